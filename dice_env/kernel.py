@@ -1,0 +1,256 @@
+"""The compiled integrator: the paper's step, written once, run over a batch of dice.
+
+One step of ``real_throw_cube.m`` for one die (the listing's order, "modified forward Euler"):
+
+1. corner offsets ``r_k = Q b_k`` and velocities ``U_k = u + w x r_k`` from the state;
+2. per corner: ``dg = max(0, -n.X_k)``, ``un = n.U_k``, ``fn = max(0, S dg - D un)`` (only
+   corners with ``n.X_k < 0`` under the gated law), friction ``-mu fn Ut/(|Ut| + vmin)``;
+3. ``u += dt F/m`` (gravity included), then ``x += dt u`` with the new ``u``;
+4. ``L += dt sum_k r_k x F_k`` (offsets before rotating), ``w = I_world^-1 L`` with
+   ``I_world = Q I_body Q^T``, then ``Q = R(w dt) Q`` with the Rodrigues rotation
+   ``R = P + cos(|w|dt)(E - P) + sin(|w|dt) [w]x/|w|``; ``R = E`` exactly when ``w = 0``.
+
+Dice are independent: ``prange`` over the batch, each die stepping until its time limit, rest,
+or a non-finite state, so results are bit-identical for any batch size or thread count.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit, prange
+
+# Per-die end status.
+RUNNING, SETTLED, NONFINITE = 0, 1, 2
+
+
+@njit(cache=True, inline="always")
+def _rotate(q: np.ndarray, w0: float, w1: float, w2: float, dt: float) -> None:
+    """Left-multiply the orientation ``q`` (3x3, in place) by the Rodrigues rotation R(w dt)."""
+    norm = math.sqrt(w0 * w0 + w1 * w1 + w2 * w2)
+    if norm == 0.0:
+        return
+    k0, k1, k2 = w0 / norm, w1 / norm, w2 / norm
+    c = math.cos(norm * dt)
+    s = math.sin(norm * dt)
+    a0, a1, a2 = w0 / norm, w1 / norm, w2 / norm
+    r00 = k0 * k0 + c * (1.0 - k0 * k0)
+    r11 = k1 * k1 + c * (1.0 - k1 * k1)
+    r22 = k2 * k2 + c * (1.0 - k2 * k2)
+    r01 = k0 * k1 - c * k0 * k1 - s * a2
+    r10 = k1 * k0 - c * k1 * k0 + s * a2
+    r02 = k0 * k2 - c * k0 * k2 + s * a1
+    r20 = k2 * k0 - c * k2 * k0 - s * a1
+    r12 = k1 * k2 - c * k1 * k2 - s * a0
+    r21 = k2 * k1 - c * k2 * k1 + s * a0
+    for j in range(3):
+        q0, q1, q2 = q[0, j], q[1, j], q[2, j]
+        q[0, j] = r00 * q0 + r01 * q1 + r02 * q2
+        q[1, j] = r10 * q0 + r11 * q1 + r12 * q2
+        q[2, j] = r20 * q0 + r21 * q1 + r22 * q2
+
+
+@njit(cache=True, inline="always")
+def _inverse_world_inertia_times(
+    q: np.ndarray, inv_body: np.ndarray, iso: float, l0: float, l1: float, l2: float
+) -> tuple[float, float, float]:
+    """``I_world^-1 L`` with ``I_world = Q I_body Q^T``; ``L / iso`` when ``iso > 0``."""
+    if iso > 0.0:
+        return l0 / iso, l1 / iso, l2 / iso
+    b0 = q[0, 0] * l0 + q[1, 0] * l1 + q[2, 0] * l2
+    b1 = q[0, 1] * l0 + q[1, 1] * l1 + q[2, 1] * l2
+    b2 = q[0, 2] * l0 + q[1, 2] * l1 + q[2, 2] * l2
+    c0 = inv_body[0, 0] * b0 + inv_body[0, 1] * b1 + inv_body[0, 2] * b2
+    c1 = inv_body[1, 0] * b0 + inv_body[1, 1] * b1 + inv_body[1, 2] * b2
+    c2 = inv_body[2, 0] * b0 + inv_body[2, 1] * b1 + inv_body[2, 2] * b2
+    return (
+        q[0, 0] * c0 + q[0, 1] * c1 + q[0, 2] * c2,
+        q[1, 0] * c0 + q[1, 1] * c1 + q[1, 2] * c2,
+        q[2, 0] * c0 + q[2, 1] * c1 + q[2, 2] * c2,
+    )
+
+
+@njit(cache=True)
+def _simulate_one(
+    i, x, u, ang, q, w, body, mass, inv_body, iso, normal, stiff, damp, mu, vmin, g, dt,
+    gated, rotation, n_steps, stop_at_rest, v_rest, hold_steps, energy_scale_add,
+    stride, rec_x, rec_e, rec_q, rec_nodes, status, unstable, rest_time, impacts,
+    max_pen, energy_rise, steps,
+):
+    """Advance die ``i`` in place; see :func:`simulate_batch` for the arguments."""
+    n0, n1, n2 = normal[0], normal[1], normal[2]
+    x0, x1, x2 = x[i, 0], x[i, 1], x[i, 2]
+    u0, u1, u2 = u[i, 0], u[i, 1], u[i, 2]
+    l0, l1, l2 = ang[i, 0], ang[i, 1], ang[i, 2]
+    w0, w1, w2 = (w[i, 0], w[i, 1], w[i, 2]) if rotation else (0.0, 0.0, 0.0)
+    qi = q[i].copy()
+    r = np.empty((8, 3))
+    n_rec = rec_x.shape[1]
+    record_e, record_q, record_nodes = rec_e.shape[1] > 0, rec_q.shape[1] > 0, rec_nodes.shape[1] > 0
+    e_start = 0.0
+    e_tol = 0.0
+    quiet = 0
+    was_in_contact = True
+    end = RUNNING
+    step = 0
+    for step in range(1, n_steps + 1):
+        # 1. corner offsets from the centre of mass, world frame
+        for k in range(8):
+            for a in range(3):
+                r[k, a] = qi[a, 0] * body[k, 0] + qi[a, 1] * body[k, 1] + qi[a, 2] * body[k, 2]
+        # 2. forces and torques of the ground on the corners
+        f0, f1, f2 = 0.0, 0.0, -mass * g
+        t0, t1, t2 = 0.0, 0.0, 0.0
+        spring = 0.0
+        fastest = 0.0
+        touching = 0
+        approach = 0.0
+        for k in range(8):
+            rk0, rk1, rk2 = r[k, 0], r[k, 1], r[k, 2]
+            uk0 = u0 + w1 * rk2 - w2 * rk1
+            uk1 = u1 + w2 * rk0 - w0 * rk2
+            uk2 = u2 + w0 * rk1 - w1 * rk0
+            fastest = max(fastest, uk0 * uk0 + uk1 * uk1 + uk2 * uk2)
+            height = n0 * (x0 + rk0) + n1 * (x1 + rk1) + n2 * (x2 + rk2)
+            dg = max(0.0, -height)
+            un = n0 * uk0 + n1 * uk1 + n2 * uk2
+            if height < 0.0:
+                touching += 1
+                spring += 0.5 * stiff * dg * dg
+                max_pen[i] = max(max_pen[i], dg)
+                approach = max(approach, -un)
+            elif gated:
+                continue
+            fn = max(0.0, stiff * dg - damp * un)
+            if fn == 0.0:
+                continue
+            fk0, fk1, fk2 = fn * n0, fn * n1, fn * n2
+            if mu > 0.0:
+                ut0, ut1, ut2 = uk0 - un * n0, uk1 - un * n1, uk2 - un * n2
+                scale = mu * fn / (math.sqrt(ut0 * ut0 + ut1 * ut1 + ut2 * ut2) + vmin)
+                fk0 -= scale * ut0
+                fk1 -= scale * ut1
+                fk2 -= scale * ut2
+            f0 += fk0
+            f1 += fk1
+            f2 += fk2
+            t0 += rk1 * fk2 - rk2 * fk1
+            t1 += rk2 * fk0 - rk0 * fk2
+            t2 += rk0 * fk1 - rk1 * fk0
+        # energy of the state entering this step: flags numerical energy gain
+        wl0, wl1, wl2 = _inverse_world_inertia_times(qi, inv_body, iso, l0, l1, l2)
+        kinetic = 0.5 * mass * (u0 * u0 + u1 * u1 + u2 * u2) + 0.5 * (
+            l0 * wl0 + l1 * wl1 + l2 * wl2
+        )
+        energy = kinetic + mass * g * x2 + spring
+        if step == 1:
+            e_start = energy
+            e_tol = energy_scale_add + kinetic
+        else:
+            energy_rise[i] = max(energy_rise[i], (energy - e_start) / e_tol)
+        if touching > 0 and not was_in_contact and approach > v_rest:
+            impacts[i] += 1
+        was_in_contact = touching > 0
+        if stop_at_rest:
+            if touching > 0 and fastest < v_rest * v_rest and kinetic < 0.5 * mass * v_rest**2:
+                quiet += 1
+                if quiet > hold_steps:
+                    rest_time[i] = (step - 1 - hold_steps) * dt
+                    end = SETTLED
+                    step -= 1
+                    break
+            else:
+                quiet = 0
+        # 3. centre of mass: velocity first, then position with the new velocity
+        nu0 = u0 + dt * f0 / mass
+        nu1 = u1 + dt * f1 / mass
+        nu2 = u2 + dt * f2 / mass
+        nx0, nx1, nx2 = x0 + dt * nu0, x1 + dt * nu1, x2 + dt * nu2
+        # 4. angular momentum, angular velocity, orientation
+        nl0, nl1, nl2 = l0, l1, l2
+        if rotation:
+            nl0, nl1, nl2 = l0 + dt * t0, l1 + dt * t1, l2 + dt * t2
+        finite = math.isfinite(nu0 + nu1 + nu2 + nx0 + nx1 + nx2 + nl0 + nl1 + nl2)
+        if not finite:
+            end = NONFINITE
+            step -= 1
+            break
+        u0, u1, u2, x0, x1, x2, l0, l1, l2 = nu0, nu1, nu2, nx0, nx1, nx2, nl0, nl1, nl2
+        if rotation:
+            w0, w1, w2 = _inverse_world_inertia_times(qi, inv_body, iso, l0, l1, l2)
+            _rotate(qi, w0, w1, w2, dt)
+        if step % stride == 0 and step // stride <= n_rec:
+            _record(step // stride - 1, i, x0, x1, x2, u0, u1, u2, l0, l1, l2, qi, inv_body,
+                    iso, body, mass, g, rec_x, rec_e, rec_q, rec_nodes,
+                    record_e, record_q, record_nodes)
+    # a die that stopped early stays where it is for the rest of the record
+    for j in range(step // stride, n_rec):
+        _record(j, i, x0, x1, x2, u0, u1, u2, l0, l1, l2, qi, inv_body, iso, body, mass, g,
+                rec_x, rec_e, rec_q, rec_nodes, record_e, record_q, record_nodes)
+    x[i, 0], x[i, 1], x[i, 2] = x0, x1, x2
+    u[i, 0], u[i, 1], u[i, 2] = u0, u1, u2
+    ang[i, 0], ang[i, 1], ang[i, 2] = l0, l1, l2
+    if rotation:
+        w[i, 0], w[i, 1], w[i, 2] = w0, w1, w2
+    q[i] = qi
+    status[i] = end
+    unstable[i] = end == NONFINITE
+    if end != SETTLED:
+        rest_time[i] = step * dt
+    steps[i] = step
+
+
+@njit(cache=True, inline="always")
+def _record(j, i, x0, x1, x2, u0, u1, u2, l0, l1, l2, qi, inv_body, iso, body, mass, g,
+            rec_x, rec_e, rec_q, rec_nodes, record_e, record_q, record_nodes):
+    """Store the state after a step: centre of mass, the listing's energy, orientation, nodes."""
+    rec_x[i, j, 0], rec_x[i, j, 1], rec_x[i, j, 2] = x0, x1, x2
+    if record_e:
+        if iso > 0.0:
+            rot = 0.5 * (l0 * l0 + l1 * l1 + l2 * l2) / iso
+        else:
+            wl0, wl1, wl2 = _inverse_world_inertia_times(qi, inv_body, iso, l0, l1, l2)
+            rot = 0.5 * (l0 * wl0 + l1 * wl1 + l2 * wl2)
+        rec_e[i, j] = 0.5 * mass * (u0 * u0 + u1 * u1 + u2 * u2) + rot + mass * g * x2
+    if record_q:
+        rec_q[i, j] = qi
+    if record_nodes:
+        for k in range(8):
+            for a in range(3):
+                rec_nodes[i, j, k, a] = (
+                    (x0, x1, x2)[a]
+                    + qi[a, 0] * body[k, 0] + qi[a, 1] * body[k, 1] + qi[a, 2] * body[k, 2]
+                )
+
+
+@njit(cache=True, parallel=True)
+def simulate_batch(
+    x, u, ang, q, w, body, mass, inv_body, iso, normal, stiff, damp, mu, vmin, g, dt,
+    gated, rotation, n_steps, stop_at_rest, v_rest, hold_steps, energy_scale_add,
+    stride, rec_x, rec_e, rec_q, rec_nodes, status, unstable, rest_time, impacts,
+    max_pen, energy_rise, steps,
+):
+    """Advance a batch of dice in place, in parallel over dice.
+
+    State (updated in place), batch size B: ``x`` (B, 3) centre of mass; ``u`` (B, 3) its
+    velocity; ``ang`` (B, 3) angular momentum about it; ``q`` (B, 3, 3) body-to-world rotation;
+    ``w`` (B, 3) angular velocity used for corner velocities.
+    Die: ``body`` (8, 3) corners relative to the centre of mass, body frame; ``mass``;
+    ``inv_body`` (3, 3) inverse body inertia; ``iso`` the scalar inertia when isotropic, else 0.
+    Ground: unit ``normal`` (3,), ``stiff``, ``damp``, ``mu``, ``vmin``; ``g`` along -z; ``gated``
+    (bool) contact law. ``rotation`` (bool): False translates only. Run ``n_steps`` of ``dt``;
+    ``stop_at_rest`` ends a die after ``hold_steps`` quiet steps below ``v_rest``.
+    ``energy_rise`` gets the largest rise of total energy above its start in units of
+    ``KE0 + energy_scale_add``; ``unstable`` marks a state that stopped being finite.
+    Records every ``stride`` steps into ``rec_x`` (B, n, 3), ``rec_e`` (B, n or 0), ``rec_q``
+    (B, n or 0, 3, 3), ``rec_nodes`` (B, n or 0, 8, 3). Outputs per die: ``status``,
+    ``unstable``, ``rest_time``, ``impacts``, ``max_pen``, ``energy_rise``, ``steps``.
+    """
+    for i in prange(x.shape[0]):
+        _simulate_one(
+            i, x, u, ang, q, w, body, mass, inv_body, iso, normal, stiff, damp, mu, vmin, g, dt,
+            gated, rotation, n_steps, stop_at_rest, v_rest, hold_steps, energy_scale_add,
+            stride, rec_x, rec_e, rec_q, rec_nodes, status, unstable, rest_time, impacts,
+            max_pen, energy_rise, steps,
+        )

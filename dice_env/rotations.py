@@ -1,0 +1,42 @@
+"""Rotation matrices: uniform random draws, axis-angle, and a check of orthonormality."""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def random_rotations(rng: np.random.Generator, size: int) -> np.ndarray:
+    """``size`` rotation matrices drawn uniformly (Haar) over SO(3), shape (size, 3, 3).
+
+    From uniform unit quaternions (Shoemake 1992).
+    """
+    u1, u2, u3 = rng.random((3, size))
+    a, b = np.sqrt(1 - u1), np.sqrt(u1)
+    quat = np.stack([a * np.sin(2 * np.pi * u2), a * np.cos(2 * np.pi * u2),
+                     b * np.sin(2 * np.pi * u3), b * np.cos(2 * np.pi * u3)], axis=-1)
+    return quaternion_to_matrix(quat)
+
+
+def quaternion_to_matrix(quat: np.ndarray) -> np.ndarray:
+    """Rotation matrices (..., 3, 3) from unit quaternions (..., 4) ordered (w, x, y, z)."""
+    w, x, y, z = np.moveaxis(np.asarray(quat, dtype=np.float64), -1, 0)
+    return np.stack([
+        np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)], -1),
+        np.stack([2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)], -1),
+        np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], -1),
+    ], -2)
+
+
+def axis_angle(axis: np.ndarray, angle: float) -> np.ndarray:
+    """Rotation by ``angle`` (rad) about ``axis`` (any non-zero length), shape (3, 3)."""
+    k = np.asarray(axis, dtype=np.float64)
+    k = k / np.linalg.norm(k)
+    cross = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
+    return np.eye(3) + np.sin(angle) * cross + (1 - np.cos(angle)) * cross @ cross
+
+
+def orthonormality_error(rot: np.ndarray) -> np.ndarray:
+    """Per matrix: ``max |R R^T - I|`` plus ``|det R - 1|`` (0 for an exact rotation)."""
+    rot = np.asarray(rot, dtype=np.float64)
+    gram = rot @ np.swapaxes(rot, -1, -2) - np.eye(3)
+    return np.abs(gram).max(axis=(-1, -2)) + np.abs(np.linalg.det(rot) - 1)

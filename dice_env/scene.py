@@ -1,0 +1,186 @@
+"""A scene: a die, a ground, gravity and the integrator settings, with the stable step.
+
+Units are SI in the default scene (m, kg, s). The paper's scenes use its own unit-free numbers
+(r = 1, m = 1, g = 9.8).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+from enum import IntEnum
+
+import numpy as np
+
+from dice_env.die import FACE_NORMALS, Die
+from dice_env.validation import check_finite, check_nonnegative, check_positive, check_range
+
+
+class ContactLaw(IntEnum):
+    """How a corner feels the ground.
+
+    ``GATED`` (default): only corners below the plane feel ``max(0, S*dg - D*un)``.
+    ``PAPER``: the listing's ``max(0, S*max(0, dg) - D*un)`` on every corner, so a corner above
+    the ground that moves down is pushed up by ``-D*un``: an air drag of about ``8*D*v`` on a
+    falling die. Kept to reproduce the paper.
+    """
+
+    GATED = 0
+    PAPER = 1
+
+
+@dataclass(frozen=True)
+class Ground:
+    """Penalty ground: a plane through the origin with unit ``normal``.
+
+    ``stiffness`` S (N/m per corner), ``damping`` D (N s/m per corner), sliding ``friction`` mu.
+    """
+
+    stiffness: float = 1e5
+    damping: float = 0.4
+    friction: float = 0.4
+    normal: tuple[float, float, float] = (0.0, 0.0, 1.0)
+    contact_law: ContactLaw = ContactLaw.GATED
+
+    def __post_init__(self) -> None:
+        check_positive("stiffness", self.stiffness)
+        check_nonnegative("damping", self.damping)
+        check_nonnegative("friction", self.friction)
+        normal = np.asarray(self.normal, dtype=np.float64)
+        if normal.shape != (3,):
+            raise ValueError(f"normal must have shape (3,), got {normal.shape}")
+        check_finite("normal", normal)
+        norm = float(np.linalg.norm(normal))
+        if norm == 0.0:
+            raise ValueError("normal must be a non-zero vector (it is normalised), got (0, 0, 0)")
+        if normal[2] / norm <= 0:
+            raise ValueError(f"normal must point upward (n_z > 0) so the table holds the die, "
+                             f"got {self.normal}")
+        object.__setattr__(self, "normal", tuple(float(v) for v in normal / norm))
+        object.__setattr__(self, "contact_law", ContactLaw(self.contact_law))
+
+    @classmethod
+    def tilted(cls, angle_deg: float, **kwargs: float) -> Ground:
+        """A table tilted by ``angle_deg`` about the y axis (0 ≤ angle < 90)."""
+        check_range("angle_deg", angle_deg, 0.0, 90.0, high_open=True)
+        a = math.radians(angle_deg)
+        return cls(normal=(math.sin(a), 0.0, math.cos(a)), **kwargs)
+
+
+@dataclass(frozen=True)
+class Rest:
+    """When a die counts as settled.
+
+    In contact, every corner slower than ``speed`` (m/s) and kinetic energy below
+    ``0.5 * mass * speed**2``, continuously for ``hold`` seconds. The rest time is when that
+    quiet interval began.
+    """
+
+    speed: float = 4e-3
+    hold: float = 0.1
+
+    def __post_init__(self) -> None:
+        check_positive("speed", self.speed)
+        check_nonnegative("hold", self.hold)
+
+
+@dataclass(frozen=True)
+class Scene:
+    """Everything that stays fixed during a throw.
+
+    ``dt=None`` picks ``safety * critical_dt``. A ``dt`` above :attr:`critical_dt` raises unless
+    ``allow_unstable=True``. ``rotation=False`` is the paper's ground_cube.m: the die translates
+    only. ``friction_vmin`` is the listing's ``umin``, added to the tangential speed before
+    dividing. A throw is flagged unstable when its total energy (kinetic + potential + ground
+    springs) exceeds its start by more than ``energy_tol`` times ``KE0 + m*g*edge``.
+    """
+
+    die: Die = field(default_factory=Die)
+    ground: Ground = field(default_factory=Ground)
+    gravity: float = 9.81
+    dt: float | None = None
+    safety: float = 0.1
+    t_max: float = 10.0
+    rotation: bool = True
+    friction_vmin: float = 1e-6
+    rest: Rest = field(default_factory=Rest)
+    energy_tol: float = 0.1
+    allow_unstable: bool = False
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.die, Die):
+            raise ValueError(f"die must be a Die, got {type(self.die).__name__}")
+        if not isinstance(self.ground, Ground):
+            raise ValueError(f"ground must be a Ground, got {type(self.ground).__name__}")
+        check_nonnegative("gravity", self.gravity)
+        check_range("safety", self.safety, 0.0, 1.0)
+        if self.safety == 0:
+            raise ValueError("safety must be in (0, 1], got 0")
+        check_positive("t_max", self.t_max)
+        check_positive("friction_vmin", self.friction_vmin)
+        check_positive("energy_tol", self.energy_tol)
+        if self.dt is not None:
+            check_positive("dt", self.dt)
+            if self.dt > self.critical_dt and not self.allow_unstable:
+                raise ValueError(
+                    f"dt must be <= the critical step {self.critical_dt:.6g} s for stiffness "
+                    f"{self.ground.stiffness:g}, damping {self.ground.damping:g} and effective "
+                    f"mass {self.effective_mass:.6g}, got {self.dt:g}; pass allow_unstable=True "
+                    "to run it anyway"
+                )
+
+    @property
+    def effective_mass(self) -> float:
+        """Smallest effective mass per contact corner, ``S / omega_max**2``.
+
+        ``omega_max`` is the fastest contact mode with one whole face on the ground (the stiffest
+        contact a flat table allows): the largest eigenvalue of ``M^-1 K`` with
+        ``K = S * sum_k a_k a_k^T``, ``a_k = (n, r_k x n)`` over the face's corners, and
+        ``M = diag(m, m, m, I)``. For a fair solid die it is ``m/6`` (rocking about an edge
+        axis); with ``rotation=False`` it is ``m/4`` (the four corners moving together).
+        """
+        die = self.die
+        if not self.rotation:
+            return die.mass / 4
+        inv_sqrt_m = np.zeros((6, 6))
+        inv_sqrt_m[:3, :3] = np.eye(3) / math.sqrt(die.mass)
+        inv_sqrt_m[3:, 3:] = _inv_sqrt_spd(die.inertia_body)
+        corners = die.corners_body
+        face_signs = np.sign(corners @ FACE_NORMALS.T)
+        worst = 0.0
+        for f, n in enumerate(FACE_NORMALS):
+            on_face = corners[face_signs[:, f] > 0]
+            a = np.hstack([np.tile(n, (len(on_face), 1)), np.cross(on_face, n)])
+            k = inv_sqrt_m @ (a.T @ a) @ inv_sqrt_m
+            worst = max(worst, float(np.linalg.eigvalsh(k)[-1]))
+        return 1.0 / worst
+
+    @property
+    def critical_dt(self) -> float:
+        """Largest stable step of the scheme for the stiffest contact mode.
+
+        The modified (symplectic) Euler step of ``m_eff x'' = -S x - D x'`` is stable iff
+        ``(w dt)^2 + 2 (D/m_eff) dt < 4`` with ``w^2 = S/m_eff``, i.e.
+        ``dt < (sqrt(D^2 + 4 S m_eff) - D) / S``.
+        """
+        s, d = self.ground.stiffness, self.ground.damping
+        return (math.sqrt(d * d + 4.0 * s * self.effective_mass) - d) / s
+
+    @property
+    def step(self) -> float:
+        """The step used: ``dt`` if given, else ``safety * critical_dt``."""
+        return self.dt if self.dt is not None else self.safety * self.critical_dt
+
+    @property
+    def n_steps(self) -> int:
+        """Number of steps to reach ``t_max``."""
+        return max(1, round(self.t_max / self.step))
+
+    def with_(self, **changes: object) -> Scene:
+        """A copy with some fields changed (validated again)."""
+        return replace(self, **changes)
+
+
+def _inv_sqrt_spd(matrix: np.ndarray) -> np.ndarray:
+    values, vectors = np.linalg.eigh(matrix)
+    return vectors @ np.diag(values**-0.5) @ vectors.T

@@ -1,0 +1,187 @@
+"""Throw dice: the state of a batch, one call to the compiled kernel, and the outcomes."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numba
+import numpy as np
+
+from dice_env import kernel
+from dice_env.die import face_up
+from dice_env.rotations import orthonormality_error
+from dice_env.scene import ContactLaw, Scene
+from dice_env.validation import as_batch, check_positive
+
+
+@dataclass
+class State:
+    """State of a batch of B dice (world frame, SI units in the default scene).
+
+    ``position`` (B, 3) centre of mass; ``velocity`` (B, 3) its velocity; ``angular_momentum``
+    (B, 3) about it; ``orientation`` (B, 3, 3) body-to-world rotation; ``angular_velocity``
+    (B, 3), the ω used for corner velocities (``I_world^-1 L`` except where a paper script starts
+    its corners without spin).
+    """
+
+    position: np.ndarray
+    velocity: np.ndarray
+    angular_momentum: np.ndarray
+    orientation: np.ndarray
+    angular_velocity: np.ndarray
+
+    @classmethod
+    def release(
+        cls,
+        scene: Scene,
+        position: np.ndarray,
+        velocity: np.ndarray,
+        angular_velocity: np.ndarray | None = None,
+        orientation: np.ndarray | None = None,
+    ) -> State:
+        """Dice released at ``position`` with ``velocity`` and ``angular_velocity`` (rad/s).
+
+        Each argument is (3,) or (B, 3) (orientation (3, 3) or (B, 3, 3)) and is broadcast to
+        the batch; ``angular_velocity`` defaults to zero, ``orientation`` to the identity.
+        """
+        position = as_batch("position", position, (3,))
+        velocity = as_batch("velocity", velocity, (3,))
+        spin = as_batch("angular_velocity",
+                        np.zeros(3) if angular_velocity is None else angular_velocity, (3,))
+        rot = as_batch("orientation", np.eye(3) if orientation is None else orientation, (3, 3))
+        if orthonormality_error(rot).max() > 1e-9:
+            raise ValueError("orientation must be rotation matrices (R R^T = I, det R = +1, "
+                             "to 1e-9)")
+        size = _batch_size(position, velocity, spin, rot)
+        position, velocity, spin = (np.broadcast_to(a, (size, 3)) for a in (position, velocity,
+                                                                               spin))
+        rot = np.broadcast_to(rot, (size, 3, 3))
+        world_inertia = rot @ scene.die.inertia_body @ rot.transpose(0, 2, 1)
+        momentum = np.einsum("bij,bj->bi", world_inertia, spin)
+        return cls(*(np.array(a) for a in (position, velocity, momentum, rot, spin)))
+
+    @property
+    def batch_size(self) -> int:
+        """Number of dice B."""
+        return self.position.shape[0]
+
+    def copy(self) -> State:
+        """An independent copy."""
+        return State(*(np.array(a) for a in self._arrays()))
+
+    def _arrays(self) -> tuple[np.ndarray, ...]:
+        return (self.position, self.velocity, self.angular_momentum, self.orientation,
+                self.angular_velocity)
+
+
+@dataclass
+class Result:
+    """Outcome of a batch of throws (arrays over the batch, B).
+
+    ``face`` 1–6 up relative to the ground normal at the end; ``settled`` came to rest;
+    ``rest_time`` when the rest began (s; the time simulated if not settled); ``impacts`` airborne-to-contact
+    transitions; ``unstable`` energy rose beyond the scene's tolerance or the state stopped being
+    finite; ``energy_rise`` the largest rise above the start in units of that tolerance;
+    ``max_penetration`` deepest corner below the plane (m); ``steps`` steps taken; ``final`` the
+    state at the end. With recording: ``t`` (n,), ``x_cm`` (B, n, 3), ``energy`` (B, n) as the
+    listing computes it (kinetic + m g z, no ground springs), ``orientations`` (B, n, 3, 3),
+    ``nodes`` (B, n, 8, 3).
+    """
+
+    face: np.ndarray
+    settled: np.ndarray
+    rest_time: np.ndarray
+    impacts: np.ndarray
+    unstable: np.ndarray
+    energy_rise: np.ndarray
+    max_penetration: np.ndarray
+    steps: np.ndarray
+    final: State
+    t: np.ndarray | None = None
+    x_cm: np.ndarray | None = None
+    energy: np.ndarray | None = None
+    orientations: np.ndarray | None = None
+    nodes: np.ndarray | None = None
+
+
+def simulate(
+    scene: Scene,
+    state: State,
+    *,
+    t_max: float | None = None,
+    stop_at_rest: bool = True,
+    record_every: int = 0,
+    record: tuple[str, ...] = ("energy",),
+    num_threads: int | None = None,
+) -> Result:
+    """Run a batch of throws; ``state`` is not modified.
+
+    ``t_max`` overrides the scene's time limit. ``record_every`` > 0 stores the centre of mass
+    every that many steps, plus what ``record`` names among "energy", "orientations", "nodes".
+    ``num_threads`` caps numba's threads for this call (default: all cores).
+    """
+    t_max = scene.t_max if t_max is None else t_max
+    check_positive("t_max", t_max)
+    unknown = set(record) - {"energy", "orientations", "nodes"}
+    if unknown:
+        raise ValueError(f"record must name only 'energy', 'orientations', 'nodes', "
+                         f"got {sorted(unknown)}")
+    if not isinstance(record_every, (int, np.integer)) or record_every < 0:
+        raise ValueError(f"record_every must be an int >= 0, got {record_every!r}")
+    dt = scene.step
+    n_steps = max(1, round(t_max / dt))
+    out = state.copy()
+    b = out.batch_size
+    n_rec = n_steps // record_every if record_every else 0
+    stride = record_every or n_steps + 1
+    rec = {
+        "x_cm": np.zeros((b, n_rec, 3)),
+        "energy": np.zeros((b, n_rec if "energy" in record else 0)),
+        "orientations": np.zeros((b, n_rec if "orientations" in record else 0, 3, 3)),
+        "nodes": np.zeros((b, n_rec if "nodes" in record else 0, 8, 3)),
+    }
+    status = np.zeros(b, np.int8)
+    unstable = np.zeros(b, np.bool_)
+    rest_time = np.zeros(b)
+    impacts = np.zeros(b, np.int64)
+    max_pen = np.zeros(b)
+    energy_rise = np.zeros(b)
+    steps = np.zeros(b, np.int64)
+    die, ground = scene.die, scene.ground
+    inertia = die.inertia_body
+    iso = float(inertia[0, 0]) if die.is_isotropic else 0.0
+    threads = numba.get_num_threads()
+    numba.set_num_threads(num_threads or numba.config.NUMBA_NUM_THREADS)
+    try:
+        kernel.simulate_batch(
+            out.position, out.velocity, out.angular_momentum, out.orientation,
+            out.angular_velocity, die.corners_body, die.mass, np.linalg.inv(inertia), iso,
+            np.asarray(ground.normal), ground.stiffness, ground.damping, ground.friction,
+            scene.friction_vmin, scene.gravity, dt, ground.contact_law == ContactLaw.GATED,
+            scene.rotation, n_steps, stop_at_rest, scene.rest.speed,
+            math.ceil(scene.rest.hold / dt), die.mass * scene.gravity * die.edge,
+            stride, rec["x_cm"], rec["energy"], rec["orientations"], rec["nodes"],
+            status, unstable, rest_time, impacts, max_pen, energy_rise, steps,
+        )
+    finally:
+        numba.set_num_threads(threads)
+    energy_rise /= scene.energy_tol
+    unstable |= energy_rise > 1.0
+    settled = status == kernel.SETTLED
+    recorded = {}
+    if record_every:
+        recorded = {"t": np.arange(1, n_rec + 1) * (stride * dt), "x_cm": rec["x_cm"]}
+        recorded.update({name: rec[name] for name in record})
+    return Result(
+        face=face_up(out.orientation, np.asarray(ground.normal)),
+        settled=settled, rest_time=rest_time, impacts=impacts, unstable=unstable,
+        energy_rise=energy_rise, max_penetration=max_pen, steps=steps, final=out, **recorded,
+    )
+
+
+def _batch_size(*arrays: np.ndarray) -> int:
+    sizes = {a.shape[0] for a in arrays} - {1}
+    if len(sizes) > 1:
+        raise ValueError(f"batch sizes of the release arguments disagree: {sorted(sizes)}")
+    return sizes.pop() if sizes else 1
