@@ -138,7 +138,10 @@ class Die:
         corners = CORNER_SIGNS * edge / 2
         com = masses @ corners / total
         rel = corners - com
-        inertia = sum(mk * (rk @ rk * np.eye(3) - np.outer(rk, rk)) for mk, rk in zip(masses, rel))
+        inertia = sum(
+            mk * (rk @ rk * np.eye(3) - np.outer(rk, rk))
+            for mk, rk in zip(masses, rel, strict=True)
+        )
         return cls(edge=edge, mass=total, com=tuple(com), inertia=_as_tuple(inertia))
 
     @property

@@ -29,8 +29,10 @@ from dice_env.validation import as_batch, check_positive
 
 @dataclass
 class PaperRun:
-    """Per-step records of one paper script: ``t`` (clockmax,), ``x_cm`` (clockmax, 3),
-    ``energy`` (clockmax,), ``nodes`` (clockmax, 8, 3) or None; ``L0`` used; ``result``.
+    """Per-step records of one paper script.
+
+    ``t`` (clockmax,), ``x_cm`` (clockmax, 3), ``energy`` (clockmax,), ``nodes``
+    (clockmax, 8, 3) or None; ``L0`` used; ``result`` the full :class:`Result`.
     """
 
     t: np.ndarray
@@ -61,8 +63,10 @@ def real_throw_cube(
     record_nodes: bool = False,
     allow_unstable: bool = False,
 ) -> PaperRun:
-    """Run ``real_throw_cube.m``. ``L0`` defaults to the listing's ``rand(3,1)*0.75 + 1e-6``
-    drawn from ``numpy.random.default_rng(seed)``; ``umin`` defaults to ``1e-6 * r``.
+    """Run ``real_throw_cube.m``.
+
+    ``L0`` defaults to the listing's ``rand(3,1)*0.75 + 1e-6`` drawn from
+    ``numpy.random.default_rng(seed)``; ``umin`` defaults to ``1e-6 * r``.
     """
     if L0 is None:
         L0 = np.random.default_rng(seed).random(3) * 0.75 + 1e-6
