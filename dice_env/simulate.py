@@ -79,14 +79,18 @@ class State:
 class Result:
     """Outcome of a batch of throws (arrays over the batch, B).
 
-    ``face`` 1–6 up relative to the ground normal at the end; ``settled`` came to rest;
-    ``rest_time`` when the rest began (s; the time simulated if not settled); ``impacts`` airborne-to-contact
-    transitions; ``unstable`` energy rose beyond the scene's tolerance or the state stopped being
-    finite; ``energy_rise`` the largest rise above the start in units of that tolerance;
-    ``max_penetration`` deepest corner below the plane (m); ``steps`` steps taken; ``final`` the
-    state at the end. With recording: ``t`` (n,), ``x_cm`` (B, n, 3), ``energy`` (B, n) as the
-    listing computes it (kinetic + m g z, no ground springs), ``orientations`` (B, n, 3, 3),
-    ``nodes`` (B, n, 8, 3).
+    - ``face``: 1–6, the face up relative to the ground normal at the end;
+    - ``settled``: came to rest; ``rest_time``: when the rest began (s; the time simulated if
+      not settled);
+    - ``impacts``: airborne-to-contact transitions;
+    - ``unstable``: energy rose beyond the scene's tolerance, or the state stopped being finite;
+      ``energy_rise``: the largest rise above the start in units of that tolerance;
+    - ``max_penetration``: deepest corner below the plane (m); ``steps``: steps taken;
+    - ``final``: the state at the end.
+
+    With recording: ``t`` (n,), ``x_cm`` (B, n, 3), ``energy`` (B, n) as the listing computes
+    it (kinetic + m g z, no ground springs), ``orientations`` (B, n, 3, 3), ``nodes``
+    (B, n, 8, 3).
     """
 
     face: np.ndarray
