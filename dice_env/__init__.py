@@ -1,8 +1,9 @@
 """dice_env: a thrown die as a compiled batched simulator (Sinha & Yu's corner-node model)."""
 
+from dice_env import envs  # registers the Gymnasium env DiceThrow-v0
 from dice_env.die import Die, face_up
 from dice_env.scene import ContactLaw, Ground, Rest, Scene
 from dice_env.simulate import Result, State, simulate
 
-__all__ = ["ContactLaw", "Die", "Ground", "Rest", "Result", "Scene", "State", "face_up",
+__all__ = ["ContactLaw", "Die", "Ground", "Rest", "Result", "Scene", "State", "envs", "face_up",
            "simulate"]

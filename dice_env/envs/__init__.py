@@ -1,0 +1,22 @@
+"""Gymnasium environments: DiceThrow-v0 (single and natively batched) and its SB3 adapter.
+
+Importing :mod:`dice_env` registers ``DiceThrow-v0``, so both ``gym.make("DiceThrow-v0")`` after
+``import dice_env`` and ``gym.make("dice_env:DiceThrow-v0")`` work.
+"""
+
+from gymnasium.envs.registration import register, registry
+
+from dice_env.envs.dice_throw import DiceThrowEnv
+from dice_env.envs.task import Throw, ThrowTask, make_task
+from dice_env.envs.vector import DiceThrowVectorEnv
+
+ENV_ID = "DiceThrow-v0"
+
+if ENV_ID not in registry:
+    register(
+        id=ENV_ID,
+        entry_point="dice_env.envs.dice_throw:DiceThrowEnv",
+        vector_entry_point="dice_env.envs.vector:DiceThrowVectorEnv",
+    )
+
+__all__ = ["ENV_ID", "DiceThrowEnv", "DiceThrowVectorEnv", "Throw", "ThrowTask", "make_task"]

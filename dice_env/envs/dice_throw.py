@@ -1,0 +1,223 @@
+"""DiceThrow-v0: throw a die so that a target face lands up (one throw per episode)."""
+
+from __future__ import annotations
+
+from typing import Any, ClassVar
+
+import gymnasium as gym
+import numpy as np
+from gymnasium import spaces
+
+from dice_env.envs.task import (
+    ACTION_DIM,
+    OBS_DIM,
+    ORIENTATION_MODES,
+    ThrowTask,
+    check_actions,
+    check_face,
+    check_rotation,
+    make_task,
+)
+
+RENDER_MODES = ("human", "rgb_array", "rgb_array_list")
+RENDER_FPS = 30
+
+
+def observation_space() -> spaces.Box:
+    """One-hot target in [0, 1] (6), then the orientation's entries in [-1, 1] (9)."""
+    low = np.r_[np.zeros(6), -np.ones(9)].astype(np.float32)
+    return spaces.Box(low, np.ones(OBS_DIM, np.float32), dtype=np.float32)
+
+
+def action_space() -> spaces.Box:
+    """Release velocity (3) and angular velocity (3), scaled to ±max_speed, ±max_spin."""
+    return spaces.Box(-1.0, 1.0, (ACTION_DIM,), np.float32)
+
+
+def check_episode_keywords(target_face: int | None, orientation_mode: str) -> None:
+    """Validate the per-episode keywords shared by the single and the vector env."""
+    if target_face is not None:
+        check_face("target_face", target_face)
+    if orientation_mode not in ORIENTATION_MODES:
+        raise ValueError(f"orientation_mode must be one of {ORIENTATION_MODES}, "
+                         f"got {orientation_mode!r}")
+
+
+def check_render(render_mode: str | None, modes: tuple[str, ...], width: int, height: int) -> None:
+    """Validate the render keywords."""
+    if render_mode is not None and render_mode not in modes:
+        raise ValueError(f"render_mode must be None or one of {modes}, got {render_mode!r}")
+    for name, value in (("render_width", width), ("render_height", height)):
+        if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not (
+                16 <= value <= 4096):
+            raise ValueError(f"{name} must be an int in [16, 4096], got {value!r}")
+
+
+class DiceThrowEnv(gym.Env):
+    """Throw a die from the hand so that the target face ends up.
+
+    ## Description
+    Each episode is one throw. The die sits in the hand ``release_height`` above the table in an
+    orientation drawn uniformly over all rotations; a target face 1–6 is drawn uniformly. The
+    agent chooses the release velocity and spin; the release actually used is perturbed by
+    seeded hand noise; the throw is simulated to rest with the compiled corner-node model
+    (:func:`dice_env.simulate`) in the default :class:`dice_env.Scene` (a 16 mm die on a table).
+
+    ## Action Space
+    ``Box(-1, 1, (6,), float32)``: release velocity ``(vx, vy, vz) * max_speed`` (m/s) and
+    angular velocity ``(wx, wy, wz) * max_spin`` (rad/s), world frame, z up. Out-of-range actions
+    are clipped (``info["action_clipped"]``); NaN/inf raise ``ValueError``.
+
+    ## Observation Space
+    ``Box((15,), float32)``: ``[0:6]`` one-hot target face (1–6), ``[6:15]`` the die's
+    orientation (body-to-world rotation matrix, row-major) in the hand after ``reset`` and at
+    rest after ``step``. Body frame: face 1 +z, 2 +x, 3 +y, 4 -y, 5 -x, 6 -z.
+
+    ## Rewards
+    ``reward_success`` 1.0 if the target face is up at rest, else 0.0, plus
+    ``reward_shaping = shaping * (n_target . n_table)`` at rest (``shaping=0`` by default).
+    A void throw (foul, unstable, or not settled within ``t_max``) gets 0;
+    ``info["void_reason"]`` says why.
+
+    ## Starting State
+    Centre ``release_height`` along the table normal; orientation per ``orientation_mode``
+    ("uniform", "flat": a random face up with a random turn, "identity"); ``reset`` options
+    ``target_face``, ``orientation`` (3x3 rotation) and ``orientation_mode`` override one episode.
+
+    ## Episode End
+    After one step: ``terminated=True``, ``truncated=False``. Stepping again re-throws from the
+    same hand with fresh noise.
+
+    ## Info
+    ``is_success``, ``target_face``, ``face`` (landed, 1–6), ``settled``, ``unstable``, ``fair``,
+    ``void_reason`` ("" or "foul", "unstable", "not_settled"), ``rest_time`` (s), ``impacts``,
+    ``reward_success``, ``reward_shaping``, ``release_velocity`` (3), ``release_spin`` (3),
+    ``release_orientation`` (3, 3), ``action_clipped``.
+
+    ## Arguments
+    | keyword | default | meaning |
+    |---|---|---|
+    | ``release_height`` | 0.05 | centre height above the table at release (m) |
+    | ``max_speed`` | 1.0 | release speed per component at action ±1 (m/s) |
+    | ``max_spin`` | 40.0 | angular velocity per component at action ±1 (rad/s) |
+    | ``hand_noise`` | 0.05 | std of the noise on each action component (fraction of its max) |
+    | ``orientation_noise`` | 0.05 | std of each component of a rotation vector on the hand (rad) |
+    | ``min_speed``, ``min_spin`` | 0, 0 | fair-throw rule: slower releases are fouls (m/s, rad/s) |
+    | ``shaping`` | 0.0 | weight of the dense term |
+    | ``target_face`` | None | fix the target (1–6) instead of drawing it |
+    | ``orientation_mode`` | "uniform" | how the hand orientation is drawn |
+    | ``t_max`` | 5.0 | simulated time limit per throw (s) |
+    | ``edge``, ``mass`` | Scene() | die edge (m) and mass (kg) |
+    | ``load_face``, ``load_fraction``, ``load_depth`` | 6, 0, 0.8 | a loaded die (Die.loaded) |
+    | ``stiffness``, ``damping``, ``friction`` | Scene() | table contact (N/m, N s/m, mu) |
+    | ``tilt_deg`` | 0 | table tilt about y (degrees) |
+    | ``contact_law`` | Scene() | "gated" or "paper" |
+    | ``gravity``, ``dt``, ``safety`` | Scene() | m/s², step (s; None = automatic), step safety |
+    | ``rest_speed``, ``rest_hold``, ``energy_tol`` | Scene() | rest detection, unstable flag |
+    | ``scene`` | None | a base :class:`dice_env.Scene` the keywords above modify |
+    | ``num_threads`` | None | numba threads for the kernel (None: all cores) |
+    | ``render_mode`` | None | "rgb_array", "rgb_array_list" or "human" |
+    | ``render_width``, ``render_height`` | 320, 240 | frame size (pixels) |
+
+    ## Version History
+    * v0: initial version.
+    """
+
+    metadata: ClassVar[dict[str, Any]] = {"render_modes": list(RENDER_MODES),
+                                          "render_fps": RENDER_FPS}
+
+    def __init__(
+        self,
+        render_mode: str | None = None,
+        *,
+        target_face: int | None = None,
+        orientation_mode: str = "uniform",
+        render_width: int = 320,
+        render_height: int = 240,
+        **task_keywords: Any,
+    ) -> None:
+        check_episode_keywords(target_face, orientation_mode)
+        check_render(render_mode, RENDER_MODES, render_width, render_height)
+        self.task: ThrowTask = make_task(**task_keywords)
+        self.target_face = target_face
+        self.orientation_mode = orientation_mode
+        self.render_mode = render_mode
+        self.render_size = (render_height, render_width)
+        self.observation_space = observation_space()
+        self.action_space = action_space()
+        self._target = 1
+        self._hand = np.eye(3)
+        self._pose = (self.task.release_position, self._hand)
+        self._frames: list[np.ndarray] = []
+        self._viewer: Any = None
+
+    def reset(
+        self, *, seed: int | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[np.ndarray, dict[str, Any]]:
+        """Put the die in the hand and draw the target; options override one episode."""
+        super().reset(seed=seed)
+        options = options or {}
+        self._target, self._hand = self.task.sample_hand(
+            self.np_random, options.get("target_face", self.target_face),
+            options.get("orientation_mode", self.orientation_mode))
+        if "orientation" in options:
+            self._hand = check_rotation("options['orientation']", options["orientation"])
+        self._pose = (self.task.release_position, self._hand)
+        self._frames = []
+        self._draw([self._pose])
+        return self.task.observe(self._target, self._hand)[0], {}
+
+    def step(self, action: np.ndarray) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
+        """Throw once and simulate to rest."""
+        action = check_actions(action)
+        noise = self.task.sample_noise(self.np_random)
+        throw = self.task.throw(action, [self._target], self._hand[None], noise,
+                                record_every=self._record_every())
+        result = throw.result
+        self._pose = (result.final.position[0], result.final.orientation[0])
+        if result.orientations is not None:
+            self._draw([*zip(result.x_cm[0], result.orientations[0], strict=True), self._pose])
+        info = {key: _scalar(value[0]) for key, value in throw.info.items()}
+        return throw.observation[0], float(throw.reward[0]), True, False, info
+
+    def render(self) -> np.ndarray | list[np.ndarray] | None:
+        """The current frame ("rgb_array"), the frames since the last call ("rgb_array_list")."""
+        if self.render_mode == "rgb_array":
+            return self._frame(*self._pose)
+        if self.render_mode == "rgb_array_list":
+            frames, self._frames = self._frames, []
+            return frames
+        return None
+
+    def close(self) -> None:
+        """Close the window of the "human" mode, if any."""
+        if self._viewer is not None:
+            self._viewer.close()
+            self._viewer = None
+
+    def _record_every(self) -> int:
+        if self.render_mode not in ("rgb_array_list", "human"):
+            return 0
+        return max(1, round(1.0 / (RENDER_FPS * self.task.scene.step)))
+
+    def _frame(self, position: np.ndarray, orientation: np.ndarray) -> np.ndarray:
+        from dice_env.envs.render import render_die
+
+        return render_die(self.task.scene, position, orientation, size=self.render_size)
+
+    def _draw(self, poses: list[tuple[np.ndarray, np.ndarray]]) -> None:
+        """Keep ("rgb_array_list") or show ("human") the frames of these poses."""
+        if self.render_mode == "rgb_array_list":
+            self._frames.extend(self._frame(*pose) for pose in poses)
+        elif self.render_mode == "human":
+            from dice_env.envs.render import Viewer
+
+            if self._viewer is None:
+                self._viewer = Viewer(RENDER_FPS)
+            for pose in poses:
+                self._viewer.show(self._frame(*pose))
+
+
+def _scalar(value: np.ndarray) -> Any:
+    """Numpy scalars as Python bool/int/float/str; arrays unchanged."""
+    return value.item() if np.ndim(value) == 0 else value

@@ -1,0 +1,129 @@
+"""DiceThrow-v0 natively batched: N throws per step in one kernel call, SAME_STEP autoreset."""
+
+from __future__ import annotations
+
+from typing import Any, ClassVar
+
+import numpy as np
+from gymnasium.utils import seeding
+from gymnasium.vector import AutoresetMode, VectorEnv
+from gymnasium.vector.utils import batch_space
+
+from dice_env.envs.dice_throw import (
+    RENDER_FPS,
+    action_space,
+    check_episode_keywords,
+    check_render,
+    observation_space,
+)
+from dice_env.envs.task import ThrowTask, check_actions, check_rotation, make_task
+
+
+class DiceThrowVectorEnv(VectorEnv):
+    """``num_envs`` DiceThrow-v0 envs stepped together (``gym.make_vec("DiceThrow-v0", n)``).
+
+    Takes the keywords of :class:`~dice_env.envs.dice_throw.DiceThrowEnv`. Every episode lasts
+    one step, so the env autoresets in the same step (``AutoresetMode.SAME_STEP``): ``step``
+    returns the observations of the *next* episodes, and the throw's own outcome is in
+    ``info["final_obs"]`` (the dice at rest, (N, 15)) and ``info["final_info"]`` (the single
+    env's info keys as arrays over N, each with its ``_key`` mask). Env ``i`` owns a generator
+    seeded with ``seed + i`` (or ``seed[i]``) and draws from it exactly as a single env reset
+    with that seed, so N single envs give identical throws.
+    """
+
+    metadata: ClassVar[dict[str, Any]] = {
+        "render_modes": ["rgb_array"], "render_fps": RENDER_FPS,
+        "autoreset_mode": AutoresetMode.SAME_STEP,
+    }
+
+    def __init__(
+        self,
+        num_envs: int = 1,
+        render_mode: str | None = None,
+        *,
+        target_face: int | None = None,
+        orientation_mode: str = "uniform",
+        render_width: int = 320,
+        render_height: int = 240,
+        **task_keywords: Any,
+    ) -> None:
+        if isinstance(num_envs, bool) or not isinstance(num_envs, (int, np.integer)) or (
+                num_envs < 1):
+            raise ValueError(f"num_envs must be an int >= 1, got {num_envs!r}")
+        check_episode_keywords(target_face, orientation_mode)
+        check_render(render_mode, ("rgb_array",), render_width, render_height)
+        self.task: ThrowTask = make_task(**task_keywords)
+        self.num_envs = int(num_envs)
+        self.target_face = target_face
+        self.orientation_mode = orientation_mode
+        self.render_mode = render_mode
+        self.render_size = (render_height, render_width)
+        self.single_observation_space = observation_space()
+        self.single_action_space = action_space()
+        self.observation_space = batch_space(self.single_observation_space, self.num_envs)
+        self.action_space = batch_space(self.single_action_space, self.num_envs)
+        self._rngs: list[np.random.Generator] = []
+        self._targets = np.ones(self.num_envs, np.int64)
+        self._hands = np.tile(np.eye(3), (self.num_envs, 1, 1))
+
+    def reset(
+        self, *, seed: int | list[int | None] | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[np.ndarray, dict[str, Any]]:
+        """Seed (``seed + i`` per env, or a list) and draw every env's hand and target.
+
+        ``options`` as the single env's, applied to all envs.
+        """
+        if seed is None:
+            seeds: list[int | None] = [None] * self.num_envs
+        elif isinstance(seed, (int, np.integer)):
+            seeds = [int(seed) + i for i in range(self.num_envs)]
+        else:
+            seeds = list(seed)
+            if len(seeds) != self.num_envs:
+                raise ValueError(f"seed must be an int, None or a list of {self.num_envs} "
+                                 f"seeds, got {len(seeds)}")
+        if seed is not None or not self._rngs:
+            self._rngs = [seeding.np_random(s)[0] for s in seeds]
+        options = options or {}
+        for i in range(self.num_envs):
+            self._new_hand(i, options)
+        return self.task.observe(self._targets, self._hands), {}
+
+    def step(
+        self, actions: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
+        """Throw all N dice in one kernel call, then start the next episodes."""
+        if not self._rngs:
+            raise RuntimeError("call reset() before step()")
+        actions = check_actions(actions)
+        if actions.shape[0] != self.num_envs:
+            raise ValueError(f"actions must have shape ({self.num_envs}, 6), got {actions.shape}")
+        noise = np.concatenate([self.task.sample_noise(rng) for rng in self._rngs])
+        throw = self.task.throw(actions, self._targets, self._hands, noise)
+        mask = np.ones(self.num_envs, np.bool_)
+        final_info: dict[str, Any] = {}
+        for key, value in throw.info.items():
+            final_info[key] = value
+            final_info["_" + key] = mask
+        info = {"final_obs": throw.observation, "_final_obs": mask,
+                "final_info": final_info, "_final_info": mask}
+        for i in range(self.num_envs):
+            self._new_hand(i, {})
+        return (self.task.observe(self._targets, self._hands), throw.reward.copy(),
+                mask.copy(), np.zeros(self.num_envs, np.bool_), info)
+
+    def render(self) -> tuple[np.ndarray, ...] | None:
+        """Each env's die in the hand ("rgb_array"), a tuple of N frames."""
+        if self.render_mode != "rgb_array":
+            return None
+        from dice_env.envs.render import render_die
+
+        return tuple(render_die(self.task.scene, self.task.release_position, self._hands[i],
+                                size=self.render_size) for i in range(self.num_envs))
+
+    def _new_hand(self, i: int, options: dict[str, Any]) -> None:
+        self._targets[i], self._hands[i] = self.task.sample_hand(
+            self._rngs[i], options.get("target_face", self.target_face),
+            options.get("orientation_mode", self.orientation_mode))
+        if "orientation" in options:
+            self._hands[i] = check_rotation("options['orientation']", options["orientation"])
