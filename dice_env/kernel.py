@@ -10,8 +10,21 @@ One step of ``real_throw_cube.m`` for one die (the listing's order, "modified fo
    ``I_world = Q I_body Q^T``, then ``Q = R(w dt) Q`` with the Rodrigues rotation
    ``R = P + cos(|w|dt)(E - P) + sin(|w|dt) [w]x/|w|``; ``R = E`` exactly when ``w = 0``.
 
-Dice are independent: ``prange`` over the batch, each die stepping until its time limit, rest,
-or a non-finite state, so results are bit-identical for any batch size or thread count.
+Work a scene does not need is skipped, with the result of computing it as zero: no rotation
+when ``rotation`` is off, no friction when ``mu = 0``, no damping term when ``D = 0``, no
+records unless asked (and then only every ``stride`` steps).
+
+Free flight (``flight``: gated law, or ``D = 0`` where the paper law is the same): a step whose
+corners are all above the plane feels gravity alone, and so do the following steps until a
+corner can reach the plane. A lower bound
+on the lowest corner (centre on its exact discrete parabola, corners moving at most
+``|w| r_max`` along the normal) gives how many steps are surely contact-free; they are taken in
+one jump: the centre in the closed form of those Euler steps, the orientation by one rotation
+of angle ``N |w| dt`` (isotropic die: ``w`` is constant) or by the plain torque-free rotation
+steps (loaded die). Every other step is the plain step above.
+
+Dice are independent: each die steps until its time limit, rest, or a non-finite state, so
+results are bit-identical for any batch size or thread count (``prange`` over the batch).
 """
 
 from __future__ import annotations
@@ -31,19 +44,19 @@ def _rotate(q: np.ndarray, w0: float, w1: float, w2: float, dt: float) -> None:
     norm = math.sqrt(w0 * w0 + w1 * w1 + w2 * w2)
     if norm == 0.0:
         return
-    k0, k1, k2 = w0 / norm, w1 / norm, w2 / norm
+    inv = 1.0 / norm
+    k0, k1, k2 = w0 * inv, w1 * inv, w2 * inv
     c = math.cos(norm * dt)
     s = math.sin(norm * dt)
-    a0, a1, a2 = w0 / norm, w1 / norm, w2 / norm
     r00 = k0 * k0 + c * (1.0 - k0 * k0)
     r11 = k1 * k1 + c * (1.0 - k1 * k1)
     r22 = k2 * k2 + c * (1.0 - k2 * k2)
-    r01 = k0 * k1 - c * k0 * k1 - s * a2
-    r10 = k1 * k0 - c * k1 * k0 + s * a2
-    r02 = k0 * k2 - c * k0 * k2 + s * a1
-    r20 = k2 * k0 - c * k2 * k0 - s * a1
-    r12 = k1 * k2 - c * k1 * k2 - s * a0
-    r21 = k2 * k1 - c * k2 * k1 + s * a0
+    r01 = k0 * k1 - c * k0 * k1 - s * k2
+    r10 = k1 * k0 - c * k1 * k0 + s * k2
+    r02 = k0 * k2 - c * k0 * k2 + s * k1
+    r20 = k2 * k0 - c * k2 * k0 - s * k1
+    r12 = k1 * k2 - c * k1 * k2 - s * k0
+    r21 = k2 * k1 - c * k2 * k1 + s * k0
     for j in range(3):
         q0, q1, q2 = q[0, j], q[1, j], q[2, j]
         q[0, j] = r00 * q0 + r01 * q1 + r02 * q2
@@ -53,11 +66,11 @@ def _rotate(q: np.ndarray, w0: float, w1: float, w2: float, dt: float) -> None:
 
 @njit(cache=True, inline="always")
 def _inverse_world_inertia_times(
-    q: np.ndarray, inv_body: np.ndarray, iso: float, l0: float, l1: float, l2: float
+    q: np.ndarray, inv_body: np.ndarray, inv_iso: float, l0: float, l1: float, l2: float
 ) -> tuple[float, float, float]:
-    """``I_world^-1 L`` with ``I_world = Q I_body Q^T``; ``L / iso`` when ``iso > 0``."""
-    if iso > 0.0:
-        return l0 / iso, l1 / iso, l2 / iso
+    """``I_world^-1 L`` with ``I_world = Q I_body Q^T``; ``L * inv_iso`` when ``inv_iso > 0``."""
+    if inv_iso > 0.0:
+        return l0 * inv_iso, l1 * inv_iso, l2 * inv_iso
     b0 = q[0, 0] * l0 + q[1, 0] * l1 + q[2, 0] * l2
     b1 = q[0, 1] * l0 + q[1, 1] * l1 + q[2, 1] * l2
     b2 = q[0, 2] * l0 + q[1, 2] * l1 + q[2, 2] * l2
@@ -71,10 +84,55 @@ def _inverse_world_inertia_times(
     )
 
 
+@njit(cache=True, inline="always")
+def _free_steps(lowest: float, un: float, spin: float, r_max: float, dvn: float, dt: float,
+                limit: int) -> int:
+    """Number of steps from now (1 to ``limit``) surely free of contact.
+
+    Given the lowest corner height ``lowest >= 0`` entering this step.
+    After ``j`` flight steps the centre has moved ``dt (j un + dvn j(j+1)/2)`` along the normal
+    (``un`` its normal velocity, ``dvn`` the per-step change of it from gravity) and a corner at
+    most ``j dt spin r_max`` relative to it; the count is the last ``j`` where that bound on the
+    lowest corner is still >= 0, plus one.
+    """
+    b = dt * (un - spin * r_max)
+    a = -0.5 * dt * dvn  # >= 0: gravity pulls toward the plane
+    if a <= 0.0:
+        if b >= 0.0:
+            return limit
+        last = lowest / -b
+    else:
+        # largest j with lowest + (b - a) j - a j^2 >= 0
+        p = b - a
+        last = (p + math.sqrt(p * p + 4.0 * a * lowest)) / (2.0 * a)
+    if not last < limit:  # also catches inf and NaN
+        return limit
+    return max(1, int(last) + 1)
+
+
+@njit(cache=True, inline="always")
+def _torque_free(q: np.ndarray, inv_body: np.ndarray, inv_iso: float, l0: float, l1: float,
+                 l2: float, dt: float, n: int) -> tuple[float, float, float]:
+    """``n`` rotation steps of step 4 at constant ``L``, in place on ``q``; returns the last ``w``.
+
+    An isotropic die spins at the constant ``w = L / I``: one rotation of angle ``n |w| dt``.
+    A loaded die takes the ``n`` plain steps (``w`` follows ``I_world``).
+    """
+    w0, w1, w2 = _inverse_world_inertia_times(q, inv_body, inv_iso, l0, l1, l2)
+    if inv_iso > 0.0:
+        _rotate(q, w0, w1, w2, n * dt)
+        return w0, w1, w2
+    _rotate(q, w0, w1, w2, dt)
+    for _ in range(n - 1):
+        w0, w1, w2 = _inverse_world_inertia_times(q, inv_body, inv_iso, l0, l1, l2)
+        _rotate(q, w0, w1, w2, dt)
+    return w0, w1, w2
+
+
 @njit(cache=True)
 def _simulate_one(
-    i, x, u, ang, q, w, body, mass, inv_body, iso, normal, stiff, damp, mu, vmin, g, dt,
-    gated, rotation, n_steps, stop_at_rest, v_rest, hold_steps, energy_scale_add,
+    i, x, u, ang, q, w, body, mass, inv_body, iso, inv_i_min, normal, stiff, damp, mu, vmin, g, dt,
+    gated, rotation, flight, n_steps, stop_at_rest, v_rest, hold_steps, energy_scale_add,
     stride, rec_x, rec_e, rec_q, rec_nodes, status, unstable, rest_time, impacts,
     max_pen, energy_rise, steps,
 ):
@@ -84,46 +142,58 @@ def _simulate_one(
     u0, u1, u2 = u[i, 0], u[i, 1], u[i, 2]
     l0, l1, l2 = ang[i, 0], ang[i, 1], ang[i, 2]
     w0, w1, w2 = (w[i, 0], w[i, 1], w[i, 2]) if rotation else (0.0, 0.0, 0.0)
+    inv_iso = 1.0 / iso if iso > 0.0 else 0.0
+    r_max = 0.0
+    for k in range(8):
+        r_max = max(r_max, math.sqrt(body[k, 0] ** 2 + body[k, 1] ** 2 + body[k, 2] ** 2))
     qi = q[i].copy()
-    r = np.empty((8, 3))
     n_rec = rec_x.shape[1]
-    record_e, record_q, record_nodes = rec_e.shape[1] > 0, rec_q.shape[1] > 0, rec_nodes.shape[1] > 0
+    record_e, record_q = rec_e.shape[1] > 0, rec_q.shape[1] > 0
+    record_nodes = rec_nodes.shape[1] > 0
+    kinetic_rest = 0.5 * mass * v_rest * v_rest
     e_start = 0.0
-    e_tol = 0.0
+    e_tol = 1.0
+    e_max = -np.inf
     quiet = 0
     was_in_contact = True
     end = RUNNING
+    pen = max_pen[i]
+    hits = impacts[i]
     step = 0
-    for step in range(1, n_steps + 1):
-        # 1. corner offsets from the centre of mass, world frame
-        for k in range(8):
-            for a in range(3):
-                r[k, a] = qi[a, 0] * body[k, 0] + qi[a, 1] * body[k, 1] + qi[a, 2] * body[k, 2]
-        # 2. forces and torques of the ground on the corners
+    while step < n_steps:
+        step += 1
+        # 1.-2. corners, and the forces and torques of the ground on them
         f0, f1, f2 = 0.0, 0.0, -mass * g
         t0, t1, t2 = 0.0, 0.0, 0.0
         spring = 0.0
         fastest = 0.0
         touching = 0
         approach = 0.0
+        lowest = np.inf
         for k in range(8):
-            rk0, rk1, rk2 = r[k, 0], r[k, 1], r[k, 2]
+            b0, b1, b2 = body[k, 0], body[k, 1], body[k, 2]
+            rk0 = qi[0, 0] * b0 + qi[0, 1] * b1 + qi[0, 2] * b2
+            rk1 = qi[1, 0] * b0 + qi[1, 1] * b1 + qi[1, 2] * b2
+            rk2 = qi[2, 0] * b0 + qi[2, 1] * b1 + qi[2, 2] * b2
             uk0 = u0 + w1 * rk2 - w2 * rk1
             uk1 = u1 + w2 * rk0 - w0 * rk2
             uk2 = u2 + w0 * rk1 - w1 * rk0
             fastest = max(fastest, uk0 * uk0 + uk1 * uk1 + uk2 * uk2)
             height = n0 * (x0 + rk0) + n1 * (x1 + rk1) + n2 * (x2 + rk2)
+            lowest = min(lowest, height)
             dg = max(0.0, -height)
             un = n0 * uk0 + n1 * uk1 + n2 * uk2
             if height < 0.0:
                 touching += 1
                 spring += 0.5 * stiff * dg * dg
-                max_pen[i] = max(max_pen[i], dg)
+                pen = max(pen, dg)
                 approach = max(approach, -un)
             elif gated:
                 continue
-            fn = max(0.0, stiff * dg - damp * un)
-            if fn == 0.0:
+            fn = stiff * dg
+            if damp > 0.0:
+                fn -= damp * un
+            if fn <= 0.0:
                 continue
             fk0, fk1, fk2 = fn * n0, fn * n1, fn * n2
             if mu > 0.0:
@@ -135,11 +205,12 @@ def _simulate_one(
             f0 += fk0
             f1 += fk1
             f2 += fk2
-            t0 += rk1 * fk2 - rk2 * fk1
-            t1 += rk2 * fk0 - rk0 * fk2
-            t2 += rk0 * fk1 - rk1 * fk0
+            if rotation:
+                t0 += rk1 * fk2 - rk2 * fk1
+                t1 += rk2 * fk0 - rk0 * fk2
+                t2 += rk0 * fk1 - rk1 * fk0
         # energy of the state entering this step: flags numerical energy gain
-        wl0, wl1, wl2 = _inverse_world_inertia_times(qi, inv_body, iso, l0, l1, l2)
+        wl0, wl1, wl2 = _inverse_world_inertia_times(qi, inv_body, inv_iso, l0, l1, l2)
         kinetic = 0.5 * mass * (u0 * u0 + u1 * u1 + u2 * u2) + 0.5 * (
             l0 * wl0 + l1 * wl1 + l2 * wl2
         )
@@ -148,12 +219,12 @@ def _simulate_one(
             e_start = energy
             e_tol = energy_scale_add + kinetic
         else:
-            energy_rise[i] = max(energy_rise[i], (energy - e_start) / e_tol)
+            e_max = max(e_max, energy)
         if touching > 0 and not was_in_contact and approach > v_rest:
-            impacts[i] += 1
+            hits += 1
         was_in_contact = touching > 0
         if stop_at_rest:
-            if touching > 0 and fastest < v_rest * v_rest and kinetic < 0.5 * mass * v_rest**2:
+            if touching > 0 and fastest < v_rest * v_rest and kinetic < kinetic_rest:
                 quiet += 1
                 if quiet > hold_steps:
                     rest_time[i] = (step - 1 - hold_steps) * dt
@@ -163,10 +234,37 @@ def _simulate_one(
             else:
                 quiet = 0
         # 3. centre of mass: velocity first, then position with the new velocity
-        nu0 = u0 + dt * f0 / mass
-        nu1 = u1 + dt * f1 / mass
-        nu2 = u2 + dt * f2 / mass
-        nx0, nx1, nx2 = x0 + dt * nu0, x1 + dt * nu1, x2 + dt * nu2
+        dv0, dv1, dv2 = dt * f0 / mass, dt * f1 / mass, dt * f2 / mass
+        jump = 1
+        if flight and touching == 0:
+            spin = math.sqrt(l0 * l0 + l1 * l1 + l2 * l2) * inv_i_min if rotation else 0.0
+            jump = _free_steps(lowest, n0 * u0 + n1 * u1 + n2 * u2, spin, r_max,
+                               n0 * dv0 + n1 * dv1 + n2 * dv2, dt, n_steps - step + 1)
+        if jump > 1:
+            # records falling inside the jump, from the same closed form (the jump itself does
+            # not depend on the recording)
+            for s in range((step + stride - 1) // stride * stride, step + jump - 1, stride):
+                if s // stride > n_rec:
+                    break
+                j = s - step + 1
+                half = 0.5 * j * (j + 1)
+                qj = qi.copy()
+                if rotation:
+                    _torque_free(qj, inv_body, inv_iso, l0, l1, l2, dt, j)
+                _record(s // stride - 1, i, x0 + dt * (j * u0 + half * dv0),
+                        x1 + dt * (j * u1 + half * dv1), x2 + dt * (j * u2 + half * dv2),
+                        u0 + j * dv0, u1 + j * dv1, u2 + j * dv2, l0, l1, l2, qj, inv_body,
+                        inv_iso, body, mass, g, rec_x, rec_e, rec_q, rec_nodes,
+                        record_e, record_q, record_nodes)
+            # `jump` flight steps in closed form: u_j = u + j dv, x_j = x + dt (j u + dv j(j+1)/2)
+            half = 0.5 * jump * (jump + 1)
+            nx0 = x0 + dt * (jump * u0 + half * dv0)
+            nx1 = x1 + dt * (jump * u1 + half * dv1)
+            nx2 = x2 + dt * (jump * u2 + half * dv2)
+            nu0, nu1, nu2 = u0 + jump * dv0, u1 + jump * dv1, u2 + jump * dv2
+        else:
+            nu0, nu1, nu2 = u0 + dv0, u1 + dv1, u2 + dv2
+            nx0, nx1, nx2 = x0 + dt * nu0, x1 + dt * nu1, x2 + dt * nu2
         # 4. angular momentum, angular velocity, orientation
         nl0, nl1, nl2 = l0, l1, l2
         if rotation:
@@ -178,15 +276,15 @@ def _simulate_one(
             break
         u0, u1, u2, x0, x1, x2, l0, l1, l2 = nu0, nu1, nu2, nx0, nx1, nx2, nl0, nl1, nl2
         if rotation:
-            w0, w1, w2 = _inverse_world_inertia_times(qi, inv_body, iso, l0, l1, l2)
-            _rotate(qi, w0, w1, w2, dt)
+            w0, w1, w2 = _torque_free(qi, inv_body, inv_iso, l0, l1, l2, dt, jump)
+        step += jump - 1
         if step % stride == 0 and step // stride <= n_rec:
             _record(step // stride - 1, i, x0, x1, x2, u0, u1, u2, l0, l1, l2, qi, inv_body,
-                    iso, body, mass, g, rec_x, rec_e, rec_q, rec_nodes,
+                    inv_iso, body, mass, g, rec_x, rec_e, rec_q, rec_nodes,
                     record_e, record_q, record_nodes)
     # a die that stopped early stays where it is for the rest of the record
     for j in range(step // stride, n_rec):
-        _record(j, i, x0, x1, x2, u0, u1, u2, l0, l1, l2, qi, inv_body, iso, body, mass, g,
+        _record(j, i, x0, x1, x2, u0, u1, u2, l0, l1, l2, qi, inv_body, inv_iso, body, mass, g,
                 rec_x, rec_e, rec_q, rec_nodes, record_e, record_q, record_nodes)
     x[i, 0], x[i, 1], x[i, 2] = x0, x1, x2
     u[i, 0], u[i, 1], u[i, 2] = u0, u1, u2
@@ -199,18 +297,22 @@ def _simulate_one(
     if end != SETTLED:
         rest_time[i] = step * dt
     steps[i] = step
+    max_pen[i] = pen
+    impacts[i] = hits
+    # (e - e0) / tol is monotone in e, so its largest value is that of the largest e
+    energy_rise[i] = max(energy_rise[i], (e_max - e_start) / e_tol)
 
 
 @njit(cache=True, inline="always")
-def _record(j, i, x0, x1, x2, u0, u1, u2, l0, l1, l2, qi, inv_body, iso, body, mass, g,
+def _record(j, i, x0, x1, x2, u0, u1, u2, l0, l1, l2, qi, inv_body, inv_iso, body, mass, g,
             rec_x, rec_e, rec_q, rec_nodes, record_e, record_q, record_nodes):
     """Store the state after a step: centre of mass, the listing's energy, orientation, nodes."""
     rec_x[i, j, 0], rec_x[i, j, 1], rec_x[i, j, 2] = x0, x1, x2
     if record_e:
-        if iso > 0.0:
-            rot = 0.5 * (l0 * l0 + l1 * l1 + l2 * l2) / iso
+        if inv_iso > 0.0:
+            rot = 0.5 * (l0 * l0 + l1 * l1 + l2 * l2) * inv_iso
         else:
-            wl0, wl1, wl2 = _inverse_world_inertia_times(qi, inv_body, iso, l0, l1, l2)
+            wl0, wl1, wl2 = _inverse_world_inertia_times(qi, inv_body, inv_iso, l0, l1, l2)
             rot = 0.5 * (l0 * wl0 + l1 * wl1 + l2 * wl2)
         rec_e[i, j] = 0.5 * mass * (u0 * u0 + u1 * u1 + u2 * u2) + rot + mass * g * x2
     if record_q:
@@ -226,8 +328,8 @@ def _record(j, i, x0, x1, x2, u0, u1, u2, l0, l1, l2, qi, inv_body, iso, body, m
 
 @njit(cache=True, parallel=True)
 def simulate_batch(
-    x, u, ang, q, w, body, mass, inv_body, iso, normal, stiff, damp, mu, vmin, g, dt,
-    gated, rotation, n_steps, stop_at_rest, v_rest, hold_steps, energy_scale_add,
+    x, u, ang, q, w, body, mass, inv_body, iso, inv_i_min, normal, stiff, damp, mu, vmin, g, dt,
+    gated, rotation, flight, n_steps, stop_at_rest, v_rest, hold_steps, energy_scale_add,
     stride, rec_x, rec_e, rec_q, rec_nodes, status, unstable, rest_time, impacts,
     max_pen, energy_rise, steps,
 ):
@@ -237,9 +339,11 @@ def simulate_batch(
     velocity; ``ang`` (B, 3) angular momentum about it; ``q`` (B, 3, 3) body-to-world rotation;
     ``w`` (B, 3) angular velocity used for corner velocities.
     Die: ``body`` (8, 3) corners relative to the centre of mass, body frame; ``mass``;
-    ``inv_body`` (3, 3) inverse body inertia; ``iso`` the scalar inertia when isotropic, else 0.
+    ``inv_body`` (3, 3) inverse body inertia; ``iso`` the scalar inertia when isotropic, else 0;
+    ``inv_i_min`` the inverse of the smallest principal moment.
     Ground: unit ``normal`` (3,), ``stiff``, ``damp``, ``mu``, ``vmin``; ``g`` along -z; ``gated``
-    (bool) contact law. ``rotation`` (bool): False translates only. Run ``n_steps`` of ``dt``;
+    (bool) contact law. ``rotation`` (bool): False translates only. ``flight`` (bool; gated law
+    or no damping): jump over contact-free steps. Run ``n_steps`` of ``dt``;
     ``stop_at_rest`` ends a die after ``hold_steps`` quiet steps below ``v_rest``.
     ``energy_rise`` gets the largest rise of total energy above its start in units of
     ``KE0 + energy_scale_add``; ``unstable`` marks a state that stopped being finite.
@@ -249,8 +353,28 @@ def simulate_batch(
     """
     for i in prange(x.shape[0]):
         _simulate_one(
-            i, x, u, ang, q, w, body, mass, inv_body, iso, normal, stiff, damp, mu, vmin, g, dt,
-            gated, rotation, n_steps, stop_at_rest, v_rest, hold_steps, energy_scale_add,
-            stride, rec_x, rec_e, rec_q, rec_nodes, status, unstable, rest_time, impacts,
-            max_pen, energy_rise, steps,
+            i, x, u, ang, q, w, body, mass, inv_body, iso, inv_i_min, normal, stiff, damp, mu,
+            vmin, g, dt, gated, rotation, flight, n_steps, stop_at_rest, v_rest, hold_steps,
+            energy_scale_add, stride, rec_x, rec_e, rec_q, rec_nodes, status, unstable,
+            rest_time, impacts, max_pen, energy_rise, steps,
+        )
+
+
+@njit(cache=True)
+def simulate_serial(
+    x, u, ang, q, w, body, mass, inv_body, iso, inv_i_min, normal, stiff, damp, mu, vmin, g, dt,
+    gated, rotation, flight, n_steps, stop_at_rest, v_rest, hold_steps, energy_scale_add,
+    stride, rec_x, rec_e, rec_q, rec_nodes, status, unstable, rest_time, impacts,
+    max_pen, energy_rise, steps,
+):
+    """:func:`simulate_batch` on the calling thread, with the same results.
+
+    Saves the start of a parallel region: for a single throw or one thread.
+    """
+    for i in range(x.shape[0]):
+        _simulate_one(
+            i, x, u, ang, q, w, body, mass, inv_body, iso, inv_i_min, normal, stiff, damp, mu,
+            vmin, g, dt, gated, rotation, flight, n_steps, stop_at_rest, v_rest, hold_steps,
+            energy_scale_add, stride, rec_x, rec_e, rec_q, rec_nodes, status, unstable,
+            rest_time, impacts, max_pen, energy_rise, steps,
         )

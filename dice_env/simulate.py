@@ -118,12 +118,16 @@ def simulate(
     record_every: int = 0,
     record: tuple[str, ...] = ("energy",),
     num_threads: int | None = None,
+    free_flight: bool = True,
 ) -> Result:
     """Run a batch of throws; ``state`` is not modified.
 
     ``t_max`` overrides the scene's time limit. ``record_every`` > 0 stores the centre of mass
     every that many steps, plus what ``record`` names among "energy", "orientations", "nodes".
-    ``num_threads`` caps numba's threads for this call (default: all cores).
+    ``num_threads`` caps numba's threads for this call (default: all cores); a single throw or
+    one thread runs on the calling thread. ``free_flight`` takes the contact-free steps in
+    analytic jumps (gated law, or no damping, where the paper law is the same); False steps them
+    one by one.
     """
     t_max = scene.t_max if t_max is None else t_max
     check_positive("t_max", t_max)
@@ -155,15 +159,19 @@ def simulate(
     die, ground = scene.die, scene.ground
     inertia = die.inertia_body
     iso = float(inertia[0, 0]) if die.is_isotropic else 0.0
+    gated = ground.contact_law == ContactLaw.GATED
+    flight = free_flight and (gated or ground.damping == 0)
     threads = numba.get_num_threads()
     numba.set_num_threads(num_threads or numba.config.NUMBA_NUM_THREADS)
+    serial = b == 1 or numba.get_num_threads() == 1
+    run = kernel.simulate_serial if serial else kernel.simulate_batch
     try:
-        kernel.simulate_batch(
+        run(
             out.position, out.velocity, out.angular_momentum, out.orientation,
             out.angular_velocity, die.corners_body, die.mass, np.linalg.inv(inertia), iso,
-            np.asarray(ground.normal), ground.stiffness, ground.damping, ground.friction,
-            scene.friction_vmin, scene.gravity, dt, ground.contact_law == ContactLaw.GATED,
-            scene.rotation, n_steps, stop_at_rest, scene.rest.speed,
+            1.0 / np.linalg.eigvalsh(inertia)[0], np.asarray(ground.normal), ground.stiffness,
+            ground.damping, ground.friction, scene.friction_vmin, scene.gravity, dt, gated,
+            scene.rotation, flight, n_steps, stop_at_rest, scene.rest.speed,
             math.ceil(scene.rest.hold / dt), die.mass * scene.gravity * die.edge,
             stride, rec["x_cm"], rec["energy"], rec["orientations"], rec["nodes"],
             status, unstable, rest_time, impacts, max_pen, energy_rise, steps,
