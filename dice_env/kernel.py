@@ -39,6 +39,21 @@ RUNNING, SETTLED, NONFINITE = 0, 1, 2
 
 
 @njit(cache=True, inline="always")
+def _cos_sin(angle: float) -> tuple[float, float]:
+    """``cos`` and ``sin`` of ``angle``.
+
+    Below 1/64 rad (a step's rotation, as a rule) from their Taylor series, whose first
+    omitted terms are below 1e-20 relative there, under float64 round-off.
+    """
+    if abs(angle) >= 0.015625:
+        return math.cos(angle), math.sin(angle)
+    a2 = angle * angle
+    c = 1.0 - a2 * (0.5 - a2 * (1.0 / 24.0 - a2 * (1.0 / 720.0 - a2 * (1.0 / 40320.0))))
+    s = angle * (1.0 - a2 * (1.0 / 6.0 - a2 * (1.0 / 120.0 - a2 * (1.0 / 5040.0))))
+    return c, s
+
+
+@njit(cache=True, inline="always")
 def _rotate(q: np.ndarray, w0: float, w1: float, w2: float, dt: float) -> None:
     """Left-multiply the orientation ``q`` (3x3, in place) by the Rodrigues rotation R(w dt)."""
     norm = math.sqrt(w0 * w0 + w1 * w1 + w2 * w2)
@@ -46,8 +61,7 @@ def _rotate(q: np.ndarray, w0: float, w1: float, w2: float, dt: float) -> None:
         return
     inv = 1.0 / norm
     k0, k1, k2 = w0 * inv, w1 * inv, w2 * inv
-    c = math.cos(norm * dt)
-    s = math.sin(norm * dt)
+    c, s = _cos_sin(norm * dt)
     r00 = k0 * k0 + c * (1.0 - k0 * k0)
     r11 = k1 * k1 + c * (1.0 - k1 * k1)
     r22 = k2 * k2 + c * (1.0 - k2 * k2)
@@ -132,8 +146,8 @@ def _torque_free(q: np.ndarray, inv_body: np.ndarray, inv_iso: float, l0: float,
 @njit(cache=True)
 def _simulate_one(
     i, x, u, ang, q, w, body, mass, inv_body, iso, inv_i_min, normal, stiff, damp, mu, vmin, g, dt,
-    gated, rotation, flight, n_steps, stop_at_rest, v_rest, hold_steps, energy_scale_add,
-    stride, rec_x, rec_e, rec_q, rec_nodes, status, unstable, rest_time, impacts,
+    gated, rotation, flight, n_steps, stop_at_rest, v_rest, hold_steps, rest_energy, rest_excess,
+    energy_scale_add, stride, rec_x, rec_e, rec_q, rec_nodes, status, unstable, rest_time, impacts,
     max_pen, energy_rise, steps,
 ):
     """Advance die ``i`` in place; see :func:`simulate_batch` for the arguments."""
@@ -143,6 +157,7 @@ def _simulate_one(
     l0, l1, l2 = ang[i, 0], ang[i, 1], ang[i, 2]
     w0, w1, w2 = (w[i, 0], w[i, 1], w[i, 2]) if rotation else (0.0, 0.0, 0.0)
     inv_iso = 1.0 / iso if iso > 0.0 else 0.0
+    dt_m = dt / mass
     r_max = 0.0
     for k in range(8):
         r_max = max(r_max, math.sqrt(body[k, 0] ** 2 + body[k, 1] ** 2 + body[k, 2] ** 2))
@@ -226,15 +241,15 @@ def _simulate_one(
         if stop_at_rest:
             if touching > 0 and fastest < v_rest * v_rest and kinetic < kinetic_rest:
                 quiet += 1
-                if quiet > hold_steps:
-                    rest_time[i] = (step - 1 - hold_steps) * dt
+                if quiet > hold_steps or energy - rest_energy < rest_excess:
+                    rest_time[i] = (step - quiet) * dt
                     end = SETTLED
                     step -= 1
                     break
             else:
                 quiet = 0
         # 3. centre of mass: velocity first, then position with the new velocity
-        dv0, dv1, dv2 = dt * f0 / mass, dt * f1 / mass, dt * f2 / mass
+        dv0, dv1, dv2 = f0 * dt_m, f1 * dt_m, f2 * dt_m
         jump = 1
         if flight and touching == 0:
             spin = math.sqrt(l0 * l0 + l1 * l1 + l2 * l2) * inv_i_min if rotation else 0.0
@@ -329,8 +344,8 @@ def _record(j, i, x0, x1, x2, u0, u1, u2, l0, l1, l2, qi, inv_body, inv_iso, bod
 @njit(cache=True, parallel=True)
 def simulate_batch(
     x, u, ang, q, w, body, mass, inv_body, iso, inv_i_min, normal, stiff, damp, mu, vmin, g, dt,
-    gated, rotation, flight, n_steps, stop_at_rest, v_rest, hold_steps, energy_scale_add,
-    stride, rec_x, rec_e, rec_q, rec_nodes, status, unstable, rest_time, impacts,
+    gated, rotation, flight, n_steps, stop_at_rest, v_rest, hold_steps, rest_energy, rest_excess,
+    energy_scale_add, stride, rec_x, rec_e, rec_q, rec_nodes, status, unstable, rest_time, impacts,
     max_pen, energy_rise, steps,
 ):
     """Advance a batch of dice in place, in parallel over dice.
@@ -344,7 +359,8 @@ def simulate_batch(
     Ground: unit ``normal`` (3,), ``stiff``, ``damp``, ``mu``, ``vmin``; ``g`` along -z; ``gated``
     (bool) contact law. ``rotation`` (bool): False translates only. ``flight`` (bool; gated law
     or no damping): jump over contact-free steps. Run ``n_steps`` of ``dt``;
-    ``stop_at_rest`` ends a die after ``hold_steps`` quiet steps below ``v_rest``.
+    ``stop_at_rest`` ends a die after ``hold_steps`` quiet steps below ``v_rest``, or at a quiet
+    step whose total energy is less than ``rest_excess`` above ``rest_energy`` (0: never).
     ``energy_rise`` gets the largest rise of total energy above its start in units of
     ``KE0 + energy_scale_add``; ``unstable`` marks a state that stopped being finite.
     Records every ``stride`` steps into ``rec_x`` (B, n, 3), ``rec_e`` (B, n or 0), ``rec_q``
@@ -355,6 +371,7 @@ def simulate_batch(
         _simulate_one(
             i, x, u, ang, q, w, body, mass, inv_body, iso, inv_i_min, normal, stiff, damp, mu,
             vmin, g, dt, gated, rotation, flight, n_steps, stop_at_rest, v_rest, hold_steps,
+            rest_energy, rest_excess,
             energy_scale_add, stride, rec_x, rec_e, rec_q, rec_nodes, status, unstable,
             rest_time, impacts, max_pen, energy_rise, steps,
         )
@@ -363,8 +380,8 @@ def simulate_batch(
 @njit(cache=True)
 def simulate_serial(
     x, u, ang, q, w, body, mass, inv_body, iso, inv_i_min, normal, stiff, damp, mu, vmin, g, dt,
-    gated, rotation, flight, n_steps, stop_at_rest, v_rest, hold_steps, energy_scale_add,
-    stride, rec_x, rec_e, rec_q, rec_nodes, status, unstable, rest_time, impacts,
+    gated, rotation, flight, n_steps, stop_at_rest, v_rest, hold_steps, rest_energy, rest_excess,
+    energy_scale_add, stride, rec_x, rec_e, rec_q, rec_nodes, status, unstable, rest_time, impacts,
     max_pen, energy_rise, steps,
 ):
     """:func:`simulate_batch` on the calling thread, with the same results.
@@ -375,6 +392,7 @@ def simulate_serial(
         _simulate_one(
             i, x, u, ang, q, w, body, mass, inv_body, iso, inv_i_min, normal, stiff, damp, mu,
             vmin, g, dt, gated, rotation, flight, n_steps, stop_at_rest, v_rest, hold_steps,
+            rest_energy, rest_excess,
             energy_scale_add, stride, rec_x, rec_e, rec_q, rec_nodes, status, unstable,
             rest_time, impacts, max_pen, energy_rise, steps,
         )

@@ -84,3 +84,21 @@ def test_serial_and_parallel_paths_are_bit_identical():
         single = State(*(a[k:k + 1] for a in start._arrays()))
         np.testing.assert_array_equal(simulate(scene, single).final.position,
                                       two.final.position[k:k + 1])
+
+
+def test_early_rest_gives_the_rest_that_the_hold_confirms():
+    scene = Scene(t_max=3.0)
+    start = throws(scene, 24, seed=4)
+    early = simulate(scene, start, early_rest=True)
+    held = simulate(scene, start)
+    assert early.settled.all()
+    for name in ("face", "settled", "rest_time", "impacts", "max_penetration", "energy_rise"):
+        np.testing.assert_array_equal(getattr(early, name), getattr(held, name))
+    hold_steps = np.ceil(scene.rest.hold / scene.step)
+    assert (early.steps < held.steps - hold_steps / 2).all()  # most of the hold is skipped
+    # where energy can grow or the die's rest energy differs, the hold is waited out
+    for other in (scene.with_(die=Die.loaded(face=1, fraction=0.2)),
+                  scene.with_(ground=scene.ground.tilted(10.0))):
+        start = throws(other, 2, seed=5)
+        np.testing.assert_array_equal(simulate(other, start, early_rest=True).steps,
+                                      simulate(other, start).steps)

@@ -1,0 +1,385 @@
+"""Speed of the simulator: kernel, throws to rest, the numpy listing and MuJoCo, in one run.
+
+    python benchmarks/physics.py            # full run, a few minutes on 2 cores
+    python benchmarks/physics.py --quick    # smaller sizes, about half a minute
+
+Prints a table and writes ``benchmarks/results/physics.json`` (``--out`` to change). Figures:
+
+- kernel die-steps/s in the paper scene (``real_throw_cube`` defaults, dt = 1e-4, no records,
+  no stop at rest), batch 1 and 1024, 1 and 2 threads, and the numpy transcription of the
+  listing (``tests/listing_transcription.py``) on the same throw, with the ratio;
+- compile time: a fresh process with an empty numba cache (cold) and with the cache (warm),
+  each ``import dice_env`` plus a first single throw plus a first batch on 2 threads;
+- settled throws/s in the default scene (``Scene()``: whatever the default table is) from a
+  seeded set of hand throws (5–15 cm up, 0.5–1 m/s, spin up to 30 rad/s, uniform orientation),
+  single throws and batches of 1024, 1 and 2 threads, with plain stepping beside for reference;
+- MuJoCo (optional ``bench`` extra): a free box of the same size, mass and inertia, friction
+  ``mu``, thrown from the same states onto a plane at its default 2 ms step, run until the same
+  rest rule holds (timed as one ``mj_step(nstep=...)`` call per throw), with ratios;
+- cost against batch size and against simulated time.
+
+Wall-clock times, best of a few repeats; the machine's load average is recorded beside them
+(the cores may be shared).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numba
+import numpy as np
+
+from dice_env import Scene, State, simulate
+from dice_env.die import face_up
+from dice_env.paper import paper_scene
+from dice_env.rotations import quaternion_to_matrix, random_rotations
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "tests"))
+from listing_transcription import real_throw_cube as listing_throw  # noqa: E402
+
+
+def best_time(fn, repeats: int) -> float:
+    """Smallest wall time of ``repeats`` calls of ``fn`` (s)."""
+    times = []
+    for _ in range(repeats):
+        start = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - start)
+    return min(times)
+
+
+def paper_throws(n: int, seed: int = 0) -> State:
+    """The paper's throw, x0 = (0, 0, 3), u0 = (5, 0, 5), L0 = rand*0.75 + 1e-6, no initial ω."""
+    rng = np.random.default_rng(seed)
+    return State(position=np.tile([0.0, 0.0, 3.0], (n, 1)), velocity=np.tile([5.0, 0, 5], (n, 1)),
+                 angular_momentum=rng.random((n, 3)) * 0.75 + 1e-6,
+                 orientation=np.tile(np.eye(3), (n, 1, 1)), angular_velocity=np.zeros((n, 3)))
+
+
+def hand_throws(scene: Scene, n: int, seed: int = 0) -> State:
+    """Seeded hand throws: 5–15 cm up, 0.5–1 m/s, spin up to 30 rad/s, uniform orientation."""
+    rng = np.random.default_rng(seed)
+
+    def directions() -> np.ndarray:
+        v = rng.normal(size=(n, 3))
+        return v / np.linalg.norm(v, axis=1, keepdims=True)
+
+    position = np.column_stack([np.zeros((n, 2)), rng.uniform(0.05, 0.15, n)])
+    velocity = directions() * rng.uniform(0.5, 1.0, (n, 1))
+    spin = directions() * rng.uniform(0.0, 30.0, (n, 1))
+    return State.release(scene, position, velocity, spin, random_rotations(rng, n))
+
+
+def subset(state: State, rows: slice) -> State:
+    return State(*(a[rows] for a in state._arrays()))
+
+
+def kernel_speed(quick: bool) -> dict:
+    """Die-steps/s in the paper scene, and the numpy listing on the same throw."""
+    out = {}
+    for batch, threads, t_max in [(1, 1, 2.0 if quick else 10.0), (1024, 1, 0.05 if quick else 0.3),
+                                  (1024, 2, 0.05 if quick else 0.3)]:
+        scene = paper_scene(t_max=t_max)
+        start = paper_throws(batch)
+        simulate(scene, subset(start, slice(0, 2)), t_max=1e-3, num_threads=threads)  # load
+        elapsed = best_time(lambda s=scene, st=start, th=threads: simulate(
+            s, st, stop_at_rest=False, record=(), num_threads=th), 2 if quick else 3)
+        out[f"batch{batch}_threads{threads}"] = batch * scene.n_steps / elapsed
+    steps = 300 if quick else 3000
+    l0 = paper_throws(1).angular_momentum[0]
+    elapsed = best_time(lambda: listing_throw(l0, clockmax=steps, tmax=steps * 1e-4), 2)
+    out["numpy_listing"] = steps / elapsed
+    out["ratio_batch1_vs_numpy"] = out["batch1_threads1"] / out["numpy_listing"]
+    out["ratio_batch1024_2threads_vs_numpy"] = out["batch1024_threads2"] / out["numpy_listing"]
+    return out
+
+
+_START_SCRIPT = """
+import time
+t0 = time.perf_counter()
+import numpy as np
+from dice_env import Scene, State, simulate
+t1 = time.perf_counter()
+scene = Scene()
+simulate(scene, State.release(scene, [0, 0, 0.1], [0.5, 0, 0], [10.0, 5, 0]), num_threads=1)
+t2 = time.perf_counter()
+simulate(scene, State.release(scene, np.tile([0, 0, 0.1], (4, 1)), [0.5, 0, 0]), num_threads=2)
+t3 = time.perf_counter()
+print(t1 - t0, t2 - t1, t3 - t2)
+"""
+
+
+def start_times() -> dict:
+    """Import and first throws in fresh processes: empty numba cache (cold), then warm."""
+    out = {}
+    with tempfile.TemporaryDirectory() as cache:
+        env = {**os.environ, "NUMBA_CACHE_DIR": cache}
+        for label in ("cold", "warm"):
+            line = subprocess.run([sys.executable, "-c", _START_SCRIPT], env=env, check=True,
+                                  capture_output=True, text=True, cwd=ROOT).stdout.split()
+            imp, first, batch = (float(v) for v in line)
+            out[label] = {"import_s": imp, "first_throw_s": first, "first_batch_2threads_s": batch,
+                          "import_and_first_throw_s": imp + first}
+    return out
+
+
+def throws_to_rest(quick: bool) -> tuple[dict, State, dict]:
+    """Settled throws/s in the default scene; returns the figures, the throws and the results."""
+    scene = Scene()
+    n = 256 if quick else 1024
+    start = hand_throws(scene, n, seed=1)
+    simulate(scene, subset(start, slice(0, 2)), t_max=1e-3, num_threads=2)  # load
+    simulate(scene, subset(start, slice(0, 1)), t_max=1e-3)
+    out = {"scene": {"edge_m": scene.die.edge, "mass_kg": scene.die.mass,
+                     "stiffness": scene.ground.stiffness, "damping": scene.ground.damping,
+                     "friction": scene.ground.friction, "dt_s": scene.step,
+                     "t_max_s": scene.t_max, "rest_speed": scene.rest.speed,
+                     "rest_hold_s": scene.rest.hold}, "throws": n}
+    results = {}
+    for threads in (1, 2):
+        for flight in (True, False):
+            if not flight and (quick or threads == 2):
+                continue
+            start_b = start if flight else subset(start, slice(0, n // 8))
+            res = None
+
+            def run(st=start_b, th=threads, ff=flight):
+                nonlocal res
+                res = simulate(scene, st, num_threads=th, free_flight=ff)
+
+            elapsed = best_time(run, 1 if quick else 2)
+            key = f"batch{start_b.batch_size}_threads{threads}" + ("" if flight else "_plain")
+            out[key] = start_b.batch_size / elapsed
+            results[key] = res
+    single_n = 64 if quick else 256
+    elapsed = best_time(lambda: [simulate(scene, subset(start, slice(k, k + 1)))
+                                 for k in range(single_n)], 1 if quick else 2)
+    out["single_throws_per_s"] = single_n / elapsed
+    out["single_throw_ms"] = 1e3 * elapsed / single_n
+    res = results[f"batch{n}_threads1"]
+    out["settled_fraction"] = float(res.settled.mean())
+    out["mean_rest_time_s"] = float(res.rest_time.mean())
+    out["mean_steps"] = float(res.steps.mean())
+    out["mean_impacts"] = float(res.impacts.mean())
+    out["face_counts"] = np.bincount(res.face, minlength=7)[1:].tolist()
+    return out, start, res
+
+
+_MJCF = """
+<mujoco>
+  <option timestep="{dt}" gravity="0 0 -{g}"/>
+  <worldbody>
+    <geom type="plane" size="1 1 0.1" friction="{mu} 0.005 0.0001"/>
+    <body name="die">
+      <freejoint/>
+      <geom type="box" size="{h} {h} {h}" friction="{mu} 0.005 0.0001"/>
+      <inertial pos="0 0 0" mass="{m}" diaginertia="{i} {i} {i}"/>
+    </body>
+  </worldbody>
+</mujoco>
+"""
+
+
+def mujoco_to_rest(scene: Scene, start: State, horizon: float) -> dict | None:
+    """MuJoCo on the same die and throws: steps until the scene's rest rule holds, CPU time."""
+    try:
+        import mujoco
+        from mujoco import rollout
+    except ImportError:
+        return None
+    die = scene.die
+    model = mujoco.MjModel.from_xml_string(_MJCF.format(
+        dt=0.002, g=scene.gravity, mu=scene.ground.friction, h=die.half_edge, m=die.mass,
+        i=die.inertia_body[0, 0]))
+    data = mujoco.MjData(model)
+    dt = model.opt.timestep
+    inertia = die.inertia_body[0, 0]
+    n = start.batch_size
+    quat = np.zeros((n, 4))
+    for k in range(n):
+        mujoco.mju_mat2Quat(quat[k], start.orientation[k].ravel())
+    spin_body = np.einsum("bji,bj->bi", start.orientation, start.angular_velocity)
+    qpos = np.hstack([start.position, quat])
+    qvel = np.hstack([start.velocity, spin_body])
+    size = mujoco.mj_stateSize(model, mujoco.mjtState.mjSTATE_FULLPHYSICS)
+    initial = np.zeros((n, size))
+    for k in range(n):
+        mujoco.mj_resetData(model, data)
+        data.qpos[:], data.qvel[:] = qpos[k], qvel[k]
+        mujoco.mj_getState(model, data, initial[k], mujoco.mjtState.mjSTATE_FULLPHYSICS)
+    n_steps = round(horizon / dt)
+    hold = int(np.ceil(scene.rest.hold / dt))
+    v_rest = scene.rest.speed
+    rest_steps = np.full(n, n_steps)
+    face = np.zeros(n, np.int64)
+    for chunk in range(0, n, 32):  # rest steps and faces from a rollout of each 32 throws
+        rows = slice(chunk, chunk + 32)
+        states, _ = rollout.rollout(model, data, initial[rows], nstep=n_steps)
+        vel, w_body = states[..., 8:11], states[..., 11:14]
+        rot = quaternion_to_matrix(states[..., 4:8])
+        corners = np.einsum("btij,cj->btci", rot, die.corners_body)
+        omega = np.einsum("btij,btj->bti", rot, w_body)
+        speed = np.linalg.norm(vel[:, :, None] + np.cross(omega[:, :, None], corners),
+                               axis=-1).max(axis=-1)
+        kinetic = 0.5 * die.mass * (vel**2).sum(-1) + 0.5 * inertia * (w_body**2).sum(-1)
+        lowest = (states[..., 3, None] + corners[..., 2]).min(axis=-1)
+        quiet = (lowest < 1e-3) & (speed < v_rest) & (kinetic < 0.5 * die.mass * v_rest**2)
+        for k in range(quiet.shape[0]):
+            run = 0
+            for j in range(n_steps):
+                run = run + 1 if quiet[k, j] else 0
+                if run > hold:
+                    rest_steps[chunk + k] = j + 1
+                    break
+        last = rot[np.arange(quiet.shape[0]), rest_steps[rows] - 1]
+        face[rows] = face_up(last, np.array([0.0, 0.0, 1.0]))
+    settled = rest_steps < n_steps
+    # time exactly the steps each throw needs, one C call per throw
+    elapsed = 0.0
+    for k in range(n):
+        mujoco.mj_resetData(model, data)
+        data.qpos[:], data.qvel[:] = qpos[k], qvel[k]
+        begin = time.perf_counter()
+        mujoco.mj_step(model, data, nstep=int(rest_steps[k]))
+        elapsed += time.perf_counter() - begin
+    return {"version": mujoco.__version__, "timestep_s": dt, "throws": n,
+            "settled_fraction": float(settled.mean()),
+            "mean_rest_time_s": float(((rest_steps - hold) * dt)[settled].mean()),
+            "mean_steps": float(rest_steps.mean()),
+            "cpu_per_throw_ms": 1e3 * elapsed / n, "throws_per_s_1thread": n / elapsed,
+            "face_counts": np.bincount(face, minlength=7)[1:].tolist()}
+
+
+def batch_scaling(start: State, quick: bool) -> dict:
+    """Settled throws/s in the default scene against batch size, 2 threads."""
+    scene = Scene()
+    out = {}
+    for size in (1, 16, 256, 1024) if quick else (1, 16, 64, 256, 1024, 4096):
+        st = subset(start, slice(0, size)) if size <= start.batch_size else hand_throws(
+            scene, size, seed=2)
+        out[size] = size / best_time(lambda s=st: simulate(scene, s, num_threads=2), 1 if quick
+                                     else 2)
+    return out
+
+
+def time_scaling(start: State, quick: bool) -> dict:
+    """CPU time per throw in the default scene against simulated time (no stop at rest)."""
+    scene = Scene()
+    st = subset(start, slice(0, 64 if quick else 256))
+    out = {}
+    for t_max in (0.1, 0.25, 0.5, 1.0, 2.0, 4.0):
+        elapsed = best_time(lambda t=t_max: simulate(scene, st, t_max=t, stop_at_rest=False,
+                                                     num_threads=1), 1)
+        plain = best_time(lambda t=t_max: simulate(scene, subset(st, slice(0, 16)), t_max=t,
+                                                   stop_at_rest=False, num_threads=1,
+                                                   free_flight=False), 1)
+        out[t_max] = {"ms_per_throw": 1e3 * elapsed / st.batch_size,
+                      "ms_per_throw_plain": 1e3 * plain / 16}
+    return out
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--quick", action="store_true", help="small sizes, about half a minute")
+    parser.add_argument("--out", type=Path, default=ROOT / "benchmarks/results/physics.json")
+    parser.add_argument("--no-mujoco", action="store_true", help="skip the MuJoCo comparison")
+    args = parser.parse_args()
+    report = {"command": "python benchmarks/physics.py" + (" --quick" if args.quick else ""),
+              "machine": {"cpu": _cpu_name(), "cores": os.cpu_count(),
+                          "python": platform.python_version(), "numba": numba.__version__,
+                          "numpy": np.__version__, "load_average_start": os.getloadavg()}}
+    report["start"] = start_times()
+    report["paper_scene_die_steps_per_s"] = kernel_speed(args.quick)
+    rest, start, _ = throws_to_rest(args.quick)
+    report["default_scene_throws_to_rest"] = rest
+    if not args.no_mujoco:
+        mj = mujoco_to_rest(Scene(), subset(start, slice(0, 128 if args.quick else 512)), 6.0)
+        if mj is not None:
+            mj["ratio_ours_1thread"] = rest[f"batch{start.batch_size}_threads1"] / mj[
+                "throws_per_s_1thread"]
+            mj["ratio_ours_2threads_vs_mujoco_2cores"] = rest[
+                f"batch{start.batch_size}_threads2"] / (2 * mj["throws_per_s_1thread"])
+            mj["ratio_single_throw"] = rest["single_throws_per_s"] / mj["throws_per_s_1thread"]
+        report["mujoco"] = mj
+    report["throws_per_s_vs_batch_2threads"] = batch_scaling(start, args.quick)
+    report["cost_vs_simulated_time"] = time_scaling(start, args.quick)
+    report["machine"]["load_average_end"] = os.getloadavg()
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    args.out.write_text(json.dumps(report, indent=2) + "\n")
+    print(format_report(report))
+    print(f"wrote {args.out}")
+
+
+def _cpu_name() -> str:
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.processor()
+
+
+def format_report(r: dict) -> str:
+    k = r["paper_scene_die_steps_per_s"]
+    d = r["default_scene_throws_to_rest"]
+    n = d["throws"]
+    lines = [f"machine: {r['machine']['cpu']}, {r['machine']['cores']} cores, load average "
+             f"{r['machine']['load_average_start'][0]:.2f} -> "
+             f"{r['machine']['load_average_end'][0]:.2f}",
+             "", "paper scene, dt = 1e-4 (die-steps/s)",
+             f"  batch 1, 1 thread        {k['batch1_threads1'] / 1e6:8.2f} M",
+             f"  batch 1024, 1 thread     {k['batch1024_threads1'] / 1e6:8.2f} M",
+             f"  batch 1024, 2 threads    {k['batch1024_threads2'] / 1e6:8.2f} M",
+             f"  numpy listing            {k['numpy_listing'] / 1e6:8.4f} M   "
+             f"(kernel batch 1: {k['ratio_batch1_vs_numpy']:.0f}x, batch 1024 on 2 threads: "
+             f"{k['ratio_batch1024_2threads_vs_numpy']:.0f}x)", ""]
+    for label in ("cold", "warm"):
+        s = r["start"][label]
+        lines.append(f"start, {label} cache: import {s['import_s']:.2f} s, first throw "
+                     f"{s['first_throw_s']:.2f} s, first 2-thread batch "
+                     f"{s['first_batch_2threads_s']:.2f} s")
+    sc = d["scene"]
+    lines += ["", f"default scene (S={sc['stiffness']:g}, D={sc['damping']:g}, "
+              f"mu={sc['friction']:g}, dt={sc['dt_s']:.3g} s): settled throws/s, {n} hand throws",
+              f"  single throws            {d['single_throws_per_s']:10.0f}   "
+              f"({d['single_throw_ms']:.3f} ms per throw)",
+              f"  batch {n}, 1 thread   {d[f'batch{n}_threads1']:10.0f}",
+              f"  batch {n}, 2 threads  {d[f'batch{n}_threads2']:10.0f}"]
+    plain = [key for key in d if key.endswith("_plain")]
+    for key in plain:
+        lines.append(f"  plain stepping ({key.split('_')[0]}, 1 thread) {d[key]:8.0f}")
+    lines.append(f"  settled {d['settled_fraction']:.3f}, mean rest time "
+                 f"{d['mean_rest_time_s']:.3f} s, mean impacts {d['mean_impacts']:.1f}, "
+                 f"faces {d['face_counts']}")
+    mj = r.get("mujoco")
+    if mj:
+        lines += ["", f"MuJoCo {mj['version']} (dt {mj['timestep_s']} s, {mj['throws']} same "
+                  f"throws): {mj['throws_per_s_1thread']:.0f} throws/s on 1 thread "
+                  f"({mj['cpu_per_throw_ms']:.3f} ms per throw), settled "
+                  f"{mj['settled_fraction']:.3f}, mean rest time {mj['mean_rest_time_s']:.3f} s, "
+                  f"faces {mj['face_counts']}",
+                  f"  ours / MuJoCo: 1 thread {mj['ratio_ours_1thread']:.2f}x, 2 threads vs 2 "
+                  f"cores {mj['ratio_ours_2threads_vs_mujoco_2cores']:.2f}x, single throws "
+                  f"{mj['ratio_single_throw']:.2f}x"]
+    lines += ["", "batch size -> settled throws/s (2 threads)"]
+    lines += [f"  {size:>6} {rate:10.0f}" for size, rate in
+              r["throws_per_s_vs_batch_2threads"].items()]
+    lines += ["", "simulated time -> ms of CPU per throw (1 thread, no stop at rest)",
+              "       t_max   free flight   plain stepping"]
+    lines += [f"  {t:8.2f} s {v['ms_per_throw']:10.3f} {v['ms_per_throw_plain']:14.3f}"
+              for t, v in r["cost_vs_simulated_time"].items()]
+    return "\n".join(lines)
+
+
+if __name__ == "__main__":
+    main()
