@@ -49,12 +49,17 @@ from listing_transcription import real_throw_cube as listing_throw  # noqa: E402
 
 def best_time(fn, repeats: int) -> float:
     """Smallest wall time of ``repeats`` calls of ``fn`` (s)."""
+    return timed(fn, repeats)[0]
+
+
+def timed(fn, repeats: int) -> tuple[float, object]:
+    """Smallest wall time of ``repeats`` calls of ``fn`` (s), and the last call's result."""
     times = []
     for _ in range(repeats):
         start = time.perf_counter()
-        fn()
+        result = fn()
         times.append(time.perf_counter() - start)
-    return min(times)
+    return min(times), result
 
 
 def paper_throws(n: int, seed: int = 0) -> State:
@@ -132,46 +137,45 @@ def start_times() -> dict:
     return out
 
 
-def throws_to_rest(quick: bool) -> tuple[dict, State, dict]:
-    """Settled throws/s in the default scene; returns the figures, the throws and the results."""
-    scene = Scene()
+# How the throws to rest are run: simulate() keywords.
+MODES = {"plain stepping": {"free_flight": False}, "free flight": {},
+         "free flight + early rest": {"early_rest": True}}
+FASTEST = "free flight + early rest"
+
+
+def throws_to_rest(scene: Scene, quick: bool) -> tuple[dict, State]:
+    """Settled throws/s in ``scene`` for each of :data:`MODES`; also returns the throws."""
     n = 256 if quick else 1024
     start = hand_throws(scene, n, seed=1)
-    simulate(scene, subset(start, slice(0, 2)), t_max=1e-3, num_threads=2)  # load
+    simulate(scene, subset(start, slice(0, 2)), t_max=1e-3, num_threads=2)  # load the kernels
     simulate(scene, subset(start, slice(0, 1)), t_max=1e-3)
     out = {"scene": {"edge_m": scene.die.edge, "mass_kg": scene.die.mass,
                      "stiffness": scene.ground.stiffness, "damping": scene.ground.damping,
                      "friction": scene.ground.friction, "dt_s": scene.step,
                      "t_max_s": scene.t_max, "rest_speed": scene.rest.speed,
-                     "rest_hold_s": scene.rest.hold}, "throws": n}
-    results = {}
-    for threads in (1, 2):
-        for flight in (True, False):
-            if not flight and (quick or threads == 2):
-                continue
-            start_b = start if flight else subset(start, slice(0, n // 8))
-            res = None
-
-            def run(st=start_b, th=threads, ff=flight):
-                nonlocal res
-                res = simulate(scene, st, num_threads=th, free_flight=ff)
-
-            elapsed = best_time(run, 1 if quick else 2)
-            key = f"batch{start_b.batch_size}_threads{threads}" + ("" if flight else "_plain")
-            out[key] = start_b.batch_size / elapsed
-            results[key] = res
-    single_n = 64 if quick else 256
-    elapsed = best_time(lambda: [simulate(scene, subset(start, slice(k, k + 1)))
-                                 for k in range(single_n)], 1 if quick else 2)
-    out["single_throws_per_s"] = single_n / elapsed
-    out["single_throw_ms"] = 1e3 * elapsed / single_n
-    res = results[f"batch{n}_threads1"]
-    out["settled_fraction"] = float(res.settled.mean())
-    out["mean_rest_time_s"] = float(res.rest_time.mean())
-    out["mean_steps"] = float(res.steps.mean())
-    out["mean_impacts"] = float(res.impacts.mean())
-    out["face_counts"] = np.bincount(res.face, minlength=7)[1:].tolist()
-    return out, start, res
+                     "rest_hold_s": scene.rest.hold}, "modes": {}}
+    repeats = 1 if quick else 2
+    for mode, kwargs in MODES.items():
+        plain = mode == "plain stepping"
+        size = n // 8 if plain else n
+        batch = subset(start, slice(0, size))
+        row = {"batch": size}
+        for threads in (1, 2):
+            elapsed, res = timed(lambda th=threads, kw=kwargs, b=batch: simulate(
+                scene, b, num_threads=th, **kw), repeats)
+            row[f"batch_threads{threads}"] = size / elapsed
+        singles = (16 if plain else 64) if quick else (32 if plain else 256)
+        elapsed = best_time(lambda kw=kwargs, m=singles: [
+            simulate(scene, subset(start, slice(k, k + 1)), **kw) for k in range(m)], repeats)
+        row.update({"single_throws_per_s": singles / elapsed,
+                    "single_throw_ms": 1e3 * elapsed / singles,
+                    "settled_fraction": float(res.settled.mean()),
+                    "mean_rest_time_s": float(res.rest_time.mean()),
+                    "mean_steps": float(res.steps.mean()),
+                    "mean_impacts": float(res.impacts.mean()),
+                    "face_counts": np.bincount(res.face, minlength=7)[1:].tolist()})
+        out["modes"][mode] = row
+    return out, start
 
 
 _MJCF = """
@@ -259,37 +263,48 @@ def mujoco_to_rest(scene: Scene, start: State, horizon: float) -> dict | None:
             "face_counts": np.bincount(face, minlength=7)[1:].tolist()}
 
 
-def batch_scaling(start: State, quick: bool) -> dict:
-    """Settled throws/s in the default scene against batch size, 2 threads."""
-    scene = Scene()
+def batch_scaling(scene: Scene, start: State, quick: bool) -> dict:
+    """Settled throws/s against batch size, 2 threads, the fastest mode."""
     out = {}
     for size in (1, 16, 256, 1024) if quick else (1, 16, 64, 256, 1024, 4096):
-        st = subset(start, slice(0, size)) if size <= start.batch_size else hand_throws(
+        batch = subset(start, slice(0, size)) if size <= start.batch_size else hand_throws(
             scene, size, seed=2)
-        out[size] = size / best_time(lambda s=st: simulate(scene, s, num_threads=2), 1 if quick
-                                     else 2)
+        out[size] = size / best_time(lambda b=batch: simulate(
+            scene, b, num_threads=2, **MODES[FASTEST]), 1 if quick else 2)
     return out
 
 
-def time_scaling(start: State, quick: bool) -> dict:
-    """CPU time per throw in the default scene against simulated time (no stop at rest)."""
-    scene = Scene()
-    st = subset(start, slice(0, 64 if quick else 256))
+def time_scaling(scene: Scene, start: State, quick: bool) -> dict:
+    """CPU time per throw against simulated time (1 thread, no stop at rest)."""
+    batch = subset(start, slice(0, 64 if quick else 256))
+    plain_batch = subset(start, slice(0, 16))
     out = {}
     for t_max in (0.1, 0.25, 0.5, 1.0, 2.0, 4.0):
-        elapsed = best_time(lambda t=t_max: simulate(scene, st, t_max=t, stop_at_rest=False,
+        elapsed = best_time(lambda t=t_max: simulate(scene, batch, t_max=t, stop_at_rest=False,
                                                      num_threads=1), 1)
-        plain = best_time(lambda t=t_max: simulate(scene, subset(st, slice(0, 16)), t_max=t,
+        plain = best_time(lambda t=t_max: simulate(scene, plain_batch, t_max=t,
                                                    stop_at_rest=False, num_threads=1,
                                                    free_flight=False), 1)
-        out[t_max] = {"ms_per_throw": 1e3 * elapsed / st.batch_size,
-                      "ms_per_throw_plain": 1e3 * plain / 16}
+        out[t_max] = {"ms_per_throw": 1e3 * elapsed / batch.batch_size,
+                      "ms_per_throw_plain": 1e3 * plain / plain_batch.batch_size}
+    return out
+
+
+def scenes() -> dict[str, Scene]:
+    """The default scene, and the realistic table of ``dice_env.table`` if it differs."""
+    out = {"Scene()": Scene()}
+    try:
+        from dice_env.table import table_scene
+    except ImportError:
+        return out
+    if table_scene() != out["Scene()"]:
+        out["table_scene()"] = table_scene()
     return out
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("--quick", action="store_true", help="small sizes, about half a minute")
+    parser.add_argument("--quick", action="store_true", help="small sizes, about a minute")
     parser.add_argument("--out", type=Path, default=ROOT / "benchmarks/results/physics.json")
     parser.add_argument("--no-mujoco", action="store_true", help="skip the MuJoCo comparison")
     args = parser.parse_args()
@@ -299,19 +314,23 @@ def main() -> None:
                           "numpy": np.__version__, "load_average_start": os.getloadavg()}}
     report["start"] = start_times()
     report["paper_scene_die_steps_per_s"] = kernel_speed(args.quick)
-    rest, start, _ = throws_to_rest(args.quick)
-    report["default_scene_throws_to_rest"] = rest
-    if not args.no_mujoco:
-        mj = mujoco_to_rest(Scene(), subset(start, slice(0, 128 if args.quick else 512)), 6.0)
-        if mj is not None:
-            mj["ratio_ours_1thread"] = rest[f"batch{start.batch_size}_threads1"] / mj[
-                "throws_per_s_1thread"]
-            mj["ratio_ours_2threads_vs_mujoco_2cores"] = rest[
-                f"batch{start.batch_size}_threads2"] / (2 * mj["throws_per_s_1thread"])
-            mj["ratio_single_throw"] = rest["single_throws_per_s"] / mj["throws_per_s_1thread"]
-        report["mujoco"] = mj
-    report["throws_per_s_vs_batch_2threads"] = batch_scaling(start, args.quick)
-    report["cost_vs_simulated_time"] = time_scaling(start, args.quick)
+    report["throws_to_rest"] = {}
+    for name, scene in scenes().items():
+        rest, start = throws_to_rest(scene, args.quick)
+        report["throws_to_rest"][name] = rest
+        if name == "Scene()":
+            report["throws_per_s_vs_batch_2threads"] = batch_scaling(scene, start, args.quick)
+            report["cost_vs_simulated_time"] = time_scaling(scene, start, args.quick)
+        if not args.no_mujoco:
+            mj = mujoco_to_rest(scene, subset(start, slice(0, 128 if args.quick else 512)), 6.0)
+            if mj is not None:
+                mj["ratios"] = {mode: {
+                    "batch_1thread": row["batch_threads1"] / mj["throws_per_s_1thread"],
+                    "batch_2threads_vs_2cores": row["batch_threads2"] / (
+                        2 * mj["throws_per_s_1thread"]),
+                    "single_throws": row["single_throws_per_s"] / mj["throws_per_s_1thread"]}
+                    for mode, row in rest["modes"].items()}
+            rest["mujoco"] = mj
     report["machine"]["load_average_end"] = os.getloadavg()
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text(json.dumps(report, indent=2) + "\n")
@@ -330,12 +349,12 @@ def _cpu_name() -> str:
 
 
 def format_report(r: dict) -> str:
+    """The report as a plain-text table."""
     k = r["paper_scene_die_steps_per_s"]
-    d = r["default_scene_throws_to_rest"]
-    n = d["throws"]
-    lines = [f"machine: {r['machine']['cpu']}, {r['machine']['cores']} cores, load average "
-             f"{r['machine']['load_average_start'][0]:.2f} -> "
-             f"{r['machine']['load_average_end'][0]:.2f}",
+    load = r["machine"]
+    lines = [f"{r['command']}",
+             f"machine: {load['cpu']}, {load['cores']} cores, load average "
+             f"{load['load_average_start'][0]:.2f} -> {load['load_average_end'][0]:.2f}",
              "", "paper scene, dt = 1e-4 (die-steps/s)",
              f"  batch 1, 1 thread        {k['batch1_threads1'] / 1e6:8.2f} M",
              f"  batch 1024, 1 thread     {k['batch1024_threads1'] / 1e6:8.2f} M",
@@ -345,36 +364,38 @@ def format_report(r: dict) -> str:
              f"{k['ratio_batch1024_2threads_vs_numpy']:.0f}x)", ""]
     for label in ("cold", "warm"):
         s = r["start"][label]
-        lines.append(f"start, {label} cache: import {s['import_s']:.2f} s, first throw "
-                     f"{s['first_throw_s']:.2f} s, first 2-thread batch "
-                     f"{s['first_batch_2threads_s']:.2f} s")
-    sc = d["scene"]
-    lines += ["", f"default scene (S={sc['stiffness']:g}, D={sc['damping']:g}, "
-              f"mu={sc['friction']:g}, dt={sc['dt_s']:.3g} s): settled throws/s, {n} hand throws",
-              f"  single throws            {d['single_throws_per_s']:10.0f}   "
-              f"({d['single_throw_ms']:.3f} ms per throw)",
-              f"  batch {n}, 1 thread   {d[f'batch{n}_threads1']:10.0f}",
-              f"  batch {n}, 2 threads  {d[f'batch{n}_threads2']:10.0f}"]
-    plain = [key for key in d if key.endswith("_plain")]
-    for key in plain:
-        lines.append(f"  plain stepping ({key.split('_')[0]}, 1 thread) {d[key]:8.0f}")
-    lines.append(f"  settled {d['settled_fraction']:.3f}, mean rest time "
-                 f"{d['mean_rest_time_s']:.3f} s, mean impacts {d['mean_impacts']:.1f}, "
-                 f"faces {d['face_counts']}")
-    mj = r.get("mujoco")
-    if mj:
-        lines += ["", f"MuJoCo {mj['version']} (dt {mj['timestep_s']} s, {mj['throws']} same "
-                  f"throws): {mj['throws_per_s_1thread']:.0f} throws/s on 1 thread "
-                  f"({mj['cpu_per_throw_ms']:.3f} ms per throw), settled "
-                  f"{mj['settled_fraction']:.3f}, mean rest time {mj['mean_rest_time_s']:.3f} s, "
-                  f"faces {mj['face_counts']}",
-                  f"  ours / MuJoCo: 1 thread {mj['ratio_ours_1thread']:.2f}x, 2 threads vs 2 "
-                  f"cores {mj['ratio_ours_2threads_vs_mujoco_2cores']:.2f}x, single throws "
-                  f"{mj['ratio_single_throw']:.2f}x"]
-    lines += ["", "batch size -> settled throws/s (2 threads)"]
+        lines.append(f"start, {label} cache: import {s['import_s']:.2f} s + first throw "
+                     f"{s['first_throw_s']:.2f} s = {s['import_and_first_throw_s']:.2f} s; "
+                     f"first 2-thread batch {s['first_batch_2threads_s']:.2f} s")
+    for name, d in r["throws_to_rest"].items():
+        sc = d["scene"]
+        lines += ["", f"{name}: S={sc['stiffness']:g}, D={sc['damping']:.4g}, "
+                  f"mu={sc['friction']:g}, dt={sc['dt_s']:.3g} s; settled throws/s",
+                  "  mode                       batch  1 thread  2 threads   single  ms/single"
+                  "  rest s  steps"]
+        for mode, row in d["modes"].items():
+            lines.append(f"  {mode:<25} {row['batch']:6d} {row['batch_threads1']:9.0f} "
+                         f"{row['batch_threads2']:10.0f} {row['single_throws_per_s']:8.0f} "
+                         f"{row['single_throw_ms']:10.3f} {row['mean_rest_time_s']:7.3f} "
+                         f"{row['mean_steps']:6.0f}")
+        row = d["modes"][FASTEST]
+        lines.append(f"  settled {row['settled_fraction']:.3f}, impacts "
+                     f"{row['mean_impacts']:.1f}, faces {row['face_counts']}")
+        mj = d.get("mujoco")
+        if mj:
+            ratio = mj["ratios"][FASTEST]
+            lines += [f"  MuJoCo {mj['version']} (dt {mj['timestep_s']} s, {mj['throws']} of "
+                      f"these throws): {mj['throws_per_s_1thread']:.0f} throws/s on 1 thread "
+                      f"({mj['cpu_per_throw_ms']:.3f} ms per throw), settled "
+                      f"{mj['settled_fraction']:.3f}, rest {mj['mean_rest_time_s']:.3f} s, "
+                      f"faces {mj['face_counts']}",
+                      f"  ours ({FASTEST}) / MuJoCo: 1 thread {ratio['batch_1thread']:.2f}x, "
+                      f"2 threads vs 2 cores {ratio['batch_2threads_vs_2cores']:.2f}x, single "
+                      f"throws {ratio['single_throws']:.2f}x"]
+    lines += ["", f"Scene(), {FASTEST}: batch size -> settled throws/s (2 threads)"]
     lines += [f"  {size:>6} {rate:10.0f}" for size, rate in
               r["throws_per_s_vs_batch_2threads"].items()]
-    lines += ["", "simulated time -> ms of CPU per throw (1 thread, no stop at rest)",
+    lines += ["", "Scene(): simulated time -> ms of CPU per throw (1 thread, no stop at rest)",
               "       t_max   free flight   plain stepping"]
     lines += [f"  {t:8.2f} s {v['ms_per_throw']:10.3f} {v['ms_per_throw_plain']:14.3f}"
               for t, v in r["cost_vs_simulated_time"].items()]

@@ -16,12 +16,12 @@ records unless asked (and then only every ``stride`` steps).
 
 Free flight (``flight``: gated law, or ``D = 0`` where the paper law is the same): a step whose
 corners are all above the plane feels gravity alone, and so do the following steps until a
-corner can reach the plane. A lower bound
-on the lowest corner (centre on its exact discrete parabola, corners moving at most
-``|w| r_max`` along the normal) gives how many steps are surely contact-free; they are taken in
-one jump: the centre in the closed form of those Euler steps, the orientation by one rotation
-of angle ``N |w| dt`` (isotropic die: ``w`` is constant) or by the plain torque-free rotation
-steps (loaded die). Every other step is the plain step above.
+corner can reach the plane. A lower bound on the lowest corner (centre on its exact discrete
+parabola, corners moving at most ``|w| r_max`` along the normal) gives how many steps are
+surely contact-free; all but the last (so a contact step always follows a plain one) are taken
+in one jump: the centre in the closed form of those Euler steps, the orientation by one
+rotation of angle ``N |w| dt`` (isotropic die: ``w`` is constant) or by the plain torque-free
+rotation steps (loaded die). Every other step is the plain step above.
 
 Dice are independent: each die steps until its time limit, rest, or a non-finite state, so
 results are bit-identical for any batch size or thread count (``prange`` over the batch).
@@ -253,8 +253,9 @@ def _simulate_one(
         jump = 1
         if flight and touching == 0:
             spin = math.sqrt(l0 * l0 + l1 * l1 + l2 * l2) * inv_i_min if rotation else 0.0
-            jump = _free_steps(lowest, n0 * u0 + n1 * u1 + n2 * u2, spin, r_max,
-                               n0 * dv0 + n1 * dv1 + n2 * dv2, dt, n_steps - step + 1)
+            # all but the last free step, so the step before a contact is a plain one
+            jump = max(1, _free_steps(lowest, n0 * u0 + n1 * u1 + n2 * u2, spin, r_max,
+                                      n0 * dv0 + n1 * dv1 + n2 * dv2, dt, n_steps - step + 1) - 1)
         if jump > 1:
             # records falling inside the jump, from the same closed form (the jump itself does
             # not depend on the recording)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -141,7 +142,7 @@ def simulate(
                          f"got {sorted(unknown)}")
     if not isinstance(record_every, (int, np.integer)) or record_every < 0:
         raise ValueError(f"record_every must be an int >= 0, got {record_every!r}")
-    dt = scene.step
+    dt, body, inv_inertia, iso, inv_i_min, normal = _scene_constants(scene)
     n_steps = max(1, round(t_max / dt))
     out = state.copy()
     b = out.batch_size
@@ -161,8 +162,6 @@ def simulate(
     energy_rise = np.zeros(b)
     steps = np.zeros(b, np.int64)
     die, ground = scene.die, scene.ground
-    inertia = die.inertia_body
-    iso = float(inertia[0, 0]) if die.is_isotropic else 0.0
     gated = ground.contact_law == ContactLaw.GATED
     flight = free_flight and (gated or ground.damping == 0)
     threads = numba.get_num_threads()
@@ -172,8 +171,8 @@ def simulate(
     try:
         run(
             out.position, out.velocity, out.angular_momentum, out.orientation,
-            out.angular_velocity, die.corners_body, die.mass, np.linalg.inv(inertia), iso,
-            1.0 / np.linalg.eigvalsh(inertia)[0], np.asarray(ground.normal), ground.stiffness,
+            out.angular_velocity, body, die.mass, inv_inertia, iso, inv_i_min, normal,
+            ground.stiffness,
             ground.damping, ground.friction, scene.friction_vmin, scene.gravity, dt, gated,
             scene.rotation, flight, n_steps, stop_at_rest, scene.rest.speed,
             math.ceil(scene.rest.hold / dt), *_rest_energy(scene, early_rest),
@@ -191,10 +190,31 @@ def simulate(
         recorded = {"t": np.arange(1, n_rec + 1) * (stride * dt), "x_cm": rec["x_cm"]}
         recorded.update({name: rec[name] for name in record})
     return Result(
-        face=face_up(out.orientation, np.asarray(ground.normal)),
+        face=face_up(out.orientation, normal),
         settled=settled, rest_time=rest_time, impacts=impacts, unstable=unstable,
         energy_rise=energy_rise, max_penetration=max_pen, steps=steps, final=out, **recorded,
     )
+
+
+def _scene_constants(scene: Scene) -> tuple:
+    """Kernel constants of ``scene``, computed once per (frozen, hashable) scene.
+
+    The step, corners, inverse inertia, isotropic inertia (or 0), inverse smallest principal
+    moment and ground normal.
+    """
+    try:
+        return _cached_constants(scene)
+    except TypeError:  # a scene holding something unhashable
+        return _cached_constants.__wrapped__(scene)
+
+
+@functools.lru_cache(maxsize=64)
+def _cached_constants(scene: Scene) -> tuple:
+    die = scene.die
+    inertia = die.inertia_body
+    return (scene.step, die.corners_body, np.linalg.inv(inertia),
+            float(inertia[0, 0]) if die.is_isotropic else 0.0,
+            1.0 / np.linalg.eigvalsh(inertia)[0], np.asarray(scene.ground.normal))
 
 
 def _rest_energy(scene: Scene, early_rest: bool) -> tuple[float, float]:
