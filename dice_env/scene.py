@@ -12,6 +12,7 @@ from enum import IntEnum
 
 import numpy as np
 
+from dice_env import table
 from dice_env.die import FACE_NORMALS, Die
 from dice_env.validation import check_finite, check_nonnegative, check_positive, check_range
 
@@ -29,16 +30,32 @@ class ContactLaw(IntEnum):
     PAPER = 1
 
 
+class Scheme(IntEnum):
+    """How a step treats the contact forces (see :mod:`dice_env.kernel`).
+
+    ``PAPER`` (default): the listing's step. ``MIDPOINT``: damping and friction from the corner
+    velocity extrapolated to the middle of the step's kick, and the damping of a corner that just
+    touched weighted by its time in contact; second order for smooth friction (a large
+    ``friction_vmin``), no better than ``PAPER`` with the listing's sign-like friction (see
+    ``docs/error-vs-runtime.md``).
+    """
+
+    PAPER = 0
+    MIDPOINT = 1
+
+
 @dataclass(frozen=True)
 class Ground:
     """Penalty ground: a plane through the origin with unit ``normal``.
 
     ``stiffness`` S (N/m per corner), ``damping`` D (N s/m per corner), sliding ``friction`` mu.
+    The defaults are the wooden table of :mod:`dice_env.table` for the default 4.5 g die
+    (restitution 0.45); :func:`dice_env.table.table_scene` recomputes D for another die.
     """
 
-    stiffness: float = 1e5
-    damping: float = 0.4
-    friction: float = 0.4
+    stiffness: float = table.STIFFNESS
+    damping: float = table.DAMPING
+    friction: float = table.FRICTION
     normal: tuple[float, float, float] = (0.0, 0.0, 1.0)
     contact_law: ContactLaw = ContactLaw.GATED
 
@@ -91,8 +108,9 @@ class Scene:
     ``dt=None`` picks ``safety * critical_dt``. A ``dt`` above :attr:`critical_dt` raises unless
     ``allow_unstable=True``. ``rotation=False`` is the paper's ground_cube.m: the die translates
     only. ``friction_vmin`` is the listing's ``umin``, added to the tangential speed before
-    dividing. A throw is flagged unstable when its total energy (kinetic + potential + ground
-    springs) exceeds its start by more than ``energy_tol`` times ``KE0 + m*g*edge``.
+    dividing: friction is Coulomb well above it and viscous below it. ``scheme``: see
+    :class:`Scheme`. A throw is flagged unstable when its total energy (kinetic + potential +
+    ground springs) exceeds its start by more than ``energy_tol`` times ``KE0 + m*g*edge``.
     """
 
     die: Die = field(default_factory=Die)
@@ -103,6 +121,7 @@ class Scene:
     t_max: float = 10.0
     rotation: bool = True
     friction_vmin: float = 1e-6
+    scheme: Scheme = Scheme.PAPER
     rest: Rest = field(default_factory=Rest)
     energy_tol: float = 0.1
     allow_unstable: bool = False
@@ -119,6 +138,7 @@ class Scene:
         check_positive("t_max", self.t_max)
         check_positive("friction_vmin", self.friction_vmin)
         check_positive("energy_tol", self.energy_tol)
+        object.__setattr__(self, "scheme", Scheme(self.scheme))
         if self.dt is not None:
             check_positive("dt", self.dt)
             if self.dt > self.critical_dt and not self.allow_unstable:
@@ -161,10 +181,14 @@ class Scene:
 
         The modified (symplectic) Euler step of ``m_eff x'' = -S x - D x'`` is stable iff
         ``(w dt)^2 + 2 (D/m_eff) dt < 4`` with ``w^2 = S/m_eff``, i.e.
-        ``dt < (sqrt(D^2 + 4 S m_eff) - D) / S``.
+        ``dt < (sqrt(D^2 + 4 S m_eff) - D) / S``. With the midpoint damping
+        (``1.5 v_n - 0.5 v_n-1``) the eigenvalue -1 is reached at
+        ``(w dt)^2 + 4 (D/m_eff) dt = 4``, i.e. ``dt < 2 (sqrt(D^2 + S m_eff) - D) / S``.
         """
-        s, d = self.ground.stiffness, self.ground.damping
-        return (math.sqrt(d * d + 4.0 * s * self.effective_mass) - d) / s
+        s, d, m = self.ground.stiffness, self.ground.damping, self.effective_mass
+        if self.scheme == Scheme.MIDPOINT:
+            return 2.0 * (math.sqrt(d * d + s * m) - d) / s
+        return (math.sqrt(d * d + 4.0 * s * m) - d) / s
 
     @property
     def step(self) -> float:

@@ -12,7 +12,7 @@ import numpy as np
 from dice_env import kernel
 from dice_env.die import face_up
 from dice_env.rotations import orthonormality_error
-from dice_env.scene import ContactLaw, Scene
+from dice_env.scene import ContactLaw, Scene, Scheme
 from dice_env.validation import as_batch, check_positive
 
 
@@ -174,7 +174,8 @@ def simulate(
             out.angular_velocity, body, die.mass, inv_inertia, iso, inv_i_min, normal,
             ground.stiffness,
             ground.damping, ground.friction, scene.friction_vmin, scene.gravity, dt, gated,
-            scene.rotation, flight, n_steps, stop_at_rest, scene.rest.speed,
+            scene.rotation, flight, scene.scheme == Scheme.MIDPOINT, n_steps, stop_at_rest,
+            scene.rest.speed,
             math.ceil(scene.rest.hold / dt), *_rest_energy(scene, early_rest),
             die.mass * scene.gravity * die.edge,
             stride, rec["x_cm"], rec["energy"], rec["orientations"], rec["nodes"],

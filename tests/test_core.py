@@ -155,7 +155,8 @@ def test_effective_mass_and_critical_step():
 @pytest.mark.parametrize(("factor", "blows_up"), [(0.95, False), (1.05, True)])
 def test_critical_step_by_experiment(factor, blows_up):
     # a die resting on its four corners, pressed in to 1.5x its static sink: a linear oscillator
-    base = Scene(rotation=False, ground=Ground(friction=0.0))
+    # (light damping: with the table's D = 6.4 the clip at zero force bounds the growth at 1.05x)
+    base = Scene(rotation=False, ground=Ground(friction=0.0, damping=0.4))
     scene = base.with_(dt=factor * base.critical_dt, allow_unstable=True)
     sink = scene.die.mass * scene.gravity / (4 * scene.ground.stiffness)
     start = State.release(scene, [0, 0, scene.die.half_edge - 1.5 * sink], [0, 0, 0])

@@ -5,7 +5,7 @@ import pytest
 from listing_transcription import ground_cube as listing_ground
 from listing_transcription import real_throw_cube as listing_throw
 
-from dice_env import Die, Scene, State, paper, simulate
+from dice_env import Die, Ground, Scene, State, paper, simulate
 from dice_env.rotations import random_rotations
 
 
@@ -19,7 +19,9 @@ def throws(scene: Scene, n: int, seed: int = 0) -> State:
 
 @pytest.mark.parametrize("die", [Die(), Die.loaded(face=6, fraction=0.3)], ids=["fair", "loaded"])
 def test_free_flight_agrees_with_plain_stepping_within_its_error(die):
-    scene = Scene(die=die, t_max=0.3)  # the first two or three impacts
+    # the first two or three impacts; light damping: with the table's D = 6.4 these throws
+    # rattle more and round-off grows chaotically to 9e-3 rad in one of them by 0.3 s
+    scene = Scene(die=die, t_max=0.3, ground=Ground(damping=0.4))
     start = throws(scene, 6, seed=1)
     kwargs = {"stop_at_rest": False, "record_every": 50, "record": ("orientations",)}
     jumped = simulate(scene, start, **kwargs)

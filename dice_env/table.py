@@ -1,0 +1,157 @@
+"""A real die on a real table: measured material values, damping from restitution.
+
+The default scene is a common 16 mm acrylic die (4.5 g) thrown on a wooden table:
+
+=====================  ==========  ==========================================================
+quantity               value       source / reason
+=====================  ==========  ==========================================================
+edge                   16 mm       the common size of a game die
+mass                   4.5 g       16 mm cube of PMMA (1.18 g/cm³) is 4.8 g, less pips and
+                                   rounded corners
+restitution (normal)   0.45        die-on-table impacts, see ``docs/error-vs-runtime.md``
+friction (sliding)     0.4         dry wood against plastics, see the same page
+stiffness per corner   1e5 N/m     a corner sinks at most about 3 % of the edge in a throw
+=====================  ==========  ==========================================================
+
+The ground law is a linear spring-dashpot per corner, ``fn = max(0, S dg - D un)``. For a
+flat landing the four bottom corners carry a quarter of the mass each, so one corner is the
+oscillator ``(m/4) x'' + D x' + S x = 0`` with damping ratio ``zeta = D / (2 sqrt(S m/4))``.
+Without the clip at zero its restitution is the classical
+``e = exp(-pi zeta / sqrt(1 - zeta^2))``. With the clip, the corner leaves the table when the
+force reaches zero, before the spring is relaxed, so ``e`` is higher; :func:`restitution`
+gives that exact value (Schwager & Pöschel 2007) and :func:`damping_for_restitution` inverts
+it, so the default damping gives the target restitution. :func:`measured_restitution`
+measures what the simulator actually produces.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from dice_env.validation import check_positive, check_range
+
+if TYPE_CHECKING:  # the scene takes its defaults from here, so import it lazily
+    from dice_env.scene import Scene
+
+# A common 16 mm game die (m, kg).
+DIE_EDGE = 0.016
+DIE_MASS = 0.0045
+# Normal restitution of the die on a wooden table (flat landing, about 1 m/s).
+RESTITUTION = 0.45
+# Sliding friction coefficient, plastic die on dry wood.
+FRICTION = 0.4
+# Ground stiffness per corner (N/m): corners sink at most about 3 % of the edge.
+STIFFNESS = 1e5
+
+
+def restitution(zeta: float, *, clipped: bool = True) -> float:
+    """Normal restitution of a linear spring-dashpot with damping ratio ``zeta`` in [0, 1).
+
+    ``clipped=False``: the classical ``exp(-pi zeta / sqrt(1 - zeta^2))`` (contact for half a
+    damped period, the force turning attractive at the end). ``clipped=True``: the force is
+    ``max(0, ...)``, so the contact ends when ``S x + D x' = 0``, at
+    ``wd t* = pi - atan2(2 zeta sqrt(1 - zeta^2), 1 - 2 zeta^2)``, and
+    ``e = -x'(t*) / v0`` (Schwager & Pöschel 2007). Gravity is neglected.
+    """
+    check_range("zeta", zeta, 0.0, 1.0, high_open=True)
+    root = math.sqrt(1.0 - zeta * zeta)
+    if not clipped:
+        return math.exp(-math.pi * zeta / root)
+    phase = math.pi - math.atan2(2.0 * zeta * root, 1.0 - 2.0 * zeta * zeta)
+    decay = math.exp(-zeta * phase / root)
+    return -decay * (math.cos(phase) - zeta / root * math.sin(phase))
+
+
+def damping_ratio(target: float, *, clipped: bool = True) -> float:
+    """The damping ratio whose :func:`restitution` is ``target`` (in (0, 1]).
+
+    Unclipped: ``zeta = -ln e / sqrt(pi^2 + ln^2 e)``; clipped: solved by bisection.
+    """
+    check_range("restitution", target, 0.0, 1.0)
+    if target == 0.0:
+        raise ValueError("restitution must be in (0, 1], got 0")
+    log_e = math.log(target)
+    zeta = -log_e / math.sqrt(math.pi**2 + log_e**2)
+    if not clipped:
+        return zeta
+    # the clipped restitution falls monotonically from 1 (zeta = 0) to a floor near 0.1
+    low, high = 0.0, 0.999
+    if restitution(high) > target:
+        raise ValueError(f"restitution must be >= {restitution(high):.3f} with the clipped law, "
+                         f"got {target}")
+    for _ in range(100):
+        mid = 0.5 * (low + high)
+        if restitution(mid) > target:
+            low = mid
+        else:
+            high = mid
+    return 0.5 * (low + high)
+
+
+def damping_for_restitution(
+    target: float, stiffness: float, mass: float, *, clipped: bool = True
+) -> float:
+    """Per-corner damping D (N s/m) giving restitution ``target`` for a flat landing.
+
+    ``D = 2 zeta sqrt(S m/4) = zeta sqrt(S m)``, ``zeta`` from :func:`damping_ratio`.
+    """
+    check_positive("stiffness", stiffness)
+    check_positive("mass", mass)
+    return damping_ratio(target, clipped=clipped) * math.sqrt(stiffness * mass)
+
+
+# Per-corner damping (N s/m) of the default table for the default die.
+DAMPING = damping_for_restitution(RESTITUTION, STIFFNESS, DIE_MASS)
+
+
+def table_scene(
+    *,
+    edge: float = DIE_EDGE,
+    mass: float = DIE_MASS,
+    restitution: float = RESTITUTION,
+    friction: float = FRICTION,
+    stiffness: float = STIFFNESS,
+    **scene_options: object,
+) -> Scene:
+    """A uniform die of ``edge`` and ``mass`` on a table of the given restitution and friction.
+
+    The damping is recomputed for the die's mass; ``scene_options`` go to :class:`Scene`
+    (``dt``, ``safety``, ``t_max``, ...). ``Scene()`` equals ``table_scene()``.
+    """
+    from dice_env.die import Die
+    from dice_env.scene import Ground, Scene
+
+    ground = Ground(stiffness=stiffness, friction=friction,
+                    damping=damping_for_restitution(restitution, stiffness, mass))
+    return Scene(die=Die(edge=edge, mass=mass), ground=ground, **scene_options)
+
+
+def measured_restitution(scene: Scene, speed: float = 1.0) -> float:
+    """Restitution the simulator produces for a flat, spin-free landing at ``speed`` (m/s).
+
+    The die starts with its bottom face on the plane (``normal`` along z) moving down at
+    ``speed``; the result is the upward speed when the face crosses the plane again (the
+    gravity between leaving and crossing is undone exactly) over ``speed``.
+    """
+    from dice_env.simulate import State, simulate
+
+    check_positive("speed", speed)
+    if scene.ground.normal != (0.0, 0.0, 1.0):
+        raise ValueError(f"scene.ground.normal must be (0, 0, 1), got {scene.ground.normal}")
+    die, g = scene.die, scene.gravity
+    height = die.half_edge + die.com[2]
+    state = State.release(scene, np.array([0.0, 0.0, height]), np.array([0.0, 0.0, -speed]))
+    # contact lasts about pi sqrt(m / 4 S); simulate ten times that, plus a little flight
+    span = 10.0 * math.pi * math.sqrt(die.mass / (4.0 * scene.ground.stiffness))
+    result = simulate(scene, state, t_max=span, stop_at_rest=False, record_every=1, record=())
+    z = result.x_cm[0, :, 2]
+    vz = np.diff(z, prepend=height) / scene.step
+    left = np.flatnonzero((z > height) & (vz > 0))
+    if left.size == 0:
+        raise ValueError(f"the die did not leave the table within {span:.3g} s at speed {speed}")
+    j = left[0]
+    return math.sqrt(vz[j] ** 2 + 2.0 * g * (z[j] - height)) / speed
+
