@@ -18,8 +18,10 @@ Prints a table and writes ``benchmarks/results/physics.json`` (``--out`` to chan
   rest rule holds (timed as one ``mj_step(nstep=...)`` call per throw), with ratios;
 - cost against batch size and against simulated time.
 
-Wall-clock times, best of a few repeats; the machine's load average is recorded beside them
-(the cores may be shared).
+Best of a few repeats. One-thread figures are the calling thread's CPU time (not inflated by
+other processes on shared cores), two-thread figures wall-clock time; the machine's load
+average is recorded beside them. ``step_budget`` shows where a throw's steps go and the floor
+the contact steps set.
 """
 
 from __future__ import annotations
@@ -47,18 +49,23 @@ sys.path.insert(0, str(ROOT / "tests"))
 from listing_transcription import real_throw_cube as listing_throw  # noqa: E402
 
 
-def best_time(fn, repeats: int) -> float:
-    """Smallest wall time of ``repeats`` calls of ``fn`` (s)."""
-    return timed(fn, repeats)[0]
+def best_time(fn, repeats: int, threads: int = 1) -> float:
+    """Smallest time of ``repeats`` calls of ``fn`` (s); see :func:`timed`."""
+    return timed(fn, repeats, threads)[0]
 
 
-def timed(fn, repeats: int) -> tuple[float, object]:
-    """Smallest wall time of ``repeats`` calls of ``fn`` (s), and the last call's result."""
+def timed(fn, repeats: int, threads: int = 1) -> tuple[float, object]:
+    """Smallest time of ``repeats`` calls of ``fn`` (s), and the last call's result.
+
+    Work on the calling thread alone (``threads=1``) is timed by that thread's CPU time, which
+    other processes on shared cores do not inflate; parallel work by the wall clock.
+    """
+    clock = time.thread_time if threads == 1 else time.perf_counter
     times = []
     for _ in range(repeats):
-        start = time.perf_counter()
+        start = clock()
         result = fn()
-        times.append(time.perf_counter() - start)
+        times.append(clock() - start)
     return min(times), result
 
 
@@ -97,7 +104,7 @@ def kernel_speed(quick: bool) -> dict:
         start = paper_throws(batch)
         simulate(scene, subset(start, slice(0, 2)), t_max=1e-3, num_threads=threads)  # load
         elapsed = best_time(lambda s=scene, st=start, th=threads: simulate(
-            s, st, stop_at_rest=False, record=(), num_threads=th), 2 if quick else 3)
+            s, st, stop_at_rest=False, record=(), num_threads=th), 2 if quick else 3, threads)
         out[f"batch{batch}_threads{threads}"] = batch * scene.n_steps / elapsed
     steps = 300 if quick else 3000
     l0 = paper_throws(1).angular_momentum[0]
@@ -162,7 +169,7 @@ def throws_to_rest(scene: Scene, quick: bool) -> tuple[dict, State]:
         row = {"batch": size}
         for threads in (1, 2):
             elapsed, res = timed(lambda th=threads, kw=kwargs, b=batch: simulate(
-                scene, b, num_threads=th, **kw), repeats)
+                scene, b, num_threads=th, **kw), repeats, threads)
             row[f"batch_threads{threads}"] = size / elapsed
         singles = (16 if plain else 64) if quick else (32 if plain else 256)
         elapsed = best_time(lambda kw=kwargs, m=singles: [
@@ -252,15 +259,50 @@ def mujoco_to_rest(scene: Scene, start: State, horizon: float) -> dict | None:
     for k in range(n):
         mujoco.mj_resetData(model, data)
         data.qpos[:], data.qvel[:] = qpos[k], qvel[k]
-        begin = time.perf_counter()
+        begin = time.thread_time()
         mujoco.mj_step(model, data, nstep=int(rest_steps[k]))
-        elapsed += time.perf_counter() - begin
+        elapsed += time.thread_time() - begin
     return {"version": mujoco.__version__, "timestep_s": dt, "throws": n,
             "settled_fraction": float(settled.mean()),
             "mean_rest_time_s": float(((rest_steps - hold) * dt)[settled].mean()),
             "mean_steps": float(rest_steps.mean()),
             "cpu_per_throw_ms": 1e3 * elapsed / n, "throws_per_s_1thread": n / elapsed,
             "face_counts": np.bincount(face, minlength=7)[1:].tolist()}
+
+
+def step_budget(scene: Scene, start: State, quick: bool) -> dict:
+    """Where the steps of a throw go, and the cost floor they set for the explicit scheme.
+
+    From a plain-stepped record of some throws: steps with every corner above the table (what
+    free flight skips), steps in contact before the rest begins, and the hold. The floor is the
+    contact steps at the measured cost of a contact step (a die resting on the table).
+    """
+    n = 8 if quick else 32
+    t_max = scene.t_max
+    flight, contact, hold = [], [], []
+    for chunk in range(0, n, 8):
+        batch = subset(start, slice(chunk, chunk + 8))
+        res = simulate(scene, batch, t_max=t_max, record_every=1, record=("orientations",),
+                       free_flight=False, num_threads=2)
+        corners = np.einsum("btij,cj->btci", res.orientations, scene.die.corners_body)
+        height = (res.x_cm[:, :, None, :] + corners) @ np.asarray(scene.ground.normal)
+        for k in range(batch.batch_size):
+            rest = round(res.rest_time[k] / scene.step)
+            free = (height[k, :rest].min(axis=-1) >= 0).sum()
+            flight.append(free)
+            contact.append(rest - free)
+            hold.append(res.steps[k] - rest)
+    resting = State.release(scene, [0, 0, scene.die.half_edge], [0, 0, 0])
+    resting = subset(resting, np.zeros(64, int))
+    steps = round(0.2 / scene.step)
+    elapsed = best_time(lambda: simulate(scene, resting, t_max=0.2, stop_at_rest=False,
+                                         num_threads=1), 2)
+    ns_contact = 1e9 * elapsed / (64 * steps)
+    floor = float(np.mean(contact)) * ns_contact * 1e-9
+    return {"throws": n, "mean_flight_steps": float(np.mean(flight)),
+            "mean_contact_steps_before_rest": float(np.mean(contact)),
+            "mean_hold_steps": float(np.mean(hold)), "ns_per_contact_step_1thread": ns_contact,
+            "floor_ms_per_throw": 1e3 * floor, "ceiling_throws_per_s_per_core": 1.0 / floor}
 
 
 def batch_scaling(scene: Scene, start: State, quick: bool) -> dict:
@@ -270,7 +312,7 @@ def batch_scaling(scene: Scene, start: State, quick: bool) -> dict:
         batch = subset(start, slice(0, size)) if size <= start.batch_size else hand_throws(
             scene, size, seed=2)
         out[size] = size / best_time(lambda b=batch: simulate(
-            scene, b, num_threads=2, **MODES[FASTEST]), 1 if quick else 2)
+            scene, b, num_threads=2, **MODES[FASTEST]), 1 if quick else 2, threads=2)
     return out
 
 
@@ -318,6 +360,7 @@ def main() -> None:
     for name, scene in scenes().items():
         rest, start = throws_to_rest(scene, args.quick)
         report["throws_to_rest"][name] = rest
+        rest["step_budget"] = step_budget(scene, start, args.quick)
         if name == "Scene()":
             report["throws_per_s_vs_batch_2threads"] = batch_scaling(scene, start, args.quick)
             report["cost_vs_simulated_time"] = time_scaling(scene, start, args.quick)
@@ -381,6 +424,14 @@ def format_report(r: dict) -> str:
         row = d["modes"][FASTEST]
         lines.append(f"  settled {row['settled_fraction']:.3f}, impacts "
                      f"{row['mean_impacts']:.1f}, faces {row['face_counts']}")
+        b = d["step_budget"]
+        lines.append(f"  steps per throw ({b['throws']} throws, plain stepping): flight "
+                     f"{b['mean_flight_steps']:.0f}, contact before rest "
+                     f"{b['mean_contact_steps_before_rest']:.0f}, hold "
+                     f"{b['mean_hold_steps']:.0f}; a contact step costs "
+                     f"{b['ns_per_contact_step_1thread']:.0f} ns, so the contact steps alone "
+                     f"take {b['floor_ms_per_throw']:.3f} ms: at most "
+                     f"{b['ceiling_throws_per_s_per_core']:.0f} throws/s per core")
         mj = d.get("mujoco")
         if mj:
             ratio = mj["ratios"][FASTEST]
