@@ -5,8 +5,9 @@ import pytest
 from listing_transcription import ground_cube as listing_ground
 from listing_transcription import real_throw_cube as listing_throw
 
-from dice_env import Die, Ground, Scene, State, paper, simulate
+from dice_env import Die, Scene, State, paper, simulate
 from dice_env.rotations import random_rotations
+from dice_env.scene import Scheme
 
 
 def throws(scene: Scene, n: int, seed: int = 0) -> State:
@@ -17,11 +18,16 @@ def throws(scene: Scene, n: int, seed: int = 0) -> State:
                          rng.uniform(-30, 30, (n, 3)), random_rotations(rng, n))
 
 
-@pytest.mark.parametrize("die", [Die(), Die.loaded(face=6, fraction=0.3)], ids=["fair", "loaded"])
-def test_free_flight_agrees_with_plain_stepping_within_its_error(die):
-    # the first two or three impacts; light damping: with the table's D = 6.4 these throws
-    # rattle more and round-off grows chaotically to 9e-3 rad in one of them by 0.3 s
-    scene = Scene(die=die, t_max=0.3, ground=Ground(damping=0.4))
+@pytest.mark.parametrize(("die", "scheme", "bound"), [
+    (Die(), Scheme.PAPER, 0.05),
+    (Die.loaded(face=6, fraction=0.3), Scheme.PAPER, 0.05),
+    (Die(), Scheme.MIDPOINT, 1e-5),
+], ids=["fair", "loaded", "fair-midpoint"])
+def test_free_flight_agrees_with_plain_stepping_within_its_error(die, scheme, bound):
+    # through the first two or three impacts on the default table. Jumping changes only
+    # round-off, which the chaotic rattling amplifies like any other perturbation (fastest
+    # under the listing's sign-like friction): compare it with the step's own error, per throw
+    scene = Scene(die=die, t_max=0.3, scheme=scheme)
     start = throws(scene, 6, seed=1)
     kwargs = {"stop_at_rest": False, "record_every": 50, "record": ("orientations",)}
     jumped = simulate(scene, start, **kwargs)
@@ -29,11 +35,11 @@ def test_free_flight_agrees_with_plain_stepping_within_its_error(die):
     half = simulate(scene.with_(dt=scene.step / 2), start, free_flight=False,
                     **{**kwargs, "record_every": 100})
     assert (jumped.steps == plain.steps).all()
-    gap = np.abs(jumped.x_cm - plain.x_cm).max()
-    stepping_error = np.abs(half.x_cm - plain.x_cm).max()
-    assert stepping_error > 1e-4  # the step's own error through the impacts, about 2 mm
-    assert gap < 1e-6 * stepping_error / 1e-4
-    np.testing.assert_allclose(jumped.orientations, plain.orientations, atol=1e-6)
+    for name in ("x_cm", "orientations"):
+        a, b, c = (getattr(r, name).reshape(6, -1) for r in (jumped, plain, half))
+        gap, stepping_error = np.abs(a - b).max(axis=1), np.abs(c - b).max(axis=1)
+        assert (stepping_error > 1e-6).all()
+        assert (gap < bound * stepping_error).all()
 
 
 def test_a_fall_jumped_in_closed_form_lands_where_stepping_does():
