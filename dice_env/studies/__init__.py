@@ -13,6 +13,7 @@ STUDIES = {
     "paper": "dice_env.studies.paper_figures",
     "stability": "dice_env.studies.stability",
     "fairness": "dice_env.studies.fairness",
+    "error": "dice_env.studies.convergence",
 }
 
 

@@ -1,0 +1,86 @@
+"""The realistic table: damping from restitution, the restitution obtained, corner sink."""
+
+import math
+
+import numpy as np
+import pytest
+
+from dice_env import Ground, Scene, State, simulate, table
+from dice_env.rotations import random_rotations
+
+
+def test_classical_relation_and_its_inverse():
+    zeta = 0.3
+    assert table.restitution(zeta, clipped=False) == pytest.approx(
+        math.exp(-math.pi * zeta / math.sqrt(1 - zeta**2)), rel=1e-14)
+    for target in (0.2, 0.45, 0.7, 0.95):
+        for clipped in (False, True):
+            zeta = table.damping_ratio(target, clipped=clipped)
+            assert table.restitution(zeta, clipped=clipped) == pytest.approx(target, abs=1e-12)
+
+
+def test_clipping_raises_the_restitution():
+    assert table.restitution(0.0) == pytest.approx(1.0)
+    for zeta in (0.05, 0.3, 0.6, 0.9):
+        assert table.restitution(zeta) > table.restitution(zeta, clipped=False)
+    # e = 0.45 needs zeta = 0.301 with the clip; the classical 0.246 would give 0.51
+    assert table.damping_ratio(0.45) == pytest.approx(0.3010, abs=1e-4)
+    assert table.restitution(table.damping_ratio(0.45, clipped=False)) == pytest.approx(
+        0.511, abs=1e-3)
+
+
+def test_default_scene_is_the_table():
+    assert Scene() == table.table_scene()
+    assert Ground().damping == table.DAMPING == pytest.approx(
+        table.damping_ratio(0.45) * math.sqrt(1e5 * 0.0045))
+    heavy = table.table_scene(mass=4 * table.DIE_MASS)
+    assert heavy.ground.damping == pytest.approx(2 * table.DAMPING)
+    assert heavy.die.mass == 4 * table.DIE_MASS
+
+
+@pytest.mark.parametrize("speed", [0.3, 1.0, 3.0])
+def test_measured_restitution_approaches_the_target(speed):
+    scene = Scene()
+    coarse = table.measured_restitution(scene, speed)
+    fine = table.measured_restitution(scene.with_(dt=scene.step / 4), speed)
+    # the step's own error: about +0.01 at the default step, +0.002 at a quarter of it
+    assert fine < coarse < 0.465
+    assert fine == pytest.approx(0.45, abs=0.003)
+
+
+def test_classical_damping_with_the_clip_bounces_higher():
+    ground = Ground(damping=table.damping_for_restitution(0.45, 1e5, 0.0045, clipped=False))
+    scene = Scene(ground=ground)
+    measured = table.measured_restitution(scene.with_(dt=scene.step / 4))
+    assert measured == pytest.approx(table.restitution(table.damping_ratio(0.45, clipped=False)),
+                                     abs=0.005)
+
+
+def test_corners_sink_at_most_about_three_percent_of_the_edge():
+    scene = Scene(t_max=2.0)
+    rng = np.random.default_rng(7)
+    n = 48
+    # vigorous throws: 30 cm, 1.5 m/s, 30 rad/s
+    start = State.release(scene, np.column_stack([np.zeros((n, 2)), np.full(n, 0.3)]),
+                          rng.normal(0, 1.5 / math.sqrt(3), (n, 3)),
+                          rng.normal(0, 30 / math.sqrt(3), (n, 3)), random_rotations(rng, n))
+    res = simulate(scene, start)
+    assert res.settled.all()
+    assert res.max_penetration.max() < 0.035 * scene.die.edge
+    assert np.median(res.rest_time) < 1.5  # a few bounces, not the paper's 20-30 s
+
+
+@pytest.mark.parametrize(
+    ("call", "message"),
+    [
+        (lambda: table.restitution(1.0), "zeta must be in"),
+        (lambda: table.damping_ratio(0.0), "restitution must be in"),
+        (lambda: table.damping_ratio(0.05), "restitution must be >="),
+        (lambda: table.damping_for_restitution(0.45, -1.0, 0.0045), "stiffness must be"),
+        (lambda: table.measured_restitution(Scene(), -1.0), "speed must be"),
+        (lambda: table.measured_restitution(Scene(ground=Ground.tilted(10))), "normal must be"),
+    ],
+)
+def test_bad_input(call, message):
+    with pytest.raises(ValueError, match=message):
+        call()
