@@ -48,38 +48,32 @@ RUNNING, SETTLED, NONFINITE = 0, 1, 2
 
 
 @njit(cache=True, inline="always")
-def _cos_sin(angle: float) -> tuple[float, float]:
-    """``cos`` and ``sin`` of ``angle``.
-
-    Below 1/64 rad (a step's rotation, as a rule) from their Taylor series, whose first
-    omitted terms are below 1e-20 relative there, under float64 round-off.
-    """
-    if abs(angle) >= 0.015625:
-        return math.cos(angle), math.sin(angle)
-    a2 = angle * angle
-    c = 1.0 - a2 * (0.5 - a2 * (1.0 / 24.0 - a2 * (1.0 / 720.0 - a2 * (1.0 / 40320.0))))
-    s = angle * (1.0 - a2 * (1.0 / 6.0 - a2 * (1.0 / 120.0 - a2 * (1.0 / 5040.0))))
-    return c, s
-
-
-@njit(cache=True, inline="always")
 def _rotate(q: np.ndarray, w0: float, w1: float, w2: float, dt: float) -> None:
-    """Left-multiply the orientation ``q`` (3x3, in place) by the Rodrigues rotation R(w dt)."""
-    norm = math.sqrt(w0 * w0 + w1 * w1 + w2 * w2)
-    if norm == 0.0:
+    """Left-multiply the orientation ``q`` (3x3, in place) by the Rodrigues rotation R(w dt).
+
+    With ``v = w dt`` and ``t = |v|``: ``R = (1 - b t^2) E + a [v]x + b v v^T``,
+    ``a = sin(t)/t``, ``b = (1 - cos t)/t^2`` (the listing's ``P + cos(E - P) + sin [k]x``
+    rearranged). Below 1/64 rad, a step's rotation as a rule, ``a`` and ``b`` come from their
+    series in ``t^2`` (first omitted terms below 1e-25): no square root, division or library
+    call. ``R = E`` exactly when ``w = 0``.
+    """
+    v0, v1, v2 = w0 * dt, w1 * dt, w2 * dt
+    t2 = v0 * v0 + v1 * v1 + v2 * v2
+    if t2 == 0.0:
         return
-    inv = 1.0 / norm
-    k0, k1, k2 = w0 * inv, w1 * inv, w2 * inv
-    c, s = _cos_sin(norm * dt)
-    r00 = k0 * k0 + c * (1.0 - k0 * k0)
-    r11 = k1 * k1 + c * (1.0 - k1 * k1)
-    r22 = k2 * k2 + c * (1.0 - k2 * k2)
-    r01 = k0 * k1 - c * k0 * k1 - s * k2
-    r10 = k1 * k0 - c * k1 * k0 + s * k2
-    r02 = k0 * k2 - c * k0 * k2 + s * k1
-    r20 = k2 * k0 - c * k2 * k0 - s * k1
-    r12 = k1 * k2 - c * k1 * k2 - s * k0
-    r21 = k2 * k1 - c * k2 * k1 + s * k0
+    if t2 < 2.44140625e-4:
+        a = 1.0 - t2 * (1.0 / 6.0 - t2 * (1.0 / 120.0 - t2 * (1.0 / 5040.0 - t2 / 362880.0)))
+        b = 0.5 - t2 * (1.0 / 24.0 - t2 * (1.0 / 720.0 - t2 * (1.0 / 40320.0 - t2 / 3628800.0)))
+    else:
+        t = math.sqrt(t2)
+        a = math.sin(t) / t
+        half = math.sin(0.5 * t) / t
+        b = 2.0 * half * half
+    d = 1.0 - b * t2
+    r00, r11, r22 = d + b * v0 * v0, d + b * v1 * v1, d + b * v2 * v2
+    r01, r10 = b * v0 * v1 - a * v2, b * v0 * v1 + a * v2
+    r02, r20 = b * v0 * v2 + a * v1, b * v0 * v2 - a * v1
+    r12, r21 = b * v1 * v2 - a * v0, b * v1 * v2 + a * v0
     for j in range(3):
         q0, q1, q2 = q[0, j], q[1, j], q[2, j]
         q[0, j] = r00 * q0 + r01 * q1 + r02 * q2
