@@ -1,0 +1,1 @@
+"""Agents for DiceThrow-v0: PPO training, baselines, a search oracle and the evaluation report."""
