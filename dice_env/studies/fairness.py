@@ -120,8 +120,7 @@ def energy_throws(scene: Scene, excess: np.ndarray, rng: np.random.Generator) ->
 def throw_energy(scene: Scene, state: State) -> np.ndarray:
     """Energy of each throw above rest on a face, in units of ``m g a``."""
     die = scene.die
-    kinetic = 0.5 * die.mass * np.sum(state.velocity**2, axis=1) + 0.5 * np.einsum(
-        "bi,bi->b", state.angular_momentum, _spin(scene, state))
+    kinetic = 0.5 * die.mass * np.sum(state.velocity**2, axis=1) + _spin_energy(scene, state)
     height = state.position[:, 2] - die.half_edge * scene.ground.normal[2]
     return (kinetic + die.mass * scene.gravity * height) / (die.mass * scene.gravity * die.edge)
 
@@ -159,7 +158,7 @@ def wilson(count: np.ndarray, total: np.ndarray, z: float = 1.959964) -> np.ndar
     p = count / total
     centre = (p + z * z / (2 * total)) / (1 + z * z / total)
     half = z * np.sqrt(p * (1 - p) / total + z * z / (4 * total * total)) / (1 + z * z / total)
-    return np.stack([centre - half, centre + half], axis=-1)
+    return np.clip(np.stack([centre - half, centre + half], axis=-1), 0.0, 1.0)
 
 
 @dataclass
@@ -259,7 +258,21 @@ def _memory_table(scene: Scene, state: State, result: Result, bins: int) -> dict
         rows["ci_down"].append(wilson(hits_down, n))
         rows["p_up"].append(hits_up / n)
         rows["ci_up"].append(wilson(hits_up, n))
-    return {k: np.array(v) for k, v in rows.items()}
+    table = {k: np.array(v) for k, v in rows.items()}
+    top = ok & (which == bins - 1)
+    spin_share = _spin_energy(scene, state) / (energy * scene.die.mass * scene.gravity
+                                               * scene.die.edge)
+    cut = float(np.median(spin_share[top]))
+    halves = (("low_spin", top & (spin_share <= cut)), ("high_spin", top & (spin_share > cut)))
+    for name, sel in halves:
+        hits = int(np.sum(final_down[sel] == down0[sel]))
+        table[name] = (hits / sel.sum(), wilson(hits, sel.sum()), cut)
+    return table
+
+
+def _spin_energy(scene: Scene, state: State) -> np.ndarray:
+    """Rotational kinetic energy of each throw (J)."""
+    return 0.5 * np.einsum("bi,bi->b", state.angular_momentum, _spin(scene, state))
 
 
 def _trend(p: np.ndarray) -> str:
@@ -280,8 +293,15 @@ def _vigorous_sentence(m: dict) -> str:
     return (f"even the most vigorous bin (median {m['e_mid'][-1]:.3g} m g a) keeps a small "
             f"memory: release-down {m['p_down'][-1]:.3f} [{down[0]:.3f}, {down[1]:.3f}], "
             f"release-up {m['p_up'][-1]:.3f} [{up[0]:.3f}, {up[1]:.3f}]. The energy of these "
-            "throws is split at random, and a throw that puts little of it into spin keeps "
-            "its orientation in flight and lands near its release-down face.")
+            "throws is split at random between height, speed and spin, and without spin the "
+            "orientation does not change in flight. Splitting this bin at the median share "
+            f"of spin in the energy ({m['low_spin'][2]:.2f}): release-down "
+            f"{_share(m['low_spin'])} with less spin, {_share(m['high_spin'])} with more.")
+
+
+def _share(entry: tuple) -> str:
+    p, ci, _ = entry
+    return f"{p:.3f} [{ci[0]:.3f}, {ci[1]:.3f}]"
 
 
 def _error_bars(p: np.ndarray, ci: np.ndarray) -> np.ndarray:
