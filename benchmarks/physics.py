@@ -1,7 +1,7 @@
 """Speed of the simulator: kernel, throws to rest, the numpy listing and MuJoCo, in one run.
 
     python benchmarks/physics.py            # full run, a few minutes on 2 cores
-    python benchmarks/physics.py --quick    # smaller sizes, about half a minute
+    python benchmarks/physics.py --quick    # smaller sizes, no cold compile, under a minute
 
 Prints a table and writes ``benchmarks/results/physics.json`` (``--out`` to change). Figures:
 
@@ -130,12 +130,15 @@ print(t1 - t0, t2 - t1, t3 - t2)
 """
 
 
-def start_times() -> dict:
-    """Import and first throws in fresh processes: empty numba cache (cold), then warm."""
+def start_times(cold: bool) -> dict:
+    """Import and first throws in fresh processes: empty numba cache (cold), then warm.
+
+    Without ``cold`` only the warm start, with the project's own cache.
+    """
     out = {}
     with tempfile.TemporaryDirectory() as cache:
-        env = {**os.environ, "NUMBA_CACHE_DIR": cache}
-        for label in ("cold", "warm"):
+        env = {**os.environ, "NUMBA_CACHE_DIR": cache} if cold else dict(os.environ)
+        for label in ("cold", "warm") if cold else ("warm",):
             line = subprocess.run([sys.executable, "-c", _START_SCRIPT], env=env, check=True,
                                   capture_output=True, text=True, cwd=ROOT).stdout.split()
             imp, first, batch = (float(v) for v in line)
@@ -354,7 +357,8 @@ def scenes() -> dict[str, Scene]:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("--quick", action="store_true", help="small sizes, about a minute")
+    parser.add_argument("--quick", action="store_true",
+                        help="small sizes and no cold compile: well under a minute")
     parser.add_argument("--out", type=Path, default=ROOT / "benchmarks/results/physics.json")
     parser.add_argument("--no-mujoco", action="store_true", help="skip the MuJoCo comparison")
     args = parser.parse_args()
@@ -362,7 +366,7 @@ def main() -> None:
               "machine": {"cpu": _cpu_name(), "cores": os.cpu_count(),
                           "python": platform.python_version(), "numba": numba.__version__,
                           "numpy": np.__version__, "load_average_start": os.getloadavg()}}
-    report["start"] = start_times()
+    report["start"] = start_times(cold=not args.quick)
     report["paper_scene_die_steps_per_s"] = kernel_speed(args.quick)
     report["throws_to_rest"] = {}
     for name, scene in scenes().items():
@@ -413,8 +417,7 @@ def format_report(r: dict) -> str:
              f"  numpy listing            {k['numpy_listing'] / 1e6:8.4f} M   "
              f"(kernel batch 1: {k['ratio_batch1_vs_numpy']:.0f}x, batch 1024 on 2 threads: "
              f"{k['ratio_batch1024_2threads_vs_numpy']:.0f}x)", ""]
-    for label in ("cold", "warm"):
-        s = r["start"][label]
+    for label, s in r["start"].items():
         lines.append(f"start, {label} cache: import {s['import_s']:.2f} s + first throw "
                      f"{s['first_throw_s']:.2f} s = {s['import_and_first_throw_s']:.2f} s; "
                      f"first 2-thread batch {s['first_batch_2threads_s']:.2f} s")
@@ -456,7 +459,7 @@ def format_report(r: dict) -> str:
               r["throws_per_s_vs_batch_2threads"].items()]
     lines += ["", "Scene(): simulated time -> ms of CPU per throw (1 thread, no stop at rest)",
               "       t_max   free flight   plain stepping"]
-    lines += [f"  {t:8.2f} s {v['ms_per_throw']:10.3f} {v['ms_per_throw_plain']:14.3f}"
+    lines += [f"  {float(t):8.2f} s {v['ms_per_throw']:10.3f} {v['ms_per_throw_plain']:14.3f}"
               for t, v in r["cost_vs_simulated_time"].items()]
     return "\n".join(lines)
 
