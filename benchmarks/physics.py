@@ -439,10 +439,10 @@ def format_report(r: dict) -> str:
         lines.append(f"  steps per throw ({b['throws']} throws, plain stepping): flight "
                      f"{b['mean_flight_steps']:.0f}, contact before rest "
                      f"{b['mean_contact_steps_before_rest']:.0f}, hold "
-                     f"{b['mean_hold_steps']:.0f}; a contact step costs "
+                     f"{b['mean_hold_steps']:.0f}; a resting die's step costs "
                      f"{b['ns_per_contact_step_1thread']:.0f} ns, so the contact steps alone "
-                     f"take {b['floor_ms_per_throw']:.3f} ms: at most "
-                     f"{b['ceiling_throws_per_s_per_core']:.0f} throws/s per core")
+                     f"take about {b['floor_ms_per_throw']:.3f} ms: about "
+                     f"{b['ceiling_throws_per_s_per_core']:.0f} throws/s per core at most")
         mj = d.get("mujoco")
         if mj:
             ratio = mj["ratios"][FASTEST]
