@@ -42,9 +42,9 @@ _WARM = {"imitation_throws": 20_000, "imitation_steps": 1500}
 
 HYPERPARAMS: dict[str, dict[str, dict[str, Any]]] = {
     "DiceThrow-v0": {
-        "quick": {"total_timesteps": 120_000, "n_envs": 256, "ppo": _PPO_COMMON,
+        "quick": {"total_timesteps": 60_000, "n_envs": 256, "ppo": _PPO_COMMON,
                   "env": _TASK, "train_env": _TRAIN, **_WARM},
-        "best": {"total_timesteps": 1_000_000, "n_envs": 256, "ppo": _PPO_COMMON,
+        "best": {"total_timesteps": 500_000, "n_envs": 256, "ppo": _PPO_COMMON,
                  "env": _TASK, "train_env": _TRAIN, **_WARM},
     },
 }
@@ -74,16 +74,16 @@ class Config:
     resume: str | None = None
     """Continue the run in this folder from its last checkpoint (its config is reused; a given
     --total-timesteps extends it)."""
-    eval_freq: int = 25_000
+    eval_freq: int = 10_000
     """Throws between evaluations during training."""
     eval_episodes: int = 512
     """Throws per evaluation during training."""
-    checkpoint_freq: int = 50_000
+    checkpoint_freq: int = 20_000
     """Throws between checkpoints."""
     eval_throws: int = 1000
     """Throws per thrower in the final evaluation."""
-    oracle_observations: int = 48
-    """Observations searched by the oracle in the final evaluation (each costs ~2000 throws)."""
+    oracle_observations: int = 24
+    """Observations searched by the oracle in the final evaluation (each costs 2240 throws)."""
     robustness_throws: int = 400
     """Throws per thrower and setting in the final evaluation's robustness sweeps."""
     gifs: int = 3

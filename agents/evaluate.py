@@ -29,11 +29,11 @@ from dice_env.envs.task import ThrowTask, make_task
 Z95 = 1.959964  # two-sided 95% normal quantile
 EPISODE_KEYWORDS = ("target_face", "orientation_mode")
 ORACLE_SCORE_SAMPLES = 16  # fresh noise draws per oracle observation
-ROBUSTNESS = {  # keyword: values (the trained value is marked in the plot)
-    "hand_noise": [0.0, 0.025, 0.05, 0.1, 0.2],
-    "friction": [0.2, 0.4, 0.8],
-    "damping": [0.2, 0.4, 1.0, 3.0],
-    "stiffness": [3e4, 1e5, 3e5],
+ROBUSTNESS = {  # keyword: multiples of the trained value (1: as trained)
+    "hand_noise": [0.0, 0.5, 1.0, 2.0, 4.0],
+    "friction": [0.5, 1.0, 2.0],
+    "damping": [0.5, 1.0, 2.0],
+    "stiffness": [0.3, 1.0, 3.0],
 }
 
 
@@ -157,9 +157,10 @@ def robustness(
 ) -> dict[str, dict[str, list[dict[str, Any]]]]:
     """Success of each thrower when one keyword (noise, table) departs from the trained value."""
     sweeps: dict[str, dict[str, list[dict[str, Any]]]] = {}
-    for key, values in ROBUSTNESS.items():
+    trained = trained_values(make_eval_task(config)[0])
+    for key, factors in ROBUSTNESS.items():
         sweeps[key] = {name: [] for name in throwers}
-        for value in values:
+        for value in (factor * trained[key] for factor in factors):
             task, episode = make_eval_task(config, **{key: value})
             batch = Batch.sample(task, throws, np.random.default_rng(seed), **episode)
             for name, thrower in throwers.items():
