@@ -9,6 +9,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field, replace
 from enum import IntEnum
+from functools import cached_property
 
 import numpy as np
 
@@ -149,7 +150,7 @@ class Scene:
                     "to run it anyway"
                 )
 
-    @property
+    @cached_property
     def effective_mass(self) -> float:
         """Smallest effective mass per contact corner, ``S / omega_max**2``.
 
