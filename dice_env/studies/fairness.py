@@ -292,11 +292,19 @@ def _vigorous_sentence(m: dict) -> str:
                 f"within their 95% intervals of 1/6: the memory is gone.")
     return (f"even the most vigorous bin (median {m['e_mid'][-1]:.3g} m g a) keeps a small "
             f"memory: release-down {m['p_down'][-1]:.3f} [{down[0]:.3f}, {down[1]:.3f}], "
-            f"release-up {m['p_up'][-1]:.3f} [{up[0]:.3f}, {up[1]:.3f}]. The energy of these "
-            "throws is split at random between height, speed and spin, and without spin the "
-            "orientation does not change in flight. Splitting this bin at the median share "
-            f"of spin in the energy ({m['low_spin'][2]:.2f}): release-down "
-            f"{_share(m['low_spin'])} with less spin, {_share(m['high_spin'])} with more.")
+            f"release-up {m['p_up'][-1]:.3f} [{up[0]:.3f}, {up[1]:.3f}]. Splitting this bin "
+            f"at the median share of spin in the energy ({m['low_spin'][2]:.2f}): release-down "
+            f"{_share(m['low_spin'])} with less spin, {_share(m['high_spin'])} with more. "
+            + _spin_reading(m))
+
+
+def _spin_reading(m: dict) -> str:
+    low, high = m["low_spin"][1], m["high_spin"][1]
+    if low[0] > high[1]:
+        return ("The memory sits in the throws with little spin, which keep their orientation "
+                "in flight.")
+    return ("The memory is no weaker with more spin, so it is not simply throws that keep "
+            "their orientation in flight; we have not traced its cause.")
 
 
 def _share(entry: tuple) -> str:
