@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import Any, ClassVar
 
 import numpy as np
@@ -73,21 +74,31 @@ class DiceThrowVectorEnv(VectorEnv):
 
         ``options`` as the single env's, applied to all envs.
         """
-        if seed is None:
-            seeds: list[int | None] = [None] * self.num_envs
-        elif isinstance(seed, (int, np.integer)):
-            seeds = [int(seed) + i for i in range(self.num_envs)]
+        if seed is None or isinstance(seed, (int, np.integer)):
+            seeds = [None if seed is None else int(seed) + i for i in range(self.num_envs)]
         else:
             seeds = list(seed)
-            if len(seeds) != self.num_envs:
-                raise ValueError(f"seed must be an int, None or a list of {self.num_envs} "
-                                 f"seeds, got {len(seeds)}")
-        if seed is not None or not self._rngs:
+        return self.reset_envs(seeds, [options or {}] * self.num_envs), {}
+
+    def reset_envs(
+        self, seeds: Sequence[int | None], options: Sequence[dict[str, Any] | None]
+    ) -> np.ndarray:
+        """Reset env ``i`` with ``seeds[i]`` and ``options[i]``, as a single env's ``reset``.
+
+        A ``None`` seed keeps env ``i``'s generator (a fresh one on the first reset). Returns the
+        observations (N, 15).
+        """
+        for name, values in (("seed", seeds), ("options", options)):
+            if len(values) != self.num_envs:
+                raise ValueError(f"{name} must be one per env ({self.num_envs}), "
+                                 f"got {len(values)}")
+        if not self._rngs:
             self._rngs = [seeding.np_random(s)[0] for s in seeds]
-        options = options or {}
         for i in range(self.num_envs):
-            self._new_hand(i, options)
-        return self.task.observe(self._targets, self._hands), {}
+            if seeds[i] is not None:
+                self._rngs[i] = seeding.np_random(seeds[i])[0]
+            self._new_hand(i, options[i] or {})
+        return self.task.observe(self._targets, self._hands)
 
     def step(
         self, actions: np.ndarray

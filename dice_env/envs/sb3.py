@@ -1,0 +1,117 @@
+"""DiceThrow-v0's native batch as a Stable-Baselines3 ``VecEnv`` (SB3 cannot take a Gymnasium one).
+
+    venv = DiceThrowSB3VecEnv(gym.make_vec("DiceThrow-v0", num_envs=16, vectorization_mode=None))
+    model = PPO("MlpPolicy", venv)
+
+Each ``step_wait`` throws all N dice in one kernel call. Every episode is one throw, so every
+step ends every episode: ``dones`` is all True, ``infos[i]["terminal_observation"]`` holds env
+``i``'s die at rest and the returned observations are already those of the next episodes (the
+vector env's SAME_STEP autoreset). ``infos[i]`` carries the single env's info keys as Python
+scalars, plus ``"TimeLimit.truncated": False``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+from gymnasium.vector import VectorEnv
+from stable_baselines3.common.vec_env import VecEnv
+from stable_baselines3.common.vec_env.base_vec_env import VecEnvIndices, VecEnvStepReturn
+
+from dice_env.envs.dice_throw import scalar
+from dice_env.envs.vector import DiceThrowVectorEnv
+
+
+class DiceThrowSB3VecEnv(VecEnv):
+    """SB3 ``VecEnv`` over a :class:`DiceThrowVectorEnv` (``gym.make_vec("DiceThrow-v0", n)``).
+
+    Seeding follows SB3: ``seed(s)`` makes the next ``reset`` seed env ``i`` with ``s + i`` (the
+    same throws as the vector env reset with ``seed=s`` and as single envs reset with ``s + i``);
+    ``set_options`` applies per env. The N envs are one batch, so attributes are shared:
+    ``get_attr`` returns the batch's value for each index, ``set_attr`` and ``env_method`` act on
+    the whole batch (``env_method`` calls the method once and returns its result per index).
+    """
+
+    def __init__(self, venv: VectorEnv) -> None:
+        if not isinstance(venv.unwrapped, DiceThrowVectorEnv):
+            raise ValueError(f"venv must be a DiceThrowVectorEnv (gym.make_vec('DiceThrow-v0', "
+                             f"n)), got {type(venv.unwrapped).__name__}")
+        self.venv = venv
+        self._batch: DiceThrowVectorEnv = venv.unwrapped
+        self._actions: np.ndarray | None = None
+        super().__init__(venv.num_envs, venv.single_observation_space, venv.single_action_space)
+        self.metadata = {**venv.metadata, **self.metadata}
+
+    def reset(self) -> np.ndarray:
+        """Start new episodes with the seeds and options set since the last reset (then cleared)."""
+        obs = self._batch.reset_envs(self._seeds, self._options)
+        self.reset_infos = [{} for _ in range(self.num_envs)]
+        self._reset_seeds()
+        self._reset_options()
+        return obs
+
+    def step_async(self, actions: np.ndarray) -> None:
+        """Keep the actions (N, 6) for :meth:`step_wait`."""
+        self._actions = np.asarray(actions)
+
+    def step_wait(self) -> VecEnvStepReturn:
+        """Throw all N dice in one kernel call; the observations are of the next episodes."""
+        if self._actions is None:
+            raise RuntimeError("call step_async() before step_wait()")
+        obs, rewards, terminated, truncated, info = self.venv.step(self._actions)
+        self._actions = None
+        final_obs, final_info = info["final_obs"], info["final_info"]
+        infos: list[dict[str, Any]] = []
+        for i in range(self.num_envs):
+            env_info = {key: scalar(value[i]) for key, value in final_info.items()
+                        if not key.startswith("_")}
+            env_info["terminal_observation"] = final_obs[i]
+            env_info["TimeLimit.truncated"] = bool(truncated[i] and not terminated[i])
+            infos.append(env_info)
+        dones = np.logical_or(terminated, truncated)
+        return obs, rewards.astype(np.float32), dones, infos
+
+    def close(self) -> None:
+        """Close the vector env."""
+        self.venv.close()
+
+    def get_images(self) -> Sequence[np.ndarray | None]:
+        """Each env's frame (render_mode "rgb_array")."""
+        frames = self.venv.render()
+        return [None] * self.num_envs if frames is None else list(frames)
+
+    def get_attr(self, attr_name: str, indices: VecEnvIndices = None) -> list[Any]:
+        """The batch's attribute, once per index."""
+        value = getattr(self._batch, attr_name)
+        return [value for _ in self._get_indices(indices)]
+
+    def set_attr(self, attr_name: str, value: Any, indices: VecEnvIndices = None) -> None:
+        """Set an attribute of the whole batch (``indices`` must cover every env)."""
+        self._check_all(indices)
+        setattr(self._batch, attr_name, value)
+
+    def env_method(
+        self, method_name: str, *method_args: Any, indices: VecEnvIndices = None,
+        **method_kwargs: Any,
+    ) -> list[Any]:
+        """Call a method of the batch once; its result once per index."""
+        self._check_all(indices)
+        result = getattr(self._batch, method_name)(*method_args, **method_kwargs)
+        return [result for _ in range(self.num_envs)]
+
+    def env_is_wrapped(
+        self, wrapper_class: type[gym.Wrapper], indices: VecEnvIndices = None
+    ) -> list[bool]:
+        """False for each index: the envs of a native batch carry no per-env wrappers."""
+        return [False for _ in self._get_indices(indices)]
+
+    def _check_all(self, indices: VecEnvIndices) -> None:
+        if sorted(self._get_indices(indices)) != list(range(self.num_envs)):
+            raise ValueError(f"indices must cover all {self.num_envs} envs (one shared batch), "
+                             f"got {indices!r}")
+
+
+SB3VecEnv = DiceThrowSB3VecEnv  # the name agents/ imports

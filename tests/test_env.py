@@ -1,0 +1,217 @@
+import subprocess
+import sys
+import warnings
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from gymnasium.utils.env_checker import check_env
+from scipy import ndimage
+
+import dice_env  # noqa: F401
+from dice_env import Scene
+from dice_env.envs import DiceThrowEnv
+from dice_env.envs.render import render_die
+from dice_env.envs.sb3 import SB3VecEnv
+from dice_env.envs.task import _FACE_UP, make_task
+from dice_env.envs.video import save_video
+
+FAST = {"t_max": 2.0}  # gentle throws settle in under 2 s
+
+
+def make(**kwargs):
+    return gym.make("DiceThrow-v0", **{**FAST, **kwargs})
+
+
+def rollout_single(seed, actions):
+    """Per env i: (obs at reset, [(final obs, reward, face)] per step) for N single envs."""
+    out = []
+    for i in range(actions.shape[1]):
+        env = make()
+        obs, _ = env.reset(seed=seed + i)
+        steps = []
+        for k in range(actions.shape[0]):
+            if k:
+                env.reset()
+            o, r, _, _, info = env.step(actions[k, i])
+            steps.append((o, r, info["face"]))
+        out.append((obs, steps))
+    return out
+
+
+def test_make_without_prior_import():
+    code = ("import gymnasium as gym; e = gym.make('dice_env:DiceThrow-v0'); "
+            "print(type(e.unwrapped).__name__)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "DiceThrowEnv"
+
+
+def test_step_types_and_info():
+    env = make()
+    obs, info = env.reset(seed=0)
+    assert obs in env.observation_space and info == {}
+    obs, reward, terminated, truncated, info = env.step(env.action_space.sample())
+    assert obs.dtype == np.float32 and obs in env.observation_space
+    assert type(reward) is float and terminated is True and truncated is False
+    assert type(info["is_success"]) is bool and info["face"] in range(1, 7)
+    assert info["void_reason"] in ("", "foul", "unstable", "not_settled")
+    assert info["reward_success"] + info["reward_shaping"] == reward
+    assert info["release_velocity"].shape == (3,) and info["release_orientation"].shape == (3, 3)
+    assert info["is_success"] == (info["face"] == info["target_face"] and not info["void_reason"])
+
+
+def test_gymnasium_check_env_no_warnings():
+    env = make()
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        check_env(env.unwrapped)  # the unwrapped env still carries the spec for the render modes
+
+
+def test_sb3_check_env_no_warnings():
+    from stable_baselines3.common.env_checker import check_env as sb3_check_env
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        sb3_check_env(make().unwrapped)
+
+
+def test_same_seed_same_throws_single_vector_sb3():
+    n, seed = 3, 11
+    actions = np.random.default_rng(0).uniform(-1, 1, (2, n, 6)).astype(np.float32)
+    single = rollout_single(seed, actions)
+    venv = gym.make_vec("DiceThrow-v0", num_envs=n, **FAST)
+    assert venv.metadata["autoreset_mode"] == gym.vector.AutoresetMode.SAME_STEP
+    obs, _ = venv.reset(seed=seed)
+    sb3 = SB3VecEnv(gym.make_vec("DiceThrow-v0", num_envs=n, **FAST))
+    sb3.seed(seed)
+    assert np.array_equal(sb3.reset(), obs)
+    for i in range(n):
+        assert np.array_equal(single[i][0], obs[i])
+    for k in range(actions.shape[0]):
+        obs, rewards, terminated, truncated, info = venv.step(actions[k])
+        sb3_obs, sb3_rewards, dones, sb3_infos = sb3.step(actions[k])
+        assert terminated.all() and not truncated.any() and dones.all()
+        assert np.array_equal(sb3_obs, obs)
+        for i in range(n):
+            final_obs, reward, face = single[i][1][k]
+            assert np.array_equal(info["final_obs"][i], final_obs)
+            assert np.array_equal(sb3_infos[i]["terminal_observation"], final_obs)
+            assert rewards[i] == reward == sb3_rewards[i]
+            assert info["final_info"]["face"][i] == face == sb3_infos[i]["face"]
+
+
+def test_bad_actions():
+    env = make()
+    env.reset(seed=0)
+    with pytest.raises(ValueError, match="action must be finite"):
+        env.step(np.array([np.nan, 0, 0, 0, 0, 0]))
+    with pytest.raises(ValueError, match="action must have shape"):
+        env.step(np.zeros(5))
+    _, _, _, _, info = env.step(np.array([3.0, 0, 0, 0, 0, 0]))
+    assert info["action_clipped"] is True
+
+
+@pytest.mark.parametrize(("keyword", "value", "match"), [
+    ("release_height", 0.005, "release_height"),
+    ("hand_noise", -0.1, "hand_noise"),
+    ("max_speed", 0.0, "max_speed"),
+    ("max_spin", np.inf, "max_spin"),
+    ("target_face", 7, "target_face"),
+    ("orientation_mode", "sideways", "orientation_mode"),
+    ("stiffness", -1.0, "stiffness"),
+    ("friction", np.nan, "friction"),
+    ("mass", 0.0, "mass"),
+    ("t_max", 0.0, "t_max"),
+    ("dt", 1.0, "dt"),
+    ("contact_law", "soft", "contact_law"),
+    ("tilt_deg", 95.0, "tilt_deg"),
+    ("load_fraction", 1.5, "load_fraction"),
+    ("num_threads", 0, "num_threads"),
+])
+def test_bad_keywords(keyword, value, match):
+    with pytest.raises(ValueError, match=match):
+        make(**{keyword: value})
+
+
+def test_bad_render_mode():
+    with pytest.raises(ValueError, match="render_mode"):
+        DiceThrowEnv(render_mode="ascii")
+
+
+def test_keywords_reach_the_scene():
+    task = make(stiffness=2e5, friction=0.3, edge=0.02, tilt_deg=10.0).unwrapped.task
+    assert task.scene.ground.stiffness == 2e5 and task.scene.ground.friction == 0.3
+    assert task.scene.die.edge == 0.02 and task.scene.ground.normal[0] > 0
+    assert make_task().scene.die == Scene().die  # defaults flow from Scene()
+    assert make_task(load_fraction=0.2).scene.die.com[2] < 0  # toward face 6 (-z)
+
+
+def test_void_throws_are_not_rewarded():
+    env = make(t_max=0.02, target_face=1)
+    env.reset(seed=0)
+    _, reward, _, _, info = env.step(np.zeros(6))
+    assert info["void_reason"] == "not_settled" and reward == 0.0 and not info["is_success"]
+    env = make(min_speed=5.0)
+    env.reset(seed=0)
+    _, reward, _, _, info = env.step(np.zeros(6))
+    assert info["void_reason"] == "foul" and info["fair"] is False and reward == 0.0
+
+
+def test_reset_options():
+    env = make()
+    obs, _ = env.reset(seed=0, options={"target_face": 4, "orientation": np.eye(3)})
+    assert obs[3] == 1.0 and np.array_equal(obs[6:], np.eye(3, dtype=np.float32).ravel())
+    with pytest.raises(ValueError, match="orientation"):
+        env.reset(options={"orientation": 2 * np.eye(3)})
+
+
+def test_placed_die_lands_as_held():
+    # No noise, no velocity, face 3 held up a few mm above the table: it lands with 3 up.
+    env = make(hand_noise=0.0, orientation_noise=0.0, release_height=0.015, target_face=3)
+    env.reset(seed=0, options={"orientation": _FACE_UP[2]})
+    _, reward, _, _, info = env.step(np.zeros(6))
+    assert info["face"] == 3 and reward == 1.0 and info["settled"]
+
+
+def count_pips(image):
+    dark = image.max(axis=-1) < 80
+    return ndimage.label(dark)[1]
+
+
+def test_render_top_face_shows_its_number():
+    scene = Scene()
+    position = np.array([0.0, 0.0, scene.die.half_edge])
+    for k in range(6):
+        image = render_die(scene, position, _FACE_UP[k], size=(96, 96), elevation=90.0)
+        assert image.shape == (96, 96, 3) and image.dtype == np.uint8
+        assert count_pips(image) == k + 1
+
+
+def test_render_modes(tmp_path):
+    env = make(render_mode="rgb_array", render_width=64, render_height=48)
+    env.reset(seed=0)
+    frame = env.render()
+    assert frame.shape == (48, 64, 3) and frame.dtype == np.uint8
+    env.step(np.zeros(6))
+    assert not np.array_equal(env.render(), frame)  # the die moved
+    env = make(render_mode="rgb_array_list", render_width=64, render_height=48)
+    env.reset(seed=0)
+    env.step(np.zeros(6))
+    frames = env.render()
+    assert len(frames) > 5 and all(f.shape == (48, 64, 3) for f in frames)
+    assert env.render() == []
+    path = save_video(frames, tmp_path / "throw.gif")
+    assert path.stat().st_size > 0
+    env = make(render_mode="human")
+    env.reset(seed=0)
+    assert env.render() is None
+    venv = gym.make_vec("DiceThrow-v0", num_envs=2, render_mode="rgb_array", **FAST)
+    venv.reset(seed=0)
+    assert len(venv.render()) == 2
+
+
+def test_no_rendering_cost_without_render_mode():
+    env = make()
+    env.reset(seed=0)
+    env.step(np.zeros(6))
+    assert env.render() is None and env.unwrapped._record_every() == 0
