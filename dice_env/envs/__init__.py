@@ -19,4 +19,14 @@ if ENV_ID not in registry:
         vector_entry_point="dice_env.envs.vector:DiceThrowVectorEnv",
     )
 
-__all__ = ["ENV_ID", "DiceThrowEnv", "DiceThrowVectorEnv", "Throw", "ThrowTask", "make_task"]
+__all__ = ["ENV_ID", "DiceThrowEnv", "DiceThrowSB3VecEnv", "DiceThrowVectorEnv", "Throw",
+           "ThrowTask", "make_task"]
+
+
+def __getattr__(name: str) -> object:
+    """``DiceThrowSB3VecEnv`` on first use, so importing dice_env does not import SB3 and torch."""
+    if name in ("DiceThrowSB3VecEnv", "SB3VecEnv"):
+        from dice_env.envs import sb3
+
+        return getattr(sb3, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

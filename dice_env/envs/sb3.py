@@ -1,6 +1,6 @@
 """DiceThrow-v0's native batch as a Stable-Baselines3 ``VecEnv`` (SB3 cannot take a Gymnasium one).
 
-    venv = DiceThrowSB3VecEnv(gym.make_vec("DiceThrow-v0", num_envs=16, vectorization_mode=None))
+    venv = DiceThrowSB3VecEnv(gym.make_vec("DiceThrow-v0", num_envs=16))
     model = PPO("MlpPolicy", venv)
 
 Each ``step_wait`` throws all N dice in one kernel call. Every episode is one throw, so every
@@ -21,7 +21,7 @@ from gymnasium.vector import VectorEnv
 from stable_baselines3.common.vec_env import VecEnv
 from stable_baselines3.common.vec_env.base_vec_env import VecEnvIndices, VecEnvStepReturn
 
-from dice_env.envs.dice_throw import scalar
+from dice_env.envs.dice_throw import _scalar
 from dice_env.envs.vector import DiceThrowVectorEnv
 
 
@@ -66,7 +66,7 @@ class DiceThrowSB3VecEnv(VecEnv):
         final_obs, final_info = info["final_obs"], info["final_info"]
         infos: list[dict[str, Any]] = []
         for i in range(self.num_envs):
-            env_info = {key: scalar(value[i]) for key, value in final_info.items()
+            env_info = {key: _scalar(value[i]) for key, value in final_info.items()
                         if not key.startswith("_")}
             env_info["terminal_observation"] = final_obs[i]
             env_info["TimeLimit.truncated"] = bool(truncated[i] and not terminated[i])

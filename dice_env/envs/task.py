@@ -156,7 +156,7 @@ class ThrowTask:
         in the hand; ``noise`` (n, 9) from :meth:`sample_noise`. ``record_every`` > 0 records the
         centre and orientation every that many steps (for rendering).
         """
-        targets = np.asarray(targets, dtype=np.int64).reshape(-1)
+        targets = np.array(targets, dtype=np.int64).reshape(-1)  # a copy: envs redraw theirs
         state, clipped = self.release(actions, hands, noise)
         record = ("orientations",) if record_every else ("energy",)
         result = simulate(self.scene, state, record_every=record_every, record=record,
