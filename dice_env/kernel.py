@@ -252,7 +252,7 @@ def _simulate_one(
         energy = kinetic + mass * g * x2 + spring
         if step == 1:
             e_start = energy
-            e_tol = energy_scale_add + kinetic
+            e_tol = energy_scale_add + kinetic + mass * g * max(0.0, n0 * x0 + n1 * x1 + n2 * x2)
         else:
             e_max = max(e_max, energy)
         if touching > 0 and not was_in_contact and approach > v_rest:
@@ -388,7 +388,8 @@ def simulate_batch(
     ``stop_at_rest`` ends a die after ``hold_steps`` quiet steps below ``v_rest``, or at a quiet
     step whose total energy is less than ``rest_excess`` above ``rest_energy`` (0: never).
     ``energy_rise`` gets the largest rise of total energy above its start in units of
-    ``KE0 + energy_scale_add``; ``unstable`` marks a state that stopped being finite.
+    ``KE0 + m g h0 + energy_scale_add`` (``h0`` the start height of the centre above the
+    plane); ``unstable`` marks a state that stopped being finite.
     Records every ``stride`` steps into ``rec_x`` (B, n, 3), ``rec_e`` (B, n or 0), ``rec_q``
     (B, n or 0, 3, 3), ``rec_nodes`` (B, n or 0, 8, 3). Outputs per die: ``status``,
     ``unstable``, ``rest_time``, ``impacts``, ``max_pen``, ``energy_rise``, ``steps``.

@@ -111,7 +111,8 @@ class Scene:
     only. ``friction_vmin`` is the listing's ``umin``, added to the tangential speed before
     dividing: friction is Coulomb well above it and viscous below it. ``scheme``: see
     :class:`Scheme`. A throw is flagged unstable when its total energy (kinetic + potential +
-    ground springs) exceeds its start by more than ``energy_tol`` times ``KE0 + m*g*edge``.
+    ground springs) exceeds its start by more than ``energy_tol`` times ``KE0 + m*g*(h0 + edge)``,
+    ``h0`` the start height of the centre above the table.
     """
 
     die: Die = field(default_factory=Die)
