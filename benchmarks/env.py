@@ -1,0 +1,86 @@
+"""DiceThrow-v0's speed: env throws/s, single and natively batched, against the raw kernel.
+
+    python benchmarks/env.py            # batch 256, a few repeats (about a minute on 2 cores)
+    python benchmarks/env.py --quick    # batch 64
+
+The same seeded throws (default task, a seeded random policy) are run three ways: N single envs
+(``gym.make``, reset + step per throw), the native vector env (``gym.make_vec``, one step = N
+throws) and the raw kernel (:func:`dice_env.simulate` on the very releases the vector env used).
+The vector env's overhead is its time over the kernel's on identical throws, measured alternately
+(best of the repeats) so that load from other processes hits both alike. Prints a table and
+writes ``benchmarks/results/env.json``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import time
+from pathlib import Path
+
+import gymnasium as gym
+import numpy as np
+
+import dice_env  # noqa: F401  (registers DiceThrow-v0)
+from dice_env import State, simulate
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--quick", action="store_true", help="batch 64, fewer repeats")
+    parser.add_argument("--out", type=Path,
+                        default=Path(__file__).parent / "results" / "env.json")
+    args = parser.parse_args()
+    n, repeats, n_single = (64, 3, 32) if args.quick else (256, 5, 64)
+    seed = 0
+    actions = np.random.default_rng(seed).uniform(-1, 1, (n, 6)).astype(np.float32)
+
+    venv = gym.make_vec("DiceThrow-v0", num_envs=n)
+    task = venv.unwrapped.task
+    venv.reset(seed=seed)
+    venv.step(actions)  # compile / warm up
+    vector_s, kernel_s = [], []
+    for _ in range(repeats):
+        venv.reset(seed=seed)
+        start = time.perf_counter()
+        _, _, _, _, info = venv.step(actions)
+        vector_s.append(time.perf_counter() - start)
+        final = info["final_info"]
+        state = State.release(task.scene, task.release_position, final["release_velocity"],
+                              final["release_spin"], final["release_orientation"])
+        start = time.perf_counter()
+        result = simulate(task.scene, state)
+        kernel_s.append(time.perf_counter() - start)
+        assert np.array_equal(result.face, final["face"])  # the very same throws
+
+    env = gym.make("DiceThrow-v0")
+    single_s = []
+    for _ in range(max(1, repeats // 2)):
+        start = time.perf_counter()
+        for i in range(n_single):
+            env.reset(seed=seed + i)
+            env.step(actions[i])
+        single_s.append(time.perf_counter() - start)
+
+    vector, kernel, single = min(vector_s), min(kernel_s), min(single_s)
+    row = {
+        "batch": n,
+        "threads": os.cpu_count(),
+        "kernel_throws_per_s": n / kernel,
+        "vector_env_throws_per_s": n / vector,
+        "vector_overhead": vector / kernel - 1.0,
+        "single_env_throws_per_s": n_single / single,
+        "mean_rest_time_s": float(final["rest_time"].mean()),
+        "load_average": os.getloadavg()[0],
+    }
+    print(f"{'batch':>6} {'kernel/s':>10} {'vector env/s':>13} {'overhead':>9} "
+          f"{'single env/s':>13}")
+    print(f"{n:>6} {row['kernel_throws_per_s']:>10.0f} {row['vector_env_throws_per_s']:>13.0f} "
+          f"{row['vector_overhead']:>9.1%} {row['single_env_throws_per_s']:>13.0f}")
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    args.out.write_text(json.dumps(row, indent=2) + "\n")
+
+
+if __name__ == "__main__":
+    main()
