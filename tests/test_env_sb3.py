@@ -28,6 +28,7 @@ def test_same_seeds_as_vector_and_single_envs():
         sb3_obs.append(obs)
         sb3_steps.append((rewards, dones, infos))
     venv = gym.make_vec("DiceThrow-v0", num_envs=n, **FAST)
+    assert venv.metadata["autoreset_mode"] == gym.vector.AutoresetMode.SAME_STEP
     obs, _ = venv.reset(seed=seed)
     assert np.array_equal(obs, sb3_obs[0])
     for k in range(2):

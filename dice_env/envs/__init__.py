@@ -25,8 +25,8 @@ __all__ = ["ENV_ID", "DiceThrowEnv", "DiceThrowSB3VecEnv", "DiceThrowVectorEnv",
 
 def __getattr__(name: str) -> object:
     """``DiceThrowSB3VecEnv`` on first use, so importing dice_env does not import SB3 and torch."""
-    if name in ("DiceThrowSB3VecEnv", "SB3VecEnv"):
-        from dice_env.envs import sb3
+    if name == "DiceThrowSB3VecEnv":
+        from dice_env.envs.sb3 import DiceThrowSB3VecEnv
 
-        return getattr(sb3, name)
+        return DiceThrowSB3VecEnv
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -113,5 +113,3 @@ class DiceThrowSB3VecEnv(VecEnv):
             raise ValueError(f"indices must cover all {self.num_envs} envs (one shared batch), "
                              f"got {indices!r}")
 
-
-SB3VecEnv = DiceThrowSB3VecEnv  # the name agents/ imports
