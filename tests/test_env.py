@@ -13,6 +13,7 @@ from scipy import ndimage
 import dice_env  # noqa: F401
 from dice_env import Scene
 from dice_env.envs import DiceThrowEnv
+from dice_env.envs.dice_throw import RENDER_FPS
 from dice_env.envs.render import render_die
 from dice_env.envs.task import _FACE_UP, make_task
 from dice_env.envs.video import save_video
@@ -187,6 +188,7 @@ def test_render_modes(tmp_path):
     env.step(np.zeros(6))
     frames = env.render()
     assert len(frames) > 5 and all(f.shape == (48, 64, 3) for f in frames)
+    assert len(frames) < 3 * RENDER_FPS  # up to rest, not the whole t_max
     assert env.render() == []
     path = save_video(frames, tmp_path / "throw.gif")
     assert path.stat().st_size > 0

@@ -175,8 +175,10 @@ class DiceThrowEnv(gym.Env):
                                 record_every=self._record_every())
         result = throw.result
         self._pose = (result.final.position[0], result.final.orientation[0])
-        if result.orientations is not None:
-            self._draw([*zip(result.x_cm[0], result.orientations[0], strict=True), self._pose])
+        if result.orientations is not None:  # the frames until the die stopped, then at rest
+            shown = int(result.steps[0]) // self._record_every()
+            self._draw([*zip(result.x_cm[0, :shown], result.orientations[0, :shown],
+                             strict=True), self._pose])
         info = {key: _scalar(value[0]) for key, value in throw.info.items()}
         return throw.observation[0], float(throw.reward[0]), True, False, info
 
