@@ -1,6 +1,9 @@
-"""The project's main job. Training lands with the agents; until then, a demonstration throw."""
+"""The project's main job: train PPO on DiceThrow-v0, evaluate it and write its report.
 
-from dice_env.demo import main
+A thin entry into :mod:`agents.train`; ``python train.py --help`` lists every option.
+"""
+
+from agents.train import main
 
 if __name__ == "__main__":
     main()

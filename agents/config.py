@@ -42,7 +42,7 @@ _WARM = {"imitation_throws": 20_000, "imitation_steps": 1500}
 
 HYPERPARAMS: dict[str, dict[str, dict[str, Any]]] = {
     "DiceThrow-v0": {
-        "quick": {"total_timesteps": 60_000, "n_envs": 256, "ppo": _PPO_COMMON,
+        "quick": {"total_timesteps": 150_000, "n_envs": 256, "ppo": _PPO_COMMON,
                   "env": _TASK, "train_env": _TRAIN, **_WARM},
         "best": {"total_timesteps": 500_000, "n_envs": 256, "ppo": _PPO_COMMON,
                  "env": _TASK, "train_env": _TRAIN, **_WARM},
@@ -82,7 +82,7 @@ class Config:
     """Throws between checkpoints."""
     eval_throws: int = 1000
     """Throws per thrower in the final evaluation."""
-    oracle_observations: int = 24
+    oracle_observations: int = 64
     """Observations searched by the oracle in the final evaluation (each costs 2240 throws)."""
     robustness_throws: int = 400
     """Throws per thrower and setting in the final evaluation's robustness sweeps."""

@@ -52,7 +52,11 @@ def strategy(path: Path, targets: np.ndarray, strategies: dict[str, dict[str, An
                            color=COLOURS.get(name), label=f"{name} (r={s['spin_tilt_corr']:.2f})")
         axes[1, 1].hist(s["axis_cosine"], bins=40, range=(-1, 1), alpha=0.5,
                         color=COLOURS.get(name), label=name)
+    from matplotlib.patches import Patch
+
+    handles = [Patch(color=COLOURS.get(n, "tab:purple"), alpha=0.6, label=n) for n in strategies]
     axes[0, 0].set_title("speed per target")
+    axes[0, 0].legend(handles=handles, fontsize=8)
     axes[0, 1].set_title("spin per target")
     axes[1, 0].set(xlabel="target face's angle from up at release (deg)",
                    ylabel="release spin (rad/s)", title="spin against how far the target must turn")
@@ -119,11 +123,8 @@ def save_throws(run: Path, env_id: str, env_kwargs: dict[str, Any], batch: Any, 
     """
     import gymnasium as gym
 
-    try:
-        from dice_env.envs.video import save_gif
-    except ImportError:  # the env's video helper is not there yet
-        print("no dice_env.envs.video: throws not saved as GIF")
-        return []
+    from dice_env.envs.video import save_video
+
     paths = []
     env = gym.make(env_id, render_mode="rgb_array_list", **env_kwargs)
     for i in range(min(count, len(batch.targets))):
@@ -131,7 +132,7 @@ def save_throws(run: Path, env_id: str, env_kwargs: dict[str, Any], batch: Any, 
                                             "orientation": batch.hands[i]})
         _, _, _, _, info = env.step(thrower(obs[None])[0])
         path = run / f"throw_{i}_target{info['target_face']}_landed{info['face']}.gif"
-        save_gif(env.render(), path, fps=env.metadata["render_fps"])
+        save_video(env.render(), path, fps=env.metadata["render_fps"])
         paths.append(path)
     env.close()
     return paths

@@ -45,9 +45,10 @@ CHECKPOINT_PREFIX = "ppo"
 
 def make_vec_env(env_id: str, n_envs: int, seed: int, **env_kwargs: Any) -> VecEnv:
     """``n_envs`` envs as one SB3 VecEnv over the native batch (one kernel call per step)."""
-    from dice_env.envs.sb3 import SB3VecEnv
+    from dice_env.envs.sb3 import DiceThrowSB3VecEnv
 
-    env = VecMonitor(SB3VecEnv(gym.make_vec(env_id, num_envs=n_envs, **env_kwargs)))
+    env = VecMonitor(DiceThrowSB3VecEnv(gym.make_vec(env_id, num_envs=n_envs,
+                                                     vectorization_mode=None, **env_kwargs)))
     env.seed(seed)
     return env
 
