@@ -10,7 +10,12 @@ def random_rotations(rng: np.random.Generator, size: int) -> np.ndarray:
 
     From uniform unit quaternions (Shoemake 1992).
     """
-    u1, u2, u3 = rng.random((3, size))
+    return uniform_rotations(rng.random((3, size)))
+
+
+def uniform_rotations(uniforms: np.ndarray) -> np.ndarray:
+    """Rotation matrices (n, 3, 3) from uniforms (3, n) in [0, 1), as :func:`random_rotations`."""
+    u1, u2, u3 = uniforms
     a, b = np.sqrt(1 - u1), np.sqrt(u1)
     quat = np.stack([a * np.sin(2 * np.pi * u2), a * np.cos(2 * np.pi * u2),
                      b * np.sin(2 * np.pi * u3), b * np.cos(2 * np.pi * u3)], axis=-1)

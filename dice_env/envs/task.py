@@ -14,12 +14,13 @@ Frames: world frame, z up on a level table; the table's unit normal is ``task.sc
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
 from dice_env.die import FACE_NORMALS, Die
-from dice_env.rotations import orthonormality_error, quaternion_to_matrix, random_rotations
+from dice_env.rotations import orthonormality_error, quaternion_to_matrix, uniform_rotations
 from dice_env.scene import ContactLaw, Ground, Rest, Scene
 from dice_env.simulate import Result, State, simulate
 from dice_env.validation import check_nonnegative, check_positive, check_range
@@ -94,19 +95,40 @@ class ThrowTask:
         "uniform": over all rotations; "flat": a uniform face up (relative to world z) with a
         uniform turn about the vertical; "identity": face 1 up, no draw.
         """
-        target = (int(rng.integers(1, 7)) if target_face is None
-                  else check_face("target_face", target_face))
-        if orientation_mode == "uniform":
-            hand = random_rotations(rng, 1)[0]
-        elif orientation_mode == "flat":
-            face = int(rng.integers(0, 6))
-            hand = _z_turn(rng.uniform(0, 2 * np.pi)) @ _FACE_UP[face]
-        elif orientation_mode == "identity":
-            hand = np.eye(3)
-        else:
+        targets, hands = self.sample_hands([rng], target_face, orientation_mode)
+        return int(targets[0]), hands[0]
+
+    def sample_hands(
+        self,
+        rngs: Sequence[np.random.Generator],
+        target_face: int | None = None,
+        orientation_mode: str = "uniform",
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """One context per generator: targets (n,) and hands (n, 3, 3).
+
+        Each is drawn from its generator as :meth:`sample_hand` draws it; the rotations are
+        built in one batch.
+        """
+        if target_face is not None:
+            check_face("target_face", target_face)
+        if orientation_mode not in ORIENTATION_MODES:
             raise ValueError(f"orientation_mode must be one of {ORIENTATION_MODES}, "
                              f"got {orientation_mode!r}")
-        return target, hand
+        targets = np.full(len(rngs), target_face or 0, np.int64)
+        draws = np.zeros((len(rngs), 3))
+        for i, rng in enumerate(rngs):
+            if target_face is None:
+                targets[i] = rng.integers(1, 7)
+            if orientation_mode == "uniform":
+                draws[i] = rng.random(3)
+            elif orientation_mode == "flat":
+                draws[i, 0], draws[i, 1] = rng.integers(0, 6), rng.uniform(0, 2 * np.pi)
+        if orientation_mode == "uniform":
+            return targets, uniform_rotations(draws.T)
+        if orientation_mode == "flat":
+            return targets, np.stack([_z_turn(turn) @ _FACE_UP[int(face)]
+                                      for face, turn, _ in draws])
+        return targets, np.tile(np.eye(3), (len(rngs), 1, 1))
 
     @staticmethod
     def sample_noise(rng: np.random.Generator, n: int = 1) -> np.ndarray:

@@ -118,8 +118,8 @@ class DiceThrowVectorEnv(VectorEnv):
             final_info["_" + key] = mask
         info = {"final_obs": throw.observation, "_final_obs": mask,
                 "final_info": final_info, "_final_info": mask}
-        for i in range(self.num_envs):
-            self._new_hand(i, {})
+        self._targets, self._hands = self.task.sample_hands(
+            self._rngs, self.target_face, self.orientation_mode)
         return (self.task.observe(self._targets, self._hands), throw.reward.copy(),
                 mask.copy(), np.zeros(self.num_envs, np.bool_), info)
 
