@@ -205,3 +205,13 @@ def test_no_rendering_cost_without_render_mode():
     env.reset(seed=0)
     env.step(np.zeros(6))
     assert env.render() is None and env.unwrapped._record_every() == 0
+
+
+@pytest.mark.parametrize("mode", ["flat", "identity"])
+def test_orientation_modes_hold_a_face_up(mode):
+    venv = gym.make_vec("DiceThrow-v0", num_envs=4, orientation_mode=mode, **FAST)
+    obs, _ = venv.reset(seed=0)
+    up = obs[:, 6:].reshape(-1, 3, 3)[:, 2, :]  # world z in the body frame, per die
+    assert np.allclose(np.sort(np.abs(up), axis=1)[:, -1], 1.0, atol=1e-6)
+    single = make(orientation_mode=mode)
+    assert np.array_equal(single.reset(seed=2)[0], obs[2])
