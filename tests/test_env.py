@@ -108,6 +108,7 @@ def test_bad_actions():
     ("tilt_deg", 95.0, "tilt_deg"),
     ("load_fraction", 1.5, "load_fraction"),
     ("num_threads", 0, "num_threads"),
+    ("stifness", 1e5, "unknown keyword"),
 ])
 def test_bad_keywords(keyword, value, match):
     with pytest.raises(ValueError, match=match):

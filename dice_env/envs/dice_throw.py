@@ -16,6 +16,7 @@ from dice_env.envs.task import (
     check_actions,
     check_face,
     check_rotation,
+    check_task_keywords,
     make_task,
 )
 
@@ -138,7 +139,7 @@ class DiceThrowEnv(gym.Env):
     ) -> None:
         check_episode_keywords(target_face, orientation_mode)
         check_render(render_mode, RENDER_MODES, render_width, render_height)
-        self.task: ThrowTask = make_task(**task_keywords)
+        self.task: ThrowTask = make_task(**check_task_keywords(task_keywords))
         self.target_face = target_face
         self.orientation_mode = orientation_mode
         self.render_mode = render_mode

@@ -13,6 +13,7 @@ Frames: world frame, z up on a level table; the table's unit normal is ``task.sc
 
 from __future__ import annotations
 
+import inspect
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -322,6 +323,17 @@ def check_face(name: str, value: object) -> int:
         raise ValueError(f"{name} must be an int in [1, 6], got {value!r}")
     check_range(name, int(value), 1, 6)
     return int(value)
+
+
+def check_task_keywords(keywords: dict[str, object]) -> dict[str, object]:
+    """``keywords`` unchanged if :func:`make_task` takes them all, else ``ValueError``."""
+    known = inspect.signature(make_task).parameters
+    unknown = sorted(set(keywords) - set(known))
+    if unknown:
+        raise ValueError(f"unknown keyword(s) {unknown}; DiceThrow-v0 takes {sorted(known)} "
+                         "plus target_face, orientation_mode, render_mode, render_width, "
+                         "render_height")
+    return keywords
 
 
 def _given(default: object, **values: object) -> dict[str, object]:

@@ -17,7 +17,13 @@ from dice_env.envs.dice_throw import (
     check_render,
     observation_space,
 )
-from dice_env.envs.task import ThrowTask, check_actions, check_rotation, make_task
+from dice_env.envs.task import (
+    ThrowTask,
+    check_actions,
+    check_rotation,
+    check_task_keywords,
+    make_task,
+)
 
 
 class DiceThrowVectorEnv(VectorEnv):
@@ -53,7 +59,7 @@ class DiceThrowVectorEnv(VectorEnv):
             raise ValueError(f"num_envs must be an int >= 1, got {num_envs!r}")
         check_episode_keywords(target_face, orientation_mode)
         check_render(render_mode, ("rgb_array",), render_width, render_height)
-        self.task: ThrowTask = make_task(**task_keywords)
+        self.task: ThrowTask = make_task(**check_task_keywords(task_keywords))
         self.num_envs = int(num_envs)
         self.target_face = target_face
         self.orientation_mode = orientation_mode
