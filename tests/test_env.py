@@ -26,10 +26,10 @@ def make(**kwargs):
 
 
 def test_make_without_prior_import():
-    code = ("import gymnasium as gym; e = gym.make('dice_env:DiceThrow-v0'); "
-            "print(type(e.unwrapped).__name__)")
+    code = ("import sys; import gymnasium as gym; e = gym.make('dice_env:DiceThrow-v0'); "
+            "print(type(e.unwrapped).__name__, 'stable_baselines3' in sys.modules)")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
-    assert out.stdout.strip() == "DiceThrowEnv"
+    assert out.stdout.split() == ["DiceThrowEnv", "False"]  # SB3 (and torch) only when asked
 
 
 def test_step_types_and_info():
@@ -120,6 +120,25 @@ def test_bad_render_mode():
         DiceThrowEnv(render_mode="ascii")
 
 
+def test_vector_bad_input():
+    for kwargs, match in (({"num_envs": 0}, "num_envs"), ({"stifness": 1e5}, "unknown keyword"),
+                          ({"hand_noise": -1.0}, "hand_noise"),
+                          ({"render_mode": "human"}, "render_mode")):
+        with pytest.raises(ValueError, match=match):
+            gym.make_vec("DiceThrow-v0", **{"num_envs": 2, **kwargs})
+    venv = gym.make_vec("DiceThrow-v0", num_envs=2, **FAST)
+    venv.reset(seed=0)
+    with pytest.raises(ValueError, match="action must be finite"):
+        venv.step(np.full((2, 6), np.inf))
+    with pytest.raises(ValueError, match=r"actions must have shape \(2, 6\)"):
+        venv.step(np.zeros((3, 6)))
+    with pytest.raises(ValueError, match="seed"):
+        venv.reset(seed=[1, 2, 3])
+    _, rewards, terminated, truncated, info = venv.step(np.full((2, 6), 2.0))
+    assert info["final_info"]["action_clipped"].all() and rewards.dtype == np.float64
+    assert terminated.all() and not truncated.any()
+
+
 def test_keywords_reach_the_scene():
     task = make(stiffness=2e5, friction=0.3, edge=0.02, tilt_deg=10.0).unwrapped.task
     assert task.scene.ground.stiffness == 2e5 and task.scene.ground.friction == 0.3
@@ -201,11 +220,24 @@ def test_render_modes(tmp_path):
     assert len(venv.render()) == 2
 
 
-def test_no_rendering_cost_without_render_mode():
+def test_no_rendering_cost_without_render_mode(monkeypatch):
+    def fail(*args, **kwargs):
+        raise AssertionError("drew a frame without a render mode")
+
+    monkeypatch.setattr("dice_env.envs.render.render_die", fail)
     env = make()
     env.reset(seed=0)
     env.step(np.zeros(6))
     assert env.render() is None and env.unwrapped._record_every() == 0
+
+
+def test_frames_at_render_fps():
+    env = make(render_mode="rgb_array_list", render_width=32, render_height=24)
+    env.reset(seed=1)
+    _, _, _, _, info = env.step(np.array([0.2, 0, 0.3, 5, 0, 0]) / 8)
+    frames = env.render()  # in the hand, every 1/fps s of the throw, at rest
+    fps = env.metadata["render_fps"]
+    assert abs(len(frames) - 2 - info["rest_time"] * fps) <= 2
 
 
 @pytest.mark.parametrize("mode", ["flat", "identity"])
