@@ -248,3 +248,23 @@ def test_orientation_modes_hold_a_face_up(mode):
     assert np.allclose(np.sort(np.abs(up), axis=1)[:, -1], 1.0, atol=1e-6)
     single = make(orientation_mode=mode)
     assert np.array_equal(single.reset(seed=2)[0], obs[2])
+
+
+def test_save_video(tmp_path):
+    import imageio.v3 as iio
+
+    frames = [np.full((24, 32, 3), 40 * i, np.uint8) for i in range(4)]
+    path = save_video(frames, tmp_path / "throw.gif", fps=25)
+    assert iio.imread(path, index=None).shape == (4, 24, 32, 3)
+    assert iio.immeta(path)["duration"] == 40  # ms per frame
+    for bad, match in (({"frames": []}, "frames"), ({"path": tmp_path / "x.avi"}, "path"),
+                       ({"fps": 0}, "fps")):
+        with pytest.raises(ValueError, match=match):
+            save_video(**{"frames": frames, "path": tmp_path / "x.gif", **bad})
+    try:
+        import imageio_ffmpeg  # noqa: F401
+    except ImportError:
+        with pytest.raises(ImportError, match="imageio-ffmpeg"):
+            save_video(frames, tmp_path / "throw.mp4")
+    else:
+        assert save_video(frames, tmp_path / "throw.mp4").stat().st_size > 0
