@@ -21,7 +21,6 @@ from gymnasium.vector import VectorEnv
 from stable_baselines3.common.vec_env import VecEnv
 from stable_baselines3.common.vec_env.base_vec_env import VecEnvIndices, VecEnvStepReturn
 
-from dice_env.envs.dice_throw import _scalar
 from dice_env.envs.vector import DiceThrowVectorEnv
 
 
@@ -63,14 +62,13 @@ class DiceThrowSB3VecEnv(VecEnv):
             raise RuntimeError("call step_async() before step_wait()")
         obs, rewards, terminated, truncated, info = self.venv.step(self._actions)
         self._actions = None
-        final_obs, final_info = info["final_obs"], info["final_info"]
-        infos: list[dict[str, Any]] = []
-        for i in range(self.num_envs):
-            env_info = {key: _scalar(value[i]) for key, value in final_info.items()
-                        if not key.startswith("_")}
-            env_info["terminal_observation"] = final_obs[i]
-            env_info["TimeLimit.truncated"] = bool(truncated[i] and not terminated[i])
-            infos.append(env_info)
+        # Per-env columns: Python scalars (one tolist per key) or rows of the arrays.
+        columns = {key: value.tolist() if value.ndim == 1 else value
+                   for key, value in info["final_info"].items() if not key.startswith("_")}
+        columns["terminal_observation"] = info["final_obs"]
+        columns["TimeLimit.truncated"] = (truncated & ~terminated).tolist()
+        infos = [{key: column[i] for key, column in columns.items()}
+                 for i in range(self.num_envs)]
         dones = np.logical_or(terminated, truncated)
         return obs, rewards.astype(np.float32), dones, infos
 
