@@ -35,18 +35,18 @@ class DiceThrowSB3VecEnv(VecEnv):
     """
 
     def __init__(self, venv: VectorEnv) -> None:
-        if not isinstance(venv.unwrapped, DiceThrowVectorEnv):
-            raise ValueError(f"venv must be a DiceThrowVectorEnv (gym.make_vec('DiceThrow-v0', "
-                             f"n)), got {type(venv.unwrapped).__name__}")
+        if not isinstance(venv, DiceThrowVectorEnv):
+            raise ValueError(f"venv must be an unwrapped DiceThrowVectorEnv (gym.make_vec("
+                             f"'DiceThrow-v0', n)); wrap the adapter in SB3's VecEnv wrappers "
+                             f"instead; got {type(venv).__name__}")
         self.venv = venv
-        self._batch: DiceThrowVectorEnv = venv.unwrapped
         self._actions: np.ndarray | None = None
         super().__init__(venv.num_envs, venv.single_observation_space, venv.single_action_space)
         self.metadata = {**venv.metadata, **self.metadata}
 
     def reset(self) -> np.ndarray:
         """Start new episodes with the seeds and options set since the last reset (then cleared)."""
-        obs = self._batch.reset_envs(self._seeds, self._options)
+        obs = self.venv.reset_envs(self._seeds, self._options)
         self.reset_infos = [{} for _ in range(self.num_envs)]
         self._reset_seeds()
         self._reset_options()
@@ -83,13 +83,13 @@ class DiceThrowSB3VecEnv(VecEnv):
 
     def get_attr(self, attr_name: str, indices: VecEnvIndices = None) -> list[Any]:
         """The batch's attribute, once per index."""
-        value = getattr(self._batch, attr_name)
+        value = getattr(self.venv, attr_name)
         return [value for _ in self._get_indices(indices)]
 
     def set_attr(self, attr_name: str, value: Any, indices: VecEnvIndices = None) -> None:
         """Set an attribute of the whole batch (``indices`` must cover every env)."""
         self._check_all(indices)
-        setattr(self._batch, attr_name, value)
+        setattr(self.venv, attr_name, value)
 
     def env_method(
         self, method_name: str, *method_args: Any, indices: VecEnvIndices = None,
@@ -97,7 +97,7 @@ class DiceThrowSB3VecEnv(VecEnv):
     ) -> list[Any]:
         """Call a method of the batch once; its result once per index."""
         self._check_all(indices)
-        result = getattr(self._batch, method_name)(*method_args, **method_kwargs)
+        result = getattr(self.venv, method_name)(*method_args, **method_kwargs)
         return [result for _ in range(self.num_envs)]
 
     def env_is_wrapped(
