@@ -5,9 +5,9 @@ also a function returning the number it rests on, so the tests assert the same n
 
 Figure 13 search: for each stiffness, ``ground_cube`` runs over a fine grid of ``clockmax``
 (tmax = 10); a run passes a criterion when its total energy (kinetic + potential + ground
-springs) never rises above its start by more than a limit (10% or 100% of ``KE0 + m g edge``),
-stays finite and ends above the plane. The steps needed are the smallest grid ``clockmax``
-above which every run passes.
+springs) never rises above its start by more than a limit (10% or 100% of
+``KE0 + m g (h0 + edge)``, h0 the start height above the plane), stays finite and ends above
+the plane. The steps needed are the smallest grid ``clockmax`` above which every run passes.
 """
 
 from __future__ import annotations
@@ -97,7 +97,8 @@ def rebound_peaks(run: PaperRun) -> np.ndarray:
 # ---- Figure 13: steps needed against stiffness --------------------------------------------
 
 # Stability criteria of the search: the largest energy rise allowed, as a fraction of
-# KE0 + m g edge. 0.1 is ``Scene.energy_tol`` (``Result.unstable``); 1.0 is "energy not doubled".
+# KE0 + m g (h0 + edge). 0.1 is ``Scene.energy_tol`` (``Result.unstable``); 1.0 is "energy not
+# doubled".
 CRITERIA = {"rise <= 10%": 0.1, "rise <= 100%": 1.0}
 
 
@@ -106,8 +107,8 @@ def energy_rises(stiffness: float, clockmaxes: np.ndarray,
     """Largest rise of total energy of ``ground_cube`` runs, one per ``clockmax`` (tmax = 10).
 
     Total energy is kinetic + potential + ground springs; the rise is in units of
-    ``KE0 + m g edge``; ``inf`` when the state stopped being finite or the cube ended below the
-    plane (a few huge steps can carry it through the ground between energy checks).
+    ``KE0 + m g (h0 + edge)``; ``inf`` when the state stopped being finite or the cube ended
+    below the plane (a few huge steps can carry it through the ground between energy checks).
     """
     tol = paper_scene(S=stiffness, rotation=False, dt=None).energy_tol
     out = np.empty(len(clockmaxes))
@@ -361,7 +362,7 @@ Search (paper law): for each S, `ground_cube` runs on a grid of `clockmax` space
 (tmax = 10, so dt = 10/clockmax), from 1/4 to 4 times the effective-mass theory (the theory only
 sets the window; the result is read from the runs). A run passes when its total energy (kinetic
 + potential + ground springs) never rises above its start by more than a limit, as a fraction of
-KE0 + m g edge, stays finite, and ends above the plane. Two limits: 10% (`Scene.energy_tol`,
+KE0 + m g (h0 + edge), stays finite, and ends above the plane. Two limits: 10% (`Scene.energy_tol`,
 what flags `Result.unstable`) and 100% (energy never doubles: "does not blow up"). Steps needed =
 the smallest grid `clockmax` above which every run passes (the pass/fail boundary is not a
 single clean threshold: near the critical step the energy kick of each impact depends on how

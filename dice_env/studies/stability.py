@@ -5,7 +5,7 @@
 Map: the paper's real throw (``paper_scene``, rotation on) for stiffness 1e1–1e8 and steps from
 1/20 to 5 times ``Scene.critical_dt``, under both contact laws, a few spins per cell. A cell is
 *stable* when no throw's total energy (kinetic + potential + ground springs) rises above its
-start by more than 10% of ``KE0 + m g edge`` (``Result.unstable`` is False), *drifting* when
+start by more than 10% of ``KE0 + m g (h0 + edge)`` (``Result.unstable`` is False), *drifting* when
 the worst rise is above 10% but below 10 times that scale with a finite state, and *blowing
 up* beyond that or on a non-finite state.
 
@@ -36,7 +36,7 @@ from dice_env.studies.paper_figures import DOCS, progress, save_figure
 
 STABLE, DRIFTING, BLOWUP = 0, 1, 2
 CLASS_NAMES = ("stable", "drifting", "blowing up")
-# Worst energy rise (fraction of KE0 + m g edge) that still counts as drifting.
+# Worst energy rise (fraction of KE0 + m g (h0 + edge)) that still counts as drifting.
 DRIFT_LIMIT = 10.0
 # Simulated time of each map cell (s): the paper throw lands at about 1.5 s.
 MAP_T_MAX = 5.0
@@ -287,9 +287,9 @@ The paper's real throw (its die, x0 = (0, 0, 3), u0 = (5, 0, 5), D = 0.1, mu = 0
 (sqrt(D^2 + 4 S m_eff) - D) / S with m_eff = m/6 (the fastest contact mode of a face on the
 table: rocking about an edge), {len(ratios)} values. Classes, from the worst of the spins:
 *stable* = the total energy (kinetic + potential + ground springs) never rose above its start
-by more than 10% of KE0 + m g edge (`Result.unstable` False); *drifting* = rose more than that
-but less than {DRIFT_LIMIT:g} times that scale and stayed finite; *blowing up* = beyond, or
-non-finite.
+by more than 10% of KE0 + m g (h0 + edge) (`Result.unstable` False); *drifting* = rose more
+than that but less than {DRIFT_LIMIT:g} times that scale and stayed finite; *blowing up* =
+beyond, or non-finite.
 
 | law | below: stable | drift | blow-up | above: stable | drift | blow-up | 1st drift | 1st blowup |
 |---|---|---|---|---|---|---|---|---|
@@ -316,7 +316,7 @@ S = {g.stiffness:g} N/m, D = {g.damping:.4g} N s/m, mu = {g.friction:g},
 {base.step:.3g} s; up to {base.t_max:g} s per throw. Each row: {throws} random throws
 (uniform orientation, centre 3–10 edges above touching, 10–30 edges/s toward the table,
 10–30 rad/s) with one thing changed. Max pen. = deepest corner in % of the edge; drift =
-largest rise of total energy above its start as a fraction of KE0 + m g edge; unstable =
+largest rise of total energy above its start as a fraction of KE0 + m g (h0 + edge); unstable =
 share of throws flagged; rest = median rest time of the settled throws; wall = seconds for the
 batch on this machine (2 cores, shared); warn = warnings raised. The last two columns of
 the map table are the smallest dt/bound where any stiffness is not stable / blows up.
@@ -334,8 +334,8 @@ the map table are the smallest dt/bound where any stiffness is not stable / blow
 {_indent(sweep_rows)}
 
   At the automatic safety factor {base.safety:g}, {_sweep_sentence(sweep_cases, sweep)}
-  Note the tolerance's scale KE0 + m g edge leaves out the drop height: a die dropped from
-  10 edges brings about 10 m g edge to its first impact.
+  The tolerance's scale KE0 + m g (h0 + edge) includes the drop height h0 of the centre above
+  the table, so a drop is judged against the energy it brings to its first impact.
 - Very stiff ground at the automatic step costs time, not accuracy: the step shrinks like
   1/sqrt(S) (S = {stiff[-1][0].scene.ground.stiffness:g}: dt = {stiff[-1][1]['dt']:.2g} s,
   {stiff[-1][1]['steps_per_s']:.3g} steps per simulated second). The simulator neither warns
