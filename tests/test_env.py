@@ -196,7 +196,9 @@ def test_render_top_face_shows_its_number():
         assert count_pips(image) == k + 1
 
 
-def test_render_modes(tmp_path):
+def test_render_modes(tmp_path, monkeypatch):
+    for name in ("DISPLAY", "WAYLAND_DISPLAY"):  # "human" must be a no-op without a display
+        monkeypatch.delenv(name, raising=False)
     env = make(render_mode="rgb_array", render_width=64, render_height=48)
     env.reset(seed=0)
     frame = env.render()
@@ -214,7 +216,8 @@ def test_render_modes(tmp_path):
     assert path.stat().st_size > 0
     env = make(render_mode="human")
     env.reset(seed=0)
-    assert env.render() is None
+    env.step(np.zeros(6))
+    assert env.render() is None and env.unwrapped._viewer._figure is None
     venv = gym.make_vec("DiceThrow-v0", num_envs=2, render_mode="rgb_array", **FAST)
     venv.reset(seed=0)
     assert len(venv.render()) == 2
