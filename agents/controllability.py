@@ -109,6 +109,11 @@ def write_markdown(path: Path, maps: dict[str, np.ndarray], heights: tuple[float
               "up in most throws while the hand is steady, and the hand noise takes that away. "
               "Released high, it bounces and tumbles long enough that even the search finds no "
               "throw better than chance (1/6): the fair, vigorous throw.", ""]
+    if "PPO" in maps:
+        lines += ["PPO is the policy of the given run, trained in one setting (its env keywords); "
+                  "the release height and the noise are not in its observation, so elsewhere it "
+                  "throws as if it were there (this is a test of transfer, not of what PPO can "
+                  "learn in each cell).", ""]
     lines += ["Intervals: Wilson over the throws (hand-written, PPO); over the searched "
               "observations (oracle: CEM from the hand-written thrower, each observation scored on "
               "16 fresh noise draws), so the oracle's are wide.", "",

@@ -107,6 +107,7 @@ def robustness(path: Path, sweeps: dict[str, dict[str, list[dict[str, Any]]]],
         ax.set(xlabel=key, ylim=(0, 1), title=f"success vs {key}")
         if key == "stiffness":
             ax.set_xscale("log")
+            ax.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
     axes[0, 0].set_ylabel("success")
     axes[0, 0].legend(fontsize=8)
     fig.tight_layout()
