@@ -107,8 +107,8 @@ def write_markdown(path: Path, maps: dict[str, np.ndarray], heights: tuple[float
             f"{best[i, j]:.2f} at noise {n:g}" for j, n in enumerate(noises)))
     lines += ["", "A die released gently just above the table is controllable: the target comes "
               "up in most throws while the hand is steady, and the hand noise takes that away. "
-              "Released high, it bounces and tumbles long enough that even the search finds no "
-              "throw better than chance (1/6): the fair, vigorous throw.", ""]
+              "Released high, it bounces and tumbles long enough that success falls to about "
+              "chance (1/6) unless the hand is very steady: the fair, vigorous throw.", ""]
     if "PPO" in maps:
         lines += ["PPO is the policy of the given run, trained in one setting (its env keywords); "
                   "the release height and the noise are not in its observation, so elsewhere it "
