@@ -105,6 +105,8 @@ def test_bad_actions():
     ("t_max", 0.0, "t_max"),
     ("dt", 1.0, "dt"),
     ("contact_law", "soft", "contact_law"),
+    ("scheme", "rk4", "scheme"),
+    ("friction_vmin", 0.0, "friction_vmin"),
     ("tilt_deg", 95.0, "tilt_deg"),
     ("load_fraction", 1.5, "load_fraction"),
     ("num_threads", 0, "num_threads"),
@@ -113,6 +115,12 @@ def test_bad_actions():
 def test_bad_keywords(keyword, value, match):
     with pytest.raises(ValueError, match=match):
         make(**{keyword: value})
+
+
+def test_physical_keywords_reach_the_scene():
+    scene = make(scheme="midpoint", friction_vmin=0.05, stiffness=2e5).unwrapped.task.scene
+    assert scene.scheme.name == "MIDPOINT"
+    assert scene.friction_vmin == 0.05 and scene.ground.stiffness == 2e5
 
 
 def test_bad_render_mode():

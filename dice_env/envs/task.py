@@ -22,7 +22,7 @@ import numpy as np
 
 from dice_env.die import FACE_NORMALS, Die
 from dice_env.rotations import orthonormality_error, quaternion_to_matrix, uniform_rotations
-from dice_env.scene import ContactLaw, Ground, Rest, Scene
+from dice_env.scene import ContactLaw, Ground, Rest, Scene, Scheme
 from dice_env.simulate import Result, State, simulate
 from dice_env.validation import check_nonnegative, check_positive, check_range
 
@@ -282,13 +282,17 @@ def make_task(
     rest_speed: float | None = None,
     rest_hold: float | None = None,
     energy_tol: float | None = None,
+    scheme: str | None = None,
+    friction_vmin: float | None = None,
 ) -> ThrowTask:
     """A validated :class:`ThrowTask` from flat keywords (the env's ``gym.make`` keywords).
 
     Physical keywords left at None keep the defaults of :class:`~dice_env.scene.Scene` (or of
     ``scene`` when one is given), so changes to the default scene flow through. ``load_fraction``
     > 0 builds :meth:`Die.loaded` toward ``load_face``; ``tilt_deg`` tilts the table about y;
-    ``contact_law`` is "gated" or "paper".
+    ``contact_law`` is "gated" or "paper"; ``scheme`` is "paper" or "midpoint" (see
+    :class:`~dice_env.scene.Scheme`; with ``friction_vmin=0.05`` on a flat table the landed
+    faces converge in the step, docs/error-vs-runtime.md).
     """
     base = Scene() if scene is None else scene
     if not isinstance(base, Scene):
@@ -310,7 +314,12 @@ def make_task(
     ground = Ground.tilted(tilt_deg, **ground_kw) if tilt_deg else Ground(
         normal=base.ground.normal, **ground_kw)
     rest = Rest(**_given(speed=rest_speed, hold=rest_hold, default=base.rest))
-    scene_kw = _given(gravity=gravity, safety=safety, energy_tol=energy_tol, default=base)
+    scene_kw = _given(gravity=gravity, safety=safety, energy_tol=energy_tol,
+                      friction_vmin=friction_vmin, default=base)
+    schemes = {kind.name.lower(): kind for kind in Scheme}
+    if scheme is not None and scheme not in schemes:
+        raise ValueError(f"scheme must be one of {sorted(schemes)}, got {scheme!r}")
+    scene_kw["scheme"] = schemes.get(scheme, base.scheme)
     scene = base.with_(die=die, ground=ground, rest=rest, t_max=t_max,
                        dt=base.dt if dt is None else dt, **scene_kw)
     return ThrowTask(scene, release_height, max_speed, max_spin, hand_noise, orientation_noise,
