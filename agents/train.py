@@ -127,7 +127,8 @@ def new_run(config: Config) -> Path:
 
 def train(config: Config) -> Path:
     """Train (or resume) a run; returns its folder. Ctrl-C stops early and saves."""
-    if config.resume:
+    resuming = config.resume is not None
+    if resuming:
         run = Path(config.resume)
         given = config
         config = Config.load(run / "config.json")
@@ -146,7 +147,7 @@ def train(config: Config) -> Path:
     tensorboard = run / "tb" if importlib.util.find_spec("tensorboard") else None
     if tensorboard is None:
         print("tensorboard is not installed: no TensorBoard logs", file=sys.stderr)
-    checkpoint = last_checkpoint(run) if config.resume else None
+    checkpoint = last_checkpoint(run) if resuming else None
     if checkpoint is not None:
         model = PPO.load(checkpoint, env=env, tensorboard_log=tensorboard, device="cpu")
         print(f"resuming {run} from {checkpoint.name} ({model.num_timesteps} throws)")

@@ -82,8 +82,9 @@ def test_train_py_end_to_end_and_resume(tmp_path):
     assert list((run / "tb").iterdir()) and list((run / "checkpoints").glob("ppo_*_steps.zip"))
     evaluation = json.loads((run / "evaluation.json").read_text())
     assert set(evaluation["summary"]) == {"PPO", "random", "hand-written", "oracle"}
-    subprocess.run([sys.executable, str(ROOT / "train.py"), "--resume", str(run),
-                    "--total-timesteps", "1024", "--no-evaluate"], check=True, cwd=ROOT,
-                   timeout=600)
+    resumed = subprocess.run([sys.executable, str(ROOT / "train.py"), "--resume", str(run),
+                              "--total-timesteps", "1024", "--no-evaluate"], check=True,
+                             cwd=ROOT, timeout=600, capture_output=True, text=True)
+    assert "resuming" in resumed.stdout and "(512 throws)" in resumed.stdout
     sessions = [json.loads(line) for line in (run / "training.jsonl").read_text().splitlines()]
     assert [s["throws"] for s in sessions] == [512, 1024]
