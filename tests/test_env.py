@@ -148,7 +148,8 @@ def test_vector_bad_input():
 
 
 def test_keywords_reach_the_scene():
-    task = make(stiffness=2e5, friction=0.3, edge=0.02, tilt_deg=10.0).unwrapped.task
+    task = make(stiffness=2e5, friction=0.3, edge=0.02, tilt_deg=10.0,
+                release_height=0.03).unwrapped.task
     assert task.scene.ground.stiffness == 2e5 and task.scene.ground.friction == 0.3
     assert task.scene.die.edge == 0.02 and task.scene.ground.normal[0] > 0
     assert make_task().scene.die == Scene().die  # defaults flow from Scene()
@@ -215,7 +216,7 @@ def test_render_modes(tmp_path, monkeypatch):
     assert not np.array_equal(env.render(), frame)  # the die moved
     env = make(render_mode="rgb_array_list", render_width=64, render_height=48)
     env.reset(seed=0)
-    env.step(np.zeros(6))
+    env.step(np.array([0, 0, 1.0, 0, 0.5, 0]))  # tossed up: a few tenths of a second in the air
     frames = env.render()
     assert len(frames) > 5 and all(f.shape == (48, 64, 3) for f in frames)
     assert len(frames) < 3 * RENDER_FPS  # up to rest, not the whole t_max

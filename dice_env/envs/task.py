@@ -3,7 +3,7 @@
 Everything the environments do with physics lives here, so the single env, the vector env, the
 SB3 adapter and an oracle that searches throws under the env's own hand noise share one code path:
 
-    task = make_task(release_height=0.05)
+    task = make_task(release_height=0.015)
     target, hand = task.sample_hand(rng)                 # one episode's context
     noise = task.sample_noise(rng, n)                    # (n, 9) standard normals
     throw = task.throw(actions, targets, hands, noise)   # (n, 6) actions -> rewards, info
@@ -48,7 +48,7 @@ class ThrowTask:
     """
 
     scene: Scene
-    release_height: float = 0.05
+    release_height: float = 0.015
     max_speed: float = 1.0
     max_spin: float = 40.0
     hand_noise: float = 0.05
@@ -61,12 +61,12 @@ class ThrowTask:
     def __post_init__(self) -> None:
         if not isinstance(self.scene, Scene):
             raise ValueError(f"scene must be a Scene, got {type(self.scene).__name__}")
-        clearance = self.scene.die.edge * math.sqrt(3) / 2 + float(np.abs(self.scene.die.com).max())
+        clearance = float(np.linalg.norm(self.scene.die.corners_body, axis=1).max())
         check_positive("release_height", self.release_height)
         if self.release_height <= clearance:
-            raise ValueError(f"release_height must be > {clearance:.6g} m (half the die's "
-                             f"diagonal, so no corner starts in the table), got "
-                             f"{self.release_height!r}")
+            raise ValueError(f"release_height must be > {clearance:.6g} m (the farthest "
+                             "corner from the centre of mass, so no corner starts in the "
+                             f"table), got {self.release_height!r}")
         check_positive("max_speed", self.max_speed)
         check_positive("max_spin", self.max_spin)
         check_nonnegative("hand_noise", self.hand_noise)
@@ -255,7 +255,7 @@ def check_rotation(name: str, value: object) -> np.ndarray:
 
 def make_task(
     *,
-    release_height: float = 0.05,
+    release_height: float = 0.015,
     max_speed: float = 1.0,
     max_spin: float = 40.0,
     hand_noise: float = 0.05,
