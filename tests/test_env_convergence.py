@@ -1,0 +1,23 @@
+"""The default task's reward is physics, not step-size noise: gentle throws converge in dt."""
+
+import numpy as np
+
+from agents.baselines import HandThrower
+from dice_env.envs.task import make_task
+
+
+def landed_faces(safety: float, n: int = 600) -> tuple[np.ndarray, float]:
+    rng = np.random.default_rng(0)
+    task = make_task(safety=safety)
+    targets, hands = task.sample_hands([rng] * n)
+    noise = task.sample_noise(rng, n)
+    actions = HandThrower(make_task())(task.observe(targets, hands))
+    throw = task.throw(actions, targets, hands, noise)
+    return throw.info["face"], float(throw.info["is_success"].mean())
+
+
+def test_default_throws_land_on_the_same_face_at_a_quarter_step():
+    faces, success = landed_faces(safety=0.1)  # the automatic step
+    finer, finer_success = landed_faces(safety=0.025)
+    assert np.mean(faces == finer) >= 0.98
+    assert abs(success - finer_success) < 0.03
