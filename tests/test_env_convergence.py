@@ -1,4 +1,7 @@
-"""The default task's reward is physics, not step-size noise: gentle throws converge in dt."""
+"""The default task's reward is physics, not step-size noise: gentle throws converge in dt.
+
+``pytest tests/test_env_convergence.py -s`` prints the figures quoted in docs/environment.md.
+"""
 
 import numpy as np
 
@@ -19,5 +22,7 @@ def landed_faces(safety: float, n: int = 600) -> tuple[np.ndarray, float]:
 def test_default_throws_land_on_the_same_face_at_a_quarter_step():
     faces, success = landed_faces(safety=0.1)  # the automatic step
     finer, finer_success = landed_faces(safety=0.025)
+    print(f"same face at dt and dt/4: {np.mean(faces == finer):.4f}; "
+          f"success {success:.4f} vs {finer_success:.4f}")
     assert np.mean(faces == finer) >= 0.98
     assert abs(success - finer_success) < 0.03
