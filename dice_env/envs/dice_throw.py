@@ -54,6 +54,24 @@ def check_render(render_mode: str | None, modes: tuple[str, ...], width: int, he
             raise ValueError(f"{name} must be an int in [16, 4096], got {value!r}")
 
 
+def configure(
+    env: Any, modes: tuple[str, ...], render_mode: str | None, target_face: int | None,
+    orientation_mode: str, width: int, height: int, task_keywords: dict[str, Any],
+) -> ThrowTask:
+    """Validate the keywords shared by the single and the vector env, set them on ``env``.
+
+    Returns the :class:`ThrowTask` built from ``task_keywords``.
+    """
+    check_episode_keywords(target_face, orientation_mode)
+    check_render(render_mode, modes, width, height)
+    task = make_task(**check_task_keywords(task_keywords))
+    env.target_face = target_face
+    env.orientation_mode = orientation_mode
+    env.render_mode = render_mode
+    env.render_size = (height, width)
+    return task
+
+
 class DiceThrowEnv(gym.Env):
     """Throw a die from the hand so that the target face ends up.
 
@@ -140,13 +158,9 @@ class DiceThrowEnv(gym.Env):
         render_height: int = 240,
         **task_keywords: Any,
     ) -> None:
-        check_episode_keywords(target_face, orientation_mode)
-        check_render(render_mode, RENDER_MODES, render_width, render_height)
-        self.task: ThrowTask = make_task(**check_task_keywords(task_keywords))
-        self.target_face = target_face
-        self.orientation_mode = orientation_mode
-        self.render_mode = render_mode
-        self.render_size = (render_height, render_width)
+        self.task: ThrowTask = configure(self, RENDER_MODES, render_mode, target_face,
+                                         orientation_mode, render_width, render_height,
+                                         task_keywords)
         self.observation_space = observation_space()
         self.action_space = action_space()
         self._target = 1

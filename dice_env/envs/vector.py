@@ -13,16 +13,13 @@ from gymnasium.vector.utils import batch_space
 from dice_env.envs.dice_throw import (
     RENDER_FPS,
     action_space,
-    check_episode_keywords,
-    check_render,
+    configure,
     observation_space,
 )
 from dice_env.envs.task import (
     ThrowTask,
     check_actions,
     check_rotation,
-    check_task_keywords,
-    make_task,
 )
 
 
@@ -57,14 +54,10 @@ class DiceThrowVectorEnv(VectorEnv):
         if isinstance(num_envs, bool) or not isinstance(num_envs, (int, np.integer)) or (
                 num_envs < 1):
             raise ValueError(f"num_envs must be an int >= 1, got {num_envs!r}")
-        check_episode_keywords(target_face, orientation_mode)
-        check_render(render_mode, ("rgb_array",), render_width, render_height)
-        self.task: ThrowTask = make_task(**check_task_keywords(task_keywords))
+        self.task: ThrowTask = configure(self, ("rgb_array",), render_mode, target_face,
+                                         orientation_mode, render_width, render_height,
+                                         task_keywords)
         self.num_envs = int(num_envs)
-        self.target_face = target_face
-        self.orientation_mode = orientation_mode
-        self.render_mode = render_mode
-        self.render_size = (render_height, render_width)
         self.single_observation_space = observation_space()
         self.single_action_space = action_space()
         self.observation_space = batch_space(self.single_observation_space, self.num_envs)
