@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from dice_env.die import Die
-from dice_env.scene import ContactLaw, Ground, Scene, Scheme
+from dice_env.scene import ContactLaw, FrictionLaw, Ground, Scene, Scheme
 from dice_env.simulate import Result, State, simulate
 from dice_env.validation import as_batch, check_positive
 
@@ -111,7 +111,7 @@ def paper_scene(
                       contact_law=contact_law),
         gravity=g, dt=dt, t_max=t_max, rotation=rotation,
         friction_vmin=1e-6 * r if umin is None else umin, allow_unstable=allow_unstable,
-        scheme=Scheme.PAPER,
+        scheme=Scheme.PAPER, friction_law=FrictionLaw.REGULARIZED,
     )
 
 

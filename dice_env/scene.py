@@ -45,11 +45,31 @@ class Scheme(IntEnum):
     MIDPOINT = 1
 
 
+class FrictionLaw(IntEnum):
+    """How a corner in contact feels friction (see :mod:`dice_env.kernel`).
+
+    ``STICK_SLIP`` (default): Coulomb friction with sticking. A corner is tied by a tangential
+    spring and damper (``tangential`` times the ground's S and D) to where it touched, until
+    the spring force would exceed ``mu fn``; then it slips at ``mu fn`` (Cundall and Strack
+    1979). Converges in the step and holds a die on a slope. ``REGULARIZED``: the listing's
+    ``-mu fn Ut / (|Ut| + vmin)``, a sign function for the listing's tiny ``vmin`` (whose
+    dithering about zero slip speed keeps outcomes from converging in the step) and a viscous
+    creep for a large one. Kept to reproduce the paper.
+    """
+
+    REGULARIZED = 0
+    STICK_SLIP = 1
+
+
 @dataclass(frozen=True)
 class Ground:
     """Penalty ground: a plane through the origin with unit ``normal``.
 
-    ``stiffness`` S (N/m per corner), ``damping`` D (N s/m per corner), sliding ``friction`` mu.
+    ``stiffness`` S (N/m per corner), ``damping`` D (N s/m per corner), sliding ``friction`` mu;
+    ``tangential``: the stick-slip friction's spring and damper per corner as a fraction of S
+    and D (2/7, the usual choice for discrete elements since Silbert et al. 2001; the same
+    fraction for both keeps the damping proportional to the stiffness, so the stable step stays
+    exact).
     The defaults are the wooden table of :mod:`dice_env.table` for the default 4.5 g die
     (restitution 0.45); :func:`dice_env.table.table_scene` recomputes D for another die.
     """
@@ -59,9 +79,13 @@ class Ground:
     friction: float = table.FRICTION
     normal: tuple[float, float, float] = (0.0, 0.0, 1.0)
     contact_law: ContactLaw = ContactLaw.GATED
+    tangential: float = 2.0 / 7.0
 
     def __post_init__(self) -> None:
         check_positive("stiffness", self.stiffness)
+        check_range("tangential", self.tangential, 0.0, 1.0)
+        if self.tangential == 0:
+            raise ValueError("tangential must be in (0, 1], got 0")
         check_nonnegative("damping", self.damping)
         check_nonnegative("friction", self.friction)
         normal = np.asarray(self.normal, dtype=np.float64)
@@ -89,9 +113,9 @@ class Ground:
 class Rest:
     """When a die counts as settled.
 
-    In contact, every corner slower than ``speed`` (m/s) and kinetic energy below
-    ``0.5 * mass * speed**2``, continuously for ``hold`` seconds. The rest time is when that
-    quiet interval began.
+    At least three corners in contact (a die pausing on an edge or corner is not at rest),
+    every corner slower than ``speed`` (m/s) and kinetic energy below ``0.5 * mass * speed**2``,
+    continuously for ``hold`` seconds. The rest time is when that quiet interval began.
     """
 
     speed: float = 4e-3
@@ -108,8 +132,9 @@ class Scene:
 
     ``dt=None`` picks ``safety * critical_dt``. A ``dt`` above :attr:`critical_dt` raises unless
     ``allow_unstable=True``. ``rotation=False`` is the paper's ground_cube.m: the die translates
-    only. ``friction_vmin`` is the listing's ``umin``, added to the tangential speed before
-    dividing: friction is Coulomb well above it and viscous below it. ``scheme``: see
+    only. ``friction_law``: see :class:`FrictionLaw`; ``friction_vmin`` is the listing's ``umin``
+    of the ``REGULARIZED`` law, added to the tangential speed before dividing: friction is
+    Coulomb well above it and viscous below it. ``scheme``: see
     :class:`Scheme`. A throw is flagged unstable when its total energy (kinetic + potential +
     ground springs) exceeds its start by more than ``energy_tol`` times ``KE0 + m*g*(h0 + edge)``,
     ``h0`` the start height of the centre above the table.
@@ -122,6 +147,7 @@ class Scene:
     safety: float = 0.1
     t_max: float = 10.0
     rotation: bool = True
+    friction_law: FrictionLaw = FrictionLaw.STICK_SLIP
     friction_vmin: float = 1e-6
     scheme: Scheme = Scheme.PAPER
     rest: Rest = field(default_factory=Rest)
@@ -141,6 +167,7 @@ class Scene:
         check_positive("friction_vmin", self.friction_vmin)
         check_positive("energy_tol", self.energy_tol)
         object.__setattr__(self, "scheme", Scheme(self.scheme))
+        object.__setattr__(self, "friction_law", FrictionLaw(self.friction_law))
         if self.dt is not None:
             check_positive("dt", self.dt)
             if self.dt > self.critical_dt and not self.allow_unstable:
@@ -158,12 +185,15 @@ class Scene:
         ``omega_max`` is the fastest contact mode with one whole face on the ground (the stiffest
         contact a flat table allows): the largest eigenvalue of ``M^-1 K`` with
         ``K = S * sum_k a_k a_k^T``, ``a_k = (n, r_k x n)`` over the face's corners, and
-        ``M = diag(m, m, m, I)``. For a fair solid die it is ``m/6`` (rocking about an edge
-        axis); with ``rotation=False`` it is ``m/4`` (the four corners moving together).
+        ``M = diag(m, m, m, I)``; sticking friction adds ``tangential * S`` springs along two
+        tangents ``t`` (``a_k = (t, r_k x t)``). For a fair solid die it is ``m/6`` without
+        them (rocking about an edge axis) and ``m/8.0`` with them (sliding coupled to rocking);
+        with ``rotation=False`` it is ``m/4`` (the four corners moving together).
         """
         die = self.die
         if not self.rotation:
             return die.mass / 4
+        sticks = self.friction_law == FrictionLaw.STICK_SLIP and self.ground.friction > 0
         inv_sqrt_m = np.zeros((6, 6))
         inv_sqrt_m[:3, :3] = np.eye(3) / math.sqrt(die.mass)
         inv_sqrt_m[3:, 3:] = _inv_sqrt_spd(die.inertia_body)
@@ -172,8 +202,13 @@ class Scene:
         worst = 0.0
         for f, n in enumerate(FACE_NORMALS):
             on_face = corners[face_signs[:, f] > 0]
-            a = np.hstack([np.tile(n, (len(on_face), 1)), np.cross(on_face, n)])
-            k = inv_sqrt_m @ (a.T @ a) @ inv_sqrt_m
+            tangents = np.eye(3)[np.abs(n) < 0.5]  # the face normals are axes: the other two
+            springs = [(1.0, n)] + [(self.ground.tangential, t) for t in tangents if sticks]
+            stiffness = np.zeros((6, 6))
+            for weight, d in springs:
+                a = np.hstack([np.tile(d, (len(on_face), 1)), np.cross(on_face, d)])
+                stiffness += weight * (a.T @ a)
+            k = inv_sqrt_m @ stiffness @ inv_sqrt_m
             worst = max(worst, float(np.linalg.eigvalsh(k)[-1]))
         return 1.0 / worst
 

@@ -12,7 +12,7 @@ import numpy as np
 from dice_env import kernel
 from dice_env.die import face_up
 from dice_env.rotations import orthonormality_error
-from dice_env.scene import ContactLaw, Scene, Scheme
+from dice_env.scene import ContactLaw, FrictionLaw, Scene, Scheme
 from dice_env.validation import as_batch, check_positive
 
 
@@ -163,6 +163,7 @@ def simulate(
     steps = np.zeros(b, np.int64)
     die, ground = scene.die, scene.ground
     gated = ground.contact_law == ContactLaw.GATED
+    stick = scene.friction_law == FrictionLaw.STICK_SLIP
     flight = free_flight and (gated or ground.damping == 0)
     threads = numba.get_num_threads()
     numba.set_num_threads(num_threads or numba.config.NUMBA_NUM_THREADS)
@@ -173,7 +174,9 @@ def simulate(
             out.position, out.velocity, out.angular_momentum, out.orientation,
             out.angular_velocity, body, die.mass, inv_inertia, iso, inv_i_min, normal,
             ground.stiffness,
-            ground.damping, ground.friction, scene.friction_vmin, scene.gravity, dt, gated,
+            ground.damping, ground.friction, scene.friction_vmin, stick,
+            ground.tangential * ground.stiffness, ground.tangential * ground.damping,
+            scene.gravity, dt, gated,
             scene.rotation, flight, scene.scheme == Scheme.MIDPOINT, n_steps, stop_at_rest,
             scene.rest.speed,
             math.ceil(scene.rest.hold / dt), *_rest_energy(scene, early_rest),

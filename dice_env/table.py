@@ -132,9 +132,11 @@ def table_scene(
 def measured_restitution(scene: Scene, speed: float = 1.0) -> float:
     """Restitution the simulator produces for a flat, spin-free landing at ``speed`` (m/s).
 
-    The die starts with its bottom face on the plane (``normal`` along z) moving down at
-    ``speed``; the result is the upward speed when the face crosses the plane again (the
-    gravity between leaving and crossing is undone exactly) over ``speed``.
+    The die starts up to 1 mm above the plane (``normal`` along z), falling so that it meets the
+    plane at ``speed`` (starting on the plane would put the contact onset exactly on a step
+    and add a first-order error of its own); the result is the upward speed when the face
+    crosses the plane again (the gravity between leaving and crossing is undone exactly) over
+    ``speed``.
     """
     from dice_env.simulate import State, simulate
 
@@ -143,12 +145,15 @@ def measured_restitution(scene: Scene, speed: float = 1.0) -> float:
         raise ValueError(f"scene.ground.normal must be (0, 0, 1), got {scene.ground.normal}")
     die, g = scene.die, scene.gravity
     height = die.half_edge + die.com[2]
-    state = State.release(scene, np.array([0.0, 0.0, height]), np.array([0.0, 0.0, -speed]))
-    # contact lasts about pi sqrt(m / 4 S); simulate ten times that, plus a little flight
+    gap = min(1e-3, 0.25 * speed**2 / g) if g > 0 else 1e-3
+    start = math.sqrt(speed**2 - 2.0 * g * gap)
+    state = State.release(scene, np.array([0.0, 0.0, height + gap]), np.array([0.0, 0.0, -start]))
+    # contact lasts about pi sqrt(m / 4 S); simulate ten times that, plus the fall
     span = 10.0 * math.pi * math.sqrt(die.mass / (4.0 * scene.ground.stiffness))
+    span += (speed - start) / g if g > 0 else gap / speed
     result = simulate(scene, state, t_max=span, stop_at_rest=False, record_every=1, record=())
     z = result.x_cm[0, :, 2]
-    vz = np.diff(z, prepend=height) / scene.step
+    vz = np.diff(z, prepend=height + gap) / scene.step
     left = np.flatnonzero((z > height) & (vz > 0))
     if left.size == 0:
         raise ValueError(f"the die did not leave the table within {span:.3g} s at speed {speed}")

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from dice_env import Scene, State
-from dice_env.scene import Scheme
+from dice_env.scene import FrictionLaw, Scheme
 from dice_env.studies import convergence as cv
 
 
@@ -46,7 +46,7 @@ def test_trajectory_error_falls_with_the_step():
 
 
 def test_midpoint_scheme_is_second_order_with_smooth_friction():
-    scene = Scene(friction_vmin=0.05, scheme=Scheme.MIDPOINT)
+    scene = Scene(friction_law=FrictionLaw.REGULARIZED, friction_vmin=0.05, scheme=Scheme.MIDPOINT)
     start = cv.trajectory_start(scene, 8, np.random.default_rng(2))
     reference = cv.run_at(scene, start, cv.HORIZON, Scene().step / 32)[0]
     curve = cv.trajectory_errors(scene, start, cv.HORIZON, (0.4, 0.2, 0.1), reference)

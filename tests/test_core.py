@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from dice_env import ContactLaw, Die, Ground, Scene, State, simulate
+from dice_env import ContactLaw, Die, FrictionLaw, Ground, Scene, State, simulate
 from dice_env.die import FACE_NORMALS, face_up
 from dice_env.rotations import axis_angle, random_rotations
 
@@ -102,6 +102,48 @@ def test_resting_height_is_half_edge_minus_weight_over_stiffness(angle):
     assert height == pytest.approx(scene.die.half_edge - sink, abs=1e-3 * sink)
 
 
+def _flat_on(angle: float, scene: Scene) -> State:
+    """A still die resting flat (at its static sink) on a table tilted by ``angle`` degrees."""
+    normal = np.array(scene.ground.normal)
+    sink = scene.die.mass * scene.gravity * np.cos(np.radians(angle)) / (
+        4 * scene.ground.stiffness)
+    return State.release(scene, normal * (scene.die.half_edge - sink), [0, 0, 0],
+                         orientation=axis_angle([0, 1, 0], np.radians(angle)))
+
+
+def test_stick_slip_holds_a_die_on_a_slope_the_listing_friction_lets_creep():
+    # 15 degrees: tan 15 = 0.27 < mu = 0.4, so Coulomb friction holds the die
+    held = Scene(ground=Ground.tilted(15.0))
+    moved = simulate(held, _flat_on(15.0, held), t_max=1.0, stop_at_rest=False)
+    assert np.linalg.norm(moved.final.position - _flat_on(15.0, held).position) < 1e-6
+    assert np.linalg.norm(moved.final.velocity) < 1e-9
+    creeping = held.with_(friction_law=FrictionLaw.REGULARIZED, friction_vmin=0.05)
+    crept = simulate(creeping, _flat_on(15.0, creeping), t_max=1.0, stop_at_rest=False)
+    assert np.linalg.norm(crept.final.velocity) > 0.05
+
+
+@pytest.mark.parametrize("law", list(FrictionLaw))
+def test_a_die_slides_down_a_steep_slope_at_coulombs_acceleration(law):
+    # 30 degrees: tan 30 = 0.58 > mu, so it slides with a = g (sin - mu cos)
+    scene = Scene(ground=Ground.tilted(30.0), friction_law=law)
+    moved = simulate(scene, _flat_on(30.0, scene), t_max=1.0, stop_at_rest=False)
+    a = np.radians(30.0)
+    expected = scene.gravity * (np.sin(a) - scene.ground.friction * np.cos(a))
+    assert np.linalg.norm(moved.final.velocity) == pytest.approx(expected, rel=2e-3)
+
+
+def test_a_die_pausing_on_an_edge_is_not_at_rest():
+    # balanced on an edge (centre straight above it) a die is quiet for a while, then falls
+    scene = Scene()
+    tilt = axis_angle([1, 0, 0], np.pi / 4)
+    start = State.release(scene, [0, 0, scene.die.half_edge * np.sqrt(2) - 2e-6], [0, 0, 0],
+                          orientation=tilt, angular_velocity=[1e-3, 0, 0])
+    res = simulate(scene, start, t_max=3.0)
+    assert res.settled[0]
+    assert res.final.position[0, 2] == pytest.approx(scene.die.half_edge, abs=1e-4)
+    assert res.rest_time[0] > 0.1
+
+
 def test_frictionless_die_keeps_sliding():
     scene = Scene(ground=Ground(friction=0.0), rotation=False)
     start = State.release(scene, [0, 0, scene.die.half_edge + 0.01], [0.7, -0.2, 0])
@@ -145,9 +187,13 @@ def test_contact_laws_differ_only_for_corners_above_ground():
 
 def test_effective_mass_and_critical_step():
     scene = Scene()
-    assert scene.effective_mass == pytest.approx(scene.die.mass / 6, rel=1e-12)
+    # sticking friction's tangential springs (2/7 S) couple sliding with rocking: m/8
+    assert scene.effective_mass == pytest.approx(scene.die.mass / 8, rel=1e-12)
+    for without_springs in (scene.with_(friction_law=FrictionLaw.REGULARIZED),
+                            scene.with_(ground=Ground(friction=0.0))):
+        assert without_springs.effective_mass == pytest.approx(scene.die.mass / 6, rel=1e-12)
     assert Scene(rotation=False).effective_mass == pytest.approx(scene.die.mass / 4)
-    s, d, m = scene.ground.stiffness, scene.ground.damping, scene.die.mass / 6
+    s, d, m = scene.ground.stiffness, scene.ground.damping, scene.die.mass / 8
     assert scene.critical_dt == pytest.approx((np.sqrt(d * d + 4 * s * m) - d) / s)
     assert scene.step == pytest.approx(scene.safety * scene.critical_dt)
 
