@@ -114,6 +114,21 @@ def _inverse_world_inertia_times(
 
 
 @njit(cache=True, inline="always")
+def _fastest_corner(q: np.ndarray, body: np.ndarray, u0: float, u1: float, u2: float, w0: float,
+                    w1: float, w2: float) -> float:
+    """Largest squared corner speed ``|u + w x Q b_k|^2``."""
+    fastest = 0.0
+    for k in range(8):
+        b0, b1, b2 = body[k, 0], body[k, 1], body[k, 2]
+        r0 = q[0, 0] * b0 + q[0, 1] * b1 + q[0, 2] * b2
+        r1 = q[1, 0] * b0 + q[1, 1] * b1 + q[1, 2] * b2
+        r2 = q[2, 0] * b0 + q[2, 1] * b1 + q[2, 2] * b2
+        v0, v1, v2 = u0 + w1 * r2 - w2 * r1, u1 + w2 * r0 - w0 * r2, u2 + w0 * r1 - w1 * r0
+        fastest = max(fastest, v0 * v0 + v1 * v1 + v2 * v2)
+    return fastest
+
+
+@njit(cache=True, inline="always")
 def _free_steps(lowest: float, un: float, spin: float, r_max: float, dvn: float, dt: float,
                 limit: int) -> int:
     """Number of steps from now (1 to ``limit``) surely free of contact.
@@ -204,7 +219,6 @@ def _simulate_one(
         f0, f1, f2 = 0.0, 0.0, -mass * g
         t0, t1, t2 = 0.0, 0.0, 0.0
         spring = 0.0
-        fastest = 0.0
         touching = 0
         approach = 0.0
         lowest = np.inf
@@ -213,14 +227,17 @@ def _simulate_one(
             rk0 = qi[0, 0] * b0 + qi[0, 1] * b1 + qi[0, 2] * b2
             rk1 = qi[1, 0] * b0 + qi[1, 1] * b1 + qi[1, 2] * b2
             rk2 = qi[2, 0] * b0 + qi[2, 1] * b1 + qi[2, 2] * b2
-            uk0 = u0 + w1 * rk2 - w2 * rk1
-            uk1 = u1 + w2 * rk0 - w0 * rk2
-            uk2 = u2 + w0 * rk1 - w1 * rk0
-            fastest = max(fastest, uk0 * uk0 + uk1 * uk1 + uk2 * uk2)
             height = n0 * (x0 + rk0) + n1 * (x1 + rk1) + n2 * (x2 + rk2)
             lowest = min(lowest, height)
             before = heights[k]
             heights[k] = height
+            if height >= 0.0:
+                tied[k] = False
+                if gated:
+                    continue
+            uk0 = u0 + w1 * rk2 - w2 * rk1
+            uk1 = u1 + w2 * rk0 - w0 * rk2
+            uk2 = u2 + w0 * rk1 - w1 * rk0
             dg = max(0.0, -height)
             un = n0 * uk0 + n1 * uk1 + n2 * uk2
             if height < 0.0:
@@ -228,10 +245,6 @@ def _simulate_one(
                 spring += 0.5 * stiff * dg * dg
                 pen = max(pen, dg)
                 approach = max(approach, -un)
-            else:
-                tied[k] = False
-                if gated:
-                    continue
             fn = stiff * dg
             if midpoint:
                 uk0 = cu0 + cw1 * rk2 - cw2 * rk1
@@ -309,7 +322,8 @@ def _simulate_one(
             hits += 1
         was_in_contact = touching > 0
         if stop_at_rest:
-            if touching >= 3 and fastest < v_rest * v_rest and kinetic < kinetic_rest:
+            if (touching >= 3 and kinetic < kinetic_rest
+                    and _fastest_corner(qi, body, u0, u1, u2, w0, w1, w2) < v_rest * v_rest):
                 quiet += 1
                 if quiet > hold_steps or energy - rest_energy < rest_excess:
                     rest_time[i] = (step - quiet) * dt

@@ -106,6 +106,7 @@ def test_bad_actions():
     ("dt", 1.0, "dt"),
     ("contact_law", "soft", "contact_law"),
     ("scheme", "rk4", "scheme"),
+    ("friction_law", "viscous", "friction_law"),
     ("friction_vmin", 0.0, "friction_vmin"),
     ("tilt_deg", 95.0, "tilt_deg"),
     ("load_fraction", 1.5, "load_fraction"),
@@ -118,8 +119,9 @@ def test_bad_keywords(keyword, value, match):
 
 
 def test_physical_keywords_reach_the_scene():
-    scene = make(scheme="midpoint", friction_vmin=0.05, stiffness=2e5).unwrapped.task.scene
-    assert scene.scheme.name == "MIDPOINT"
+    scene = make(scheme="midpoint", friction_law="regularized", friction_vmin=0.05,
+                 stiffness=2e5).unwrapped.task.scene
+    assert scene.scheme.name == "MIDPOINT" and scene.friction_law.name == "REGULARIZED"
     assert scene.friction_vmin == 0.05 and scene.ground.stiffness == 2e5
 
 

@@ -17,12 +17,13 @@ import inspect
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from enum import IntEnum
 
 import numpy as np
 
 from dice_env.die import FACE_NORMALS, Die
 from dice_env.rotations import orthonormality_error, quaternion_to_matrix, uniform_rotations
-from dice_env.scene import ContactLaw, Ground, Rest, Scene, Scheme
+from dice_env.scene import ContactLaw, FrictionLaw, Ground, Rest, Scene, Scheme
 from dice_env.simulate import Result, State, simulate
 from dice_env.validation import check_nonnegative, check_positive, check_range
 
@@ -283,6 +284,7 @@ def make_task(
     rest_hold: float | None = None,
     energy_tol: float | None = None,
     scheme: str | None = None,
+    friction_law: str | None = None,
     friction_vmin: float | None = None,
 ) -> ThrowTask:
     """A validated :class:`ThrowTask` from flat keywords (the env's ``gym.make`` keywords).
@@ -291,8 +293,8 @@ def make_task(
     ``scene`` when one is given), so changes to the default scene flow through. ``load_fraction``
     > 0 builds :meth:`Die.loaded` toward ``load_face``; ``tilt_deg`` tilts the table about y;
     ``contact_law`` is "gated" or "paper"; ``scheme`` is "paper" or "midpoint" (see
-    :class:`~dice_env.scene.Scheme`; with ``friction_vmin=0.05`` on a flat table the landed
-    faces converge in the step, docs/error-vs-runtime.md).
+    :class:`~dice_env.scene.Scheme`); ``friction_law`` is "stick_slip" or "regularized" (the
+    listing's, whose ``friction_vmin`` is its umin; see :class:`~dice_env.scene.FrictionLaw`).
     """
     base = Scene() if scene is None else scene
     if not isinstance(base, Scene):
@@ -306,24 +308,29 @@ def make_task(
                          edge=die.edge, mass=die.mass)
     ground_kw = _given(stiffness=stiffness, damping=damping, friction=friction,
                        contact_law=contact_law, default=base.ground)
-    laws = {law.name.lower(): law for law in ContactLaw}
-    if contact_law is not None and contact_law not in laws:
-        raise ValueError(f"contact_law must be one of {sorted(laws)}, got {contact_law!r}")
-    ground_kw["contact_law"] = laws.get(contact_law, base.ground.contact_law)
+    ground_kw["contact_law"] = _choice("contact_law", contact_law, ContactLaw,
+                                       base.ground.contact_law)
     check_range("tilt_deg", tilt_deg, 0.0, 90.0, high_open=True)
     ground = Ground.tilted(tilt_deg, **ground_kw) if tilt_deg else Ground(
         normal=base.ground.normal, **ground_kw)
     rest = Rest(**_given(speed=rest_speed, hold=rest_hold, default=base.rest))
     scene_kw = _given(gravity=gravity, safety=safety, energy_tol=energy_tol,
                       friction_vmin=friction_vmin, default=base)
-    schemes = {kind.name.lower(): kind for kind in Scheme}
-    if scheme is not None and scheme not in schemes:
-        raise ValueError(f"scheme must be one of {sorted(schemes)}, got {scheme!r}")
-    scene_kw["scheme"] = schemes.get(scheme, base.scheme)
+    scene_kw["scheme"] = _choice("scheme", scheme, Scheme, base.scheme)
+    scene_kw["friction_law"] = _choice("friction_law", friction_law, FrictionLaw,
+                                       base.friction_law)
     scene = base.with_(die=die, ground=ground, rest=rest, t_max=t_max,
                        dt=base.dt if dt is None else dt, **scene_kw)
     return ThrowTask(scene, release_height, max_speed, max_spin, hand_noise, orientation_noise,
                      min_speed, min_spin, shaping, num_threads)
+
+
+def _choice(name: str, value: str | None, kind: type[IntEnum], default: IntEnum) -> IntEnum:
+    """The member of ``kind`` named ``value`` in lower case (``default`` for None)."""
+    members = {member.name.lower(): member for member in kind}
+    if value is not None and value not in members:
+        raise ValueError(f"{name} must be one of {sorted(members)}, got {value!r}")
+    return default if value is None else members[value]
 
 
 def check_face(name: str, value: object) -> int:
