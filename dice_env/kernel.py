@@ -35,7 +35,7 @@ in one jump: the centre in the closed form of those Euler steps, the orientation
 rotation of angle ``N |w| dt`` (isotropic die: ``w`` is constant) or by the plain torque-free
 rotation steps (loaded die). Every other step is the plain step above.
 
-Midpoint contact forces (``midpoint``, ``Scheme.MIDPOINT``; off by default): the kick of a
+Midpoint contact forces (``midpoint``, ``Scheme.MIDPOINT``, the default scene's): the kick of a
 step stands for the interval from half a step before to half a step after the positions it
 uses, so the velocity-dependent forces (damping and friction) take the corner velocity
 extrapolated to the positions' time, ``u + (u - u_prev)/2`` and ``w + (w - w_prev)/2``, and a
@@ -43,6 +43,9 @@ corner that entered contact during the last step (height ``h_prev > 0``, now ``h
 its damping weighted by the time in contact within that interval,
 ``1/2 - h / (h_prev - h)``. Both remove first-order errors of the listing's step at every
 impact; the sign-like friction of a tiny ``vmin`` keeps another one (``docs/error-vs-runtime.md``).
+The friction's limit ``mu fn`` takes the unweighted normal force: weighting it too left about
+6 % of gentle throws' faces unconverged between dt/8 and dt/16 (measured; with it unweighted,
+99 %+ agree).
 
 Dice are independent: each die steps until its time limit, rest, or a non-finite state, so
 results are bit-identical for any batch size or thread count (``prange`` over the batch).
@@ -251,15 +254,18 @@ def _simulate_one(
                 uk1 = cu1 + cw2 * rk0 - cw0 * rk2
                 uk2 = cu2 + cw0 * rk1 - cw1 * rk0
                 un = n0 * uk0 + n1 * uk1 + n2 * uk2
+            friction_limit = fn  # normal force for the friction, without the onset weight
             if damp > 0.0:
+                friction_limit -= damp * un
                 if midpoint and before > 0.0 and height < 0.0:
                     fn -= (0.5 - height / (before - height)) * damp * un
                 else:
-                    fn -= damp * un
+                    fn = friction_limit
             if fn <= 0.0:
                 tied[k] = False
                 continue
             fk0, fk1, fk2 = fn * n0, fn * n1, fn * n2
+            fn = max(friction_limit, 0.0)
             if mu > 0.0:
                 ut0, ut1, ut2 = uk0 - un * n0, uk1 - un * n1, uk2 - un * n2
                 if stick:

@@ -34,11 +34,11 @@ class ContactLaw(IntEnum):
 class Scheme(IntEnum):
     """How a step treats the contact forces (see :mod:`dice_env.kernel`).
 
-    ``PAPER`` (default): the listing's step. ``MIDPOINT``: damping and friction from the corner
-    velocity extrapolated to the middle of the step's kick, and the damping of a corner that just
-    touched weighted by its time in contact; second order for smooth friction (a large
-    ``friction_vmin``), no better than ``PAPER`` with the listing's sign-like friction (see
-    ``docs/error-vs-runtime.md``).
+    ``MIDPOINT`` (default): damping and friction from the corner velocity extrapolated to the
+    middle of the step's kick, and the damping of a corner that just touched weighted by its time
+    in contact; second order for smooth friction, and with the stick-slip friction the gentle
+    throws' faces converge in the step (``docs/error-vs-runtime.md``); no better than ``PAPER``
+    with the listing's sign-like friction. ``PAPER``: the listing's step, first order.
     """
 
     PAPER = 0
@@ -149,7 +149,7 @@ class Scene:
     rotation: bool = True
     friction_law: FrictionLaw = FrictionLaw.STICK_SLIP
     friction_vmin: float = 1e-6
-    scheme: Scheme = Scheme.PAPER
+    scheme: Scheme = Scheme.MIDPOINT
     rest: Rest = field(default_factory=Rest)
     energy_tol: float = 0.1
     allow_unstable: bool = False

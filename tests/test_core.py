@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from dice_env import ContactLaw, Die, FrictionLaw, Ground, Scene, State, simulate
+from dice_env import ContactLaw, Die, FrictionLaw, Ground, Scene, Scheme, State, simulate
 from dice_env.die import FACE_NORMALS, face_up
 from dice_env.rotations import axis_angle, random_rotations
 
@@ -194,15 +194,18 @@ def test_effective_mass_and_critical_step():
         assert without_springs.effective_mass == pytest.approx(scene.die.mass / 6, rel=1e-12)
     assert Scene(rotation=False).effective_mass == pytest.approx(scene.die.mass / 4)
     s, d, m = scene.ground.stiffness, scene.ground.damping, scene.die.mass / 8
-    assert scene.critical_dt == pytest.approx((np.sqrt(d * d + 4 * s * m) - d) / s)
+    assert scene.critical_dt == pytest.approx(2 * (np.sqrt(d * d + s * m) - d) / s)  # midpoint
+    paper = scene.with_(scheme=Scheme.PAPER)
+    assert paper.critical_dt == pytest.approx((np.sqrt(d * d + 4 * s * m) - d) / s)
     assert scene.step == pytest.approx(scene.safety * scene.critical_dt)
 
 
+@pytest.mark.parametrize("scheme", list(Scheme))
 @pytest.mark.parametrize(("factor", "blows_up"), [(0.95, False), (1.05, True)])
-def test_critical_step_by_experiment(factor, blows_up):
+def test_critical_step_by_experiment(factor, blows_up, scheme):
     # a die resting on its four corners, pressed in to 1.5x its static sink: a linear oscillator
     # (light damping: with the table's D = 6.4 the clip at zero force bounds the growth at 1.05x)
-    base = Scene(rotation=False, ground=Ground(friction=0.0, damping=0.4))
+    base = Scene(rotation=False, ground=Ground(friction=0.0, damping=0.4), scheme=scheme)
     scene = base.with_(dt=factor * base.critical_dt, allow_unstable=True)
     sink = scene.die.mass * scene.gravity / (4 * scene.ground.stiffness)
     start = State.release(scene, [0, 0, scene.die.half_edge - 1.5 * sink], [0, 0, 0])
