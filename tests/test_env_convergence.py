@@ -6,6 +6,7 @@
 import numpy as np
 
 from agents.baselines import HandThrower
+from dice_env import Scene
 from dice_env.envs.task import make_task
 
 
@@ -20,8 +21,9 @@ def landed_faces(safety: float, n: int = 600) -> tuple[np.ndarray, float]:
 
 
 def test_default_throws_land_on_the_same_face_at_a_quarter_step():
-    faces, success = landed_faces(safety=0.1)  # the automatic step
-    finer, finer_success = landed_faces(safety=0.025)
+    safety = Scene().safety  # the automatic step
+    faces, success = landed_faces(safety=safety)
+    finer, finer_success = landed_faces(safety=safety / 4)
     print(f"same face at dt and dt/4: {np.mean(faces == finer):.4f}; "
           f"success {success:.4f} vs {finer_success:.4f}")
     assert np.mean(faces == finer) >= 0.98

@@ -226,7 +226,7 @@ class Sizes:
 FULL = Sizes(trajectory=200, outcomes=10_000, agreement=3000, gentle=2000)
 QUICK = Sizes(trajectory=12, outcomes=300, agreement=120, gentle=100)
 # Steps of the work-precision curves, as fractions of the critical step.
-SAFETIES = (0.8, 0.4, 0.2, 0.1, 0.05, 0.025, 0.0125)
+SAFETIES = (0.6, 0.3, 0.15, 0.075, 0.0375, 0.01875, 0.009375)
 # Horizon (s) of the trajectory error: releases 6–10 cm up land at about 0.1 s and hit the
 # table two or three times by then.
 HORIZON = 0.25

@@ -165,7 +165,7 @@ def safety_sweep(cases: list[Case], safeties: tuple[float, ...], throws: int,
     return out
 
 
-SAFETIES = (0.1, 0.03, 0.01)
+SAFETIES = (0.15, 0.05, 0.015)  # the default first
 
 
 def run(out: Path = DOCS, quick: bool = False, seed: int = 7) -> dict[str, float]:
