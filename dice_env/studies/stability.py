@@ -264,7 +264,6 @@ def _markdown(stiffnesses: np.ndarray, ratios: np.ndarray, maps: dict, rows: lis
     nan_cases = [f"{c.group} {c.label}" for c, r in rows if r["nan"]]
     stiff = [(c, r) for c, r in rows if c.group == "stiffness"]
     slip = float(np.degrees(np.arctan(g.friction)))
-    ns_per_step = 1e9 * sum(r["wall"] for _, r in stiff) / sum(r["die_steps"] for _, r in stiff)
     by_label = {c.label: r for c, r in rows}
     d_rows = [(c.label, r) for c, r in rows if c.group == "damping"]
     tilt_rows = ", ".join(f"{c.label} {100 * r['settled']:.0f}%" for c, r in rows
@@ -339,18 +338,20 @@ the map table are the smallest dt/bound where any stiffness is not stable / blow
 - Very stiff ground at the automatic step costs time, not accuracy: the step shrinks like
   1/sqrt(S) (S = {stiff[-1][0].scene.ground.stiffness:g}: dt = {stiff[-1][1]['dt']:.2g} s,
   {stiff[-1][1]['steps_per_s']:.3g} steps per simulated second). The simulator neither warns
-  nor refuses (warn column); it just takes longer: about {ns_per_step:.0f} ns per die-step on
-  this machine, {stiff[-1][1]['wall']:.1f} s wall for the {throws} throws at
-  S = {stiff[-1][0].scene.ground.stiffness:g} ({stiff[-1][1]['die_steps'] / throws:.3g} steps
-  per throw). A user-given step above the bound raises `ValueError` unless `allow_unstable=True`.
+  nor refuses (warn column); it just takes longer: {stiff[-1][1]['wall']:.1f} s wall for
+  the {throws} throws at S = {stiff[-1][0].scene.ground.stiffness:g}
+  ({stiff[-1][1]['die_steps'] / throws:.3g} steps per throw, counting the flight steps taken
+  in analytic jumps). A user-given step above the bound raises `ValueError` unless
+  `allow_unstable=True`.
 - Tilted table (settled within {base.t_max:g} s: {tilt_rows}): a die can only stay where
   tan(angle) < mu, i.e. below {slip:.1f}°. Steeper tables let it slide and tumble down the
   infinite plane until the time limit, so "not settled" there is physics, not a failure; it
   gathers speed and hits hard (the penetration column).
-- Damping (critical = 2 sqrt(S m_eff) with m_eff = m/6): settled
+- Damping (critical = 2 sqrt(S m_eff), m_eff = m/{base.die.mass / base.effective_mass:.0f}): settled
   {', '.join(f"{lab.split(' (')[0]}: {100 * r['settled']:.0f}%" for lab, r in d_rows)};
   median rest {', '.join(f"{r['rest_time']:.2f} s" for _, r in d_rows)} (baseline
-  {by_label['default scene']['rest_time']:.2f} s). Without damping only friction dissipates;
+  {by_label['default scene']['rest_time']:.2f} s). Without damping only sliding friction dissipates
+  (a sticking corner's tangential spring is undamped too);
   near-critical damping settles fastest and needs a smaller automatic step (the bound's D term).
 - Mass, same die size and table (sink m g / (4 S) of a flat die vs deepest corner seen):
   {'; '.join(sink)}. At 1000 kg the penalty ground is far outside its valid range (the die
