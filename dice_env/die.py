@@ -20,6 +20,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from dice_env.table import DIE_EDGE, DIE_MASS
 from dice_env.validation import check_finite, check_positive, check_range
 
 # Corner signs in the order of the paper's cube.m (node k = row k).
@@ -66,8 +67,8 @@ class Die:
     :meth:`from_node_masses`.
     """
 
-    edge: float = 0.016
-    mass: float = 0.0045
+    edge: float = DIE_EDGE
+    mass: float = DIE_MASS
     com: tuple[float, float, float] = (0.0, 0.0, 0.0)
     inertia: tuple[tuple[float, ...], ...] | None = field(default=None)
 
@@ -106,8 +107,8 @@ class Die:
         face: int = 6,
         fraction: float = 0.1,
         depth: float = 0.8,
-        edge: float = 0.016,
-        mass: float = 0.0045,
+        edge: float = DIE_EDGE,
+        mass: float = DIE_MASS,
     ) -> Die:
         """A die with ``fraction`` of its mass moved into a point weight toward ``face``.
 
@@ -126,7 +127,7 @@ class Die:
         return cls(edge=edge, mass=mass, com=tuple(com), inertia=_as_tuple(about_com))
 
     @classmethod
-    def from_node_masses(cls, masses: np.ndarray, edge: float = 0.016) -> Die:
+    def from_node_masses(cls, masses: np.ndarray, edge: float = DIE_EDGE) -> Die:
         """A die whose whole mass sits in its 8 corner nodes (inertia of those point masses)."""
         masses = np.asarray(masses, dtype=np.float64)
         if masses.shape != (8,):
