@@ -17,7 +17,7 @@ damper ``-kt e - ct Ut`` on its tangential offset ``e`` from that point, and whe
 ``mu fn`` the corner slips: the force is ``mu fn`` against the slip velocity (against the
 spring's pull while the corner is too slow for its direction to mean anything) and the tie
 point moves so that the spring alone carries it. Taking the slip direction from the velocity
-rather than from the lagging spring is what makes sliding converge (about 10 times smaller
+rather than from the lagging spring is what makes sliding converge (about 8 times smaller
 trajectory errors at the default step). The tie is released when the corner leaves the ground
 or its normal force vanishes. A sticking corner thus stays put instead of dithering about zero
 slip speed as a sign-like friction does.
