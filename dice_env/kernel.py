@@ -265,8 +265,8 @@ def _simulate_one(
                 tied[k] = False
                 continue
             fk0, fk1, fk2 = fn * n0, fn * n1, fn * n2
-            fn = max(friction_limit, 0.0)
             if mu > 0.0:
+                cap = mu * max(friction_limit, 0.0)  # Coulomb's limit mu fn
                 ut0, ut1, ut2 = uk0 - un * n0, uk1 - un * n1, uk2 - un * n2
                 if stick:
                     # tangential spring from the tie point plus damping, capped at mu fn
@@ -283,17 +283,17 @@ def _simulate_one(
                     e0, e1, e2 = e0 - en * n0, e1 - en * n1, e2 - en * n2
                     ft0, ft1, ft2 = -kt * e0 - ct * ut0, -kt * e1 - ct * ut1, -kt * e2 - ct * ut2
                     size = math.sqrt(ft0 * ft0 + ft1 * ft1 + ft2 * ft2)
-                    if size > mu * fn:
+                    if size > cap:
                         # slip: Coulomb's force against the slip velocity, or along the
                         # spring's pull while the corner is slower than one step's friction
                         # kick on a quarter of the die could make it (then its direction
                         # means nothing); the tie point follows the corner
                         speed = math.sqrt(ut0 * ut0 + ut1 * ut1 + ut2 * ut2)
-                        if speed > 4.0 * mu * fn * dt_m:
-                            ratio = -mu * fn / speed
+                        if speed > 4.0 * cap * dt_m:
+                            ratio = -cap / speed
                             ft0, ft1, ft2 = ratio * ut0, ratio * ut1, ratio * ut2
                         else:
-                            ratio = mu * fn / size
+                            ratio = cap / size
                             ft0, ft1, ft2 = ratio * ft0, ratio * ft1, ratio * ft2
                         e0, e1, e2 = -ft0 / kt, -ft1 / kt, -ft2 / kt
                         anchors[k, 0], anchors[k, 1], anchors[k, 2] = p0 - e0, p1 - e1, p2 - e2
@@ -302,7 +302,7 @@ def _simulate_one(
                     fk1 += ft1
                     fk2 += ft2
                 else:
-                    scale = mu * fn / (math.sqrt(ut0 * ut0 + ut1 * ut1 + ut2 * ut2) + vmin)
+                    scale = cap / (math.sqrt(ut0 * ut0 + ut1 * ut1 + ut2 * ut2) + vmin)
                     fk0 -= scale * ut0
                     fk1 -= scale * ut1
                     fk2 -= scale * ut2

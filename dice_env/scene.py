@@ -131,7 +131,7 @@ class Scene:
     """Everything that stays fixed during a throw.
 
     ``dt=None`` picks ``safety * critical_dt`` (0.15: landed faces of gentle throws agree with
-    a quarter step as well as at 0.1, and at 0.2 less well; docs/error-vs-runtime.md). A ``dt``
+    a quarter step as well as at 0.1, and at 0.2 less well; docs/model.md). A ``dt``
     above :attr:`critical_dt` raises unless
     ``allow_unstable=True``. ``rotation=False`` is the paper's ground_cube.m: the die translates
     only. ``friction_law``: see :class:`FrictionLaw`; ``friction_vmin`` is the listing's ``umin``
@@ -189,7 +189,7 @@ class Scene:
         ``K = S * sum_k a_k a_k^T``, ``a_k = (n, r_k x n)`` over the face's corners, and
         ``M = diag(m, m, m, I)``; sticking friction adds ``tangential * S`` springs along two
         tangents ``t`` (``a_k = (t, r_k x t)``). For a fair solid die it is ``m/6`` without
-        them (rocking about an edge axis) and ``m/8.0`` with them (sliding coupled to rocking);
+        them (rocking about an edge axis) and ``m/8`` with them (sliding coupled to rocking);
         with ``rotation=False`` it is ``m/4`` (the four corners moving together).
         """
         die = self.die
