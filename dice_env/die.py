@@ -169,9 +169,42 @@ class Die:
         return CORNER_SIGNS * self.half_edge - np.asarray(self.com)
 
     @property
+    def resting_heights(self) -> np.ndarray:
+        """Height (m) of the centre of mass above the plane with each face up, lying flat, (6,)."""
+        return _heights_above_lowest_corner(self.corners_body, FACE_NORMALS)
+
+    @property
+    def tipping_heights(self) -> np.ndarray:
+        """Least height (m) of the centre of mass above its lowest corner as each face tips, (6,).
+
+        A die can stop showing face ``F`` up only through an orientation in which ``F`` and an
+        adjacent face ``G`` point equally far up, further than any other (``u = s (f_F + f_G)
+        + t f_F x f_G`` with ``|t| <= s``, ``u`` the up direction in the body frame): for a
+        fair die balanced on an edge, ``sqrt(2)`` half edges. Taken as the minimum over a dense
+        sampling of those four arcs, lowered by the height's Lipschitz bound times the sampling
+        gap, so it is never above the true minimum.
+        """
+        corners = self.corners_body
+        t = np.linspace(-1.0, 1.0, 4001) / math.sqrt(3.0)
+        s = np.sqrt((1.0 - t * t) / 2.0)
+        # |du/dt| <= sqrt(3/2) on an arc; the height is max|r_k|-Lipschitz in u
+        slack = float(np.linalg.norm(corners, axis=1).max()) * math.sqrt(1.5) * (t[1] - t[0]) / 2
+        out = np.full(6, np.inf)
+        for f, normal in enumerate(FACE_NORMALS):
+            for other in FACE_NORMALS[FACE_NORMALS @ normal == 0]:
+                up = s[:, None] * (normal + other) + t[:, None] * np.cross(normal, other)
+                out[f] = min(out[f], _heights_above_lowest_corner(corners, up).min() - slack)
+        return out
+
+    @property
     def is_fair(self) -> bool:
         """True for a centred, isotropic die."""
         return not any(self.com) and self.is_isotropic
+
+
+def _heights_above_lowest_corner(corners: np.ndarray, up: np.ndarray) -> np.ndarray:
+    """Height of the centre of mass above the lowest of ``corners`` for each up direction."""
+    return (-(up @ corners.T)).max(axis=-1)
 
 
 def _as_tuple(matrix: np.ndarray) -> tuple[tuple[float, ...], ...]:

@@ -59,7 +59,7 @@ import numpy as np
 from numba import njit, prange
 
 # Per-die end status.
-RUNNING, SETTLED, NONFINITE = 0, 1, 2
+RUNNING, SETTLED, NONFINITE, DECIDED = 0, 1, 2, 3
 
 
 @njit(cache=True, inline="always")
@@ -132,6 +132,19 @@ def _fastest_corner(q: np.ndarray, body: np.ndarray, u0: float, u1: float, u2: f
 
 
 @njit(cache=True, inline="always")
+def _face_up_index(q: np.ndarray, n0: float, n1: float, n2: float) -> int:
+    """Index (0-5, the order of ``die.FACE_NORMALS``) of the face pointing most along ``n``."""
+    up_x = q[0, 0] * n0 + q[1, 0] * n1 + q[2, 0] * n2  # n in the body frame, Q^T n
+    up_y = q[0, 1] * n0 + q[1, 1] * n1 + q[2, 1] * n2
+    up_z = q[0, 2] * n0 + q[1, 2] * n1 + q[2, 2] * n2
+    best, index = up_z, 0
+    for value, k in ((up_x, 1), (up_y, 2), (-up_y, 3), (-up_x, 4), (-up_z, 5)):
+        if value > best:
+            best, index = value, k
+    return index
+
+
+@njit(cache=True, inline="always")
 def _free_steps(lowest: float, un: float, spin: float, r_max: float, dvn: float, dt: float,
                 limit: int) -> int:
     """Number of steps from now (1 to ``limit``) surely free of contact.
@@ -180,8 +193,8 @@ def _torque_free(q: np.ndarray, inv_body: np.ndarray, inv_iso: float, l0: float,
 def _simulate_one(
     i, x, u, ang, q, w, body, mass, inv_body, iso, inv_i_min, normal, stiff, damp, mu, vmin,
     stick, kt, ct, g, dt, gated, rotation, flight, midpoint, n_steps, stop_at_rest, v_rest,
-    hold_steps, rest_energy, rest_excess, energy_scale_add, stride, rec_x, rec_e, rec_q, rec_nodes,
-    status, unstable, rest_time, impacts, max_pen, energy_rise, steps,
+    hold_steps, rest_energy, rest_excess, lock_energy, energy_scale_add, stride, rec_x, rec_e,
+    rec_q, rec_nodes, status, unstable, rest_time, impacts, max_pen, energy_rise, steps,
 ):
     """Advance die ``i`` in place; see :func:`simulate_batch` for the arguments."""
     n0, n1, n2 = normal[0], normal[1], normal[2]
@@ -199,6 +212,7 @@ def _simulate_one(
     record_e, record_q = rec_e.shape[1] > 0, rec_q.shape[1] > 0
     record_nodes = rec_nodes.shape[1] > 0
     kinetic_rest = 0.5 * mass * v_rest * v_rest
+    lock_max = lock_energy.max()
     e_start = 0.0
     e_tol = 1.0
     e_max = -np.inf
@@ -327,6 +341,10 @@ def _simulate_one(
         if touching > 0 and not was_in_contact and approach > v_rest:
             hits += 1
         was_in_contact = touching > 0
+        if energy < lock_max and energy < lock_energy[_face_up_index(qi, n0, n1, n2)]:
+            end = DECIDED
+            step -= 1
+            break
         if stop_at_rest:
             if (touching >= 3 and kinetic < kinetic_rest
                     and _fastest_corner(qi, body, u0, u1, u2, w0, w1, w2) < v_rest * v_rest):
@@ -439,8 +457,8 @@ def _record(j, i, x0, x1, x2, u0, u1, u2, l0, l1, l2, qi, inv_body, inv_iso, bod
 def simulate_batch(
     x, u, ang, q, w, body, mass, inv_body, iso, inv_i_min, normal, stiff, damp, mu, vmin, stick,
     kt, ct, g, dt, gated, rotation, flight, midpoint, n_steps, stop_at_rest, v_rest, hold_steps,
-    rest_energy, rest_excess, energy_scale_add, stride, rec_x, rec_e, rec_q, rec_nodes, status,
-    unstable, rest_time, impacts, max_pen, energy_rise, steps,
+    rest_energy, rest_excess, lock_energy, energy_scale_add, stride, rec_x, rec_e, rec_q,
+    rec_nodes, status, unstable, rest_time, impacts, max_pen, energy_rise, steps,
 ):
     """Advance a batch of dice in place, in parallel over dice.
 
@@ -457,6 +475,8 @@ def simulate_batch(
     ``stop_at_rest`` ends a die after ``hold_steps`` quiet steps (at least three corners in
     contact, every corner slower than ``v_rest``), or at a quiet
     step whose total energy is less than ``rest_excess`` above ``rest_energy`` (0: never).
+    Whatever ``stop_at_rest``, a die whose total energy falls below ``lock_energy`` (6,) of
+    its face up ends decided (``-inf``: never; :func:`dice_env.simulate.lock_energy`).
     ``energy_rise`` gets the largest rise of total energy above its start in units of
     ``KE0 + m g h0 + energy_scale_add`` (``h0`` the start height of the centre above the
     plane); ``unstable`` marks a state that stopped being finite.
@@ -468,8 +488,9 @@ def simulate_batch(
         _simulate_one(
             i, x, u, ang, q, w, body, mass, inv_body, iso, inv_i_min, normal, stiff, damp, mu,
             vmin, stick, kt, ct, g, dt, gated, rotation, flight, midpoint, n_steps, stop_at_rest,
-            v_rest, hold_steps, rest_energy, rest_excess, energy_scale_add, stride, rec_x, rec_e,
-            rec_q, rec_nodes, status, unstable, rest_time, impacts, max_pen, energy_rise, steps,
+            v_rest, hold_steps, rest_energy, rest_excess, lock_energy, energy_scale_add, stride,
+            rec_x, rec_e, rec_q, rec_nodes, status, unstable, rest_time, impacts, max_pen,
+            energy_rise, steps,
         )
 
 
@@ -477,8 +498,8 @@ def simulate_batch(
 def simulate_serial(
     x, u, ang, q, w, body, mass, inv_body, iso, inv_i_min, normal, stiff, damp, mu, vmin, stick,
     kt, ct, g, dt, gated, rotation, flight, midpoint, n_steps, stop_at_rest, v_rest, hold_steps,
-    rest_energy, rest_excess, energy_scale_add, stride, rec_x, rec_e, rec_q, rec_nodes, status,
-    unstable, rest_time, impacts, max_pen, energy_rise, steps,
+    rest_energy, rest_excess, lock_energy, energy_scale_add, stride, rec_x, rec_e, rec_q,
+    rec_nodes, status, unstable, rest_time, impacts, max_pen, energy_rise, steps,
 ):
     """:func:`simulate_batch` on the calling thread, with the same results.
 
@@ -488,6 +509,7 @@ def simulate_serial(
         _simulate_one(
             i, x, u, ang, q, w, body, mass, inv_body, iso, inv_i_min, normal, stiff, damp, mu,
             vmin, stick, kt, ct, g, dt, gated, rotation, flight, midpoint, n_steps, stop_at_rest,
-            v_rest, hold_steps, rest_energy, rest_excess, energy_scale_add, stride, rec_x, rec_e,
-            rec_q, rec_nodes, status, unstable, rest_time, impacts, max_pen, energy_rise, steps,
+            v_rest, hold_steps, rest_energy, rest_excess, lock_energy, energy_scale_add, stride,
+            rec_x, rec_e, rec_q, rec_nodes, status, unstable, rest_time, impacts, max_pen,
+            energy_rise, steps,
         )

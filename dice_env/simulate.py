@@ -13,7 +13,7 @@ from dice_env import kernel
 from dice_env.die import face_up
 from dice_env.rotations import orthonormality_error
 from dice_env.scene import ContactLaw, FrictionLaw, Scene, Scheme
-from dice_env.validation import as_batch, check_positive
+from dice_env.validation import as_batch, check_positive, check_range
 
 
 @dataclass
@@ -83,6 +83,7 @@ class Result:
     - ``face``: 1–6, the face up relative to the ground normal at the end;
     - ``settled``: came to rest; ``rest_time``: when the rest began (s; the time simulated if
       not settled);
+    - ``decided``: ended by ``stop_when_decided`` with too little energy left to change face;
     - ``impacts``: airborne-to-contact transitions;
     - ``unstable``: energy rose beyond the scene's tolerance, or the state stopped being finite;
       ``energy_rise``: the largest rise above the start in units of that tolerance;
@@ -96,6 +97,7 @@ class Result:
 
     face: np.ndarray
     settled: np.ndarray
+    decided: np.ndarray
     rest_time: np.ndarray
     impacts: np.ndarray
     unstable: np.ndarray
@@ -121,6 +123,7 @@ def simulate(
     num_threads: int | None = None,
     free_flight: bool = True,
     early_rest: bool = False,
+    stop_when_decided: bool = False,
 ) -> Result:
     """Run a batch of throws; ``state`` is not modified.
 
@@ -132,7 +135,13 @@ def simulate(
     one by one. ``early_rest`` ends a quiet die as soon as its energy proves it stays at rest
     (fair die on a horizontal table): the same outcome (face, rest time, impacts) without the
     cost of the hold, but the final state is taken then, still vibrating within the rest
-    thresholds. By default the hold ``scene.rest.hold`` is waited out.
+    thresholds. By default the hold ``scene.rest.hold`` is waited out. ``stop_when_decided``
+    ends a die as soon as its face up is decided: its total energy (kinetic, potential and
+    ground springs), which the ground can only store or dissipate, is below the least energy
+    of any orientation in which its face up ties with another (:func:`lock_energy`;
+    horizontal table, fair or loaded die). Its face is the one it would rest on, at a fraction
+    of the cost; the final state, rest time and impacts are those of that moment, and it is
+    not ``settled``.
     """
     t_max = scene.t_max if t_max is None else t_max
     check_positive("t_max", t_max)
@@ -142,7 +151,7 @@ def simulate(
                          f"got {sorted(unknown)}")
     if not isinstance(record_every, (int, np.integer)) or record_every < 0:
         raise ValueError(f"record_every must be an int >= 0, got {record_every!r}")
-    dt, body, inv_inertia, iso, inv_i_min, normal = _scene_constants(scene)
+    dt, body, inv_inertia, iso, inv_i_min, normal, lock = _scene_constants(scene)
     n_steps = max(1, round(t_max / dt))
     out = state.copy()
     b = out.batch_size
@@ -180,6 +189,7 @@ def simulate(
             scene.rotation, flight, scene.scheme == Scheme.MIDPOINT, n_steps, stop_at_rest,
             scene.rest.speed,
             math.ceil(scene.rest.hold / dt), *_rest_energy(scene, early_rest),
+            lock if stop_when_decided else _NEVER,
             die.mass * scene.gravity * die.edge,
             stride, rec["x_cm"], rec["energy"], rec["orientations"], rec["nodes"],
             status, unstable, rest_time, impacts, max_pen, energy_rise, steps,
@@ -195,8 +205,9 @@ def simulate(
         recorded.update({name: rec[name] for name in record})
     return Result(
         face=face_up(out.orientation, normal),
-        settled=settled, rest_time=rest_time, impacts=impacts, unstable=unstable,
-        energy_rise=energy_rise, max_penetration=max_pen, steps=steps, final=out, **recorded,
+        settled=settled, decided=status == kernel.DECIDED, rest_time=rest_time,
+        impacts=impacts, unstable=unstable, energy_rise=energy_rise, max_penetration=max_pen,
+        steps=steps, final=out, **recorded,
     )
 
 
@@ -204,7 +215,7 @@ def _scene_constants(scene: Scene) -> tuple:
     """Kernel constants of ``scene``, computed once per (frozen, hashable) scene.
 
     The step, corners, inverse inertia, isotropic inertia (or 0), inverse smallest principal
-    moment and ground normal.
+    moment, ground normal and :func:`lock_energy`.
     """
     try:
         return _cached_constants(scene)
@@ -218,7 +229,8 @@ def _cached_constants(scene: Scene) -> tuple:
     inertia = die.inertia_body
     return (scene.step, die.corners_body, np.linalg.inv(inertia),
             float(inertia[0, 0]) if die.is_isotropic else 0.0,
-            1.0 / np.linalg.eigvalsh(inertia)[0], np.asarray(scene.ground.normal))
+            1.0 / np.linalg.eigvalsh(inertia)[0], np.asarray(scene.ground.normal),
+            lock_energy(scene))
 
 
 def _rest_energy(scene: Scene, early_rest: bool) -> tuple[float, float]:
@@ -238,6 +250,32 @@ def _rest_energy(scene: Scene, early_rest: bool) -> tuple[float, float]:
     r_max2 = float((die.corners_body**2).sum(axis=1).max())
     move = scene.rest.speed**2 / (2.0 * (1.0 / die.mass + r_max2 / die.inertia_body[0, 0]))
     return weight * die.half_edge - lift, 0.5 * min(lift, move)
+
+
+LOCK_MARGIN = 0.5
+_NEVER = np.full(6, -math.inf)
+
+
+def lock_energy(scene: Scene, margin: float = LOCK_MARGIN) -> np.ndarray:
+    """Total energy (J) below which each face up (1–6) can no longer change, (6,).
+
+    A die stops showing ``F`` up only through an orientation in which ``F`` ties with an
+    adjacent face, with the centre of mass at least ``Die.tipping_heights[F]`` above the
+    lowest corner; that corner sinks ``d`` into the ground at a spring energy of ``S d^2 / 2``,
+    so such an orientation holds at least ``E_tie = m g h_tip - (m g)^2 / (2 S)`` (potential
+    energy above the plane, the minimum over ``d``). Every ground force stores energy in a
+    spring or dissipates it, so a die below ``E_tie`` keeps its face for good. The threshold is
+    lowered by ``margin`` of the barrier ``m g (h_tip - h_rest)`` against the scheme's energy
+    wobble. ``-inf`` (never) unless the table is horizontal (on a slope gravity does work as
+    the die slides), with gravity and rotation.
+    """
+    check_range("margin", margin, 0.0, 1.0)
+    die, ground = scene.die, scene.ground
+    if ground.normal != (0.0, 0.0, 1.0) or scene.gravity == 0 or not scene.rotation:
+        return np.full(6, -math.inf)
+    weight = die.mass * scene.gravity
+    tip, rest = die.tipping_heights, die.resting_heights
+    return weight * (tip - margin * (tip - rest)) - weight**2 / (2.0 * ground.stiffness)
 
 
 def _batch_size(*arrays: np.ndarray) -> int:
