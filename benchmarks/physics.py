@@ -13,9 +13,13 @@ Prints a table and writes ``benchmarks/results/physics.json`` (``--out`` to chan
 - settled throws/s in the default scene (``Scene()``: whatever the default table is) from a
   seeded set of hand throws (5–15 cm up, 0.5–1 m/s, spin up to 30 rad/s, uniform orientation),
   single throws and batches of 1024, 1 and 2 threads, with plain stepping beside for reference;
+  and the same throws ended when their face is decided (``stop_when_decided``: the face they
+  come to rest on, checked here against the runs to rest);
 - MuJoCo (optional ``bench`` extra): a free box of the same size, mass and inertia, friction
   ``mu``, thrown from the same states onto a plane at its default 2 ms step, run until the same
-  rest rule holds (timed as one ``mj_step(nstep=...)`` call per throw), with ratios;
+  rest rule holds, and until the same decided-face rule holds (its kinetic and potential energy
+  below :func:`dice_env.simulate.lock_energy`), each timed as one ``mj_step(nstep=...)`` call
+  per throw, with ratios (our decided throws against its decided throws);
 - cost against batch size and against simulated time.
 
 Best of a few repeats. One-thread figures are the calling thread's CPU time (not inflated by
@@ -43,6 +47,7 @@ from dice_env import Scene, State, simulate
 from dice_env.die import face_up
 from dice_env.paper import paper_scene
 from dice_env.rotations import quaternion_to_matrix, random_rotations
+from dice_env.simulate import lock_energy
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))
@@ -147,14 +152,20 @@ def start_times(cold: bool) -> dict:
     return out
 
 
-# How the throws to rest are run: simulate() keywords.
+# How the throws are run: simulate() keywords. All but the last run to rest; the last ends
+# each throw when its face is decided (the same face, not at rest).
 MODES = {"plain stepping": {"free_flight": False}, "free flight": {},
-         "free flight + early rest": {"early_rest": True}}
+         "free flight + early rest": {"early_rest": True},
+         "free flight + decided face": {"stop_when_decided": True}}
 FASTEST = "free flight + early rest"
+DECIDED = "free flight + decided face"
 
 
 def throws_to_rest(scene: Scene, quick: bool) -> tuple[dict, State]:
-    """Settled throws/s in ``scene`` for each of :data:`MODES`; also returns the throws."""
+    """Throws/s in ``scene`` for each of :data:`MODES`; also returns the throws.
+
+    For the decided mode also the fraction of throws whose decided face is the face at rest.
+    """
     n = 256 if quick else 1024
     start = hand_throws(scene, n, seed=1)
     simulate(scene, subset(start, slice(0, 2)), t_max=1e-3, num_threads=2)  # load the kernels
@@ -165,6 +176,7 @@ def throws_to_rest(scene: Scene, quick: bool) -> tuple[dict, State]:
                      "t_max_s": scene.t_max, "rest_speed": scene.rest.speed,
                      "rest_hold_s": scene.rest.hold}, "modes": {}}
     repeats = 1 if quick else 2
+    faces = {}
     for mode, kwargs in MODES.items():
         plain = mode == "plain stepping"
         size = n // 8 if plain else n
@@ -180,11 +192,15 @@ def throws_to_rest(scene: Scene, quick: bool) -> tuple[dict, State]:
         row.update({"single_throws_per_s": singles / elapsed,
                     "single_throw_ms": 1e3 * elapsed / singles,
                     "settled_fraction": float(res.settled.mean()),
+                    "decided_fraction": float(res.decided.mean()),
                     "mean_rest_time_s": float(res.rest_time.mean()),
                     "mean_steps": float(res.steps.mean()),
                     "mean_impacts": float(res.impacts.mean()),
                     "face_counts": np.bincount(res.face, minlength=7)[1:].tolist()})
         out["modes"][mode] = row
+        faces[mode] = res.face
+    out["modes"][DECIDED]["same_face_as_at_rest"] = float(np.mean(faces[DECIDED]
+                                                                 == faces[FASTEST]))
     return out, start
 
 
@@ -234,7 +250,10 @@ def mujoco_to_rest(scene: Scene, start: State, horizon: float) -> dict | None:
     hold = int(np.ceil(scene.rest.hold / dt))
     v_rest = scene.rest.speed
     rest_steps = np.full(n, n_steps)
+    decided_steps = np.full(n, n_steps)
     face = np.zeros(n, np.int64)
+    decided_face = np.zeros(n, np.int64)
+    lock = lock_energy(scene)
     for chunk in range(0, n, 32):  # rest steps and faces from a rollout of each 32 throws
         rows = slice(chunk, chunk + 32)
         states, _ = rollout.rollout(model, data, initial[rows], nstep=n_steps)
@@ -254,23 +273,40 @@ def mujoco_to_rest(scene: Scene, start: State, horizon: float) -> dict | None:
                 if run > hold:
                     rest_steps[chunk + k] = j + 1
                     break
+        up = np.array([0.0, 0.0, 1.0])
         last = rot[np.arange(quiet.shape[0]), rest_steps[rows] - 1]
-        face[rows] = face_up(last, np.array([0.0, 0.0, 1.0]))
+        face[rows] = face_up(last, up)
+        # the same decision rule as ours, on MuJoCo's kinetic and potential energy
+        energy = kinetic + die.mass * scene.gravity * states[..., 3]
+        below = energy < lock[face_up(rot, up) - 1]
+        first = np.where(below.any(axis=1), below.argmax(axis=1) + 1, n_steps)
+        decided_steps[rows] = first
+        decided_face[rows] = face_up(rot[np.arange(quiet.shape[0]), first - 1], up)
     settled = rest_steps < n_steps
-    # time exactly the steps each throw needs, one C call per throw
-    elapsed = 0.0
-    for k in range(n):
-        mujoco.mj_resetData(model, data)
-        data.qpos[:], data.qvel[:] = qpos[k], qvel[k]
-        begin = time.thread_time()
-        mujoco.mj_step(model, data, nstep=int(rest_steps[k]))
-        elapsed += time.thread_time() - begin
+
+    def cpu_time(steps: np.ndarray) -> float:
+        """CPU time of exactly ``steps[k]`` steps of each throw, one C call per throw."""
+        elapsed = 0.0
+        for k in range(n):
+            mujoco.mj_resetData(model, data)
+            data.qpos[:], data.qvel[:] = qpos[k], qvel[k]
+            begin = time.thread_time()
+            mujoco.mj_step(model, data, nstep=int(steps[k]))
+            elapsed += time.thread_time() - begin
+        return elapsed
+
+    elapsed, decided_elapsed = cpu_time(rest_steps), cpu_time(decided_steps)
     return {"version": mujoco.__version__, "timestep_s": dt, "throws": n,
             "settled_fraction": float(settled.mean()),
             "mean_rest_time_s": float(((rest_steps - hold) * dt)[settled].mean()),
             "mean_steps": float(rest_steps.mean()),
             "cpu_per_throw_ms": 1e3 * elapsed / n, "throws_per_s_1thread": n / elapsed,
-            "face_counts": np.bincount(face, minlength=7)[1:].tolist()}
+            "face_counts": np.bincount(face, minlength=7)[1:].tolist(),
+            "decided": {"fraction": float((decided_steps < n_steps).mean()),
+                        "mean_time_s": float(decided_steps.mean() * dt),
+                        "same_face_as_at_rest": float(np.mean(decided_face == face)),
+                        "cpu_per_throw_ms": 1e3 * decided_elapsed / n,
+                        "throws_per_s_1thread": n / decided_elapsed}}
 
 
 def step_budget(scene: Scene, start: State, quick: bool) -> dict:
@@ -379,18 +415,21 @@ def main() -> None:
         if not args.no_mujoco:
             mj = mujoco_to_rest(scene, subset(start, slice(0, 128 if args.quick else 512)), 6.0)
             if mj is not None:
-                mj["ratios"] = {mode: {
-                    "batch_1thread": row["batch_threads1"] / mj["throws_per_s_1thread"],
-                    "batch_2threads_vs_2cores": row["batch_threads2"] / (
-                        2 * mj["throws_per_s_1thread"]),
-                    "single_throws": row["single_throws_per_s"] / mj["throws_per_s_1thread"]}
-                    for mode, row in rest["modes"].items()}
+                # each mode against MuJoCo run to the same end: rest, or the decided face
+                mj["ratios"] = {mode: _ratios(row, (mj["decided"] if mode == DECIDED else mj)[
+                    "throws_per_s_1thread"]) for mode, row in rest["modes"].items()}
             rest["mujoco"] = mj
     report["machine"]["load_average_end"] = os.getloadavg()
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text(json.dumps(report, indent=2) + "\n")
     print(format_report(report))
     print(f"wrote {args.out}")
+
+
+def _ratios(row: dict, reference: float) -> dict:
+    return {"batch_1thread": row["batch_threads1"] / reference,
+            "batch_2threads_vs_2cores": row["batch_threads2"] / (2 * reference),
+            "single_throws": row["single_throws_per_s"] / reference}
 
 
 def _cpu_name() -> str:
@@ -432,9 +471,11 @@ def format_report(r: dict) -> str:
                          f"{row['batch_threads2']:10.0f} {row['single_throws_per_s']:8.0f} "
                          f"{row['single_throw_ms']:10.3f} {row['mean_rest_time_s']:7.3f} "
                          f"{row['mean_steps']:6.0f}")
-        row = d["modes"][FASTEST]
+        row, decided = d["modes"][FASTEST], d["modes"][DECIDED]
         lines.append(f"  settled {row['settled_fraction']:.3f}, impacts "
                      f"{row['mean_impacts']:.1f}, faces {row['face_counts']}")
+        lines.append(f"  {DECIDED}: decided {decided['decided_fraction']:.3f} (column 'rest s':"
+                     f" when), the same face as at rest {decided['same_face_as_at_rest']:.4f}")
         b = d["step_budget"]
         lines.append(f"  steps per throw ({b['throws']} throws, plain stepping): flight "
                      f"{b['mean_flight_steps']:.0f}, contact before rest "
@@ -454,6 +495,14 @@ def format_report(r: dict) -> str:
                       f"  ours ({FASTEST}) / MuJoCo: 1 thread {ratio['batch_1thread']:.2f}x, "
                       f"2 threads vs 2 cores {ratio['batch_2threads_vs_2cores']:.2f}x, single "
                       f"throws {ratio['single_throws']:.2f}x"]
+            md, ratio = mj["decided"], mj["ratios"][DECIDED]
+            lines += [f"  MuJoCo to the same decided-face rule: {md['throws_per_s_1thread']:.0f} "
+                      f"throws/s on 1 thread, decided at {md['mean_time_s']:.3f} s, same face "
+                      f"as at rest {md['same_face_as_at_rest']:.3f}",
+                      f"  ours ({DECIDED}) / MuJoCo decided: 1 thread "
+                      f"{ratio['batch_1thread']:.2f}x, 2 threads vs 2 cores "
+                      f"{ratio['batch_2threads_vs_2cores']:.2f}x, single throws "
+                      f"{ratio['single_throws']:.2f}x"]
     lines += ["", f"Scene(), {FASTEST}: batch size -> settled throws/s (2 threads)"]
     lines += [f"  {size:>6} {rate:10.0f}" for size, rate in
               r["throws_per_s_vs_batch_2threads"].items()]
