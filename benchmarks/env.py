@@ -5,10 +5,11 @@
 
 The same seeded throws (default task, a seeded random policy) are run three ways: N single envs
 (``gym.make``, reset + step per throw), the native vector env (``gym.make_vec``, one step = N
-throws) and the raw kernel (:func:`dice_env.simulate` with ``early_rest=True`` as the env calls
-it, on the very releases the vector env used). The vector env's overhead is its time over the
-kernel's on identical throws, measured alternately (best of the repeats) so that load from other
-processes hits both alike. Prints a table and writes ``benchmarks/results/env.json``.
+throws) and the raw kernel (:func:`dice_env.simulate` as the env calls it, on the very releases
+the vector env used); once to rest (the default) and once with ``until="decided"``. The vector
+env's overhead is its time over the kernel's on identical throws, measured alternately (best of
+the repeats) so that load from other processes hits both alike. Prints a table and writes
+``benchmarks/results/env.json``.
 """
 
 from __future__ import annotations
@@ -26,17 +27,10 @@ import dice_env  # noqa: F401  (registers DiceThrow-v0)
 from dice_env import State, simulate
 
 
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("--quick", action="store_true", help="batch 64, fewer repeats")
-    parser.add_argument("--out", type=Path,
-                        default=Path(__file__).parent / "results" / "env.json")
-    args = parser.parse_args()
-    n, repeats, n_single = (64, 3, 32) if args.quick else (256, 5, 64)
-    seed = 0
+def measure(until: str, n: int, repeats: int, n_single: int, seed: int = 0) -> dict:
+    """Throws/s of the kernel, the vector env and single envs for the env keyword ``until``."""
     actions = np.random.default_rng(seed).uniform(-1, 1, (n, 6)).astype(np.float32)
-
-    venv = gym.make_vec("DiceThrow-v0", num_envs=n)
+    venv = gym.make_vec("DiceThrow-v0", num_envs=n, until=until)
     task = venv.unwrapped.task
     venv.reset(seed=seed)
     venv.step(actions)  # compile / warm up
@@ -50,11 +44,12 @@ def main() -> None:
         state = State.release(task.scene, task.release_position, final["release_velocity"],
                               final["release_spin"], final["release_orientation"])
         start = time.perf_counter()
-        result = simulate(task.scene, state, early_rest=True)  # as ThrowTask.throw
+        result = simulate(task.scene, state, early_rest=until == "rest",  # as ThrowTask.throw
+                          stop_when_decided=until == "decided")
         kernel_s.append(time.perf_counter() - start)
         assert np.array_equal(result.face, final["face"])  # the very same throws
 
-    env = gym.make("DiceThrow-v0")
+    env = gym.make("DiceThrow-v0", until=until)
     single_s = []
     for _ in range(max(1, repeats // 2)):
         start = time.perf_counter()
@@ -64,22 +59,41 @@ def main() -> None:
         single_s.append(time.perf_counter() - start)
 
     vector, kernel, single = min(vector_s), min(kernel_s), min(single_s)
-    row = {
+    return {
         "batch": n,
         "threads": os.cpu_count(),
         "kernel_throws_per_s": n / kernel,
         "vector_env_throws_per_s": n / vector,
         "vector_overhead": vector / kernel - 1.0,
         "single_env_throws_per_s": n_single / single,
-        "mean_rest_time_s": float(final["rest_time"].mean()),
+        "mean_end_time_s": float(final["rest_time"].mean()),
+        "faces": final["face"].tolist(),
         "load_average": os.getloadavg()[0],
     }
-    print(f"{'batch':>6} {'kernel/s':>10} {'vector env/s':>13} {'overhead':>9} "
-          f"{'single env/s':>13}")
-    print(f"{n:>6} {row['kernel_throws_per_s']:>10.0f} {row['vector_env_throws_per_s']:>13.0f} "
-          f"{row['vector_overhead']:>9.1%} {row['single_env_throws_per_s']:>13.0f}")
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--quick", action="store_true", help="batch 64, fewer repeats")
+    parser.add_argument("--out", type=Path,
+                        default=Path(__file__).parent / "results" / "env.json")
+    args = parser.parse_args()
+    n, repeats, n_single = (64, 3, 32) if args.quick else (256, 5, 64)
+    rows = {until: measure(until, n, repeats, n_single) for until in ("rest", "decided")}
+    rows["decided_over_rest_vector_env"] = (rows["decided"]["vector_env_throws_per_s"]
+                                            / rows["rest"]["vector_env_throws_per_s"])
+    rows["same_faces"] = rows["rest"]["faces"] == rows["decided"]["faces"]
+    print(f"{'until':>8} {'batch':>6} {'kernel/s':>10} {'vector env/s':>13} {'overhead':>9} "
+          f"{'single env/s':>13} {'ends at s':>10}")
+    for until in ("rest", "decided"):
+        row = rows[until]
+        print(f"{until:>8} {n:>6} {row['kernel_throws_per_s']:>10.0f} "
+              f"{row['vector_env_throws_per_s']:>13.0f} {row['vector_overhead']:>9.1%} "
+              f"{row['single_env_throws_per_s']:>13.0f} {row['mean_end_time_s']:>10.3f}")
+    print(f"until='decided': {rows['decided_over_rest_vector_env']:.2f}x the vector env's "
+          f"throws/s, the same faces: {rows['same_faces']}")
     args.out.parent.mkdir(parents=True, exist_ok=True)
-    args.out.write_text(json.dumps(row, indent=2) + "\n")
+    args.out.write_text(json.dumps(rows, indent=2) + "\n")
 
 
 if __name__ == "__main__":

@@ -111,11 +111,33 @@ def test_bad_actions():
     ("tilt_deg", 95.0, "tilt_deg"),
     ("load_fraction", 1.5, "load_fraction"),
     ("num_threads", 0, "num_threads"),
+    ("until", "landed", "until must be one of"),
     ("stifness", 1e5, "unknown keyword"),
 ])
 def test_bad_keywords(keyword, value, match):
     with pytest.raises(ValueError, match=match):
         make(**{keyword: value})
+
+
+def test_until_decided_lands_the_same_faces_sooner():
+    rest, decided = (gym.make_vec("DiceThrow-v0", num_envs=32, until=until)
+                     for until in ("rest", "decided"))
+    actions = np.random.default_rng(0).uniform(-1, 1, (32, 6))
+    infos = []
+    for venv in (rest, decided):
+        venv.reset(seed=4)
+        infos.append(venv.step(actions)[4]["final_info"])
+    at_rest, at_decision = infos
+    np.testing.assert_array_equal(at_rest["face"], at_decision["face"])
+    np.testing.assert_array_equal(at_rest["is_success"], at_decision["is_success"])
+    assert at_rest["settled"].all() and not at_decision["settled"].any()
+    assert (at_decision["void_reason"] == "").all()
+    assert (at_decision["rest_time"] < at_rest["rest_time"]).all()
+    env = make(until="decided", t_max=0.02)
+    env.reset(seed=0)
+    assert env.step(np.zeros(6))[4]["void_reason"] == "not_decided"
+    with pytest.raises(ValueError, match="until='decided' needs a horizontal table"):
+        make(until="decided", tilt_deg=5.0)
 
 
 def test_physical_keywords_reach_the_scene():

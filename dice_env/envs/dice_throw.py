@@ -96,7 +96,10 @@ class DiceThrowEnv(gym.Env):
     ``reward_success`` 1.0 if the target face is up at rest, else 0.0, plus
     ``reward_shaping = shaping * (n_target . n_table)`` at rest (``shaping=0`` by default).
     A void throw (foul, unstable, or not settled within ``t_max``) gets 0;
-    ``info["void_reason"]`` says why.
+    ``info["void_reason"]`` says why. With ``until="decided"`` a throw ends as soon as its face
+    is decided (the face it rests on; about 2.3 times the throws per second at the defaults,
+    ``docs/performance.md``): "at rest" above then means "at that moment", ``settled`` is
+    False and an undecided throw's void reason is "not_decided".
 
     ## Starting State
     Centre ``release_height`` along the table normal; orientation per ``orientation_mode``
@@ -109,9 +112,9 @@ class DiceThrowEnv(gym.Env):
 
     ## Info
     ``is_success``, ``target_face``, ``face`` (landed, 1–6), ``settled``, ``unstable``, ``fair``,
-    ``void_reason`` ("" or "foul", "unstable", "not_settled"), ``rest_time`` (s), ``impacts``,
-    ``reward_success``, ``reward_shaping``, ``release_velocity`` (3), ``release_spin`` (3),
-    ``release_orientation`` (3, 3), ``action_clipped``.
+    ``void_reason`` ("" or "foul", "unstable", "not_settled", "not_decided"), ``rest_time`` (s),
+    ``impacts``, ``reward_success``, ``reward_shaping``, ``release_velocity`` (3),
+    ``release_spin`` (3), ``release_orientation`` (3, 3), ``action_clipped``.
 
     ## Arguments
     | keyword | default | meaning |
@@ -135,6 +138,7 @@ class DiceThrowEnv(gym.Env):
     | ``rest_speed``, ``rest_hold``, ``energy_tol`` | Scene() | rest detection, unstable flag |
     | ``scene`` | None | a base :class:`dice_env.Scene` the keywords above modify |
     | ``num_threads`` | None | numba threads for the kernel (None: all cores) |
+    | ``until`` | "rest" | "rest", or "decided": end a throw when its face is decided |
     | ``render_mode`` | None | "rgb_array", "rgb_array_list" or "human" |
     | ``render_width``, ``render_height`` | 320, 240 | frame size (pixels) |
 
@@ -148,6 +152,8 @@ class DiceThrowEnv(gym.Env):
       on the table, so that landed faces converge in the step; at 1.5 cm the rule now lands
       0.71, the oracle and PPO 0.975. ``friction_law="regularized", scheme="paper",
       safety=0.1`` restores the earlier physics (rest test aside).
+    * v0, session 3: keyword ``until`` ("decided" ends throws when their face is decided);
+      the default, "rest", is unchanged.
     """
 
     metadata: ClassVar[dict[str, Any]] = {"render_modes": list(RENDER_MODES),
