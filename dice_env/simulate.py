@@ -151,7 +151,7 @@ def simulate(
                          f"got {sorted(unknown)}")
     if not isinstance(record_every, (int, np.integer)) or record_every < 0:
         raise ValueError(f"record_every must be an int >= 0, got {record_every!r}")
-    dt, body, inv_inertia, iso, inv_i_min, normal, lock = _scene_constants(scene)
+    dt, body, inv_inertia, iso, inv_i_min, normal = _scene_constants(scene)
     n_steps = max(1, round(t_max / dt))
     out = state.copy()
     b = out.batch_size
@@ -189,7 +189,7 @@ def simulate(
             scene.rotation, flight, scene.scheme == Scheme.MIDPOINT, n_steps, stop_at_rest,
             scene.rest.speed,
             math.ceil(scene.rest.hold / dt), *_rest_energy(scene, early_rest),
-            lock if stop_when_decided else _NEVER,
+            lock_energy(scene) if stop_when_decided else _NEVER,
             die.mass * scene.gravity * die.edge,
             stride, rec["x_cm"], rec["energy"], rec["orientations"], rec["nodes"],
             status, unstable, rest_time, impacts, max_pen, energy_rise, steps,
@@ -215,7 +215,7 @@ def _scene_constants(scene: Scene) -> tuple:
     """Kernel constants of ``scene``, computed once per (frozen, hashable) scene.
 
     The step, corners, inverse inertia, isotropic inertia (or 0), inverse smallest principal
-    moment, ground normal and :func:`lock_energy`.
+    moment and ground normal.
     """
     try:
         return _cached_constants(scene)
@@ -229,8 +229,7 @@ def _cached_constants(scene: Scene) -> tuple:
     inertia = die.inertia_body
     return (scene.step, die.corners_body, np.linalg.inv(inertia),
             float(inertia[0, 0]) if die.is_isotropic else 0.0,
-            1.0 / np.linalg.eigvalsh(inertia)[0], np.asarray(scene.ground.normal),
-            lock_energy(scene))
+            1.0 / np.linalg.eigvalsh(inertia)[0], np.asarray(scene.ground.normal))
 
 
 def _rest_energy(scene: Scene, early_rest: bool) -> tuple[float, float]:

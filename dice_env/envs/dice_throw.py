@@ -97,7 +97,7 @@ class DiceThrowEnv(gym.Env):
     ``reward_shaping = shaping * (n_target . n_table)`` at rest (``shaping=0`` by default).
     A void throw (foul, unstable, or not settled within ``t_max``) gets 0;
     ``info["void_reason"]`` says why. With ``until="decided"`` a throw ends as soon as its face
-    is decided (the face it rests on; about 2.6 times the throws per second at the defaults,
+    is decided (the face it rests on; about 2.4 times the throws per second at the defaults,
     ``docs/performance.md``): "at rest" above then means "at that moment", ``settled`` is
     False and an undecided throw's void reason is "not_decided".
 
