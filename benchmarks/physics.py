@@ -6,8 +6,9 @@
 Prints a table and writes ``benchmarks/results/physics.json`` (``--out`` to change). Figures:
 
 - kernel die-steps/s in the paper scene (``real_throw_cube`` defaults, dt = 1e-4, no records,
-  no stop at rest), batch 1 and 1024, 1 and 2 threads, and the numpy transcription of the
-  listing (``tests/listing_transcription.py``) on the same throw, with the ratio;
+  no stop at rest), batch 1 (scalar kernel) and 1024 (vectorised kernel), 1 and 2 threads,
+  the batch through the scalar kernel beside it, and the numpy transcription of the listing
+  (``tests/listing_transcription.py``) on the same throw, with the ratios;
 - compile time: a fresh process with an empty numba cache (cold) and with the cache (warm),
   each ``import dice_env`` plus a first single throw plus a first batch on 2 threads;
 - settled throws/s in the default scene (``Scene()``: whatever the default table is) from a
@@ -31,6 +32,7 @@ the contact steps set.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import os
 import platform
@@ -43,7 +45,7 @@ from pathlib import Path
 import numba
 import numpy as np
 
-from dice_env import Scene, State, simulate
+from dice_env import Scene, State, simulate, vector_kernel
 from dice_env.die import face_up
 from dice_env.paper import paper_scene
 from dice_env.rotations import quaternion_to_matrix, random_rotations
@@ -100,23 +102,45 @@ def subset(state: State, rows: slice) -> State:
     return State(*(a[rows] for a in state._arrays()))
 
 
+@contextlib.contextmanager
+def scalar_kernel_only():
+    """Run every scene in :mod:`dice_env.kernel`, not the paper scene's vectorised kernel."""
+    covers = vector_kernel.covers
+    vector_kernel.covers = lambda *args: False
+    try:
+        yield
+    finally:
+        vector_kernel.covers = covers
+
+
 def kernel_speed(quick: bool) -> dict:
-    """Die-steps/s in the paper scene, and the numpy listing on the same throw."""
+    """Die-steps/s in the paper scene, and the numpy listing on the same throw.
+
+    A batch runs in the vectorised kernel (:mod:`dice_env.vector_kernel`); the same batch in
+    the scalar kernel is measured beside it.
+    """
     out = {}
-    for batch, threads, t_max in [(1, 1, 2.0 if quick else 10.0), (1024, 1, 0.05 if quick else 0.3),
-                                  (1024, 2, 0.05 if quick else 0.3)]:
+    runs = [(1, 1, 2.0 if quick else 10.0, False), (1024, 1, 0.05 if quick else 0.3, False),
+            (1024, 2, 0.05 if quick else 0.3, False), (1024, 2, 0.05 if quick else 0.3, True)]
+    for batch, threads, t_max, scalar in runs:
         scene = paper_scene(t_max=t_max)
         start = paper_throws(batch)
-        simulate(scene, subset(start, slice(0, 2)), t_max=1e-3, num_threads=threads)  # load
-        elapsed = best_time(lambda s=scene, st=start, th=threads: simulate(
-            s, st, stop_at_rest=False, record=(), num_threads=th), 2 if quick else 3, threads)
-        out[f"batch{batch}_threads{threads}"] = batch * scene.n_steps / elapsed
+        with scalar_kernel_only() if scalar else contextlib.nullcontext():
+            simulate(scene, start, t_max=1e-3, stop_at_rest=False, record=(),
+                     num_threads=threads)  # load
+            elapsed = best_time(lambda s=scene, st=start, th=threads: simulate(
+                s, st, stop_at_rest=False, record=(), num_threads=th), 2 if quick else 3,
+                threads)
+        name = f"batch{batch}_threads{threads}" + ("_scalar_kernel" if scalar else "")
+        out[name] = batch * scene.n_steps / elapsed
     steps = 300 if quick else 3000
     l0 = paper_throws(1).angular_momentum[0]
     elapsed = best_time(lambda: listing_throw(l0, clockmax=steps, tmax=steps * 1e-4), 2)
     out["numpy_listing"] = steps / elapsed
     out["ratio_batch1_vs_numpy"] = out["batch1_threads1"] / out["numpy_listing"]
     out["ratio_batch1024_2threads_vs_numpy"] = out["batch1024_threads2"] / out["numpy_listing"]
+    out["ratio_vectorised_vs_scalar_kernel"] = (out["batch1024_threads2"]
+                                                / out["batch1024_threads2_scalar_kernel"])
     return out
 
 
@@ -124,7 +148,7 @@ _START_SCRIPT = """
 import time
 t0 = time.perf_counter()
 import numpy as np
-from dice_env import Scene, State, simulate
+from dice_env import Scene, State, simulate, vector_kernel
 t1 = time.perf_counter()
 scene = Scene()
 simulate(scene, State.release(scene, [0, 0, 0.1], [0.5, 0, 0], [10.0, 5, 0]), num_threads=1)
@@ -452,7 +476,9 @@ def format_report(r: dict) -> str:
              "", "paper scene, dt = 1e-4 (die-steps/s)",
              f"  batch 1, 1 thread        {k['batch1_threads1'] / 1e6:8.2f} M",
              f"  batch 1024, 1 thread     {k['batch1024_threads1'] / 1e6:8.2f} M",
-             f"  batch 1024, 2 threads    {k['batch1024_threads2'] / 1e6:8.2f} M",
+             f"  batch 1024, 2 threads    {k['batch1024_threads2'] / 1e6:8.2f} M   "
+             f"(scalar kernel: {k['batch1024_threads2_scalar_kernel'] / 1e6:.2f} M, vectorised "
+             f"{k['ratio_vectorised_vs_scalar_kernel']:.2f}x)",
              f"  numpy listing            {k['numpy_listing'] / 1e6:8.4f} M   "
              f"(kernel batch 1: {k['ratio_batch1_vs_numpy']:.0f}x, batch 1024 on 2 threads: "
              f"{k['ratio_batch1024_2threads_vs_numpy']:.0f}x)", ""]

@@ -9,7 +9,7 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
-from dice_env import kernel
+from dice_env import kernel, vector_kernel
 from dice_env.die import face_up
 from dice_env.rotations import orthonormality_error
 from dice_env.scene import ContactLaw, FrictionLaw, Scene, Scheme
@@ -174,26 +174,31 @@ def simulate(
     gated = ground.contact_law == ContactLaw.GATED
     stick = scene.friction_law == FrictionLaw.STICK_SLIP
     flight = free_flight and (gated or ground.damping == 0)
+    lock = lock_energy(scene) if stop_when_decided else _NEVER
     threads = numba.get_num_threads()
     numba.set_num_threads(num_threads or numba.config.NUMBA_NUM_THREADS)
-    serial = b == 1 or numba.get_num_threads() == 1
-    run = kernel.simulate_serial if serial else kernel.simulate_batch
     try:
-        run(
-            out.position, out.velocity, out.angular_momentum, out.orientation,
-            out.angular_velocity, body, die.mass, inv_inertia, iso, inv_i_min, normal,
-            ground.stiffness,
-            ground.damping, ground.friction, scene.friction_vmin, stick,
-            ground.tangential * ground.stiffness, ground.tangential * ground.damping,
-            scene.gravity, dt, gated,
-            scene.rotation, flight, scene.scheme == Scheme.MIDPOINT, n_steps, stop_at_rest,
-            scene.rest.speed,
-            math.ceil(scene.rest.hold / dt), *_rest_energy(scene, early_rest),
-            lock_energy(scene) if stop_when_decided else _NEVER,
-            die.mass * scene.gravity * die.edge,
-            stride, rec["x_cm"], rec["energy"], rec["orientations"], rec["nodes"],
-            status, unstable, rest_time, impacts, max_pen, energy_rise, steps,
-        )
+        if vector_kernel.covers(scene, b, flight, stride <= n_steps, stop_at_rest, lock):
+            vector_kernel.simulate_batch(
+                out.position, out.velocity, out.angular_momentum, out.orientation,
+                out.angular_velocity, body, die.mass, 1.0 / iso, normal, ground.stiffness,
+                ground.damping, ground.friction, scene.friction_vmin, scene.gravity, dt, n_steps,
+                scene.rest.speed, die.mass * scene.gravity * die.edge,
+                status, unstable, rest_time, impacts, max_pen, energy_rise, steps,
+            )
+        else:
+            serial = b == 1 or numba.get_num_threads() == 1
+            (kernel.simulate_serial if serial else kernel.simulate_batch)(
+                out.position, out.velocity, out.angular_momentum, out.orientation,
+                out.angular_velocity, body, die.mass, inv_inertia, iso, inv_i_min, normal,
+                ground.stiffness, ground.damping, ground.friction, scene.friction_vmin, stick,
+                ground.tangential * ground.stiffness, ground.tangential * ground.damping,
+                scene.gravity, dt, gated, scene.rotation, flight, scene.scheme == Scheme.MIDPOINT,
+                n_steps, stop_at_rest, scene.rest.speed, math.ceil(scene.rest.hold / dt),
+                *_rest_energy(scene, early_rest), lock, die.mass * scene.gravity * die.edge,
+                stride, rec["x_cm"], rec["energy"], rec["orientations"], rec["nodes"],
+                status, unstable, rest_time, impacts, max_pen, energy_rise, steps,
+            )
     finally:
         numba.set_num_threads(threads)
     energy_rise /= scene.energy_tol

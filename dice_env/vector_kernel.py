@@ -1,0 +1,277 @@
+"""The listing's own scene, stepped across dice at once (SIMD): the paper scene at full speed.
+
+Under the paper's contact law every corner does the same work at every step: the force
+``max(0, S dg - D un)`` with the listing's friction ``-mu fn Ut/(|Ut| + vmin)`` is computed for
+all 8 corners whether they touch or not, and the die never jumps or stops early. With no
+branch that depends on the die, one pass of a loop over a tile of ``TILE`` dice does one step
+of every die in it, and LLVM turns that pass into SIMD code (4 or 8 dice per instruction).
+
+The arithmetic is :func:`dice_env.kernel._simulate_one`'s, operation for operation in the same
+order (no fast-math: no reassociation, no fused multiply-add), so its results are
+bit-identical to that kernel's (``tests/test_vector_kernel.py`` checks it); what is a branch
+there is a select here. It serves the scenes :func:`covers` accepts (the paper's law and
+friction, listing step, isotropic die, no records, no stop at rest or decided face); every
+other scene runs in :mod:`dice_env.kernel`.
+
+A die whose state stops being finite keeps its last finite state and step count, as in the
+scalar kernel; a turn above 1/64 rad in one step (where ``R(w dt)`` needs ``sin``) is done
+for that die after the vector pass by :func:`dice_env.kernel._rotate` itself.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit, prange
+
+from dice_env.kernel import NONFINITE, RUNNING, _rotate
+from dice_env.scene import ContactLaw, FrictionLaw, Scene, Scheme
+
+TILE = 16  # dice per tile; a compile-time row stride, so LLVM can prove the lanes independent
+X, U, L, W, Q = 0, 3, 6, 9, 12  # centre, velocity, angular momentum, angular velocity, Q (9)
+STEP, ALIVE, E_START, E_TOL, E_MAX, WAS, PEN, HITS, TURN = 21, 22, 23, 24, 25, 26, 27, 28, 29
+ROWS = 30
+SERIES = 2.44140625e-4  # below this squared turn per step, R(w dt) from its series (as _rotate)
+
+
+def covers(scene: Scene, batch: int, flight: bool, records: bool, stop_at_rest: bool,
+           lock: np.ndarray) -> bool:
+    """Whether a run of ``batch`` dice in ``scene`` takes this kernel (else the scalar one).
+
+    The paper's contact law and friction with the listing's step, an isotropic die that
+    rotates, no free-flight jumps, records, stop at rest or decided face; and at least a tile
+    of dice (a tile costs the same for fewer).
+    """
+    return (scene.ground.contact_law == ContactLaw.PAPER
+            and scene.friction_law == FrictionLaw.REGULARIZED and scene.scheme == Scheme.PAPER
+            and scene.rotation and scene.die.is_isotropic and batch >= TILE and not flight
+            and not records and not stop_at_rest and bool(np.all(lock == -np.inf)))
+
+
+@njit(cache=True, inline="always")
+def _max(a: float, b: float) -> float:
+    """``max(a, b)`` as a select (numba's builtin is a call, which stops vectorisation)."""
+    return b if b > a else a
+
+
+@njit(cache=True, inline="always")
+def _corner(q, x, w, u, b0, b1, b2, ground):
+    """One corner's force and torque under the paper's law, without branches.
+
+    Returns the force and torque it adds (zero unless it pushes), its spring energy, whether
+    it is below the plane, its approach speed and its sink.
+    """
+    q00, q01, q02, q10, q11, q12, q20, q21, q22 = q
+    x0, x1, x2 = x
+    w0, w1, w2 = w
+    u0, u1, u2 = u
+    n0, n1, n2, stiff, damp, mu, vmin = ground
+    rk0 = q00 * b0 + q01 * b1 + q02 * b2
+    rk1 = q10 * b0 + q11 * b1 + q12 * b2
+    rk2 = q20 * b0 + q21 * b1 + q22 * b2
+    height = n0 * (x0 + rk0) + n1 * (x1 + rk1) + n2 * (x2 + rk2)
+    uk0 = u0 + w1 * rk2 - w2 * rk1
+    uk1 = u1 + w2 * rk0 - w0 * rk2
+    uk2 = u2 + w0 * rk1 - w1 * rk0
+    dg = _max(0.0, -height)
+    un = n0 * uk0 + n1 * uk1 + n2 * uk2
+    below = height < 0.0
+    spring = 0.5 * stiff * dg * dg if below else 0.0
+    approach = -un if below else 0.0
+    fn = stiff * dg
+    if damp > 0.0:
+        fn -= damp * un
+    pushes = fn > 0.0
+    fk0, fk1, fk2 = fn * n0, fn * n1, fn * n2
+    if mu > 0.0:
+        cap = mu * _max(fn, 0.0)
+        ut0, ut1, ut2 = uk0 - un * n0, uk1 - un * n1, uk2 - un * n2
+        scale = cap / (math.sqrt(ut0 * ut0 + ut1 * ut1 + ut2 * ut2) + vmin)
+        fk0 -= scale * ut0
+        fk1 -= scale * ut1
+        fk2 -= scale * ut2
+    if not pushes:
+        fk0, fk1, fk2 = 0.0, 0.0, 0.0
+    return (pushes, fk0, fk1, fk2, rk1 * fk2 - rk2 * fk1, rk2 * fk0 - rk0 * fk2,
+            rk0 * fk1 - rk1 * fk0, spring, below, approach, dg)
+
+
+@njit(cache=True, inline="always")
+def _add(acc, corner):
+    """Add a corner's share to the step's sums, in the corners' order (as the kernel does)."""
+    f0, f1, f2, t0, t1, t2, spring, touching, approach, pen = acc
+    pushes, fk0, fk1, fk2, tk0, tk1, tk2, spring_k, below, approach_k, dg = corner
+    if below:
+        touching += 1
+        spring += spring_k
+        pen = _max(pen, dg)
+        approach = _max(approach, approach_k)
+    if pushes:
+        f0 += fk0
+        f1 += fk1
+        f2 += fk2
+        t0 += tk0
+        t1 += tk1
+        t2 += tk2
+    return f0, f1, f2, t0, t1, t2, spring, touching, approach, pen
+
+
+@njit(cache=True, error_model="numpy")
+def _tile_step(t, body, mass, inv_iso, normal, stiff, damp, mu, vmin, g, dt, v_rest,
+               energy_scale_add):
+    """One step of every die of the tile ``t`` (rows of ``TILE`` lanes), in place.
+
+    Leaves in row ``TURN`` the squared turn of each die that the series could not take (else 0).
+    """
+    n0, n1, n2 = normal[0], normal[1], normal[2]
+    dt_m = dt / mass
+    b0, b1 = (body[0, 0], body[0, 1], body[0, 2]), (body[1, 0], body[1, 1], body[1, 2])
+    b2, b3 = (body[2, 0], body[2, 1], body[2, 2]), (body[3, 0], body[3, 1], body[3, 2])
+    b4, b5 = (body[4, 0], body[4, 1], body[4, 2]), (body[5, 0], body[5, 1], body[5, 2])
+    b6, b7 = (body[6, 0], body[6, 1], body[6, 2]), (body[7, 0], body[7, 1], body[7, 2])
+    ground = (n0, n1, n2, stiff, damp, mu, vmin)
+    for i in range(TILE):
+        x = (t[X * TILE + i], t[(X + 1) * TILE + i], t[(X + 2) * TILE + i])
+        u = (t[U * TILE + i], t[(U + 1) * TILE + i], t[(U + 2) * TILE + i])
+        w = (t[W * TILE + i], t[(W + 1) * TILE + i], t[(W + 2) * TILE + i])
+        x0, x1, x2 = x
+        u0, u1, u2 = u
+        l0, l1, l2 = t[L * TILE + i], t[(L + 1) * TILE + i], t[(L + 2) * TILE + i]
+        q = (t[Q * TILE + i], t[(Q + 1) * TILE + i], t[(Q + 2) * TILE + i],
+             t[(Q + 3) * TILE + i], t[(Q + 4) * TILE + i], t[(Q + 5) * TILE + i],
+             t[(Q + 6) * TILE + i], t[(Q + 7) * TILE + i], t[(Q + 8) * TILE + i])
+        acc = (0.0, 0.0, -mass * g, 0.0, 0.0, 0.0, 0.0, 0, 0.0, t[PEN * TILE + i])
+        acc = _add(acc, _corner(q, x, w, u, b0[0], b0[1], b0[2], ground))
+        acc = _add(acc, _corner(q, x, w, u, b1[0], b1[1], b1[2], ground))
+        acc = _add(acc, _corner(q, x, w, u, b2[0], b2[1], b2[2], ground))
+        acc = _add(acc, _corner(q, x, w, u, b3[0], b3[1], b3[2], ground))
+        acc = _add(acc, _corner(q, x, w, u, b4[0], b4[1], b4[2], ground))
+        acc = _add(acc, _corner(q, x, w, u, b5[0], b5[1], b5[2], ground))
+        acc = _add(acc, _corner(q, x, w, u, b6[0], b6[1], b6[2], ground))
+        acc = _add(acc, _corner(q, x, w, u, b7[0], b7[1], b7[2], ground))
+        f0, f1, f2, t0, t1, t2, spring, touching, approach, pen = acc
+        alive = t[ALIVE * TILE + i] > 0.0
+        step = t[STEP * TILE + i]
+        # energy of the state entering this step
+        kinetic = 0.5 * mass * (u0 * u0 + u1 * u1 + u2 * u2) + 0.5 * (
+            l0 * (l0 * inv_iso) + l1 * (l1 * inv_iso) + l2 * (l2 * inv_iso))
+        energy = kinetic + mass * g * x2 + spring
+        e_start, e_tol, e_max = t[E_START * TILE + i], t[E_TOL * TILE + i], t[E_MAX * TILE + i]
+        first = step == 0.0
+        if first:
+            e_start = energy
+            e_tol = energy_scale_add + kinetic + mass * g * _max(0.0, n0 * x0 + n1 * x1 + n2 * x2)
+        else:
+            e_max = _max(e_max, energy)
+        hits = t[HITS * TILE + i]
+        if alive and touching > 0 and not t[WAS * TILE + i] > 0.0 and approach > v_rest:
+            hits += 1.0
+        # 3.-4. centre of mass, then angular momentum, angular velocity and orientation
+        nu0, nu1, nu2 = u0 + f0 * dt_m, u1 + f1 * dt_m, u2 + f2 * dt_m
+        nx0, nx1, nx2 = x0 + dt * nu0, x1 + dt * nu1, x2 + dt * nu2
+        nl0, nl1, nl2 = l0 + dt * t0, l1 + dt * t1, l2 + dt * t2
+        total = nu0 + nu1 + nu2 + nx0 + nx1 + nx2 + nl0 + nl1 + nl2
+        moves = alive and total * 0.0 == 0.0  # finite (abs(x) < inf blocks vectorising)
+        nw0, nw1, nw2 = nl0 * inv_iso, nl1 * inv_iso, nl2 * inv_iso
+        v0, v1, v2 = nw0 * dt, nw1 * dt, nw2 * dt
+        turn = v0 * v0 + v1 * v1 + v2 * v2
+        series = turn > 0.0 and turn < SERIES
+        s = turn
+        a = 1.0 - s * (1.0 / 6.0 - s * (1.0 / 120.0 - s * (1.0 / 5040.0 - s / 362880.0)))
+        c = 0.5 - s * (1.0 / 24.0 - s * (1.0 / 720.0 - s * (1.0 / 40320.0 - s / 3628800.0)))
+        d = 1.0 - c * s
+        r00, r11, r22 = d + c * v0 * v0, d + c * v1 * v1, d + c * v2 * v2
+        r01, r10 = c * v0 * v1 - a * v2, c * v0 * v1 + a * v2
+        r02, r20 = c * v0 * v2 + a * v1, c * v0 * v2 - a * v1
+        r12, r21 = c * v1 * v2 - a * v0, c * v1 * v2 + a * v0
+        if not moves:  # a die that is done keeps its state (selects, not branches)
+            nx0, nx1, nx2, nu0, nu1, nu2, nl0, nl1, nl2 = x0, x1, x2, u0, u1, u2, l0, l1, l2
+            nw0, nw1, nw2 = w
+        t[STEP * TILE + i] = step + 1.0 if moves else step
+        t[X * TILE + i], t[(X + 1) * TILE + i], t[(X + 2) * TILE + i] = nx0, nx1, nx2
+        t[U * TILE + i], t[(U + 1) * TILE + i], t[(U + 2) * TILE + i] = nu0, nu1, nu2
+        t[L * TILE + i], t[(L + 1) * TILE + i], t[(L + 2) * TILE + i] = nl0, nl1, nl2
+        t[W * TILE + i], t[(W + 1) * TILE + i], t[(W + 2) * TILE + i] = nw0, nw1, nw2
+        rotates = moves and series
+        for j in range(3):
+            qa, qb, qc = q[j], q[3 + j], q[6 + j]
+            t[(Q + j) * TILE + i] = r00 * qa + r01 * qb + r02 * qc if rotates else qa
+            t[(Q + 3 + j) * TILE + i] = r10 * qa + r11 * qb + r12 * qc if rotates else qb
+            t[(Q + 6 + j) * TILE + i] = r20 * qa + r21 * qb + r22 * qc if rotates else qc
+        t[TURN * TILE + i] = turn if moves and turn >= SERIES else 0.0
+        t[ALIVE * TILE + i] = 1.0 if moves else 0.0
+        t[E_START * TILE + i], t[E_TOL * TILE + i], t[E_MAX * TILE + i] = e_start, e_tol, e_max
+        t[HITS * TILE + i] = hits
+        t[WAS * TILE + i] = 1.0 if touching > 0 else 0.0
+        t[PEN * TILE + i] = pen
+
+
+@njit(cache=True)
+def _run_tile(first, last, x, u, ang, q, w, body, mass, inv_iso, normal, stiff, damp, mu, vmin,
+              g, dt, n_steps, v_rest, energy_scale_add, status, unstable, rest_time, impacts,
+              max_pen, energy_rise, steps):
+    """Dice ``first`` to ``last - 1`` (at most ``TILE``) for ``n_steps`` steps, in place."""
+    t = np.zeros(ROWS * TILE)
+    qi = np.empty((3, 3))
+    lanes = last - first
+    for i in range(TILE):
+        d = first + i if i < lanes else first  # spare lanes repeat the first die, unused
+        for a in range(3):
+            t[(X + a) * TILE + i] = x[d, a]
+            t[(U + a) * TILE + i] = u[d, a]
+            t[(L + a) * TILE + i] = ang[d, a]
+            t[(W + a) * TILE + i] = w[d, a]
+            for c in range(3):
+                t[(Q + 3 * a + c) * TILE + i] = q[d, a, c]
+        t[ALIVE * TILE + i] = 1.0
+        t[E_TOL * TILE + i] = 1.0
+        t[E_MAX * TILE + i] = -np.inf
+        t[WAS * TILE + i] = 1.0
+        t[PEN * TILE + i] = max_pen[d]
+        t[HITS * TILE + i] = impacts[d]
+    for _ in range(n_steps):
+        _tile_step(t, body, mass, inv_iso, normal, stiff, damp, mu, vmin, g, dt, v_rest,
+                   energy_scale_add)
+        for i in range(TILE):  # the rare large turn, exactly as the scalar kernel does it
+            if t[TURN * TILE + i] > 0.0:
+                for a in range(3):
+                    for c in range(3):
+                        qi[a, c] = t[(Q + 3 * a + c) * TILE + i]
+                _rotate(qi, t[W * TILE + i], t[(W + 1) * TILE + i], t[(W + 2) * TILE + i], dt)
+                for a in range(3):
+                    for c in range(3):
+                        t[(Q + 3 * a + c) * TILE + i] = qi[a, c]
+    for i in range(lanes):
+        d = first + i
+        for a in range(3):
+            x[d, a] = t[(X + a) * TILE + i]
+            u[d, a] = t[(U + a) * TILE + i]
+            ang[d, a] = t[(L + a) * TILE + i]
+            w[d, a] = t[(W + a) * TILE + i]
+            for c in range(3):
+                q[d, a, c] = t[(Q + 3 * a + c) * TILE + i]
+        done = int(t[STEP * TILE + i])
+        status[d] = RUNNING if t[ALIVE * TILE + i] > 0.0 else NONFINITE
+        unstable[d] = status[d] == NONFINITE
+        rest_time[d] = done * dt
+        steps[d] = done
+        max_pen[d] = t[PEN * TILE + i]
+        impacts[d] = int(t[HITS * TILE + i])
+        energy_rise[d] = max(energy_rise[d], (t[E_MAX * TILE + i] - t[E_START * TILE + i])
+                             / t[E_TOL * TILE + i])
+
+
+@njit(cache=True, parallel=True)
+def simulate_batch(x, u, ang, q, w, body, mass, inv_iso, normal, stiff, damp, mu, vmin, g, dt,
+                   n_steps, v_rest, energy_scale_add, status, unstable, rest_time, impacts,
+                   max_pen, energy_rise, steps):
+    """:func:`dice_env.kernel.simulate_batch` for a scene :func:`covers`, tiles in parallel.
+
+    The arguments are that function's (``inv_iso`` the inverse of the isotropic moment).
+    """
+    n = x.shape[0]
+    for tile in prange((n + TILE - 1) // TILE):
+        _run_tile(tile * TILE, min(n, (tile + 1) * TILE), x, u, ang, q, w, body, mass, inv_iso,
+                  normal, stiff, damp, mu, vmin, g, dt, n_steps, v_rest, energy_scale_add,
+                  status, unstable, rest_time, impacts, max_pen, energy_rise, steps)
