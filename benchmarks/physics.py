@@ -333,12 +333,16 @@ def mujoco_to_rest(scene: Scene, start: State, horizon: float) -> dict | None:
                         "throws_per_s_1thread": n / decided_elapsed}}
 
 
-def step_budget(scene: Scene, start: State, quick: bool) -> dict:
+def step_budget(scene: Scene, start: State, quick: bool, vector_rate: float) -> dict:
     """Where the steps of a throw go, and the cost floor they set for the explicit scheme.
 
     From a plain-stepped record of some throws: steps with every corner above the table (what
     free flight skips), steps in contact before the rest begins, and the hold. The floor is the
-    contact steps at the measured cost of a contact step (a die resting on the table).
+    contact steps at the measured cost of a contact step (a die resting on the table); the
+    vectorised floor puts them at the cost of a step of the vectorised paper kernel on one
+    thread (``vector_rate`` die-steps/s), the cheapest die-step measured here: the paper law's
+    corner work (one square root and one division a corner) without the default table's
+    stick-slip and midpoint work.
     """
     n = 8 if quick else 32
     t_max = min(scene.t_max, 1.5)  # the records take memory; most throws rest by 1 s
@@ -362,10 +366,14 @@ def step_budget(scene: Scene, start: State, quick: bool) -> dict:
                                          num_threads=1), 2)
     ns_contact = 1e9 * elapsed / (64 * steps)
     floor = float(np.mean(contact)) * ns_contact * 1e-9
+    vector_floor = float(np.mean(contact)) / vector_rate
     return {"throws": n, "mean_flight_steps": float(np.mean(flight)),
             "mean_contact_steps_before_rest": float(np.mean(contact)),
             "mean_hold_steps": float(np.mean(hold)), "ns_per_contact_step_1thread": ns_contact,
-            "floor_ms_per_throw": 1e3 * floor, "ceiling_throws_per_s_per_core": 1.0 / floor}
+            "floor_ms_per_throw": 1e3 * floor, "ceiling_throws_per_s_per_core": 1.0 / floor,
+            "ns_per_vectorised_paper_step_1thread": 1e9 / vector_rate,
+            "vectorised_floor_ms_per_throw": 1e3 * vector_floor,
+            "vectorised_ceiling_throws_per_s_2cores": 2.0 / vector_floor}
 
 
 def batch_scaling(scene: Scene, start: State, quick: bool) -> dict:
@@ -432,7 +440,8 @@ def main() -> None:
     for name, scene in scenes().items():
         rest, start = throws_to_rest(scene, args.quick)
         report["throws_to_rest"][name] = rest
-        rest["step_budget"] = step_budget(scene, start, args.quick)
+        rest["step_budget"] = step_budget(
+            scene, start, args.quick, report["paper_scene_die_steps_per_s"]["batch1024_threads1"])
         if name == "Scene()":
             report["throws_per_s_vs_batch_2threads"] = batch_scaling(scene, start, args.quick)
             report["cost_vs_simulated_time"] = time_scaling(scene, start, args.quick)
@@ -442,6 +451,9 @@ def main() -> None:
                 # each mode against MuJoCo run to the same end: rest, or the decided face
                 mj["ratios"] = {mode: _ratios(row, (mj["decided"] if mode == DECIDED else mj)[
                     "throws_per_s_1thread"]) for mode, row in rest["modes"].items()}
+                mj["vectorised_ceiling_vs_mujoco_per_core"] = (
+                    rest["step_budget"]["vectorised_ceiling_throws_per_s_2cores"]
+                    / (2 * mj["throws_per_s_1thread"]))
             rest["mujoco"] = mj
     report["machine"]["load_average_end"] = os.getloadavg()
     args.out.parent.mkdir(parents=True, exist_ok=True)
@@ -510,6 +522,10 @@ def format_report(r: dict) -> str:
                      f"{b['ns_per_contact_step_1thread']:.0f} ns, so the contact steps alone "
                      f"take about {b['floor_ms_per_throw']:.3f} ms: about "
                      f"{b['ceiling_throws_per_s_per_core']:.0f} throws/s per core at most")
+        lines.append(f"  at the vectorised paper step's cost "
+                     f"({b['ns_per_vectorised_paper_step_1thread']:.0f} ns) the contact steps "
+                     f"would still take {b['vectorised_floor_ms_per_throw']:.3f} ms: at most "
+                     f"{b['vectorised_ceiling_throws_per_s_2cores']:.0f} throws/s on 2 cores")
         mj = d.get("mujoco")
         if mj:
             ratio = mj["ratios"][FASTEST]
@@ -520,7 +536,8 @@ def format_report(r: dict) -> str:
                       f"faces {mj['face_counts']}",
                       f"  ours ({FASTEST}) / MuJoCo: 1 thread {ratio['batch_1thread']:.2f}x, "
                       f"2 threads vs 2 cores {ratio['batch_2threads_vs_2cores']:.2f}x, single "
-                      f"throws {ratio['single_throws']:.2f}x"]
+                      f"throws {ratio['single_throws']:.2f}x; the vectorised ceiling above / "
+                      f"MuJoCo: {mj['vectorised_ceiling_vs_mujoco_per_core']:.2f}x per core"]
             md, ratio = mj["decided"], mj["ratios"][DECIDED]
             lines += [f"  MuJoCo to the same decided-face rule: {md['throws_per_s_1thread']:.0f} "
                       f"throws/s on 1 thread, decided at {md['mean_time_s']:.3f} s, same face "

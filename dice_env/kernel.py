@@ -454,13 +454,14 @@ def _record(j, i, x0, x1, x2, u0, u1, u2, l0, l1, l2, qi, inv_body, inv_iso, bod
 
 
 @njit(cache=True, parallel=True)
-def simulate_batch(
-    x, u, ang, q, w, body, mass, inv_body, iso, inv_i_min, normal, stiff, damp, mu, vmin, stick,
-    kt, ct, g, dt, gated, rotation, flight, midpoint, n_steps, stop_at_rest, v_rest, hold_steps,
-    rest_energy, rest_excess, lock_energy, energy_scale_add, stride, rec_x, rec_e, rec_q,
-    rec_nodes, status, unstable, rest_time, impacts, max_pen, energy_rise, steps,
-):
+def simulate_batch(*args):
     """Advance a batch of dice in place, in parallel over dice.
+
+    ``args`` are those of :func:`_simulate_one` after the die's index:
+    ``x, u, ang, q, w, body, mass, inv_body, iso, inv_i_min, normal, stiff, damp, mu, vmin,
+    stick, kt, ct, g, dt, gated, rotation, flight, midpoint, n_steps, stop_at_rest, v_rest,
+    hold_steps, rest_energy, rest_excess, lock_energy, energy_scale_add, stride, rec_x, rec_e,
+    rec_q, rec_nodes, status, unstable, rest_time, impacts, max_pen, energy_rise, steps``.
 
     State (updated in place), batch size B: ``x`` (B, 3) centre of mass; ``u`` (B, 3) its
     velocity; ``ang`` (B, 3) angular momentum about it; ``q`` (B, 3, 3) body-to-world rotation;
@@ -484,32 +485,15 @@ def simulate_batch(
     (B, n or 0, 3, 3), ``rec_nodes`` (B, n or 0, 8, 3). Outputs per die: ``status``,
     ``unstable``, ``rest_time``, ``impacts``, ``max_pen``, ``energy_rise``, ``steps``.
     """
-    for i in prange(x.shape[0]):
-        _simulate_one(
-            i, x, u, ang, q, w, body, mass, inv_body, iso, inv_i_min, normal, stiff, damp, mu,
-            vmin, stick, kt, ct, g, dt, gated, rotation, flight, midpoint, n_steps, stop_at_rest,
-            v_rest, hold_steps, rest_energy, rest_excess, lock_energy, energy_scale_add, stride,
-            rec_x, rec_e, rec_q, rec_nodes, status, unstable, rest_time, impacts, max_pen,
-            energy_rise, steps,
-        )
+    for i in prange(args[0].shape[0]):
+        _simulate_one(i, *args)
 
 
 @njit(cache=True)
-def simulate_serial(
-    x, u, ang, q, w, body, mass, inv_body, iso, inv_i_min, normal, stiff, damp, mu, vmin, stick,
-    kt, ct, g, dt, gated, rotation, flight, midpoint, n_steps, stop_at_rest, v_rest, hold_steps,
-    rest_energy, rest_excess, lock_energy, energy_scale_add, stride, rec_x, rec_e, rec_q,
-    rec_nodes, status, unstable, rest_time, impacts, max_pen, energy_rise, steps,
-):
+def simulate_serial(*args):
     """:func:`simulate_batch` on the calling thread, with the same results.
 
     Saves the start of a parallel region: for a single throw or one thread.
     """
-    for i in range(x.shape[0]):
-        _simulate_one(
-            i, x, u, ang, q, w, body, mass, inv_body, iso, inv_i_min, normal, stiff, damp, mu,
-            vmin, stick, kt, ct, g, dt, gated, rotation, flight, midpoint, n_steps, stop_at_rest,
-            v_rest, hold_steps, rest_energy, rest_excess, lock_energy, energy_scale_add, stride,
-            rec_x, rec_e, rec_q, rec_nodes, status, unstable, rest_time, impacts, max_pen,
-            energy_rise, steps,
-        )
+    for i in range(args[0].shape[0]):
+        _simulate_one(i, *args)
