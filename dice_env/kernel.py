@@ -117,21 +117,6 @@ def _inverse_world_inertia_times(
 
 
 @njit(cache=True, inline="always")
-def _fastest_corner(q: np.ndarray, body: np.ndarray, u0: float, u1: float, u2: float, w0: float,
-                    w1: float, w2: float) -> float:
-    """Largest squared corner speed ``|u + w x Q b_k|^2``."""
-    fastest = 0.0
-    for k in range(8):
-        b0, b1, b2 = body[k, 0], body[k, 1], body[k, 2]
-        r0 = q[0, 0] * b0 + q[0, 1] * b1 + q[0, 2] * b2
-        r1 = q[1, 0] * b0 + q[1, 1] * b1 + q[1, 2] * b2
-        r2 = q[2, 0] * b0 + q[2, 1] * b1 + q[2, 2] * b2
-        v0, v1, v2 = u0 + w1 * r2 - w2 * r1, u1 + w2 * r0 - w0 * r2, u2 + w0 * r1 - w1 * r0
-        fastest = max(fastest, v0 * v0 + v1 * v1 + v2 * v2)
-    return fastest
-
-
-@njit(cache=True, inline="always")
 def _face_up_index(q: np.ndarray, n0: float, n1: float, n2: float) -> int:
     """Index (0-5, the order of ``die.FACE_NORMALS``) of the face pointing most along ``n``."""
     up_x = q[0, 0] * n0 + q[1, 0] * n1 + q[2, 0] * n2  # n in the body frame, Q^T n
@@ -222,6 +207,7 @@ def _simulate_one(
     pen = max_pen[i]
     hits = impacts[i]
     step = 0
+    next_record = stride
     pu0, pu1, pu2 = u0, u1, u2  # velocities one step back, for the midpoint forces
     pw0, pw1, pw2 = w0, w1, w2
     heights = np.full(8, -1.0)  # corner heights entering the last step
@@ -239,6 +225,13 @@ def _simulate_one(
         touching = 0
         approach = 0.0
         lowest = np.inf
+        # kinetic energy of the state entering this step; near rest, the fastest corner
+        wl0, wl1, wl2 = _inverse_world_inertia_times(qi, inv_body, inv_iso, l0, l1, l2)
+        kinetic = 0.5 * mass * (u0 * u0 + u1 * u1 + u2 * u2) + 0.5 * (
+            l0 * wl0 + l1 * wl1 + l2 * wl2
+        )
+        near_rest = stop_at_rest and kinetic < kinetic_rest
+        fastest = 0.0  # largest squared corner speed |u + w x r_k|^2, when near_rest
         for k in range(8):
             b0, b1, b2 = body[k, 0], body[k, 1], body[k, 2]
             rk0 = qi[0, 0] * b0 + qi[0, 1] * b1 + qi[0, 2] * b2
@@ -251,10 +244,17 @@ def _simulate_one(
             if height >= 0.0:
                 tied[k] = False
                 if gated:
+                    if near_rest:
+                        v0 = u0 + w1 * rk2 - w2 * rk1
+                        v1 = u1 + w2 * rk0 - w0 * rk2
+                        v2 = u2 + w0 * rk1 - w1 * rk0
+                        fastest = max(fastest, v0 * v0 + v1 * v1 + v2 * v2)
                     continue
             uk0 = u0 + w1 * rk2 - w2 * rk1
             uk1 = u1 + w2 * rk0 - w0 * rk2
             uk2 = u2 + w0 * rk1 - w1 * rk0
+            if near_rest:
+                fastest = max(fastest, uk0 * uk0 + uk1 * uk1 + uk2 * uk2)
             dg = max(0.0, -height)
             un = n0 * uk0 + n1 * uk1 + n2 * uk2
             if height < 0.0:
@@ -328,10 +328,6 @@ def _simulate_one(
                 t1 += rk2 * fk0 - rk0 * fk2
                 t2 += rk0 * fk1 - rk1 * fk0
         # energy of the state entering this step: flags numerical energy gain
-        wl0, wl1, wl2 = _inverse_world_inertia_times(qi, inv_body, inv_iso, l0, l1, l2)
-        kinetic = 0.5 * mass * (u0 * u0 + u1 * u1 + u2 * u2) + 0.5 * (
-            l0 * wl0 + l1 * wl1 + l2 * wl2
-        )
         energy = kinetic + mass * g * x2 + spring
         if step == 1:
             e_start = energy
@@ -346,8 +342,7 @@ def _simulate_one(
             step -= 1
             break
         if stop_at_rest:
-            if (touching >= 3 and kinetic < kinetic_rest
-                    and _fastest_corner(qi, body, u0, u1, u2, w0, w1, w2) < v_rest * v_rest):
+            if touching >= 3 and near_rest and fastest < v_rest * v_rest:
                 quiet += 1
                 if quiet > hold_steps or energy - rest_energy < rest_excess:
                     rest_time[i] = (step - quiet) * dt
@@ -405,10 +400,13 @@ def _simulate_one(
         if rotation:
             w0, w1, w2 = _torque_free(qi, inv_body, inv_iso, l0, l1, l2, dt, jump)
         step += jump - 1
-        if step % stride == 0 and step // stride <= n_rec:
-            _record(step // stride - 1, i, x0, x1, x2, u0, u1, u2, l0, l1, l2, qi, inv_body,
-                    inv_iso, body, mass, g, rec_x, rec_e, rec_q, rec_nodes,
-                    record_e, record_q, record_nodes)
+        if step >= next_record:  # a multiple of the stride reached or jumped (no division
+            # in every step)
+            if step % stride == 0 and step // stride <= n_rec:
+                _record(step // stride - 1, i, x0, x1, x2, u0, u1, u2, l0, l1, l2, qi,
+                        inv_body, inv_iso, body, mass, g, rec_x, rec_e, rec_q, rec_nodes,
+                        record_e, record_q, record_nodes)
+            next_record = (step // stride + 1) * stride
     # a die that stopped early stays where it is for the rest of the record
     for j in range(step // stride, n_rec):
         _record(j, i, x0, x1, x2, u0, u1, u2, l0, l1, l2, qi, inv_body, inv_iso, body, mass, g,
