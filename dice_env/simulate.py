@@ -175,15 +175,18 @@ def simulate(
     stick = scene.friction_law == FrictionLaw.STICK_SLIP
     flight = free_flight and (gated or ground.damping == 0)
     lock = lock_energy(scene) if stop_when_decided else _NEVER
+    rest_energy, rest_excess = _rest_energy(scene, early_rest)
+    hold_steps = math.ceil(scene.rest.hold / dt)
     threads = numba.get_num_threads()
     numba.set_num_threads(num_threads or numba.config.NUMBA_NUM_THREADS)
     try:
-        if vector_kernel.covers(scene, b, flight, stride <= n_steps, stop_at_rest, lock):
+        if vector_kernel.covers(scene, b, flight, stride <= n_steps):
             vector_kernel.simulate_batch(
                 out.position, out.velocity, out.angular_momentum, out.orientation,
                 out.angular_velocity, body, die.mass, 1.0 / iso, normal, ground.stiffness,
                 ground.damping, ground.friction, scene.friction_vmin, scene.gravity, dt, n_steps,
-                scene.rest.speed, die.mass * scene.gravity * die.edge,
+                stop_at_rest, scene.rest.speed, hold_steps, rest_energy, rest_excess, lock,
+                die.mass * scene.gravity * die.edge,
                 status, unstable, rest_time, impacts, max_pen, energy_rise, steps,
             )
         else:
@@ -194,8 +197,8 @@ def simulate(
                 ground.stiffness, ground.damping, ground.friction, scene.friction_vmin, stick,
                 ground.tangential * ground.stiffness, ground.tangential * ground.damping,
                 scene.gravity, dt, gated, scene.rotation, flight, scene.scheme == Scheme.MIDPOINT,
-                n_steps, stop_at_rest, scene.rest.speed, math.ceil(scene.rest.hold / dt),
-                *_rest_energy(scene, early_rest), lock, die.mass * scene.gravity * die.edge,
+                n_steps, stop_at_rest, scene.rest.speed, hold_steps, rest_energy, rest_excess,
+                lock, die.mass * scene.gravity * die.edge,
                 stride, rec["x_cm"], rec["energy"], rec["orientations"], rec["nodes"],
                 status, unstable, rest_time, impacts, max_pen, energy_rise, steps,
             )

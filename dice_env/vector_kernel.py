@@ -2,20 +2,21 @@
 
 Under the paper's contact law every corner does the same work at every step: the force
 ``max(0, S dg - D un)`` with the listing's friction ``-mu fn Ut/(|Ut| + vmin)`` is computed for
-all 8 corners whether they touch or not, and the die never jumps or stops early. With no
-branch that depends on the die, one pass of a loop over a tile of ``TILE`` dice does one step
-of every die in it, and LLVM turns that pass into SIMD code (4 or 8 dice per instruction).
+all 8 corners whether they touch or not, and the die never jumps. With no branch that depends
+on the die but its end, one pass of a loop over a tile of ``TILE`` dice does one step of every
+die in it, and LLVM turns that pass into SIMD code (4 dice per instruction with AVX2).
 
 The arithmetic is :func:`dice_env.kernel._simulate_one`'s, operation for operation in the same
 order (no fast-math: no reassociation, no fused multiply-add), so its results are
 bit-identical to that kernel's (``tests/test_vector_kernel.py`` checks it); what is a branch
-there is a select here. It serves the scenes :func:`covers` accepts (the paper's law and
-friction, listing step, isotropic die, no records, no stop at rest or decided face); every
-other scene runs in :mod:`dice_env.kernel`.
+there is a select here. It serves the runs :func:`covers` accepts (the paper's law and
+friction, listing step, isotropic die, no records, no free-flight jumps); every other run
+goes to :mod:`dice_env.kernel`.
 
-A die whose state stops being finite keeps its last finite state and step count, as in the
-scalar kernel; a turn above 1/64 rad in one step (where ``R(w dt)`` needs ``sin``) is done
-for that die after the vector pass by :func:`dice_env.kernel._rotate` itself.
+A die that ends (time limit, rest, decided face, or a state that stops being finite) keeps
+the state and step count it ended with, as in the scalar kernel, and its lane idles; a tile
+stops once all its dice have ended. A turn above 1/64 rad in one step (where ``R(w dt)``
+needs ``sin``) is done for that die after the vector pass by :func:`dice_env.kernel._rotate`.
 """
 
 from __future__ import annotations
@@ -25,28 +26,29 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from dice_env.kernel import NONFINITE, RUNNING, _rotate
+from dice_env.kernel import DECIDED, NONFINITE, RUNNING, SETTLED, _rotate
 from dice_env.scene import ContactLaw, FrictionLaw, Scene, Scheme
 
 TILE = 16  # dice per tile; a compile-time row stride, so LLVM can prove the lanes independent
 X, U, L, W, Q = 0, 3, 6, 9, 12  # centre, velocity, angular momentum, angular velocity, Q (9)
-STEP, ALIVE, E_START, E_TOL, E_MAX, WAS, PEN, HITS, TURN = 21, 22, 23, 24, 25, 26, 27, 28, 29
-ROWS = 30
+STEP, STATUS, E_START, E_TOL, E_MAX, WAS, PEN, HITS, TURN = 21, 22, 23, 24, 25, 26, 27, 28, 29
+QUIET, REST_T = 30, 31  # quiet steps so far; when the rest began
+ROWS = 32
+CHECK_EVERY = 64  # steps between checks whether every die of a tile has ended
 SERIES = 2.44140625e-4  # below this squared turn per step, R(w dt) from its series (as _rotate)
 
 
-def covers(scene: Scene, batch: int, flight: bool, records: bool, stop_at_rest: bool,
-           lock: np.ndarray) -> bool:
+def covers(scene: Scene, batch: int, flight: bool, records: bool) -> bool:
     """Whether a run of ``batch`` dice in ``scene`` takes this kernel (else the scalar one).
 
     The paper's contact law and friction with the listing's step, an isotropic die that
-    rotates, no free-flight jumps, records, stop at rest or decided face; and at least a tile
-    of dice (a tile costs the same for fewer).
+    rotates, no free-flight jumps and no records; and at least a tile of dice (a tile costs
+    the same for fewer).
     """
     return (scene.ground.contact_law == ContactLaw.PAPER
             and scene.friction_law == FrictionLaw.REGULARIZED and scene.scheme == Scheme.PAPER
             and scene.rotation and scene.die.is_isotropic and batch >= TILE and not flight
-            and not records and not stop_at_rest and bool(np.all(lock == -np.inf)))
+            and not records)
 
 
 @njit(cache=True, inline="always")
@@ -60,7 +62,7 @@ def _corner(q, x, w, u, b0, b1, b2, ground):
     """One corner's force and torque under the paper's law, without branches.
 
     Returns the force and torque it adds (zero unless it pushes), its spring energy, whether
-    it is below the plane, its approach speed and its sink.
+    it is below the plane, its approach speed, its sink and its squared speed.
     """
     q00, q01, q02, q10, q11, q12, q20, q21, q22 = q
     x0, x1, x2 = x
@@ -74,6 +76,7 @@ def _corner(q, x, w, u, b0, b1, b2, ground):
     uk0 = u0 + w1 * rk2 - w2 * rk1
     uk1 = u1 + w2 * rk0 - w0 * rk2
     uk2 = u2 + w0 * rk1 - w1 * rk0
+    speed2 = uk0 * uk0 + uk1 * uk1 + uk2 * uk2
     dg = _max(0.0, -height)
     un = n0 * uk0 + n1 * uk1 + n2 * uk2
     below = height < 0.0
@@ -94,14 +97,15 @@ def _corner(q, x, w, u, b0, b1, b2, ground):
     if not pushes:
         fk0, fk1, fk2 = 0.0, 0.0, 0.0
     return (pushes, fk0, fk1, fk2, rk1 * fk2 - rk2 * fk1, rk2 * fk0 - rk0 * fk2,
-            rk0 * fk1 - rk1 * fk0, spring, below, approach, dg)
+            rk0 * fk1 - rk1 * fk0, spring, below, approach, dg, speed2)
 
 
 @njit(cache=True, inline="always")
 def _add(acc, corner):
     """Add a corner's share to the step's sums, in the corners' order (as the kernel does)."""
-    f0, f1, f2, t0, t1, t2, spring, touching, approach, pen = acc
-    pushes, fk0, fk1, fk2, tk0, tk1, tk2, spring_k, below, approach_k, dg = corner
+    f0, f1, f2, t0, t1, t2, spring, touching, approach, pen, fastest = acc
+    pushes, fk0, fk1, fk2, tk0, tk1, tk2, spring_k, below, approach_k, dg, speed2 = corner
+    fastest = _max(fastest, speed2)
     if below:
         touching += 1
         spring += spring_k
@@ -114,18 +118,21 @@ def _add(acc, corner):
         t0 += tk0
         t1 += tk1
         t2 += tk2
-    return f0, f1, f2, t0, t1, t2, spring, touching, approach, pen
+    return f0, f1, f2, t0, t1, t2, spring, touching, approach, pen, fastest
 
 
 @njit(cache=True, error_model="numpy")
-def _tile_step(t, body, mass, inv_iso, normal, stiff, damp, mu, vmin, g, dt, v_rest,
-               energy_scale_add):
+def _tile_step(t, body, mass, inv_iso, normal, stiff, damp, mu, vmin, g, dt, stop_at_rest,
+               v_rest, hold_steps, rest_energy, rest_excess, lock, energy_scale_add):
     """One step of every die of the tile ``t`` (rows of ``TILE`` lanes), in place.
 
     Leaves in row ``TURN`` the squared turn of each die that the series could not take (else 0).
     """
     n0, n1, n2 = normal[0], normal[1], normal[2]
     dt_m = dt / mass
+    kinetic_rest = 0.5 * mass * v_rest * v_rest
+    lock0, lock1, lock2, lock3, lock4, lock5 = lock[0], lock[1], lock[2], lock[3], lock[4], lock[5]
+    lock_max = _max(_max(_max(lock0, lock1), _max(lock2, lock3)), _max(lock4, lock5))
     b0, b1 = (body[0, 0], body[0, 1], body[0, 2]), (body[1, 0], body[1, 1], body[1, 2])
     b2, b3 = (body[2, 0], body[2, 1], body[2, 2]), (body[3, 0], body[3, 1], body[3, 2])
     b4, b5 = (body[4, 0], body[4, 1], body[4, 2]), (body[5, 0], body[5, 1], body[5, 2])
@@ -141,7 +148,7 @@ def _tile_step(t, body, mass, inv_iso, normal, stiff, damp, mu, vmin, g, dt, v_r
         q = (t[Q * TILE + i], t[(Q + 1) * TILE + i], t[(Q + 2) * TILE + i],
              t[(Q + 3) * TILE + i], t[(Q + 4) * TILE + i], t[(Q + 5) * TILE + i],
              t[(Q + 6) * TILE + i], t[(Q + 7) * TILE + i], t[(Q + 8) * TILE + i])
-        acc = (0.0, 0.0, -mass * g, 0.0, 0.0, 0.0, 0.0, 0, 0.0, t[PEN * TILE + i])
+        acc = (0.0, 0.0, -mass * g, 0.0, 0.0, 0.0, 0.0, 0, 0.0, t[PEN * TILE + i], 0.0)
         acc = _add(acc, _corner(q, x, w, u, b0[0], b0[1], b0[2], ground))
         acc = _add(acc, _corner(q, x, w, u, b1[0], b1[1], b1[2], ground))
         acc = _add(acc, _corner(q, x, w, u, b2[0], b2[1], b2[2], ground))
@@ -150,8 +157,9 @@ def _tile_step(t, body, mass, inv_iso, normal, stiff, damp, mu, vmin, g, dt, v_r
         acc = _add(acc, _corner(q, x, w, u, b5[0], b5[1], b5[2], ground))
         acc = _add(acc, _corner(q, x, w, u, b6[0], b6[1], b6[2], ground))
         acc = _add(acc, _corner(q, x, w, u, b7[0], b7[1], b7[2], ground))
-        f0, f1, f2, t0, t1, t2, spring, touching, approach, pen = acc
-        alive = t[ALIVE * TILE + i] > 0.0
+        f0, f1, f2, t0, t1, t2, spring, touching, approach, pen, fastest = acc
+        status = t[STATUS * TILE + i]
+        alive = status == RUNNING
         step = t[STEP * TILE + i]
         # energy of the state entering this step
         kinetic = 0.5 * mass * (u0 * u0 + u1 * u1 + u2 * u2) + 0.5 * (
@@ -167,12 +175,40 @@ def _tile_step(t, body, mass, inv_iso, normal, stiff, damp, mu, vmin, g, dt, v_r
         hits = t[HITS * TILE + i]
         if alive and touching > 0 and not t[WAS * TILE + i] > 0.0 and approach > v_rest:
             hits += 1.0
+        # the decided face (the lock of the face up, in the order of die.FACE_NORMALS), then rest
+        up_x = q[0] * n0 + q[3] * n1 + q[6] * n2  # n in the body frame, Q^T n
+        up_y = q[1] * n0 + q[4] * n1 + q[7] * n2
+        up_z = q[2] * n0 + q[5] * n1 + q[8] * n2
+        best, face_lock = up_z, lock0
+        if up_x > best:
+            best, face_lock = up_x, lock1
+        if up_y > best:
+            best, face_lock = up_y, lock2
+        if -up_y > best:
+            best, face_lock = -up_y, lock3
+        if -up_x > best:
+            best, face_lock = -up_x, lock4
+        if -up_z > best:
+            best, face_lock = -up_z, lock5
+        end = RUNNING
+        quiet, rest_t = t[QUIET * TILE + i], t[REST_T * TILE + i]
+        if energy < lock_max and energy < face_lock:
+            end = DECIDED
+        elif stop_at_rest:
+            if touching >= 3 and kinetic < kinetic_rest and fastest < v_rest * v_rest:
+                quiet += 1.0
+                if quiet > hold_steps or energy - rest_energy < rest_excess:
+                    rest_t = (step + 1.0 - quiet) * dt
+                    end = SETTLED
+            else:
+                quiet = 0.0
         # 3.-4. centre of mass, then angular momentum, angular velocity and orientation
         nu0, nu1, nu2 = u0 + f0 * dt_m, u1 + f1 * dt_m, u2 + f2 * dt_m
         nx0, nx1, nx2 = x0 + dt * nu0, x1 + dt * nu1, x2 + dt * nu2
         nl0, nl1, nl2 = l0 + dt * t0, l1 + dt * t1, l2 + dt * t2
         total = nu0 + nu1 + nu2 + nx0 + nx1 + nx2 + nl0 + nl1 + nl2
-        moves = alive and total * 0.0 == 0.0  # finite (abs(x) < inf blocks vectorising)
+        finite = total * 0.0 == 0.0  # (abs(x) < inf would block vectorising)
+        moves = alive and end == RUNNING and finite
         nw0, nw1, nw2 = nl0 * inv_iso, nl1 * inv_iso, nl2 * inv_iso
         v0, v1, v2 = nw0 * dt, nw1 * dt, nw2 * dt
         turn = v0 * v0 + v1 * v1 + v2 * v2
@@ -200,7 +236,11 @@ def _tile_step(t, body, mass, inv_iso, normal, stiff, damp, mu, vmin, g, dt, v_r
             t[(Q + 3 + j) * TILE + i] = r10 * qa + r11 * qb + r12 * qc if rotates else qb
             t[(Q + 6 + j) * TILE + i] = r20 * qa + r21 * qb + r22 * qc if rotates else qc
         t[TURN * TILE + i] = turn if moves and turn >= SERIES else 0.0
-        t[ALIVE * TILE + i] = 1.0 if moves else 0.0
+        ends = end if end != RUNNING else (RUNNING if finite else NONFINITE)
+        t[STATUS * TILE + i] = ends if alive else status
+        if not alive:  # selects, not branches
+            quiet, rest_t = t[QUIET * TILE + i], t[REST_T * TILE + i]
+        t[QUIET * TILE + i], t[REST_T * TILE + i] = quiet, rest_t
         t[E_START * TILE + i], t[E_TOL * TILE + i], t[E_MAX * TILE + i] = e_start, e_tol, e_max
         t[HITS * TILE + i] = hits
         t[WAS * TILE + i] = 1.0 if touching > 0 else 0.0
@@ -208,8 +248,18 @@ def _tile_step(t, body, mass, inv_iso, normal, stiff, damp, mu, vmin, g, dt, v_r
 
 
 @njit(cache=True)
+def _all_ended(t: np.ndarray, lanes: int) -> bool:
+    """Whether every used lane of the tile has ended (time limit aside)."""
+    for i in range(lanes):
+        if t[STATUS * TILE + i] == RUNNING:
+            return False
+    return True
+
+
+@njit(cache=True)
 def _run_tile(first, last, x, u, ang, q, w, body, mass, inv_iso, normal, stiff, damp, mu, vmin,
-              g, dt, n_steps, v_rest, energy_scale_add, status, unstable, rest_time, impacts,
+              g, dt, n_steps, stop_at_rest, v_rest, hold_steps, rest_energy, rest_excess, lock,
+              energy_scale_add, status, unstable, rest_time, impacts,
               max_pen, energy_rise, steps):
     """Dice ``first`` to ``last - 1`` (at most ``TILE``) for ``n_steps`` steps, in place."""
     t = np.zeros(ROWS * TILE)
@@ -224,15 +274,16 @@ def _run_tile(first, last, x, u, ang, q, w, body, mass, inv_iso, normal, stiff, 
             t[(W + a) * TILE + i] = w[d, a]
             for c in range(3):
                 t[(Q + 3 * a + c) * TILE + i] = q[d, a, c]
-        t[ALIVE * TILE + i] = 1.0
         t[E_TOL * TILE + i] = 1.0
         t[E_MAX * TILE + i] = -np.inf
         t[WAS * TILE + i] = 1.0
         t[PEN * TILE + i] = max_pen[d]
         t[HITS * TILE + i] = impacts[d]
-    for _ in range(n_steps):
-        _tile_step(t, body, mass, inv_iso, normal, stiff, damp, mu, vmin, g, dt, v_rest,
-                   energy_scale_add)
+    for step in range(n_steps):
+        if step % CHECK_EVERY == 0 and _all_ended(t, lanes):
+            break
+        _tile_step(t, body, mass, inv_iso, normal, stiff, damp, mu, vmin, g, dt, stop_at_rest,
+                   v_rest, hold_steps, rest_energy, rest_excess, lock, energy_scale_add)
         for i in range(TILE):  # the rare large turn, exactly as the scalar kernel does it
             if t[TURN * TILE + i] > 0.0:
                 for a in range(3):
@@ -252,9 +303,9 @@ def _run_tile(first, last, x, u, ang, q, w, body, mass, inv_iso, normal, stiff, 
             for c in range(3):
                 q[d, a, c] = t[(Q + 3 * a + c) * TILE + i]
         done = int(t[STEP * TILE + i])
-        status[d] = RUNNING if t[ALIVE * TILE + i] > 0.0 else NONFINITE
+        status[d] = int(t[STATUS * TILE + i])
         unstable[d] = status[d] == NONFINITE
-        rest_time[d] = done * dt
+        rest_time[d] = t[REST_T * TILE + i] if status[d] == SETTLED else done * dt
         steps[d] = done
         max_pen[d] = t[PEN * TILE + i]
         impacts[d] = int(t[HITS * TILE + i])
@@ -264,7 +315,8 @@ def _run_tile(first, last, x, u, ang, q, w, body, mass, inv_iso, normal, stiff, 
 
 @njit(cache=True, parallel=True)
 def simulate_batch(x, u, ang, q, w, body, mass, inv_iso, normal, stiff, damp, mu, vmin, g, dt,
-                   n_steps, v_rest, energy_scale_add, status, unstable, rest_time, impacts,
+                   n_steps, stop_at_rest, v_rest, hold_steps, rest_energy, rest_excess, lock,
+                   energy_scale_add, status, unstable, rest_time, impacts,
                    max_pen, energy_rise, steps):
     """:func:`dice_env.kernel.simulate_batch` for a scene :func:`covers`, tiles in parallel.
 
@@ -273,5 +325,6 @@ def simulate_batch(x, u, ang, q, w, body, mass, inv_iso, normal, stiff, damp, mu
     n = x.shape[0]
     for tile in prange((n + TILE - 1) // TILE):
         _run_tile(tile * TILE, min(n, (tile + 1) * TILE), x, u, ang, q, w, body, mass, inv_iso,
-                  normal, stiff, damp, mu, vmin, g, dt, n_steps, v_rest, energy_scale_add,
+                  normal, stiff, damp, mu, vmin, g, dt, n_steps, stop_at_rest, v_rest,
+                  hold_steps, rest_energy, rest_excess, lock, energy_scale_add,
                   status, unstable, rest_time, impacts, max_pen, energy_rise, steps)

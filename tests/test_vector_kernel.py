@@ -4,8 +4,7 @@ import numpy as np
 import pytest
 from listing_transcription import real_throw_cube as listing_throw
 
-from dice_env import Scene, State, paper, simulate, vector_kernel
-from dice_env.simulate import _NEVER
+from dice_env import Die, Rest, Scene, State, paper, simulate, vector_kernel
 
 FIELDS = ("face", "settled", "decided", "rest_time", "impacts", "unstable", "energy_rise",
           "max_penetration", "steps")
@@ -39,23 +38,33 @@ def overflowing(n: int) -> State:
     return start
 
 
-@pytest.mark.parametrize(("scene", "start", "free_flight"), [
-    (paper.paper_scene(t_max=1.5), paper_throws(37), True),  # two full tiles and a part
-    (paper.paper_scene(t_max=1.5, normal=(0.2, -0.1, 1.0)), paper_throws(37), True),
-    (paper.paper_scene(t_max=1.0, mu=0.0), paper_throws(37), True),
-    (paper.paper_scene(t_max=1.0, D=0.0), paper_throws(37), False),  # flight: scalar kernel
-    (paper.paper_scene(t_max=0.5), paper_throws(37, spin=300.0), True),  # turns > 1/64 rad
-    (paper.paper_scene(t_max=1.0), overflowing(37), True),
-], ids=["paper", "tilted", "frictionless", "undamped", "fast-spin", "overflow"])
-def test_bit_identical_to_the_scalar_kernel(scene, start, free_flight, monkeypatch):
-    kwargs = {"stop_at_rest": False, "record": (), "free_flight": free_flight}
-    assert vector_kernel.covers(scene, start.batch_size, False, False, False, _NEVER)
+SETTLING = paper.paper_scene(t_max=10.0).with_(rest=Rest(speed=0.2))  # most dice rest by 9 s
+PLAIN = {"stop_at_rest": False, "record": ()}
+
+
+@pytest.mark.parametrize(("scene", "start", "kwargs"), [
+    (paper.paper_scene(t_max=1.5), paper_throws(37), PLAIN),  # two full tiles and a part
+    (paper.paper_scene(t_max=1.5, normal=(0.2, -0.1, 1.0)), paper_throws(37), PLAIN),
+    (paper.paper_scene(t_max=1.0, mu=0.0), paper_throws(37), PLAIN),
+    (paper.paper_scene(t_max=1.0, D=0.0), paper_throws(37), {**PLAIN, "free_flight": False}),
+    (paper.paper_scene(t_max=0.5), paper_throws(37, spin=300.0), PLAIN),  # turns > 1/64 rad
+    (paper.paper_scene(t_max=1.0), overflowing(37), PLAIN),
+    (SETTLING, paper_throws(37), {}),
+    (SETTLING, paper_throws(37), {"early_rest": True}),
+    (paper.paper_scene(t_max=10.0), paper_throws(37), {"stop_when_decided": True}),
+], ids=["paper", "tilted", "frictionless", "undamped", "fast-spin", "overflow", "rest",
+        "early-rest", "decided"])
+def test_bit_identical_to_the_scalar_kernel(scene, start, kwargs, monkeypatch):
+    assert vector_kernel.covers(scene, start.batch_size, False, False)
     with np.errstate(over="ignore", invalid="ignore"):
         fast = simulate(scene, start, **kwargs)
         assert_identical(fast, scalar(scene, start, monkeypatch, **kwargs))
     if start.velocity[0, 0] > 1e300:
         assert fast.unstable.all() and len(set(fast.steps)) > 30  # each at its own step
         assert (fast.steps < scene.n_steps).all() and np.isfinite(fast.final.position).all()
+    if "stop_at_rest" not in kwargs:  # the dice end at their own steps, most of them early
+        ended = fast.decided if kwargs.get("stop_when_decided") else fast.settled
+        assert ended.mean() > 0.5 and len(set(fast.steps[ended])) == ended.sum()
 
 
 def test_same_results_for_any_thread_count_and_batch():
@@ -81,13 +90,11 @@ def test_a_batch_of_paper_throws_ends_where_the_listing_does():
 
 def test_other_scenes_and_runs_take_the_scalar_kernel():
     paper_scene = paper.paper_scene()
-    lock = np.zeros(6)
-    assert not vector_kernel.covers(Scene(), 64, False, False, False, _NEVER)
-    assert not vector_kernel.covers(paper_scene, vector_kernel.TILE - 1, False, False, False,
-                                    _NEVER)
-    assert not vector_kernel.covers(paper_scene, 64, True, False, False, _NEVER)
-    assert not vector_kernel.covers(paper_scene, 64, False, True, False, _NEVER)
-    assert not vector_kernel.covers(paper_scene, 64, False, False, True, _NEVER)
-    assert not vector_kernel.covers(paper_scene, 64, False, False, False, lock)
-    assert not vector_kernel.covers(paper.paper_scene(rotation=False), 64, False, False, False,
-                                    _NEVER)
+    assert vector_kernel.covers(paper_scene, vector_kernel.TILE, False, False)
+    assert not vector_kernel.covers(Scene(), 64, False, False)
+    assert not vector_kernel.covers(paper_scene, vector_kernel.TILE - 1, False, False)
+    assert not vector_kernel.covers(paper_scene, 64, True, False)  # free-flight jumps
+    assert not vector_kernel.covers(paper_scene, 64, False, True)  # records
+    assert not vector_kernel.covers(paper.paper_scene(rotation=False), 64, False, False)
+    loaded = paper_scene.with_(die=Die.loaded(face=6, fraction=0.2, edge=1.0, mass=1.0))
+    assert not vector_kernel.covers(loaded, 64, False, False)
