@@ -122,11 +122,30 @@ def _add(acc, corner):
 
 
 @njit(cache=True, error_model="numpy")
-def _tile_step(t, body, mass, inv_iso, normal, stiff, damp, mu, vmin, g, dt, stop_at_rest,
-               v_rest, hold_steps, rest_energy, rest_excess, lock, energy_scale_add):
+def _tile_step_plain(t, body, mass, inv_iso, normal, stiff, damp, mu, vmin, g, dt, stop_at_rest,
+                     v_rest, hold_steps, rest_energy, rest_excess, lock, energy_scale_add):
+    """:func:`_step` for dice that run to the time limit: no rest test or decided face."""
+    _step(t, body, mass, inv_iso, normal, stiff, damp, mu, vmin, g, dt, stop_at_rest, v_rest,
+          hold_steps, rest_energy, rest_excess, lock, energy_scale_add, False)
+
+
+@njit(cache=True, error_model="numpy")
+def _tile_step_ending(t, body, mass, inv_iso, normal, stiff, damp, mu, vmin, g, dt,
+                      stop_at_rest, v_rest, hold_steps, rest_energy, rest_excess, lock,
+                      energy_scale_add):
+    """:func:`_step` for dice that may end at rest or at a decided face."""
+    _step(t, body, mass, inv_iso, normal, stiff, damp, mu, vmin, g, dt, stop_at_rest, v_rest,
+          hold_steps, rest_energy, rest_excess, lock, energy_scale_add, True)
+
+
+@njit(cache=True, inline="always")
+def _step(t, body, mass, inv_iso, normal, stiff, damp, mu, vmin, g, dt, stop_at_rest, v_rest,
+          hold_steps, rest_energy, rest_excess, lock, energy_scale_add, ends):
     """One step of every die of the tile ``t`` (rows of ``TILE`` lanes), in place.
 
-    Leaves in row ``TURN`` the squared turn of each die that the series could not take (else 0).
+    ``ends`` (a constant in each of the two compiled copies, so its work costs nothing when
+    False) enables the rest test and the decided face. Leaves in row ``TURN`` the squared
+    turn of each die that the series could not take (else 0).
     """
     n0, n1, n2 = normal[0], normal[1], normal[2]
     dt_m = dt / mass
@@ -175,33 +194,34 @@ def _tile_step(t, body, mass, inv_iso, normal, stiff, damp, mu, vmin, g, dt, sto
         hits = t[HITS * TILE + i]
         if alive and touching > 0 and not t[WAS * TILE + i] > 0.0 and approach > v_rest:
             hits += 1.0
-        # the decided face (the lock of the face up, in the order of die.FACE_NORMALS), then rest
-        up_x = q[0] * n0 + q[3] * n1 + q[6] * n2  # n in the body frame, Q^T n
-        up_y = q[1] * n0 + q[4] * n1 + q[7] * n2
-        up_z = q[2] * n0 + q[5] * n1 + q[8] * n2
-        best, face_lock = up_z, lock0
-        if up_x > best:
-            best, face_lock = up_x, lock1
-        if up_y > best:
-            best, face_lock = up_y, lock2
-        if -up_y > best:
-            best, face_lock = -up_y, lock3
-        if -up_x > best:
-            best, face_lock = -up_x, lock4
-        if -up_z > best:
-            best, face_lock = -up_z, lock5
         end = RUNNING
         quiet, rest_t = t[QUIET * TILE + i], t[REST_T * TILE + i]
-        if energy < lock_max and energy < face_lock:
-            end = DECIDED
-        elif stop_at_rest:
-            if touching >= 3 and kinetic < kinetic_rest and fastest < v_rest * v_rest:
-                quiet += 1.0
-                if quiet > hold_steps or energy - rest_energy < rest_excess:
-                    rest_t = (step + 1.0 - quiet) * dt
-                    end = SETTLED
-            else:
-                quiet = 0.0
+        if ends:
+            # the decided face (the lock of the face up, in the order of die.FACE_NORMALS)
+            up_x = q[0] * n0 + q[3] * n1 + q[6] * n2  # n in the body frame, Q^T n
+            up_y = q[1] * n0 + q[4] * n1 + q[7] * n2
+            up_z = q[2] * n0 + q[5] * n1 + q[8] * n2
+            best, face_lock = up_z, lock0
+            if up_x > best:
+                best, face_lock = up_x, lock1
+            if up_y > best:
+                best, face_lock = up_y, lock2
+            if -up_y > best:
+                best, face_lock = -up_y, lock3
+            if -up_x > best:
+                best, face_lock = -up_x, lock4
+            if -up_z > best:
+                best, face_lock = -up_z, lock5
+            if energy < lock_max and energy < face_lock:
+                end = DECIDED
+            elif stop_at_rest:
+                if touching >= 3 and kinetic < kinetic_rest and fastest < v_rest * v_rest:
+                    quiet += 1.0
+                    if quiet > hold_steps or energy - rest_energy < rest_excess:
+                        rest_t = (step + 1.0 - quiet) * dt
+                        end = SETTLED
+                else:
+                    quiet = 0.0
         # 3.-4. centre of mass, then angular momentum, angular velocity and orientation
         nu0, nu1, nu2 = u0 + f0 * dt_m, u1 + f1 * dt_m, u2 + f2 * dt_m
         nx0, nx1, nx2 = x0 + dt * nu0, x1 + dt * nu1, x2 + dt * nu2
@@ -236,8 +256,8 @@ def _tile_step(t, body, mass, inv_iso, normal, stiff, damp, mu, vmin, g, dt, sto
             t[(Q + 3 + j) * TILE + i] = r10 * qa + r11 * qb + r12 * qc if rotates else qb
             t[(Q + 6 + j) * TILE + i] = r20 * qa + r21 * qb + r22 * qc if rotates else qc
         t[TURN * TILE + i] = turn if moves and turn >= SERIES else 0.0
-        ends = end if end != RUNNING else (RUNNING if finite else NONFINITE)
-        t[STATUS * TILE + i] = ends if alive else status
+        ended = end if end != RUNNING else (RUNNING if finite else NONFINITE)
+        t[STATUS * TILE + i] = ended if alive else status
         if not alive:  # selects, not branches
             quiet, rest_t = t[QUIET * TILE + i], t[REST_T * TILE + i]
         t[QUIET * TILE + i], t[REST_T * TILE + i] = quiet, rest_t
@@ -279,11 +299,18 @@ def _run_tile(first, last, x, u, ang, q, w, body, mass, inv_iso, normal, stiff, 
         t[WAS * TILE + i] = 1.0
         t[PEN * TILE + i] = max_pen[d]
         t[HITS * TILE + i] = impacts[d]
+    ends = stop_at_rest or lock.max() > -np.inf
     for step in range(n_steps):
         if step % CHECK_EVERY == 0 and _all_ended(t, lanes):
             break
-        _tile_step(t, body, mass, inv_iso, normal, stiff, damp, mu, vmin, g, dt, stop_at_rest,
-                   v_rest, hold_steps, rest_energy, rest_excess, lock, energy_scale_add)
+        if ends:
+            _tile_step_ending(t, body, mass, inv_iso, normal, stiff, damp, mu, vmin, g, dt,
+                              stop_at_rest, v_rest, hold_steps, rest_energy, rest_excess, lock,
+                              energy_scale_add)
+        else:
+            _tile_step_plain(t, body, mass, inv_iso, normal, stiff, damp, mu, vmin, g, dt,
+                             stop_at_rest, v_rest, hold_steps, rest_energy, rest_excess, lock,
+                             energy_scale_add)
         for i in range(TILE):  # the rare large turn, exactly as the scalar kernel does it
             if t[TURN * TILE + i] > 0.0:
                 for a in range(3):
