@@ -103,17 +103,6 @@ def subset(state: State, rows: slice) -> State:
     return State(*(a[rows] for a in state._arrays()))
 
 
-@contextlib.contextmanager
-def scalar_kernel_only():
-    """Run every scene in :mod:`dice_env.kernel`, not the paper scene's vectorised kernel."""
-    covers = vector_kernel.covers
-    vector_kernel.covers = lambda *args: False
-    try:
-        yield
-    finally:
-        vector_kernel.covers = covers
-
-
 def kernel_speed(quick: bool) -> dict:
     """Die-steps/s in the paper scene, and the numpy listing on the same throw.
 
@@ -126,7 +115,7 @@ def kernel_speed(quick: bool) -> dict:
     for batch, threads, t_max, scalar in runs:
         scene = paper_scene(t_max=t_max)
         start = paper_throws(batch)
-        with scalar_kernel_only() if scalar else contextlib.nullcontext():
+        with vector_kernel.disabled() if scalar else contextlib.nullcontext():
             simulate(scene, start, t_max=1e-3, stop_at_rest=False, record=(),
                      num_threads=threads)  # load
             elapsed = best_time(lambda s=scene, st=start, th=threads: simulate(

@@ -62,6 +62,31 @@ from numba import njit, prange
 RUNNING, SETTLED, NONFINITE, DECIDED = 0, 1, 2, 3
 
 
+SERIES = 2.44140625e-4  # (1/64 rad)^2: below this squared turn, R's coefficients from series
+
+
+@njit(cache=True, inline="always")
+def _rotation_series(t2: float) -> tuple[float, float]:
+    """``a = sin(t)/t`` and ``b = (1 - cos t)/t^2`` from their series in ``t^2 < SERIES``.
+
+    First omitted terms below 1e-25: no square root, division or library call.
+    """
+    a = 1.0 - t2 * (1.0 / 6.0 - t2 * (1.0 / 120.0 - t2 * (1.0 / 5040.0 - t2 / 362880.0)))
+    b = 0.5 - t2 * (1.0 / 24.0 - t2 * (1.0 / 720.0 - t2 * (1.0 / 40320.0 - t2 / 3628800.0)))
+    return a, b
+
+
+@njit(cache=True, inline="always")
+def _rodrigues(v0: float, v1: float, v2: float, t2: float, a: float, b: float) -> tuple:
+    """The entries of ``R = (1 - b t^2) E + a [v]x + b v v^T``, row by row."""
+    d = 1.0 - b * t2
+    r00, r11, r22 = d + b * v0 * v0, d + b * v1 * v1, d + b * v2 * v2
+    r01, r10 = b * v0 * v1 - a * v2, b * v0 * v1 + a * v2
+    r02, r20 = b * v0 * v2 + a * v1, b * v0 * v2 - a * v1
+    r12, r21 = b * v1 * v2 - a * v0, b * v1 * v2 + a * v0
+    return r00, r01, r02, r10, r11, r12, r20, r21, r22
+
+
 @njit(cache=True, inline="always")
 def _rotate(q: np.ndarray, w0: float, w1: float, w2: float, dt: float) -> None:
     """Left-multiply the orientation ``q`` (3x3, in place) by the Rodrigues rotation R(w dt).
@@ -69,26 +94,20 @@ def _rotate(q: np.ndarray, w0: float, w1: float, w2: float, dt: float) -> None:
     With ``v = w dt`` and ``t = |v|``: ``R = (1 - b t^2) E + a [v]x + b v v^T``,
     ``a = sin(t)/t``, ``b = (1 - cos t)/t^2`` (the listing's ``P + cos(E - P) + sin [k]x``
     rearranged). Below 1/64 rad, a step's rotation as a rule, ``a`` and ``b`` come from their
-    series in ``t^2`` (first omitted terms below 1e-25): no square root, division or library
-    call. ``R = E`` exactly when ``w = 0``.
+    series (:func:`_rotation_series`). ``R = E`` exactly when ``w = 0``.
     """
     v0, v1, v2 = w0 * dt, w1 * dt, w2 * dt
     t2 = v0 * v0 + v1 * v1 + v2 * v2
     if t2 == 0.0:
         return
-    if t2 < 2.44140625e-4:
-        a = 1.0 - t2 * (1.0 / 6.0 - t2 * (1.0 / 120.0 - t2 * (1.0 / 5040.0 - t2 / 362880.0)))
-        b = 0.5 - t2 * (1.0 / 24.0 - t2 * (1.0 / 720.0 - t2 * (1.0 / 40320.0 - t2 / 3628800.0)))
+    if t2 < SERIES:
+        a, b = _rotation_series(t2)
     else:
         t = math.sqrt(t2)
         a = math.sin(t) / t
         half = math.sin(0.5 * t) / t
         b = 2.0 * half * half
-    d = 1.0 - b * t2
-    r00, r11, r22 = d + b * v0 * v0, d + b * v1 * v1, d + b * v2 * v2
-    r01, r10 = b * v0 * v1 - a * v2, b * v0 * v1 + a * v2
-    r02, r20 = b * v0 * v2 + a * v1, b * v0 * v2 - a * v1
-    r12, r21 = b * v1 * v2 - a * v0, b * v1 * v2 + a * v0
+    r00, r01, r02, r10, r11, r12, r20, r21, r22 = _rodrigues(v0, v1, v2, t2, a, b)
     for j in range(3):
         q0, q1, q2 = q[0, j], q[1, j], q[2, j]
         q[0, j] = r00 * q0 + r01 * q1 + r02 * q2
@@ -400,8 +419,7 @@ def _simulate_one(
         if rotation:
             w0, w1, w2 = _torque_free(qi, inv_body, inv_iso, l0, l1, l2, dt, jump)
         step += jump - 1
-        if step >= next_record:  # a multiple of the stride reached or jumped (no division
-            # in every step)
+        if step >= next_record:  # a multiple of the stride reached or jumped over
             if step % stride == 0 and step // stride <= n_rec:
                 _record(step // stride - 1, i, x0, x1, x2, u0, u1, u2, l0, l1, l2, qi,
                         inv_body, inv_iso, body, mass, g, rec_x, rec_e, rec_q, rec_nodes,

@@ -21,12 +21,23 @@ needs ``sin``) is done for that die after the vector pass by :func:`dice_env.ker
 
 from __future__ import annotations
 
+import contextlib
 import math
+from collections.abc import Iterator
 
 import numpy as np
 from numba import njit, prange
 
-from dice_env.kernel import DECIDED, NONFINITE, RUNNING, SETTLED, _rotate
+from dice_env.kernel import (
+    DECIDED,
+    NONFINITE,
+    RUNNING,
+    SERIES,
+    SETTLED,
+    _rodrigues,
+    _rotate,
+    _rotation_series,
+)
 from dice_env.scene import ContactLaw, FrictionLaw, Scene, Scheme
 
 TILE = 16  # dice per tile; a compile-time row stride, so LLVM can prove the lanes independent
@@ -35,7 +46,20 @@ STEP, STATUS, E_START, E_TOL, E_MAX, WAS, PEN, HITS, TURN = 21, 22, 23, 24, 25, 
 QUIET, REST_T = 30, 31  # quiet steps so far; when the rest began
 ROWS = 32
 CHECK_EVERY = 64  # steps between checks whether every die of a tile has ended
-SERIES = 2.44140625e-4  # below this squared turn per step, R(w dt) from its series (as _rotate)
+
+
+_enabled = True
+
+
+@contextlib.contextmanager
+def disabled() -> Iterator[None]:
+    """Within the block every run takes the scalar kernel (to compare the two)."""
+    global _enabled
+    was, _enabled = _enabled, False
+    try:
+        yield
+    finally:
+        _enabled = was
 
 
 def covers(scene: Scene, batch: int, flight: bool, records: bool) -> bool:
@@ -43,9 +67,9 @@ def covers(scene: Scene, batch: int, flight: bool, records: bool) -> bool:
 
     The paper's contact law and friction with the listing's step, an isotropic die that
     rotates, no free-flight jumps and no records; and at least a tile of dice (a tile costs
-    the same for fewer).
+    the same for fewer); not inside :func:`disabled`.
     """
-    return (scene.ground.contact_law == ContactLaw.PAPER
+    return (_enabled and scene.ground.contact_law == ContactLaw.PAPER
             and scene.friction_law == FrictionLaw.REGULARIZED and scene.scheme == Scheme.PAPER
             and scene.rotation and scene.die.is_isotropic and batch >= TILE and not flight
             and not records)
@@ -233,14 +257,8 @@ def _step(t, body, mass, inv_iso, normal, stiff, damp, mu, vmin, g, dt, stop_at_
         v0, v1, v2 = nw0 * dt, nw1 * dt, nw2 * dt
         turn = v0 * v0 + v1 * v1 + v2 * v2
         series = turn > 0.0 and turn < SERIES
-        s = turn
-        a = 1.0 - s * (1.0 / 6.0 - s * (1.0 / 120.0 - s * (1.0 / 5040.0 - s / 362880.0)))
-        c = 0.5 - s * (1.0 / 24.0 - s * (1.0 / 720.0 - s * (1.0 / 40320.0 - s / 3628800.0)))
-        d = 1.0 - c * s
-        r00, r11, r22 = d + c * v0 * v0, d + c * v1 * v1, d + c * v2 * v2
-        r01, r10 = c * v0 * v1 - a * v2, c * v0 * v1 + a * v2
-        r02, r20 = c * v0 * v2 + a * v1, c * v0 * v2 - a * v1
-        r12, r21 = c * v1 * v2 - a * v0, c * v1 * v2 + a * v0
+        a, c = _rotation_series(turn)
+        r00, r01, r02, r10, r11, r12, r20, r21, r22 = _rodrigues(v0, v1, v2, turn, a, c)
         if not moves:  # a die that is done keeps its state (selects, not branches)
             nx0, nx1, nx2, nu0, nu1, nu2, nl0, nl1, nl2 = x0, x1, x2, u0, u1, u2, l0, l1, l2
             nw0, nw1, nw2 = w
