@@ -233,17 +233,32 @@ _MJCF = """
 """
 
 
-def mujoco_to_rest(scene: Scene, start: State, horizon: float) -> dict | None:
-    """MuJoCo on the same die and throws: steps until the scene's rest rule holds, CPU time."""
+def mujoco_model(scene: Scene, dt: float = 0.002, contact: str = ""):
+    """MuJoCo's model of the scene's die on a plane: a free box on a plane.
+
+    ``contact`` (geom attributes such as ``solref``) is set on both geoms, so that MuJoCo's
+    mixing of the two geoms' parameters keeps it.
+    """
+    import mujoco
+
+    die = scene.die
+    xml = _MJCF.format(dt=dt, g=scene.gravity, mu=scene.ground.friction, h=die.half_edge,
+                       m=die.mass, i=die.inertia_body[0, 0])
+    return mujoco.MjModel.from_xml_string(xml.replace("<geom ", f"<geom {contact} "))
+
+
+def mujoco_to_rest(scene: Scene, start: State, horizon: float, model=None) -> dict | None:
+    """MuJoCo on the same die and throws: steps until the scene's rest rule holds, CPU time.
+
+    ``model`` defaults to :func:`mujoco_model` at MuJoCo's default step and contact.
+    """
     try:
         import mujoco
         from mujoco import rollout
     except ImportError:
         return None
     die = scene.die
-    model = mujoco.MjModel.from_xml_string(_MJCF.format(
-        dt=0.002, g=scene.gravity, mu=scene.ground.friction, h=die.half_edge, m=die.mass,
-        i=die.inertia_body[0, 0]))
+    model = mujoco_model(scene) if model is None else model
     data = mujoco.MjData(model)
     dt = model.opt.timestep
     inertia = die.inertia_body[0, 0]
@@ -268,8 +283,9 @@ def mujoco_to_rest(scene: Scene, start: State, horizon: float) -> dict | None:
     face = np.zeros(n, np.int64)
     decided_face = np.zeros(n, np.int64)
     lock = lock_energy(scene)
-    for chunk in range(0, n, 32):  # rest steps and faces from a rollout of each 32 throws
-        rows = slice(chunk, chunk + 32)
+    per_rollout = int(np.clip(2_000_000 // n_steps, 1, 32))  # about 1 GB of states
+    for chunk in range(0, n, per_rollout):  # rest steps and faces from rollouts of throws
+        rows = slice(chunk, chunk + per_rollout)
         states, _ = rollout.rollout(model, data, initial[rows], nstep=n_steps)
         vel, w_body = states[..., 8:11], states[..., 11:14]
         rot = quaternion_to_matrix(states[..., 4:8])
