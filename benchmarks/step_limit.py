@@ -1,6 +1,6 @@
 """What bounds the default scene's throws/s: the step its accuracy allows, and MuJoCo's contact.
 
-    python benchmarks/step_limit.py            # full run, about 10 minutes on 2 cores
+    python benchmarks/step_limit.py            # full run, about 6 minutes on 2 cores
     python benchmarks/step_limit.py --quick    # smaller sizes, a couple of minutes
 
 Prints two tables and writes ``benchmarks/results/step_limit.json`` (``--out`` to change).
