@@ -47,7 +47,7 @@ from dice_env.kernel import _rotate
 from dice_env.scene import Scene
 from dice_env.simulate import State, simulate
 from dice_env.studies.convergence import RELEASES, T_THROW
-from dice_env.table import measured_restitution
+from dice_env.table import measured_restitution, rebound
 
 FACTORS = (0.15, 0.3, 0.6, 1.2, 2.4, 4.8)
 # (theta, onset): backward Euler and trapezoid as briefed, then each with the onset impulse
@@ -314,11 +314,8 @@ def drop_restitution(scene: Scene, dt: float, theta: float, onset: bool = False,
     rec_z, rec_uz = np.zeros(n_steps), np.zeros(n_steps)
     _advance(x, u, q, w, *_constants(scene), dt, theta, onset, n_steps, False, 0.0, 0, rec_z,
              rec_uz)
-    left = np.flatnonzero((rec_z > height) & (rec_uz > 0))
-    if left.size == 0:
-        return math.nan
-    j = left[0]
-    return math.sqrt(rec_uz[j] ** 2 + 2.0 * g * (rec_z[j] - height)) / speed
+    e = rebound(rec_z, rec_uz, height, g, speed)
+    return math.nan if e is None else e
 
 
 def _warm_up(scene: Scene) -> None:

@@ -28,11 +28,11 @@ import os
 from pathlib import Path
 
 import numpy as np
-from physics import ROOT, best_time, hand_throws, mujoco_model, mujoco_to_rest
+from physics import ROOT, best_time, hand_throws, mujoco_model, mujoco_to_rest, timed
 
 from dice_env import Scene, State, simulate
 from dice_env.studies.convergence import RELEASES, face_agreement
-from dice_env.table import RESTITUTION, damping_ratio, measured_restitution
+from dice_env.table import RESTITUTION, damping_ratio, measured_restitution, rebound
 
 SAFETIES = (0.15, 0.3, 0.45, 0.6, 0.9)
 DROP_SPEEDS = (0.3, 1.0)
@@ -55,9 +55,8 @@ def step_sweep(quick: bool) -> list[dict]:
     for safety in SAFETIES:
         at = scene.with_(dt=safety * scene.critical_dt)
         agree = face_agreement(at, gentle)
-        timing = best_time(lambda s=at: simulate(s, throws, early_rest=True, num_threads=2),
-                           1 if quick else 2, threads=2)
-        result = simulate(at, throws, early_rest=True, num_threads=2)
+        timing, result = timed(lambda s=at: simulate(s, throws, early_rest=True, num_threads=2),
+                               1 if quick else 2, threads=2)
         rows.append({
             "safety": safety, "dt_s": at.step,
             "gentle_agreement": float(agree["step"].mean()),
@@ -87,10 +86,9 @@ def mujoco_landing(model, scene: Scene, speed: float) -> dict:
         mujoco.mj_step(model, data)
         z.append(data.qpos[2])
         vz.append(data.qvel[2])
-    z, vz = np.array(z), np.array(vz)
-    left = np.flatnonzero((z > h) & (vz > 0))
-    rebound = math.sqrt(vz[left[0]] ** 2 + 2 * g * (z[left[0]] - h)) if left.size else 0.0
-    return {"restitution": rebound / speed, "sink": float((h - z.min()) / scene.die.edge)}
+    z = np.array(z)
+    e = rebound(z, np.array(vz), h, g, speed)
+    return {"restitution": 0.0 if e is None else e, "sink": float((h - z.min()) / scene.die.edge)}
 
 
 def contact_comparison(quick: bool) -> dict | None:

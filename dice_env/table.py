@@ -153,10 +153,22 @@ def measured_restitution(scene: Scene, speed: float = 1.0) -> float:
     span += (speed - start) / g if g > 0 else gap / speed
     result = simulate(scene, state, t_max=span, stop_at_rest=False, record_every=1, record=())
     z = result.x_cm[0, :, 2]
-    vz = np.diff(z, prepend=height + gap) / scene.step
+    e = rebound(z, np.diff(z, prepend=height + gap) / scene.step, height, g, speed)
+    if e is None:
+        raise ValueError(f"the die did not leave the table within {span:.3g} s at speed {speed}")
+    return e
+
+
+def rebound(z: np.ndarray, vz: np.ndarray, height: float, gravity: float,
+            speed: float) -> float | None:
+    """Restitution from a landing's record of centre height ``z`` and vertical velocity ``vz``.
+
+    The upward speed when the centre first rises through its resting ``height`` again (the
+    gravity since the die left undone) over the landing ``speed``; None if it never does.
+    """
     left = np.flatnonzero((z > height) & (vz > 0))
     if left.size == 0:
-        raise ValueError(f"the die did not leave the table within {span:.3g} s at speed {speed}")
+        return None
     j = left[0]
-    return math.sqrt(vz[j] ** 2 + 2.0 * g * (z[j] - height)) / speed
+    return math.sqrt(vz[j] ** 2 + 2.0 * gravity * (z[j] - height)) / speed
 
