@@ -117,7 +117,8 @@ class Die:
         the rest of the mass stays a uniform solid cube. The heavy face tends to land down, so
         its opposite (``7 - face``) shows up more often.
         """
-        check_range("face", face, 1, 6)
+        if not isinstance(face, (int, np.integer)) or isinstance(face, bool) or not 1 <= face <= 6:
+            raise ValueError(f"face must be an int in [1, 6], got {face!r}")
         check_range("fraction", fraction, 0.0, 1.0, high_open=True)
         check_range("depth", depth, 0.0, 1.0, high_open=True)
         p = FACE_NORMALS[face - 1] * depth * edge / 2

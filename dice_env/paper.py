@@ -123,11 +123,15 @@ def _run(L0, rotation, r, total_mass, normal, S, D, mu, clockmax, tmax, x0, u0, 
     scene = paper_scene(r=r, total_mass=total_mass, normal=normal, S=S, D=D, mu=mu,
                         dt=tmax / clockmax, g=g, umin=umin, rotation=rotation,
                         contact_law=contact_law, allow_unstable=allow_unstable, t_max=tmax)
-    L0 = as_batch("L0", L0, (3,))
+    L0 = _vector("L0", L0)
+    position = _vector("x0", x0)
+    sink = float(scene.sink(position, np.eye(3)[None])[0])
+    if sink > 0.0:
+        raise ValueError(f"x0 must hold every corner above the ground, got {x0} with a corner "
+                         f"{sink:.4g} below it")
     state = State(
-        position=as_batch("x0", x0, (3,)), velocity=as_batch("u0", u0, (3,)),
-        angular_momentum=L0.copy(), orientation=np.eye(3)[None].copy(),
-        angular_velocity=np.zeros((1, 3)),
+        position=position, velocity=_vector("u0", u0), angular_momentum=L0.copy(),
+        orientation=np.eye(3)[None].copy(), angular_velocity=np.zeros((1, 3)),
     )
     record = ("energy", "nodes") if record_nodes else ("energy",)
     result = simulate(scene, state, stop_at_rest=False, record_every=1, record=record)
@@ -135,3 +139,11 @@ def _run(L0, rotation, r, total_mass, normal, S, D, mu, clockmax, tmax, x0, u0, 
         t=result.t, x_cm=result.x_cm[0], energy=result.energy[0],
         nodes=result.nodes[0] if record_nodes else None, L0=L0[0], result=result,
     )
+
+
+def _vector(name: str, value: object) -> np.ndarray:
+    """``value`` as a finite (1, 3) array: one vector (3,) of the listing, never a batch."""
+    array = np.asarray(value, dtype=np.float64)
+    if array.shape != (3,):
+        raise ValueError(f"{name} must be one vector of shape (3,), got shape {array.shape}")
+    return as_batch(name, array, (3,))

@@ -17,6 +17,21 @@ from dice_env import table
 from dice_env.die import FACE_NORMALS, Die
 from dice_env.validation import check_finite, check_nonnegative, check_positive, check_range
 
+MAX_STEPS = 10**9  # steps of one throw to t_max: more is refused (about a minute a die)
+
+
+def as_enum(name: str, kind: type[IntEnum], value: object) -> IntEnum:
+    """``value`` as a member of ``kind``: a member, its name (any case) or its int value."""
+    if isinstance(value, kind):
+        return value
+    if isinstance(value, str) and value.upper() in kind.__members__:
+        return kind[value.upper()]
+    if isinstance(value, (int, np.integer)) and not isinstance(value, bool) \
+            and value in kind._value2member_map_:
+        return kind(value)
+    names = ", ".join(repr(m.name.lower()) for m in kind)
+    raise ValueError(f"{name} must be a {kind.__name__} or one of {names}, got {value!r}")
+
 
 class ContactLaw(IntEnum):
     """How a corner feels the ground.
@@ -99,7 +114,8 @@ class Ground:
             raise ValueError(f"normal must point upward (n_z > 0) so the table holds the die, "
                              f"got {self.normal}")
         object.__setattr__(self, "normal", tuple(float(v) for v in normal / norm))
-        object.__setattr__(self, "contact_law", ContactLaw(self.contact_law))
+        object.__setattr__(self, "contact_law",
+                           as_enum("contact_law", ContactLaw, self.contact_law))
 
     @classmethod
     def tilted(cls, angle_deg: float, **kwargs: float) -> Ground:
@@ -138,8 +154,14 @@ class Scene:
     of the ``REGULARIZED`` law, added to the tangential speed before dividing: friction is
     Coulomb well above it and viscous below it. ``scheme``: see
     :class:`Scheme`. A throw is flagged unstable when its total energy (kinetic + potential +
-    ground springs) exceeds its start by more than ``energy_tol`` times ``KE0 + m*g*(h0 + edge)``,
-    ``h0`` the start height of the centre above the table.
+    normal ground springs) exceeds its start by more than ``energy_tol`` times
+    ``KE0 + m*g*(h0 + edge)``, ``h0`` the start height of the centre above the table. A throw
+    whose deepest corner sinks more than ``sink_limit`` times the edge into the table is
+    flagged ``sunk`` (the contact too soft for the load or the impact).
+
+    Checked when built: every field's type and range, and the run it implies: a step
+    that is finite, > 0 and at most ``t_max``, and at most :data:`MAX_STEPS` steps to
+    ``t_max`` (stiff, heavily damped or very light settings make the automatic step tiny).
     """
 
     die: Die = field(default_factory=Die)
@@ -155,12 +177,17 @@ class Scene:
     rest: Rest = field(default_factory=Rest)
     energy_tol: float = 0.1
     allow_unstable: bool = False
+    sink_limit: float = 0.25
 
     def __post_init__(self) -> None:
-        if not isinstance(self.die, Die):
-            raise ValueError(f"die must be a Die, got {type(self.die).__name__}")
-        if not isinstance(self.ground, Ground):
-            raise ValueError(f"ground must be a Ground, got {type(self.ground).__name__}")
+        for name, kind in (("die", Die), ("ground", Ground), ("rest", Rest)):
+            if not isinstance(getattr(self, name), kind):
+                raise TypeError(f"{name} must be a {kind.__name__}, "
+                                f"got {type(getattr(self, name)).__name__}")
+        for name in ("rotation", "allow_unstable"):
+            if not isinstance(getattr(self, name), (bool, np.bool_)):
+                raise TypeError(f"{name} must be a bool, got {getattr(self, name)!r}")
+        check_positive("sink_limit", self.sink_limit)
         check_nonnegative("gravity", self.gravity)
         check_range("safety", self.safety, 0.0, 1.0)
         if self.safety == 0:
@@ -168,8 +195,9 @@ class Scene:
         check_positive("t_max", self.t_max)
         check_positive("friction_vmin", self.friction_vmin)
         check_positive("energy_tol", self.energy_tol)
-        object.__setattr__(self, "scheme", Scheme(self.scheme))
-        object.__setattr__(self, "friction_law", FrictionLaw(self.friction_law))
+        object.__setattr__(self, "scheme", as_enum("scheme", Scheme, self.scheme))
+        object.__setattr__(self, "friction_law",
+                           as_enum("friction_law", FrictionLaw, self.friction_law))
         if self.dt is not None:
             check_positive("dt", self.dt)
             if self.dt > self.critical_dt and not self.allow_unstable:
@@ -179,6 +207,15 @@ class Scene:
                     f"mass {self.effective_mass:.6g}, got {self.dt:g}; pass allow_unstable=True "
                     "to run it anyway"
                 )
+        step = self.step
+        if not (math.isfinite(step) and 0.0 < step <= self.t_max):
+            raise ValueError(
+                f"the step must be in (0, t_max = {self.t_max:g}] s, got {step:.6g} s from "
+                f"dt={self.dt}, safety={self.safety:g} and the critical step for stiffness "
+                f"{self.ground.stiffness:g}, damping {self.ground.damping:g} and effective "
+                f"mass {self.effective_mass:.6g}"
+            )
+        self.steps_for(self.t_max)
 
     @cached_property
     def effective_mass(self) -> float:
@@ -225,9 +262,10 @@ class Scene:
         ``(w dt)^2 + 4 (D/m_eff) dt = 4``, i.e. ``dt < 2 (sqrt(D^2 + S m_eff) - D) / S``.
         """
         s, d, m = self.ground.stiffness, self.ground.damping, self.effective_mass
+        # the same roots rationalised, with no cancellation when D^2 >> S m_eff
         if self.scheme == Scheme.MIDPOINT:
-            return 2.0 * (math.sqrt(d * d + s * m) - d) / s
-        return (math.sqrt(d * d + 4.0 * s * m) - d) / s
+            return 2.0 * m / (math.sqrt(d * d + s * m) + d)
+        return 4.0 * m / (math.sqrt(d * d + 4.0 * s * m) + d)
 
     @property
     def step(self) -> float:
@@ -237,7 +275,29 @@ class Scene:
     @property
     def n_steps(self) -> int:
         """Number of steps to reach ``t_max``."""
-        return max(1, round(self.t_max / self.step))
+        return self.steps_for(self.t_max)
+
+    def steps_for(self, t_max: float) -> int:
+        """Number of steps to reach ``t_max`` (s), refused above :data:`MAX_STEPS`."""
+        check_positive("t_max", t_max)
+        count = t_max / self.step
+        if count > MAX_STEPS:
+            raise ValueError(
+                f"t_max / step must be <= {MAX_STEPS:.0e} steps, got {count:.3g} (t_max "
+                f"{t_max:g} s, step {self.step:.3g} s from stiffness {self.ground.stiffness:g}, "
+                f"damping {self.ground.damping:g}, mass {self.die.mass:g}, safety "
+                f"{self.safety:g}): shorten t_max or soften the contact"
+            )
+        return max(1, round(count))
+
+    def sink(self, position: np.ndarray, orientation: np.ndarray) -> np.ndarray:
+        """Depth (m) of the deepest corner below the table for each die, (B,); < 0 above it.
+
+        ``position`` (B, 3) centre of mass, ``orientation`` (B, 3, 3) body-to-world.
+        """
+        corners = position[:, None, :] + np.einsum("bij,kj->bki", orientation,
+                                                   self.die.corners_body)
+        return -(corners @ np.asarray(self.ground.normal)).min(axis=1)
 
     def with_(self, **changes: object) -> Scene:
         """A copy with some fields changed (validated again)."""

@@ -4,6 +4,9 @@ from __future__ import annotations
 
 import functools
 import math
+import os
+import threading
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numba
@@ -13,7 +16,7 @@ from dice_env import kernel, vector_kernel
 from dice_env.die import face_up
 from dice_env.rotations import orthonormality_error
 from dice_env.scene import ContactLaw, FrictionLaw, Scene, Scheme
-from dice_env.validation import as_batch, check_positive, check_range
+from dice_env.validation import as_batch, check_finite, check_range
 
 
 @dataclass
@@ -24,6 +27,9 @@ class State:
     (B, 3) about it; ``orientation`` (B, 3, 3) body-to-world rotation; ``angular_velocity``
     (B, 3), the ω used for corner velocities (``I_world^-1 L`` except where a paper script starts
     its corners without spin).
+
+    Checked when built: every array is converted to float64, has one batch size B >= 1 and
+    the shape above, is finite, and ``orientation`` holds rotations (to 1e-6).
     """
 
     position: np.ndarray
@@ -31,6 +37,26 @@ class State:
     angular_momentum: np.ndarray
     orientation: np.ndarray
     angular_velocity: np.ndarray
+
+    def __post_init__(self) -> None:
+        for name in ("position", "velocity", "angular_momentum", "angular_velocity",
+                     "orientation"):
+            tail = (3, 3) if name == "orientation" else (3,)
+            array = np.asarray(getattr(self, name), dtype=np.float64)
+            if array.ndim != len(tail) + 1 or array.shape[1:] != tail:
+                raise ValueError(f"State.{name} must have shape (B, {', '.join(map(str, tail))})"
+                                 f", got {array.shape}")
+            check_finite(f"State.{name}", array)
+            object.__setattr__(self, name, array)
+        sizes = {a.shape[0] for a in self._arrays()}
+        if len(sizes) > 1:
+            raise ValueError(f"State arrays must share one batch size B, got {sorted(sizes)}")
+        if self.batch_size == 0:
+            raise ValueError("State must hold at least one die (B >= 1), got B = 0")
+        error = orthonormality_error(self.orientation).max()
+        if error > ROTATION_TOL:
+            raise ValueError(f"State.orientation must be rotation matrices (R R^T = I, "
+                             f"det R = +1, to {ROTATION_TOL:g}), got an error of {error:.3g}")
 
     @classmethod
     def release(
@@ -45,6 +71,9 @@ class State:
 
         Each argument is (3,) or (B, 3) (orientation (3, 3) or (B, 3, 3)) and is broadcast to
         the batch; ``angular_velocity`` defaults to zero, ``orientation`` to the identity.
+        A die must start above the table or touching it: no corner deeper than
+        :data:`RELEASE_SINK` of the edge, or than the die's weight presses one corner in
+        (``m g / S``), whichever is more.
         """
         position = as_batch("position", position, (3,))
         velocity = as_batch("velocity", velocity, (3,))
@@ -55,9 +84,20 @@ class State:
             raise ValueError("orientation must be rotation matrices (R R^T = I, det R = +1, "
                              "to 1e-9)")
         size = _batch_size(position, velocity, spin, rot)
+        if size == 0:
+            raise ValueError("release arguments must hold at least one die, got a batch of 0")
         position, velocity, spin = (np.broadcast_to(a, (size, 3)) for a in (position, velocity,
                                                                                spin))
         rot = np.broadcast_to(rot, (size, 3, 3))
+        sink = scene.sink(position, rot)
+        pressed = max(RELEASE_SINK * scene.die.edge,
+                      scene.die.mass * scene.gravity / scene.ground.stiffness)
+        if sink.max() > pressed:
+            i = int(sink.argmax())
+            raise ValueError(f"position must hold every corner of the die above the table (or "
+                             f"touching it, pressed in by at most {pressed:.3g} m): die {i} "
+                             f"starts with a corner {sink[i]:.3g} m below it (centre "
+                             f"{position[i].tolist()})")
         world_inertia = rot @ scene.die.inertia_body @ rot.transpose(0, 2, 1)
         momentum = np.einsum("bij,bj->bi", world_inertia, spin)
         return cls(*(np.array(a) for a in (position, velocity, momentum, rot, spin)))
@@ -68,7 +108,7 @@ class State:
         return self.position.shape[0]
 
     def copy(self) -> State:
-        """An independent copy."""
+        """An independent copy (checked again, so changes made to this one are caught)."""
         return State(*(np.array(a) for a in self._arrays()))
 
     def _arrays(self) -> tuple[np.ndarray, ...]:
@@ -87,8 +127,10 @@ class Result:
     - ``impacts``: airborne-to-contact transitions;
     - ``unstable``: energy rose beyond the scene's tolerance, or the state stopped being finite;
       ``energy_rise``: the largest rise above the start in units of that tolerance;
-    - ``max_penetration``: deepest corner below the plane (m); ``steps``: steps taken;
-    - ``final``: the state at the end.
+    - ``max_penetration``: deepest corner below the plane (m); ``sunk``: deeper than the
+      scene's :attr:`~dice_env.scene.Scene.sink_limit` (a contact too soft for the load or the
+      impact: physics the model cannot represent; never count such a throw's face);
+    - ``steps``: steps taken; ``final``: the state at the end.
 
     With recording: ``t`` (n,), ``x_cm`` (B, n, 3), ``energy`` (B, n) as the listing computes
     it (kinetic + m g z, no ground springs), ``orientations`` (B, n, 3, 3), ``nodes``
@@ -103,6 +145,7 @@ class Result:
     unstable: np.ndarray
     energy_rise: np.ndarray
     max_penetration: np.ndarray
+    sunk: np.ndarray
     steps: np.ndarray
     final: State
     t: np.ndarray | None = None
@@ -129,8 +172,10 @@ def simulate(
 
     ``t_max`` overrides the scene's time limit. ``record_every`` > 0 stores the centre of mass
     every that many steps, plus what ``record`` names among "energy", "orientations", "nodes".
-    ``num_threads`` caps numba's threads for this call (default: all cores); a single throw or
-    one thread runs on the calling thread. ``free_flight`` takes the contact-free steps in
+    ``num_threads`` caps numba's threads for this call (1 to ``NUMBA_NUM_THREADS``; default:
+    all of them); a single throw or one thread runs on the calling thread, and so does every
+    run in a process forked after its parent ran threads (GNU OpenMP cannot be used across a
+    fork; :func:`_forked`). ``free_flight`` takes the contact-free steps in
     analytic jumps (gated law, or no damping, where the paper law is the same); False steps them
     one by one. ``early_rest`` ends a quiet die as soon as its energy proves it stays at rest
     (fair die on a horizontal table): the same outcome (face, rest time, impacts) without the
@@ -142,21 +187,44 @@ def simulate(
     horizontal table, fair or loaded die). Its face is the one it would rest on, at a fraction
     of the cost; the final state, rest time and impacts are those of that moment, and it is
     not ``settled``.
+
+    Refused before any work (``ValueError``/``TypeError`` naming the argument): a step count
+    above :data:`dice_env.scene.MAX_STEPS`, records above :data:`MAX_RECORD_BYTES`, a state
+    starting deeper in the table than the scene's sink limit. Ctrl-C ends a long run within
+    milliseconds and raises ``KeyboardInterrupt``.
     """
-    t_max = scene.t_max if t_max is None else t_max
-    check_positive("t_max", t_max)
-    unknown = set(record) - {"energy", "orientations", "nodes"}
-    if unknown:
-        raise ValueError(f"record must name only 'energy', 'orientations', 'nodes', "
-                         f"got {sorted(unknown)}")
-    if not isinstance(record_every, (int, np.integer)) or record_every < 0:
+    if not isinstance(scene, Scene):
+        raise TypeError(f"scene must be a Scene, got {type(scene).__name__}")
+    if not isinstance(state, State):
+        raise TypeError(f"state must be a State, got {type(state).__name__}")
+    record = _record_names(record)
+    if not isinstance(record_every, (int, np.integer)) or isinstance(record_every, bool) \
+            or record_every < 0:
         raise ValueError(f"record_every must be an int >= 0, got {record_every!r}")
+    threads = _thread_count(num_threads)
+    for name, flag in (("stop_at_rest", stop_at_rest), ("free_flight", free_flight),
+                       ("early_rest", early_rest), ("stop_when_decided", stop_when_decided)):
+        if not isinstance(flag, (bool, np.bool_)):
+            raise TypeError(f"{name} must be a bool, got {flag!r}")
     dt, body, inv_inertia, iso, inv_i_min, normal = _scene_constants(scene)
-    n_steps = max(1, round(t_max / dt))
+    n_steps = scene.steps_for(scene.t_max if t_max is None else t_max)
     out = state.copy()
     b = out.batch_size
+    start_sink = scene.sink(out.position, out.orientation)
+    if start_sink.max() > scene.sink_limit * scene.die.edge:
+        i = int(start_sink.argmax())
+        raise ValueError(f"state.position: die {i} starts with a corner {start_sink[i]:.3g} m "
+                         f"inside the table, deeper than the scene's sink limit "
+                         f"({scene.sink_limit:g} of the edge)")
     n_rec = n_steps // record_every if record_every else 0
     stride = record_every or n_steps + 1
+    sizes = {"x_cm": 3, "energy": 1, "orientations": 9, "nodes": 24}
+    floats = b * n_rec * (3 + sum(sizes[name] for name in record))
+    if floats * 8 > MAX_RECORD_BYTES:
+        raise ValueError(f"record_every={record_every} records {n_rec} states of {b} dice "
+                         f"({floats * 8 / 2**30:.3g} GiB), more than the limit of "
+                         f"{MAX_RECORD_BYTES / 2**30:g} GiB: record less often, fewer dice or "
+                         "a shorter t_max")
     rec = {
         "x_cm": np.zeros((b, n_rec, 3)),
         "energy": np.zeros((b, n_rec if "energy" in record else 0)),
@@ -167,7 +235,7 @@ def simulate(
     unstable = np.zeros(b, np.bool_)
     rest_time = np.zeros(b)
     impacts = np.zeros(b, np.int64)
-    max_pen = np.zeros(b)
+    max_pen = np.maximum(start_sink, 0.0)
     energy_rise = np.zeros(b)
     steps = np.zeros(b, np.int64)
     die, ground = scene.die, scene.ground
@@ -177,33 +245,31 @@ def simulate(
     lock = lock_energy(scene) if stop_when_decided else _NEVER
     rest_energy, rest_excess = _rest_energy(scene, early_rest)
     hold_steps = math.ceil(scene.rest.hold / dt)
-    threads = numba.get_num_threads()
-    numba.set_num_threads(num_threads or numba.config.NUMBA_NUM_THREADS)
-    try:
-        if vector_kernel.covers(scene, b, flight, stride <= n_steps):
-            vector_kernel.simulate_batch(
-                out.position, out.velocity, out.angular_momentum, out.orientation,
-                out.angular_velocity, body, die.mass, 1.0 / iso, normal, ground.stiffness,
-                ground.damping, ground.friction, scene.friction_vmin, scene.gravity, dt, n_steps,
-                stop_at_rest, scene.rest.speed, hold_steps, rest_energy, rest_excess, lock,
-                die.mass * scene.gravity * die.edge,
-                status, unstable, rest_time, impacts, max_pen, energy_rise, steps,
-            )
-        else:
-            serial = b == 1 or numba.get_num_threads() == 1
-            (kernel.simulate_serial if serial else kernel.simulate_batch)(
-                out.position, out.velocity, out.angular_momentum, out.orientation,
-                out.angular_velocity, body, die.mass, inv_inertia, iso, inv_i_min, normal,
-                ground.stiffness, ground.damping, ground.friction, scene.friction_vmin, stick,
-                ground.tangential * ground.stiffness, ground.tangential * ground.damping,
-                scene.gravity, dt, gated, scene.rotation, flight, scene.scheme == Scheme.MIDPOINT,
-                n_steps, stop_at_rest, scene.rest.speed, hold_steps, rest_energy, rest_excess,
-                lock, die.mass * scene.gravity * die.edge,
-                stride, rec["x_cm"], rec["energy"], rec["orientations"], rec["nodes"],
-                status, unstable, rest_time, impacts, max_pen, energy_rise, steps,
-            )
-    finally:
-        numba.set_num_threads(threads)
+    serial = b == 1 or threads == 1 or _after_fork
+    if vector_kernel.covers(scene, b, flight, stride <= n_steps):
+        run = vector_kernel.simulate_serial if serial else vector_kernel.simulate_batch
+        args = (
+            out.position, out.velocity, out.angular_momentum, out.orientation,
+            out.angular_velocity, body, die.mass, 1.0 / iso, normal, ground.stiffness,
+            ground.damping, ground.friction, scene.friction_vmin, scene.gravity, dt, n_steps,
+            stop_at_rest, scene.rest.speed, hold_steps, rest_energy, rest_excess, lock,
+            die.mass * scene.gravity * die.edge,
+            status, unstable, rest_time, impacts, max_pen, energy_rise, steps,
+        )
+    else:
+        run = kernel.simulate_serial if serial else kernel.simulate_batch
+        args = (
+            out.position, out.velocity, out.angular_momentum, out.orientation,
+            out.angular_velocity, body, die.mass, inv_inertia, iso, inv_i_min, normal,
+            ground.stiffness, ground.damping, ground.friction, scene.friction_vmin, stick,
+            ground.tangential * ground.stiffness, ground.tangential * ground.damping,
+            scene.gravity, dt, gated, scene.rotation, flight, scene.scheme == Scheme.MIDPOINT,
+            n_steps, stop_at_rest, scene.rest.speed, hold_steps, rest_energy, rest_excess,
+            lock, die.mass * scene.gravity * die.edge,
+            stride, rec["x_cm"], rec["energy"], rec["orientations"], rec["nodes"],
+            status, unstable, rest_time, impacts, max_pen, energy_rise, steps,
+        )
+    _run_interruptibly(run, args, threads, long=b * n_steps > _LONG_RUN)
     energy_rise /= scene.energy_tol
     unstable |= energy_rise > 1.0
     settled = status == kernel.SETTLED
@@ -215,8 +281,96 @@ def simulate(
         face=face_up(out.orientation, normal),
         settled=settled, decided=status == kernel.DECIDED, rest_time=rest_time,
         impacts=impacts, unstable=unstable, energy_rise=energy_rise, max_penetration=max_pen,
-        steps=steps, final=out, **recorded,
+        sunk=max_pen > scene.sink_limit * die.edge, steps=steps, final=out, **recorded,
     )
+
+
+RECORDS = ("energy", "orientations", "nodes")
+RELEASE_SINK = 1e-3  # deepest corner of a release, as a fraction of the edge
+MAX_RECORD_BYTES = 4 * 2**30  # records larger than this are refused before any work
+ROTATION_TOL = 1e-6  # State.orientation's allowed orthonormality error (a long run drifts)
+_LONG_RUN = 2_000_000  # die-steps (about 0.1 s) from which a run goes on a worker thread
+_after_fork = False  # set in a child forked after the parent's kernel started threads
+
+
+def _forked() -> None:
+    """In a forked child: GNU OpenMP's threads cannot be used again, so run serially."""
+    global _after_fork
+    try:
+        layer = numba.threading_layer()
+    except ValueError:  # the parent never started a parallel region: nothing to avoid
+        return
+    _after_fork = _after_fork or layer == "omp"
+
+
+os.register_at_fork(after_in_child=_forked)
+
+
+def _record_names(record: object) -> tuple[str, ...]:
+    """``record`` as a tuple of names from :data:`RECORDS` (a single name may be a string)."""
+    names = (record,) if isinstance(record, str) else record
+    if not isinstance(names, (tuple, list)) or not all(isinstance(n, str) for n in names):
+        raise TypeError(f"record must be a name or a tuple of names from {RECORDS}, "
+                        f"got {record!r}")
+    unknown = set(names) - set(RECORDS)
+    if unknown:
+        raise ValueError(f"record must name only {', '.join(map(repr, RECORDS))}, "
+                         f"got {sorted(unknown)}")
+    return tuple(names)
+
+
+def _thread_count(num_threads: int | None) -> int:
+    """The threads for a run: ``num_threads`` in 1..NUMBA_NUM_THREADS, None for all of them."""
+    most = numba.config.NUMBA_NUM_THREADS
+    if num_threads is None:
+        return most
+    if (not isinstance(num_threads, (int, np.integer)) or isinstance(num_threads, bool)
+            or not 1 <= num_threads <= most):
+        raise ValueError(f"num_threads must be an int in [1, {most}] (NUMBA_NUM_THREADS) or "
+                         f"None, got {num_threads!r}")
+    return int(num_threads)
+
+
+def _run_interruptibly(run: Callable, args: tuple, threads: int, *, long: bool) -> None:
+    """Call the kernel ``run(*args, abort)`` on ``threads`` threads, ending early on Ctrl-C.
+
+    A long run goes on a worker thread (the kernel releases the GIL) while this one waits
+    where Python can take a signal; on ``KeyboardInterrupt`` the kernel's abort flag ends
+    every die within a few thousand steps and the interrupt is raised again. A short run
+    is called directly (a thread costs about 0.1 ms).
+    """
+    abort = np.zeros(1, np.int64)
+
+    def call() -> None:
+        previous = numba.get_num_threads()  # per thread in numba
+        numba.set_num_threads(threads)
+        try:
+            run(*args, abort)
+        finally:
+            numba.set_num_threads(previous)
+
+    if not long:
+        call()
+        return
+    failure: list[BaseException] = []
+
+    def target() -> None:
+        try:
+            call()
+        except BaseException as error:  # raised again in the caller's thread
+            failure.append(error)
+
+    worker = threading.Thread(target=target, name="dice_env-kernel", daemon=True)
+    worker.start()
+    try:
+        while worker.is_alive():
+            worker.join(0.05)
+    except KeyboardInterrupt:
+        abort[0] = 1
+        worker.join()
+        raise
+    if failure:
+        raise failure[0]
 
 
 def _scene_constants(scene: Scene) -> tuple:

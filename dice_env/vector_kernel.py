@@ -29,6 +29,7 @@ import numpy as np
 from numba import njit, prange
 
 from dice_env.kernel import (
+    ABORTED,
     DECIDED,
     NONFINITE,
     RUNNING,
@@ -298,7 +299,7 @@ def _all_ended(t: np.ndarray, lanes: int) -> bool:
 def _run_tile(first, last, x, u, ang, q, w, body, mass, inv_iso, normal, stiff, damp, mu, vmin,
               g, dt, n_steps, stop_at_rest, v_rest, hold_steps, rest_energy, rest_excess, lock,
               energy_scale_add, status, unstable, rest_time, impacts,
-              max_pen, energy_rise, steps):
+              max_pen, energy_rise, steps, abort):
     """Dice ``first`` to ``last - 1`` (at most ``TILE``) for ``n_steps`` steps, in place."""
     t = np.zeros(ROWS * TILE)
     qi = np.empty((3, 3))
@@ -319,8 +320,14 @@ def _run_tile(first, last, x, u, ang, q, w, body, mass, inv_iso, normal, stiff, 
         t[HITS * TILE + i] = impacts[d]
     ends = stop_at_rest or lock.max() > -np.inf
     for step in range(n_steps):
-        if step % CHECK_EVERY == 0 and _all_ended(t, lanes):
-            break
+        if step % CHECK_EVERY == 0:
+            if abort[0] != 0:
+                for i in range(lanes):
+                    if t[STATUS * TILE + i] == RUNNING:
+                        t[STATUS * TILE + i] = ABORTED
+                break
+            if _all_ended(t, lanes):
+                break
         if ends:
             _tile_step_ending(t, body, mass, inv_iso, normal, stiff, damp, mu, vmin, g, dt,
                               stop_at_rest, v_rest, hold_steps, rest_energy, rest_excess, lock,
@@ -358,11 +365,11 @@ def _run_tile(first, last, x, u, ang, q, w, body, mass, inv_iso, normal, stiff, 
                              / t[E_TOL * TILE + i])
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True, parallel=True, nogil=True)
 def simulate_batch(x, u, ang, q, w, body, mass, inv_iso, normal, stiff, damp, mu, vmin, g, dt,
                    n_steps, stop_at_rest, v_rest, hold_steps, rest_energy, rest_excess, lock,
                    energy_scale_add, status, unstable, rest_time, impacts,
-                   max_pen, energy_rise, steps):
+                   max_pen, energy_rise, steps, abort):
     """:func:`dice_env.kernel.simulate_batch` for a scene :func:`covers`, tiles in parallel.
 
     The arguments are that function's (``inv_iso`` the inverse of the isotropic moment).
@@ -372,4 +379,12 @@ def simulate_batch(x, u, ang, q, w, body, mass, inv_iso, normal, stiff, damp, mu
         _run_tile(tile * TILE, min(n, (tile + 1) * TILE), x, u, ang, q, w, body, mass, inv_iso,
                   normal, stiff, damp, mu, vmin, g, dt, n_steps, stop_at_rest, v_rest,
                   hold_steps, rest_energy, rest_excess, lock, energy_scale_add,
-                  status, unstable, rest_time, impacts, max_pen, energy_rise, steps)
+                  status, unstable, rest_time, impacts, max_pen, energy_rise, steps, abort)
+
+
+@njit(cache=True, nogil=True)
+def simulate_serial(*args):
+    """:func:`simulate_batch` on the calling thread, with the same results."""
+    n = args[0].shape[0]
+    for tile in range((n + TILE - 1) // TILE):
+        _run_tile(tile * TILE, min(n, (tile + 1) * TILE), *args)

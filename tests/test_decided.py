@@ -27,7 +27,7 @@ def throws(scene: Scene, n: int, seed: int, height=(0.05, 0.15), speed=(0.5, 1.0
 CASES = {
     "default": (Scene(), {}),
     "vigorous": (Scene(), {"speed": (1.0, 2.0), "spin": (20.0, 60.0)}),
-    "gentle": (Scene(), {"height": (0.0085, 0.02), "speed": (0.0, 0.3), "spin": (0.0, 5.0)}),
+    "gentle": (Scene(), {"height": (0.014, 0.025), "speed": (0.0, 0.3), "spin": (0.0, 5.0)}),
     "loaded": (Scene(die=Die.loaded(face=6, fraction=0.3)), {}),
     "listing friction and step": (
         Scene(friction_law=FrictionLaw.REGULARIZED, scheme=Scheme.PAPER), {}),

@@ -145,7 +145,7 @@ def throw_batches(scene: Scene, state: State, bar, batch: int = BATCH) -> Result
         parts.append(simulate(scene, chunk, t_max=T_MAX))
         bar.update(chunk.batch_size)
     names = ("face", "settled", "decided", "rest_time", "impacts", "unstable", "energy_rise",
-             "max_penetration", "steps")
+             "max_penetration", "sunk", "steps")
     joined = {f: np.concatenate([getattr(p, f) for p in parts]) for f in names}
     final = State(*(np.concatenate([getattr(p.final, f.name) for p in parts])
                     for f in fields(State)))

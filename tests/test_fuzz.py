@@ -1,0 +1,127 @@
+"""Random keyword sets and random states: a result or a named refusal, nothing else."""
+
+import time
+
+import numpy as np
+
+from dice_env import Die, Ground, Scene, State, simulate
+from dice_env.rotations import random_rotations
+
+BUDGET = 30.0  # seconds of fuzzing per test, after compiling
+CASES = 300  # or this many cases, whichever comes first
+GROUND = {
+    "stiffness": [1e-3, 10.0, 1e3, 1e5, 1e8, 1e12, 1e30, 0.0, -1.0, np.nan, np.inf, "1e5"],
+    "damping": [0.0, 0.1, 6.0, 1e3, 1e15, -1.0, np.nan],
+    "friction": [0.0, 0.4, 2.0, 1e6, -0.1, np.inf],
+    "normal": [(0, 0, 1), (0.3, 0, 1), (0, 0, -1), (0, 0, 0), (1, 2), (np.nan, 0, 1)],
+    "contact_law": ["gated", "paper", 0, 1, 7, "sticky", None],
+}
+DIE = {
+    "edge": [1e-4, 0.016, 1.0, 0.0, -1.0, np.inf],
+    "mass": [1e-9, 1e-3, 0.0045, 10.0, 1e30, 0.0, np.nan],
+}
+SCENE = {
+    "gravity": [0.0, 9.81, 1e3, 1e6, -9.81, np.nan],
+    "safety": [1e-9, 0.05, 0.15, 0.9, 1.0, 1.5, 0.0],
+    "t_max": [1e-4, 0.05, 0.3, 1e30, 0.0, -1.0],
+    "dt": [None, None, 1e-6, 1e-3, 0.0, -1e-5],
+    "rotation": [True, False, "no", 1],
+    "friction_law": ["stick_slip", "regularized", 1, "coulomb"],
+    "scheme": ["midpoint", "paper", 2],
+    "energy_tol": [0.1, 1e-9, 0.0],
+    "sink_limit": [0.25, 1e-6, 0.0],
+    "allow_unstable": [False, True, "yes"],
+}
+NAMES = set(GROUND) | set(DIE) | set(SCENE) | {
+    "step", "t_max / step", "critical step", "State.", "position", "orientation",
+    "num_threads", "state", "sink limit", "t_max", "State",
+}
+
+
+def warm():
+    """Compile the kernels first, so the budget goes to the cases."""
+    scene = Scene()
+    for n in (1, 2):
+        simulate(scene, State.release(scene, np.tile([0, 0, 0.05], (n, 1)), [0, 0, 0]),
+                 t_max=0.01)
+
+
+def pick(rng, table):
+    return {k: v[rng.integers(len(v))] for k, v in table.items() if rng.random() < 0.15}
+
+
+def named(error):
+    return any(name in str(error) for name in NAMES)
+
+
+def check(result, scene):
+    final = np.concatenate([result.final.position, result.final.velocity,
+                            result.final.angular_momentum], axis=1)
+    finite = np.isfinite(final).all(axis=1)
+    assert (finite | result.unstable).all(), "a non-finite state not flagged unstable"
+    assert np.isin(result.face, np.arange(1, 7)).all()
+    deep = result.max_penetration > scene.sink_limit * scene.die.edge
+    assert (result.sunk == deep).all()
+    assert np.isfinite(result.rest_time).all() and (result.steps >= 0).all()
+
+
+def test_random_scenes_end_in_a_result_or_a_named_error():
+    rng = np.random.default_rng(2026)
+    warm()
+    end = time.monotonic() + BUDGET
+    outcomes = {"ran": 0, "refused": 0}
+    while time.monotonic() < end and sum(outcomes.values()) < CASES:
+        kwargs = pick(rng, DIE), pick(rng, GROUND), pick(rng, SCENE)
+        try:
+            scene = Scene(die=Die(**kwargs[0]), ground=Ground(**kwargs[1]), **kwargs[2])
+            n = int(rng.integers(1, 5))
+            state = State.release(scene, [0, 0, 0.05 * rng.uniform(1, 100)],
+                                  rng.normal(0, 2, (n, 3)), rng.normal(0, 50, (n, 3)),
+                                  random_rotations(rng, n))
+            result = simulate(scene, state, t_max=min(scene.t_max, 0.05),
+                              stop_when_decided=bool(rng.random() < 0.5))
+        except (ValueError, TypeError) as error:
+            assert named(error), f"unnamed refusal: {error} for {kwargs}"
+            outcomes["refused"] += 1
+            continue
+        check(result, scene)
+        outcomes["ran"] += 1
+    assert outcomes["ran"] > 10 and outcomes["refused"] > 10, outcomes
+
+
+def random_state(rng):
+    n = int(rng.integers(0, 4))
+    sizes = [n if rng.random() < 0.8 else int(rng.integers(0, 4)) for _ in range(5)]
+    arrays = [rng.normal(0, 1, (s, 3)) for s in sizes[:3]]
+    q = random_rotations(rng, sizes[3]) if rng.random() < 0.8 else rng.normal(0, 1,
+                                                                               (sizes[3], 3, 3))
+    arrays.insert(3, q)
+    arrays.append(rng.normal(0, 1, (sizes[4], 3)))
+    arrays[0][:, 2] = np.abs(arrays[0][:, 2]) * 0.05  # centres from 0 to about 0.1 m up
+    if rng.random() < 0.1 and arrays[1].size:
+        arrays[1][0, 0] = np.nan
+    if rng.random() < 0.2:
+        k = int(rng.integers(5))
+        arrays[k] = np.nan_to_num(arrays[k]).astype(int)
+    if rng.random() < 0.1:
+        arrays[2] = arrays[2][..., :2]
+    return arrays
+
+
+def test_random_states_end_in_a_result_or_a_named_error():
+    rng = np.random.default_rng(7)
+    scene = Scene()
+    warm()
+    end = time.monotonic() + BUDGET
+    outcomes = {"ran": 0, "refused": 0}
+    while time.monotonic() < end and sum(outcomes.values()) < CASES:
+        try:
+            state = State(*random_state(rng))
+            result = simulate(scene, state, t_max=0.05, num_threads=int(rng.integers(1, 3)))
+        except (ValueError, TypeError) as error:
+            assert named(error), f"unnamed refusal: {error}"
+            outcomes["refused"] += 1
+            continue
+        check(result, scene)
+        outcomes["ran"] += 1
+    assert outcomes["ran"] > 10 and outcomes["refused"] > 10, outcomes
