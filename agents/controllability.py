@@ -20,6 +20,7 @@ import numpy as np
 from agents.baselines import HandThrower, Thrower
 from agents.evaluate import Batch, clustered, wilson
 from agents.oracle import CEM, score, score_noise, search
+from dice_env.die import FACE_NORMALS
 from dice_env.envs.task import make_task
 
 HEIGHTS = (0.015, 0.02, 0.03, 0.05, 0.15)  # release height of the die's centre (m)
@@ -71,7 +72,8 @@ def plot(path: Path, maps: dict[str, np.ndarray], heights: tuple[float, ...],
 
     fig, axes = plt.subplots(1, len(maps), figsize=(4.0 * len(maps), 3.8), squeeze=False)
     for ax, (name, m) in zip(axes[0], maps.items(), strict=True):
-        ax.imshow(m[..., 0], vmin=1 / 6, vmax=1, cmap="magma", origin="lower", aspect="auto")
+        ax.imshow(m[..., 0], vmin=1 / len(FACE_NORMALS), vmax=1, cmap="magma", origin="lower",
+                  aspect="auto")
         for i in range(len(heights)):
             for j in range(len(noises)):
                 ax.text(j, i, f"{m[i, j, 0]:.2f}", ha="center", va="center", fontsize=8,
