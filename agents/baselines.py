@@ -1,7 +1,8 @@
 """Baseline throwers: a random one and a hand-written one, the bar a person could write.
 
-A thrower maps observations (n, 15) to actions (n, 6) in [-1, 1], like a trained policy's
-``predict``; see :class:`Thrower`.
+A thrower maps observations (n, faces + 9) to actions (n, 6) in [-1, 1], like a trained policy's
+``predict``; see :class:`Thrower`. Sizes come from the observations (the one-hot's length is the
+number of faces) and the task (the action size), never from fixed numbers.
 """
 
 from __future__ import annotations
@@ -13,40 +14,54 @@ from typing import Protocol
 import numpy as np
 
 from dice_env.die import FACE_NORMALS
-from dice_env.envs.task import ThrowTask
+from dice_env.envs.task import ACTION_DIM, ThrowTask
+
+ROTATION_DIM = 9  # the hand's orientation, a row-major 3x3 matrix, after the one-hot
 
 
 class Thrower(Protocol):
-    """Anything that throws: observations (n, 15) -> actions (n, 6) in [-1, 1]."""
+    """Anything that throws: observations (n, faces + 9) -> actions (n, 6) in [-1, 1]."""
 
     def __call__(self, observations: np.ndarray) -> np.ndarray:
         """Actions for a batch of observations."""
         ...
 
 
+def n_faces(observation_size: int) -> int:
+    """Faces of the die from the observation's size: the one-hot before the orientation."""
+    faces = observation_size - ROTATION_DIM
+    if faces < 1:
+        raise ValueError(f"observation size must exceed {ROTATION_DIM} (a one-hot target and a "
+                         f"3x3 orientation), got {observation_size}")
+    return faces
+
+
 def decode(observations: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Targets (n,) in 1–6 and hand orientations (n, 3, 3) from observations (n, 15).
+    """Targets (n,) from 1 and hand orientations (n, 3, 3) from observations (n, faces + 9).
 
     The float32 matrices are projected back onto rotations (nearest in Frobenius norm), so they
     can be thrown again with :meth:`ThrowTask.throw`.
     """
-    observations = np.asarray(observations, dtype=np.float64).reshape(-1, 15)
-    u, _, vt = np.linalg.svd(observations[:, 6:].reshape(-1, 3, 3))
-    return observations[:, :6].argmax(axis=1) + 1, u @ vt
+    observations = np.atleast_2d(np.asarray(observations, dtype=np.float64))
+    faces = n_faces(observations.shape[1])
+    u, _, vt = np.linalg.svd(observations[:, faces:].reshape(-1, 3, 3))
+    return observations[:, :faces].argmax(axis=1) + 1, u @ vt
 
 
 @dataclass
 class RandomThrower:
-    """Uniform actions in [-1, 1]: the chance level (about 1/6)."""
+    """Uniform actions in [-1, 1]^action_size: the chance level (about 1 / faces)."""
 
     seed: int = 0
+    action_size: int = ACTION_DIM
 
     def __post_init__(self) -> None:
         self.rng = np.random.default_rng(self.seed)
 
     def __call__(self, observations: np.ndarray) -> np.ndarray:
         """Uniform random actions, one per observation."""
-        return self.rng.uniform(-1.0, 1.0, (len(np.atleast_2d(observations)), 6))
+        return self.rng.uniform(-1.0, 1.0, (len(np.atleast_2d(observations)),
+                                            self.action_size))
 
 
 @dataclass(frozen=True)
@@ -75,7 +90,7 @@ class HandThrower:
         fallback = np.cross(up, [1.0, 0.0, 0.0] if abs(up[0]) < 0.9 else [0.0, 1.0, 0.0])
         axis = np.where(sine[:, None] > 1e-9, axis / np.maximum(sine, 1e-12)[:, None],
                         fallback / np.linalg.norm(fallback))
-        actions = np.zeros((len(targets), 6))
+        actions = np.zeros((len(targets), ACTION_DIM))
         actions[:, :3] = up * self.toss / self.task.max_speed
         spin = angle / (self.turn * self.flight_time())
         spin_actions = axis * spin[:, None] / self.task.max_spin

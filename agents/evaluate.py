@@ -1,10 +1,12 @@
 """Evaluate a trained run against baselines and the oracle, explain its strategy, write a report.
 
-    python -m agents.evaluate RUN_DIR [--throws 1000] [--oracle-observations 48]
+    python -m agents.evaluate RUN_DIR [--eval-throws 1000] [--oracle-observations 64]
 
-All throwers face the same observations and the same hand noise (common random numbers). Writes
-into RUN_DIR: ``report.md``, ``evaluation.json``, ``confusion.png``, ``strategy.png``,
-``outcomes.png``, ``robustness.png`` and a few ``throw_*.gif``.
+All throwers face the same observations and the same hand noise (common random numbers): on
+``eval_throws`` throws each, and with the oracle on its observations × ``ORACLE_SCORE_SAMPLES``
+fresh throws. Writes into RUN_DIR: ``report.md``, ``evaluation.json``, ``learning.png``,
+``turn.png``, ``strategy.png``, ``confusion.png``, ``outcomes.png``, ``robustness.png`` and a
+few ``throw_*.gif`` (failures first).
 """
 
 from __future__ import annotations
@@ -20,21 +22,25 @@ from typing import Any
 
 import numpy as np
 
-from agents.baselines import HandThrower, RandomThrower, Thrower, decode
+from agents.baselines import HandThrower, RandomThrower, Thrower, decode, n_faces
 from agents.config import Config, field_docs
-from agents.oracle import CEM, score, search
+from agents.oracle import CEM, score, score_noise, search
+from agents.progress import announce_compile, bar
 from dice_env.die import FACE_NORMALS
 from dice_env.envs.task import ThrowTask, make_task
 
 Z95 = 1.959964  # two-sided 95% normal quantile
 EPISODE_KEYWORDS = ("target_face", "orientation_mode")
 ORACLE_SCORE_SAMPLES = 16  # fresh noise draws per oracle observation
+CHUNK = 256  # throws per kernel call when the evaluation shows its progress
 ROBUSTNESS = {  # keyword: multiples of the trained value (1: as trained)
     "hand_noise": [0.0, 0.5, 1.0, 2.0, 4.0],
     "friction": [0.5, 1.0, 2.0],
     "damping": [0.5, 1.0, 2.0],
     "stiffness": [0.3, 1.0, 3.0],
 }
+# How far the target face must turn: its angle from the table normal in the hand (degrees).
+TURN_CLASSES = {"already up": (0.0, 45.0), "on a side": (45.0, 135.0), "down": (135.0, 180.0)}
 
 
 class PolicyThrower:
@@ -50,7 +56,7 @@ class PolicyThrower:
 
 @dataclass
 class Batch:
-    """``n`` episodes: targets (n,), hands (n, 3, 3), observations (n, 15), noise (n, 9)."""
+    """``n`` episodes: targets (n,), hands (n, 3, 3), observations (n, size), noise (n, d)."""
 
     targets: np.ndarray
     hands: np.ndarray
@@ -67,45 +73,82 @@ class Batch:
         hands = np.stack([h for _, h in pairs])
         return cls(targets, hands, task.observe(targets, hands), task.sample_noise(rng, n))
 
-    def throw(self, task: ThrowTask, thrower: Thrower) -> dict[str, np.ndarray]:
-        """The thrower's actions and the throws' info arrays."""
+    def throw(self, task: ThrowTask, thrower: Thrower,
+              progress: Callable[[int], None] | None = None) -> dict[str, np.ndarray]:
+        """The thrower's actions and the throws' info arrays (in chunks when ``progress``)."""
         actions = np.asarray(thrower(self.observations), np.float64)
-        info = task.throw(actions, self.targets, self.hands, self.noise).info
+        step = CHUNK if progress is not None else len(actions)
+        parts = []
+        for i in range(0, len(actions), step):
+            part = slice(i, i + step)
+            parts.append(task.throw(actions[part], self.targets[part], self.hands[part],
+                                    self.noise[part]).info)
+            if progress is not None:
+                progress(len(actions[part]))
+        info = {key: np.concatenate([p[key] for p in parts]) for key in parts[0]}
         return {"action": actions, **info}
 
 
-def wilson(successes: int, n: int) -> tuple[float, float]:
-    """95% Wilson score interval of a binomial proportion."""
-    if n == 0:
+def wilson(successes: float, n: float) -> tuple[float, float]:
+    """95% Wilson score interval of a binomial proportion (``n`` may be an effective size)."""
+    if n <= 0:
         return (0.0, 1.0)
     p = successes / n
     centre = (p + Z95**2 / (2 * n)) / (1 + Z95**2 / n)
     half = Z95 * math.sqrt(p * (1 - p) / n + Z95**2 / (4 * n * n)) / (1 + Z95**2 / n)
-    return (max(0.0, centre - half), min(1.0, centre + half))
+    # The interval holds p; rounding must not put an end a hair inside it.
+    return (max(0.0, min(p, centre - half)), min(1.0, max(p, centre + half)))
 
 
-def clustered(rates: np.ndarray) -> tuple[float, float]:
-    """95% normal interval of a mean over independent observations' success rates."""
-    if len(rates) < 2:
-        return (0.0, 1.0)
-    half = Z95 * float(np.std(rates, ddof=1)) / math.sqrt(len(rates))
-    mean = float(np.mean(rates))
-    return (max(0.0, mean - half), min(1.0, mean + half))
+def clustered(success: np.ndarray) -> tuple[float, float]:
+    """95% interval of the success rate of (n, k) throws: k throws of each of n observations.
+
+    Wilson's interval on the pooled throws, with their number divided by the design effect
+    (the variance of the observations' rates over the binomial variance, at least 1): throws of
+    one observation are not independent. It does not collapse when every throw scores the
+    same (all 1024 of 64 × 16 successes: [0.996, 1.000]); with one observation the k throws
+    count as one.
+    """
+    success = np.asarray(success, dtype=np.float64)
+    n, k = success.shape
+    p = float(success.mean())
+    binomial = p * (1 - p) / (n * k)
+    if n < 2:
+        effect = float(k)
+    elif binomial > 0:
+        effect = max(1.0, float(np.var(success.mean(axis=1), ddof=1)) / n / binomial)
+    else:
+        effect = 1.0
+    size = n * k / effect
+    return wilson(p * size, size)
 
 
-def summary(success: np.ndarray, targets: np.ndarray) -> dict[str, Any]:
+def summary(success: np.ndarray, targets: np.ndarray, faces: int) -> dict[str, Any]:
     """Success rate with its interval, overall and per target. ``success`` (n,) or (n, k).
 
-    With (n, k) (k throws per observation) the interval treats observations as the units.
+    With (n, k) (k throws per observation) the interval is :func:`clustered`.
     """
     def one(s: np.ndarray) -> dict[str, Any]:
         if s.ndim == 2:
-            return {"rate": float(s.mean()), "ci": clustered(s.mean(axis=1)), "n": int(s.size),
+            return {"rate": float(s.mean()), "ci": clustered(s), "n": int(s.size),
                     "observations": len(s)}
         return {"rate": float(s.mean()), "ci": wilson(int(s.sum()), s.size), "n": int(s.size)}
 
     return {**one(success), "per_target": {
-        int(f): one(success[targets == f]) for f in range(1, 7) if np.any(targets == f)}}
+        f: one(success[targets == f]) for f in range(1, faces + 1) if np.any(targets == f)}}
+
+
+def paired_difference(a: np.ndarray, b: np.ndarray) -> dict[str, Any]:
+    """Mean of ``a - b`` over the same throws (n,) or (n, k), with its 95% normal interval.
+
+    Rows are the independent units (throws, or observations with k throws each).
+    """
+    d = np.asarray(a, np.float64) - np.asarray(b, np.float64)
+    rows = d.reshape(len(d), -1).mean(axis=1)
+    mean = float(rows.mean())
+    half = Z95 * float(rows.std(ddof=1)) / math.sqrt(len(rows)) if len(rows) > 1 else 1.0
+    return {"diff": mean, "ci": (mean - half, mean + half),
+            "same": bool(np.all(d == 0))}
 
 
 def make_eval_task(config: Config, **overrides: Any) -> tuple[ThrowTask, dict[str, Any]]:
@@ -120,53 +163,63 @@ def make_eval_task(config: Config, **overrides: Any) -> tuple[ThrowTask, dict[st
 def compare(
     task: ThrowTask, throwers: dict[str, Thrower], throws: int, oracle_observations: int,
     seed: int, cem: CEM | None = None, episode: dict[str, Any] | None = None,
-    log: Callable[[str], None] = print,
+    progress: bool = False, log: Callable[[str], None] = print,
 ) -> dict[str, Any]:
-    """Every thrower on the same ``throws`` episodes, plus the oracle on the first few.
+    """Every thrower on the same ``throws`` episodes, and with the oracle on its observations.
 
-    Returns per thrower its summary and raw throws, the oracle's summary, and a paired
-    comparison of all throwers on the oracle's observations (same fresh-noise protocol).
+    Returns per thrower its summary and raw throws; with ``oracle_observations`` > 0 the oracle's
+    actions and ``common``: every thrower and the oracle scored on the same throws (the oracle's
+    observations × ``ORACLE_SCORE_SAMPLES`` fresh noise draws), their summaries and successes.
     """
     cem = CEM() if cem is None else cem
     rng = np.random.default_rng(seed)
     batch = Batch.sample(task, throws, rng, **(episode or {}))
-    out: dict[str, Any] = {"throws": {}, "summary": {}}
-    for name, thrower in throwers.items():
-        out["throws"][name] = batch.throw(task, thrower)
-        out["summary"][name] = summary(out["throws"][name]["is_success"], batch.targets)
+    faces = n_faces(batch.observations.shape[1])
+    out: dict[str, Any] = {"throws": {}, "summary": {}, "batch": batch}
+    with bar(throws * len(throwers), "evaluation", "throw", progress) as b:
+        for name, thrower in throwers.items():
+            out["throws"][name] = batch.throw(task, thrower, b.update)
+            out["summary"][name] = summary(out["throws"][name]["is_success"], batch.targets,
+                                           faces)
     if oracle_observations > 0:
         m = min(oracle_observations, throws)
         obs, targets = batch.observations[:m], batch.targets[:m]
-        log(f"oracle: searching {m} observations × {cem.throws_per_observation} throws")
+        starts = {name: out["throws"][name]["action"][:m] for name in throwers}
+        log(f"oracle: searching {m} observations, about "
+            f"{cem.throws_per_observation(len(starts) + 1)} throws each")
         start = time.perf_counter()
-        actions = search(task, obs, rng, cem)
-        paired = {"oracle": score(task, obs, actions, rng, ORACLE_SCORE_SAMPLES)}
+        with bar(m, "oracle search", "obs", progress) as b:
+            actions = search(task, obs, rng, cem, starts=starts, progress=b.update)
         out["oracle_seconds"] = time.perf_counter() - start
-        out["summary"]["oracle"] = summary(paired["oracle"], targets)
-        for name, thrower in throwers.items():
-            paired[name] = score(task, obs, np.asarray(thrower(obs), np.float64), rng,
-                                 ORACLE_SCORE_SAMPLES)
-        out["paired"] = {name: summary(s, targets) for name, s in paired.items()}
+        noise = score_noise(task, rng, m, ORACLE_SCORE_SAMPLES)
+        success = {name: score(task, obs, a, noise)
+                   for name, a in {**starts, "oracle": actions}.items()}
+        out["common"] = {name: summary(s, targets, faces) for name, s in success.items()}
+        out["common_success"] = success
         out["oracle_actions"] = actions
-    out["batch"] = batch
     return out
 
 
 def robustness(
-    config: Config, throwers: dict[str, Thrower], throws: int, seed: int
+    config: Config, throwers: dict[str, Thrower], throws: int, seed: int, progress: bool = False,
 ) -> dict[str, dict[str, list[dict[str, Any]]]]:
     """Success of each thrower when one keyword (noise, table) departs from the trained value."""
     sweeps: dict[str, dict[str, list[dict[str, Any]]]] = {}
+    if throws < 1:
+        return sweeps
     trained = trained_values(make_eval_task(config)[0])
-    for key, factors in ROBUSTNESS.items():
-        sweeps[key] = {name: [] for name in throwers}
-        for value in (factor * trained[key] for factor in factors):
-            task, episode = make_eval_task(config, **{key: value})
-            batch = Batch.sample(task, throws, np.random.default_rng(seed), **episode)
-            for name, thrower in throwers.items():
-                s = batch.throw(task, thrower)["is_success"]
-                sweeps[key][name].append({"value": value, "rate": float(s.mean()),
-                                          "ci": wilson(int(s.sum()), s.size)})
+    settings = sum(len(f) for f in ROBUSTNESS.values())
+    with bar(settings * len(throwers) * throws, "robustness", "throw", progress) as b:
+        for key, factors in ROBUSTNESS.items():
+            sweeps[key] = {name: [] for name in throwers}
+            for value in (factor * trained[key] for factor in factors):
+                task, episode = make_eval_task(config, **{key: value})
+                batch = Batch.sample(task, throws, np.random.default_rng(seed), **episode)
+                for name, thrower in throwers.items():
+                    s = batch.throw(task, thrower)["is_success"]
+                    b.update(throws)
+                    sweeps[key][name].append({"value": value, "rate": float(s.mean()),
+                                              "ci": wilson(int(s.sum()), s.size)})
     return sweeps
 
 
@@ -177,31 +230,115 @@ def trained_values(task: ThrowTask) -> dict[str, float]:
             "damping": ground.damping, "stiffness": ground.stiffness}
 
 
-def strategy(batch: Batch, throws: dict[str, np.ndarray], task: ThrowTask) -> dict[str, Any]:
-    """How a thrower uses the orientation: its spin against the geometric turn of the target.
-
-    ``tilt``: angle (rad) between the target's normal and the table normal at release;
-    ``axis_cosine``: cosine between the release spin axis and ``n_target x up`` (1: the spin
-    turns the target straight up); ``spin_tilt_corr``: correlation of spin magnitude and tilt.
-    """
-    targets, hands = decode(batch.observations)
+def tilt(observations: np.ndarray, task: ThrowTask) -> tuple[np.ndarray, np.ndarray]:
+    """The target's angle from the table normal in the hand (rad) and its normal (n, 3)."""
+    targets, hands = decode(observations)
     up = np.asarray(task.scene.ground.normal)
     normal = np.einsum("nij,nj->ni", hands, FACE_NORMALS[targets - 1])
-    tilt = np.arccos(np.clip(normal @ up, -1, 1))
+    return np.arccos(np.clip(normal @ up, -1, 1)), normal
+
+
+def turn_class(angle: np.ndarray) -> np.ndarray:
+    """Index into :data:`TURN_CLASSES` of each angle (rad)."""
+    edges = [high for _, high in list(TURN_CLASSES.values())[:-1]]
+    return np.digitize(np.degrees(angle), edges)
+
+
+def by_turn(success: np.ndarray, angle: np.ndarray) -> dict[str, dict[str, Any]]:
+    """Success per class of :data:`TURN_CLASSES`; ``success`` (n,) or (n, k) per observation."""
+    classes = turn_class(angle)
+    out = {}
+    for i, name in enumerate(TURN_CLASSES):
+        s = success[classes == i]
+        if len(s) == 0:
+            continue
+        ci = clustered(s) if s.ndim == 2 else wilson(int(s.sum()), s.size)
+        out[name] = {"rate": float(s.mean()), "ci": ci, "n": int(s.size)}
+    return out
+
+
+def strategy(batch: Batch, actions: np.ndarray, task: ThrowTask) -> dict[str, np.ndarray]:
+    """What a thrower does against how far the target must turn (its intended release).
+
+    Per throw: ``tilt`` (rad) of the target from up in the hand; ``vz`` the vertical toss
+    (m/s); ``push`` the horizontal speed along the roll direction (m/s; the direction the die
+    rolls when it turns the target up, ``(n_target × up) × up``); ``spin`` (rad/s);
+    ``axis_cosine`` between the spin axis and ``n_target × up`` (1: the spin turns the target
+    straight up).
+    """
+    angle, normal = tilt(batch.observations, task)
+    up = np.asarray(task.scene.ground.normal)
+    velocity = actions[:, :3] * task.max_speed
+    spin = actions[:, 3:] * task.max_spin
     turn_axis = np.cross(normal, up)
-    spin = throws["release_spin"]
+    roll = np.cross(turn_axis, up)
+    roll_norm = np.linalg.norm(roll, axis=1)
+    push = np.where(roll_norm > 1e-6,
+                    np.einsum("ni,ni->n", velocity, roll) / np.maximum(roll_norm, 1e-12), np.nan)
     spin_norm = np.linalg.norm(spin, axis=1)
     cos = np.einsum("ni,ni->n", spin, turn_axis) / np.maximum(
         spin_norm * np.linalg.norm(turn_axis, axis=1), 1e-12)
-    speed = np.linalg.norm(throws["release_velocity"], axis=1)
-    return {"tilt": tilt, "axis_cosine": cos, "spin": spin_norm, "speed": speed,
-            "vz": throws["release_velocity"] @ up,
-            "spin_tilt_corr": float(np.corrcoef(spin_norm, tilt)[0, 1])
-            if spin_norm.std() > 0 else 0.0}
+    return {"tilt": angle, "vz": velocity @ up, "push": push, "spin": spin_norm,
+            "axis_cosine": cos}
+
+
+def strategy_table(s: dict[str, np.ndarray]) -> dict[str, dict[str, float]]:
+    """Medians of :func:`strategy`'s quantities per class of :data:`TURN_CLASSES`."""
+    classes = turn_class(s["tilt"])
+    return {name: {key: float(np.nanmedian(s[key][classes == i])) if np.any(classes == i)
+                   and not np.all(np.isnan(s[key][classes == i])) else float("nan")
+                   for key in ("vz", "push", "spin", "axis_cosine")}
+            for i, name in enumerate(TURN_CLASSES)}
+
+
+def learning_curve(run: Path) -> dict[str, Any]:
+    """Evaluation success against throws during training (``eval/evaluations.npz``).
+
+    ``start``: the policy before PPO's first update (``eval/start.json``: after the warm start,
+    or the initial policy), plotted at 0 throws.
+    """
+    curve: dict[str, Any] = {"timesteps": [], "success": [], "start": None}
+    path = run / "eval" / "evaluations.npz"
+    if path.exists():
+        with np.load(path) as data:
+            rates = data["successes"] if "successes" in data else data["results"]
+            curve["timesteps"] = data["timesteps"].tolist()
+            curve["success"] = np.asarray(rates, np.float64).mean(axis=1).tolist()
+    start = run / "eval" / "start.json"
+    if start.exists():
+        curve["start"] = json.loads(start.read_text())
+    return curve
+
+
+def verdict(evaluation: dict[str, Any]) -> list[str]:
+    """The report's headline: PPO against the rule and the oracle, on the same throws."""
+    lines = []
+    diffs = evaluation.get("differences", {})
+    for other, where in (("hand-written", "the hand-written rule"), ("oracle", "the oracle")):
+        d = diffs.get(other)
+        if d is None:
+            continue
+        lo, hi = d["ci"]
+        if d["same"]:
+            word = f"PPO throws exactly as well as {where} on these throws"
+        elif d["diff"] < 0:
+            word = (f"**PPO is below {where}**" + (" (significantly)" if hi < 0
+                                                    else " (within noise)"))
+        elif d["diff"] > 0:
+            word = f"PPO is above {where}" + (" (significantly)" if lo > 0 else " (within noise)")
+        else:
+            word = f"PPO is level with {where}"
+        lines.append(f"- {word}: difference {d['diff']:+.3f} [{lo:+.3f}, {hi:+.3f}] "
+                     f"on {d['where']}.")
+    for name in evaluation.get("above_oracle", []):
+        lines.append(f"- **The oracle is not a ceiling here: {name} scores above it** on the "
+                     "oracle's throws.")
+    return lines
 
 
 def evaluate_run(
-    run: Path, log: Callable[[str], None] = print, **overrides: int | None
+    run: Path, log: Callable[[str], None] = print, progress: bool = False,
+    **overrides: int | None,
 ) -> dict[str, Any]:
     """Evaluate the run's model against the baselines and the oracle; write report.md.
 
@@ -211,6 +348,7 @@ def evaluate_run(
     from stable_baselines3 import PPO
 
     from agents import plots
+    from agents.replay import save_throws
 
     run = Path(run)
     config = Config.load(run / "config.json")
@@ -220,51 +358,78 @@ def evaluate_run(
     throws, oracle_observations = config.eval_throws, config.oracle_observations
     task, episode = make_eval_task(config)
     model = PPO.load(run / "model.zip", device="cpu")
-    throwers: dict[str, Thrower] = {"PPO": PolicyThrower(model),
-                                    "random": RandomThrower(config.seed),
-                                    "hand-written": HandThrower(task)}
+    throwers: dict[str, Thrower] = {
+        "PPO": PolicyThrower(model), "hand-written": HandThrower(task),
+        "random": RandomThrower(config.seed, model.action_space.shape[0])}
     seed = config.seed + 2 * 10**6
     start = time.perf_counter()
     log(f"evaluating {run}: {throws} throws per thrower")
-    result = compare(task, throwers, throws, oracle_observations, seed, episode=episode, log=log)
+    announce_compile(log)
+    result = compare(task, throwers, throws, oracle_observations, seed, episode=episode,
+                     progress=progress, log=log)
     batch, raw = result["batch"], result["throws"]
-    strategies = {name: strategy(batch, raw[name], task) for name in ("PPO", "hand-written")}
+    angle = tilt(batch.observations, task)[0]
+    turn = {name: by_turn(r["is_success"], angle) for name, r in raw.items()}
+    differences = {"hand-written": {
+        **paired_difference(raw["PPO"]["is_success"], raw["hand-written"]["is_success"]),
+        "where": f"the same {throws} throws"}}
+    above_oracle = []
+    if "common" in result:
+        common = result["common_success"]
+        m = len(common["oracle"])
+        turn["oracle"] = by_turn(common["oracle"], angle[:m])
+        differences["oracle"] = {**paired_difference(common["PPO"], common["oracle"]),
+                                 "where": f"the oracle's {m} observations × "
+                                          f"{ORACLE_SCORE_SAMPLES} throws"}
+        above_oracle = [n for n in throwers
+                        if common[n].mean() > common["oracle"].mean()]
+    strategies = {name: strategy(batch, raw[name]["action"], task)
+                  for name in ("PPO", "hand-written")}
     log("robustness sweeps")
-    sweeps = robustness(config, throwers, config.robustness_throws, seed + 1)
+    sweeps = robustness(config, throwers, config.robustness_throws, seed + 1, progress)
+    curve = learning_curve(run)
+    faces = n_faces(batch.observations.shape[1])
+    levels = {n: s["rate"] for n, s in result["summary"].items() if n != "PPO"}
+    if "common" in result:
+        levels["oracle"] = result["common"]["oracle"]["rate"]
     figures = {
+        "learning": plots.learning(run / "learning.png", {"PPO": [curve]}, levels),
+        "turn": plots.by_turn(run / "turn.png", turn),
+        "strategy": plots.strategy(run / "strategy.png", strategies,
+                                   {n: raw[n]["is_success"] for n in strategies}),
         "confusion": plots.confusion(run / "confusion.png", batch.targets,
-                                     {n: raw[n]["face"] for n in ("PPO", "hand-written")}),
-        "strategy": plots.strategy(run / "strategy.png", batch.targets, strategies),
+                                     {n: raw[n]["face"] for n in ("PPO", "hand-written")},
+                                     faces),
         "outcomes": plots.outcomes(run / "outcomes.png", raw),
-        "robustness": plots.robustness(run / "robustness.png", sweeps, trained_values(task)),
     }
+    if sweeps:
+        figures["robustness"] = plots.robustness(run / "robustness.png", sweeps,
+                                                 trained_values(task))
     log("saving throws as GIFs")
-    gif_paths = plots.save_throws(run, config.env_id, config.env_kwargs(), batch,
-                                  throwers["PPO"], config.gifs)
+    gifs = save_throws(run, task, batch, raw["PPO"], "PPO", config.gifs)
     evaluation = {
         "throws": throws, "oracle_observations": oracle_observations,
         "oracle_score_samples": ORACLE_SCORE_SAMPLES, "cem": CEM().__dict__,
-        "summary": result["summary"], "paired": result.get("paired", {}),
-        "oracle_seconds": result.get("oracle_seconds"),
-        "strategy": {n: {"axis_cosine_mean": float(np.nanmean(s["axis_cosine"])),
-                         "spin_tilt_corr": s["spin_tilt_corr"],
-                         "speed_median": float(np.median(s["speed"])),
-                         "spin_median": float(np.median(s["spin"])),
-                         "vz_median": float(np.median(s["vz"]))}
-                     for n, s in strategies.items()},
+        "summary": result["summary"], "common": result.get("common", {}),
+        "differences": differences, "above_oracle": above_oracle,
+        "oracle_seconds": result.get("oracle_seconds"), "turn": turn,
+        "learning": curve,
+        "strategy": {n: strategy_table(s) for n, s in strategies.items()},
         "outcomes": {n: {"impacts_median": float(np.median(r["impacts"])),
                          "rest_time_median": float(np.median(r["rest_time"])),
                          "void": float(np.mean(r["void_reason"] != ""))}
                      for n, r in raw.items()},
         "robustness": sweeps,
+        "gifs": [g.name for g in gifs],
         "seconds": time.perf_counter() - start,
     }
     (run / "evaluation.json").write_text(json.dumps(evaluation, indent=2) + "\n")
     from agents.report import write_report
 
-    write_report(run, config, evaluation, figures, gif_paths)
+    write_report(run, config, evaluation, figures, gifs)
     log(f"wrote {run / 'report.md'}")
-    log(headline_table(evaluation))
+    log("\n".join(verdict(evaluation)))
+    log(headline_table(evaluation.get("common") or evaluation["summary"]))
     return evaluation
 
 
@@ -273,14 +438,15 @@ def fmt(s: dict[str, Any]) -> str:
     return f"{s['rate']:.3f} [{s['ci'][0]:.3f}, {s['ci'][1]:.3f}]"
 
 
-def headline_table(evaluation: dict[str, Any]) -> str:
+def headline_table(summaries: dict[str, dict[str, Any]]) -> str:
     """The Markdown table of success per thrower, overall and per target."""
+    faces = sorted({f for s in summaries.values() for f in s["per_target"]})
     lines = ["| thrower | throws | success [95% CI] | " + " | ".join(
-        f"target {f}" for f in range(1, 7)) + " |", "|---|---|---|" + "---|" * 6]
-    for name, s in evaluation["summary"].items():
+        f"target {f}" for f in faces) + " |", "|---|---|---|" + "---|" * len(faces)]
+    for name, s in summaries.items():
         n = f"{s['n']}" + (f" ({s['observations']} obs)" if "observations" in s else "")
         per = " | ".join(f"{s['per_target'][f]['rate']:.2f}" if f in s["per_target"] else "–"
-                         for f in range(1, 7))
+                         for f in faces)
         lines.append(f"| {name} | {n} | {fmt(s)} | {per} |")
     return "\n".join(lines)
 
@@ -294,7 +460,16 @@ def main(argv: list[str] | None = None) -> None:
     for key in ("eval_throws", "oracle_observations", "robustness_throws", "gifs"):
         parser.add_argument("--" + key.replace("_", "-"), type=int, default=None,
                             help=docs[key] + " (default: the run's)")
+    parser.add_argument("--progress", action=argparse.BooleanOptionalAction, default=True,
+                        help="show progress bars")
     args = vars(parser.parse_args(argv))
+    for key in ("eval_throws", "oracle_observations", "robustness_throws", "gifs"):
+        low = 1 if key == "eval_throws" else 0
+        if args[key] is not None and args[key] < low:
+            parser.error(f"argument --{key.replace('_', '-')}: must be an integer >= {low}, "
+                         f"got {args[key]}")
+    if not (args["run"] / "model.zip").exists():
+        parser.error(f"argument run: {args['run']} has no model.zip")
     evaluate_run(args.pop("run"), **args)
 
 

@@ -14,19 +14,30 @@ import gymnasium as gym
 import torch
 from stable_baselines3.common.torch_layers import BaseFeaturesExtractor
 
+from agents.baselines import ROTATION_DIM, n_faces
 from dice_env.die import FACE_NORMALS
 
 
 class TargetNormal(BaseFeaturesExtractor):
-    """Features (n, 18): the observation (15) and the target's normal in the world (3)."""
+    """Features (n, size + 3): the observation and the target's normal in the world (3).
+
+    Sized from the observation space: the one-hot before the 3x3 orientation has one entry per
+    face of the die (:data:`dice_env.die.FACE_NORMALS`).
+    """
 
     def __init__(self, observation_space: gym.spaces.Box) -> None:
-        super().__init__(observation_space, features_dim=observation_space.shape[0] + 3)
+        size = observation_space.shape[0]
+        super().__init__(observation_space, features_dim=size + 3)
+        self.faces = n_faces(size)
+        if self.faces != len(FACE_NORMALS):
+            raise ValueError(f"observation space of size {size} has a one-hot of {self.faces} "
+                             f"faces; the die has {len(FACE_NORMALS)}")
         self.register_buffer("normals", torch.as_tensor(FACE_NORMALS, dtype=torch.float32))
 
     def forward(self, observations: torch.Tensor) -> torch.Tensor:
         """Append ``R @ n_body(target)``, with the one-hot weighting the body normals."""
-        body_normal = observations[:, :6] @ self.normals  # (n, 3), the target's body normal
-        rotation = observations[:, 6:15].reshape(-1, 3, 3)
+        faces = self.faces
+        body_normal = observations[:, :faces] @ self.normals  # (n, 3), the target's body normal
+        rotation = observations[:, faces:faces + ROTATION_DIM].reshape(-1, 3, 3)
         world_normal = torch.einsum("nij,nj->ni", rotation, body_normal)
         return torch.cat([observations, world_normal], dim=1)

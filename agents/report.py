@@ -1,4 +1,4 @@
-"""The run's report.md: headline table, strategy, outcomes, robustness, figures."""
+"""The run's report.md: headline, success with the oracle, learning curve, turn, strategy, GIFs."""
 
 from __future__ import annotations
 
@@ -19,65 +19,143 @@ def training_summary(run: Path) -> tuple[int, float]:
             sum(s["seconds"] for s in sessions))
 
 
+def _rate(s: dict[str, Any] | None) -> str:
+    return "–" if s is None else f"{s['rate']:.2f} [{s['ci'][0]:.2f}, {s['ci'][1]:.2f}]"
+
+
+def _rates_line(evaluation: dict[str, Any]) -> str:
+    """Every thrower's success in one line."""
+    summary, common = evaluation["summary"], evaluation.get("common")
+    line = ", ".join(f"{n} {_rate(s)}" for n, s in summary.items())
+    line = f"Success on {evaluation['throws']} throws each: {line}."
+    if common:
+        line += (f" On the oracle's throws: oracle {_rate(common['oracle'])}, PPO "
+                 f"{_rate(common['PPO'])} (PPO / oracle = "
+                 f"{common['PPO']['rate'] / max(common['oracle']['rate'], 1e-12):.2f}).")
+    return line
+
+
+def _section_success(evaluation: dict[str, Any]) -> list[str]:
+    from agents.evaluate import headline_table
+
+    lines = []
+    common = evaluation.get("common")
+    if common:
+        cem = evaluation["cem"]
+        m, k = evaluation["oracle_observations"], evaluation["oracle_score_samples"]
+        lines += [f"## Success on the same throws, with the oracle ({m} observations × {k} "
+                  "throws each)", "", headline_table(common), "",
+                  "Every thrower and the oracle are scored on the same throws (the same "
+                  "observations and the same hand noise). The oracle searches each observation "
+                  "under the env's own noise: it screens every other thrower's action (hand-"
+                  f"written, PPO, random) and {cem['global_candidates']} uniform actions, runs "
+                  f"{cem['restarts']} cross-entropy searches ({cem['iterations']} rounds × "
+                  f"{cem['population']} candidates × {cem['noise_samples']} noise draws) from "
+                  "the best of them, and keeps the best finalist (every start included) on "
+                  f"{cem['validation_samples']} fresh draws; its score here is on further fresh "
+                  "draws. Intervals (95 %): Wilson on the pooled throws, their number divided "
+                  "by the design effect of the observations (throws of one observation are not "
+                  "independent).", ""]
+    lines += [f"## Success on {evaluation['throws']} throws per thrower, by target face", "",
+              headline_table(evaluation["summary"]), "",
+              "The same observations and hand noise for every thrower; 95 % Wilson intervals.",
+              ""]
+    return lines
+
+
+def _section_learning(run: Path, evaluation: dict[str, Any], figure: Path) -> list[str]:
+    curve = evaluation["learning"]
+    lines = ["## Learning curve (evaluation success against training throws)", "",
+             f"![learning]({figure.name})", ""]
+    start = curve.get("start")
+    if start:
+        kind = ("after the warm start (imitation of the hand-written thrower)"
+                if start.get("warm_start") else "the initial policy (PPO from scratch)")
+        lines.append(f"Before PPO's first update, {kind}: {start['success']:.3f} on "
+                     f"{start['episodes']} throws.")
+    if curve["timesteps"]:
+        best = max(range(len(curve["success"])), key=curve["success"].__getitem__)
+        lines.append(f"{len(curve['timesteps'])} evaluations during training; last "
+                     f"{curve['success'][-1]:.3f} at {curve['timesteps'][-1]} throws, best "
+                     f"{curve['success'][best]:.3f} at {curve['timesteps'][best]}.")
+    lines += ["", f"From `{run}/eval/evaluations.npz` (SB3's EvalCallback, deterministic policy,"
+              " no shaping) and `eval/start.json`; TensorBoard: `tensorboard --logdir "
+              f"{run}/tb`.", ""]
+    return lines
+
+
+def _section_turn(evaluation: dict[str, Any], figure: Path) -> list[str]:
+    turn = evaluation["turn"]
+    classes = list(next(iter(turn.values())))
+    return ["## Success by how far the target face must turn (its angle from up in the hand: "
+            + ", ".join(classes) + ")", "", f"![turn]({figure.name})", "",
+            "| thrower | " + " | ".join(f"target {c}" for c in classes) + " |",
+            "|---|" + "---|" * len(classes),
+            *[f"| {n} | " + " | ".join(_rate(per.get(c)) for c in classes) + " |"
+              for n, per in turn.items()], "",
+            "Classes: already up (< 45°), on a side (45–135°), down (> 135°). The oracle's row "
+            "is on its own observations.", ""]
+
+
+def _section_strategy(evaluation: dict[str, Any], figure: Path) -> list[str]:
+    lines = ["## Strategy: toss, sideways push and spin against the target's tilt (PPO and the "
+             "hand-written rule)", "", f"![strategy]({figure.name})", "",
+             "| thrower | target | median toss v_z (m/s) | median push along the roll (m/s) | "
+             "median spin (rad/s) | median cos(spin axis, n_target × up) |",
+             "|---|---|---|---|---|---|"]
+    for name, per in evaluation["strategy"].items():
+        lines += [f"| {name} | {c} | {v['vz']:.3f} | {v['push']:.3f} | {v['spin']:.1f} | "
+                  f"{v['axis_cosine']:.2f} |" for c, v in per.items()]
+    lines += ["", "The intended release (before hand noise) against the target face's angle "
+              "from up in the hand. The hand-written rule spins about `n_target × up` "
+              "(cosine 1) at a rate proportional to that angle, with no toss and no push. "
+              "A learned policy that tosses upward more, or pushes along the roll direction "
+              "(`(n_target × up) × up`, where the die rolls as it turns the target up), the "
+              "further the target must turn has found more than the rule.", ""]
+    return lines
+
+
 def write_report(run: Path, config: Config, evaluation: dict[str, Any],
                  figures: dict[str, Path], gifs: list[Path]) -> Path:
     """Write ``run/report.md`` from the evaluation and its figures."""
-    from agents.evaluate import fmt, headline_table
+    from agents.evaluate import verdict
 
     throws, seconds = training_summary(run)
     params = config.hyperparams()
-    summary = evaluation["summary"]
+    start = evaluation["learning"].get("start") or {}
+    warm = ("warm-started by imitating the hand-written thrower" if start.get("warm_start")
+            else "from scratch")
     lines = [
         f"# {config.name}: PPO on {config.env_id}", "",
-        f"Trained on {throws} throws in {seconds / 60:.1f} min (preset `{config.preset}`, seed "
-        f"{config.seed}); env keywords `{config.env_kwargs() or 'defaults'}`, training-only "
-        f"keywords `{params['train_env']}`. Evaluation: {evaluation['throws']} throws per "
-        f"thrower, all throwers on the same observations and hand noise.", "",
-        "## Success (target face up at rest)", "",
-        headline_table(evaluation), "",
-        "95% intervals: Wilson for independent throws. The oracle searched "
-        f"{evaluation['oracle_observations']} observations (CEM from the hand-written thrower, "
-        f"{evaluation['cem']['iterations']} rounds × {evaluation['cem']['population']} candidates"
-        f" × {evaluation['cem']['noise_samples']} noise draws, finalists re-scored on fresh "
-        "draws) and is scored on "
-        f"{evaluation['oracle_score_samples']} further fresh draws per observation; its interval "
-        "treats the observations as the units.",
+        f"Trained on {throws} throws in {seconds / 60:.1f} min ({warm}; preset "
+        f"`{config.preset}`, seed {config.seed}); env keywords "
+        f"`{config.env_kwargs() or 'defaults'}`, training-only keywords `{params['train_env']}`.",
+        "", "## Headline", "", _rates_line(evaluation), "", *verdict(evaluation), "",
+        *_section_success(evaluation),
+        *_section_learning(run, evaluation, figures["learning"]),
+        *_section_turn(evaluation, figures["turn"]),
+        *_section_strategy(evaluation, figures["strategy"]),
+        "## Outcomes", "", f"![confusion]({figures['confusion'].name})", "",
+        f"![outcomes]({figures['outcomes'].name})", "",
+        "| thrower | median impacts | median rest time (s) | void throws |", "|---|---|---|---|",
+        *[f"| {n} | {o['impacts_median']:.0f} | {o['rest_time_median']:.2f} | {o['void']:.3f} |"
+          for n, o in evaluation["outcomes"].items()], "",
     ]
-    if "PPO" in summary and "oracle" in summary:
-        paired = evaluation["paired"]
-        ratio = paired["PPO"]["rate"] / max(paired["oracle"]["rate"], 1e-12)
-        lines += ["", "On the oracle's observations, with the same protocol for everyone:", "",
-                  "| thrower | success [95% CI] |", "|---|---|",
-                  *[f"| {n} | {fmt(s)} |" for n, s in paired.items()], "",
-                  f"PPO / oracle = **{ratio:.2f}** on these observations."]
-    strat = evaluation["strategy"]
-    lines += ["", "## Strategy", "", f"![strategy]({figures['strategy'].name})", "",
-              "| thrower | median speed (m/s) | median vertical speed (m/s) | median spin (rad/s) |"
-              " mean cos(spin axis, n_target × up) | corr(spin, tilt of target) |",
-              "|---|---|---|---|---|---|",
-              *[f"| {n} | {s['speed_median']:.3f} | {s['vz_median']:.3f} | "
-                f"{s['spin_median']:.1f} | {s['axis_cosine_mean']:.2f} | "
-                f"{s['spin_tilt_corr']:.2f} |" for n, s in strat.items()], "",
-              "The hand-written thrower spins about `n_target × up` (cosine 1) at a rate "
-              "proportional to the angle the target must turn. A cosine near 1 and a strong "
-              "spin–tilt correlation for PPO mean it learned the same geometric rule from the "
-              "orientation in its observation; a lower value means it found another way.", "",
-              "## Outcomes", "", f"![confusion]({figures['confusion'].name})", "",
-              f"![outcomes]({figures['outcomes'].name})", "",
-              "| thrower | median impacts | median rest time (s) | void throws |",
-              "|---|---|---|---|",
-              *[f"| {n} | {o['impacts_median']:.0f} | {o['rest_time_median']:.2f} | "
-                f"{o['void']:.3f} |" for n, o in evaluation["outcomes"].items()], "",
-              "## Robustness (keywords not trained on)", "",
-              f"![robustness]({figures['robustness'].name})", ""]
-    for key, per in evaluation["robustness"].items():
-        values = [p["value"] for p in next(iter(per.values()))]
-        lines += [f"| {key} | " + " | ".join(f"{v:g}" for v in values) + " |",
-                  "|---|" + "---|" * len(values),
-                  *[f"| {n} | " + " | ".join(f"{p['rate']:.2f}" for p in pts) + " |"
-                    for n, pts in per.items()], ""]
+    if evaluation["robustness"]:
+        lines += ["## Robustness: success when one keyword departs from the trained value ("
+                  + ", ".join(evaluation["robustness"]) + ")", "",
+                  f"![robustness]({figures['robustness'].name})", ""]
+        for key, per in evaluation["robustness"].items():
+            values = [p["value"] for p in next(iter(per.values()))]
+            lines += [f"| {key} | " + " | ".join(f"{v:g}" for v in values) + " |",
+                      "|---|" + "---|" * len(values),
+                      *[f"| {n} | " + " | ".join(f"{p['rate']:.2f}" for p in pts) + " |"
+                        for n, pts in per.items()], ""]
     if gifs:
-        lines += ["## Throws", "", *[f"![throw]({g.name})" for g in gifs], ""]
+        lines += ["## Throws (failures first)", "",
+                  *[f"![{g.stem}]({g.name}) `{g.stem}`" for g in gifs], "",
+                  f"More: `python -m agents.replay {run}` (fresh throws with the saved model, "
+                  "GIFs in `replay/`).", ""]
     lines += [f"Evaluation took {evaluation['seconds']:.0f} s"
               + (f" (oracle {evaluation['oracle_seconds']:.0f} s)."
                  if evaluation.get("oracle_seconds") else "."),

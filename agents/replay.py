@@ -1,0 +1,142 @@
+"""Replay throws of a trained run and save them as GIFs.
+
+    python -m agents.replay RUN [--throws 4] [--seed 0] [--target 3] [--thrower hand-written]
+
+Draws fresh episodes of the run's evaluation task (its ``--env`` keywords), throws them with the
+run's saved model (or a baseline), prints each outcome and writes ``RUN/replay/*.gif``. The
+evaluation uses the same code for its GIFs (:func:`save_throws`), replaying its own throws
+exactly: the same hand, target and hand noise.
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from dice_env.envs.task import ThrowTask
+
+FPS = 30  # frames per second of the GIFs (the env's render_fps)
+HOLD = 0.6  # seconds the landed die is shown at the end
+
+
+def record_throw(task: ThrowTask, action: np.ndarray, target: int, hand: np.ndarray,
+                 noise: np.ndarray, size: tuple[int, int] = (240, 320)) -> tuple[list, dict]:
+    """The frames of one throw (the same throw as ``task.throw`` with this noise) and its info."""
+    from dice_env.envs.render import render_die
+
+    every = max(1, round(1.0 / (FPS * task.scene.step)))
+    throw = task.throw(np.asarray(action)[None], [target], np.asarray(hand)[None],
+                       np.asarray(noise)[None], record_every=every)
+    result = throw.result
+    shown = int(result.steps[0]) // every
+    poses = [(task.release_position, hand),
+             *zip(result.x_cm[0, :shown], result.orientations[0, :shown], strict=True)]
+    poses += [(result.final.position[0], result.final.orientation[0])] * round(HOLD * FPS)
+    frames = [render_die(task.scene, p, q, size=size) for p, q in poses]
+    return frames, {key: value[0] for key, value in throw.info.items()}
+
+
+def gif_name(prefix: str, index: int, thrower: str, info: dict[str, Any]) -> str:
+    """``throw_0_PPO_target3_landed5_failure.gif``."""
+    outcome = "success" if info["is_success"] else "failure"
+    return (f"{prefix}_{index}_{thrower.replace(' ', '-')}_target{int(info['target_face'])}_"
+            f"landed{int(info['face'])}_{outcome}.gif")
+
+
+def pick_throws(success: np.ndarray, count: int) -> list[int]:
+    """Indices of ``count`` throws, failures first, each kind in the evaluation's order.
+
+    Failures take half of them (at least one when there is any), successes the rest.
+    """
+    failures = np.flatnonzero(~success)
+    successes = np.flatnonzero(success)
+    n_fail = min(len(failures), max(1, count // 2) if count else 0)
+    picked = [*failures[:n_fail], *successes[:count - n_fail], *failures[n_fail:]]
+    return [int(i) for i in picked[:count]]
+
+
+def save_throws(run: Path, task: ThrowTask, batch: Any, throws: dict[str, np.ndarray],
+                thrower: str, count: int) -> list[Path]:
+    """GIFs of ``count`` of the evaluation's throws by ``thrower``, failures first.
+
+    ``throws``: that thrower's actions and info from :meth:`agents.evaluate.Batch.throw`; each
+    throw is replayed exactly (its hand, target and noise).
+    """
+    from dice_env.envs.video import save_video
+
+    paths = []
+    for k, i in enumerate(pick_throws(np.asarray(throws["is_success"]), count)):
+        frames, info = record_throw(task, throws["action"][i], batch.targets[i], batch.hands[i],
+                                    batch.noise[i])
+        paths.append(save_video(frames, run / gif_name("throw", k, thrower, info), fps=FPS))
+    return paths
+
+
+def replay(run: Path, throws: int, seed: int, target: int | None, thrower: str,
+           out: Path | None = None) -> list[Path]:
+    """Throw ``throws`` fresh episodes with the run's model (or a baseline); write GIFs."""
+    from stable_baselines3 import PPO
+
+    from agents.baselines import HandThrower, RandomThrower
+    from agents.config import Config
+    from agents.evaluate import Batch, PolicyThrower, make_eval_task
+    from dice_env.envs.video import save_video
+
+    config = Config.load(run / "config.json")
+    task, episode = make_eval_task(config)
+    if target is not None:
+        episode["target_face"] = target
+    batch = Batch.sample(task, throws, np.random.default_rng(seed), **episode)
+    if thrower == "PPO":
+        act = PolicyThrower(PPO.load(run / "model.zip", device="cpu"))
+    elif thrower == "hand-written":
+        act = HandThrower(task)
+    else:
+        act = RandomThrower(seed)
+    actions = np.asarray(act(batch.observations), np.float64)
+    out = out or run / "replay"
+    out.mkdir(parents=True, exist_ok=True)
+    paths = []
+    for i in range(throws):
+        frames, info = record_throw(task, actions[i], batch.targets[i], batch.hands[i],
+                                    batch.noise[i])
+        path = save_video(frames, out / gif_name(f"replay_s{seed}", i, thrower, info), fps=FPS)
+        print(f"throw {i}: target {int(info['target_face'])}, landed {int(info['face'])} "
+              f"({'success' if info['is_success'] else 'failure'}) -> {path}")
+        paths.append(path)
+    return paths
+
+
+def main(argv: list[str] | None = None) -> None:
+    """Command line: ``python -m agents.replay RUN``."""
+    parser = argparse.ArgumentParser(prog="python -m agents.replay", description=__doc__,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("run", type=Path, help="run folder (with config.json and model.zip)")
+    parser.add_argument("--throws", type=int, default=4, help="throws to replay (>= 1)")
+    parser.add_argument("--seed", type=int, default=0, help="seed of the episodes (>= 0)")
+    parser.add_argument("--target", type=int, default=None, help="fix the target face")
+    parser.add_argument("--thrower", choices=("PPO", "hand-written", "random"), default="PPO")
+    parser.add_argument("--out", type=Path, default=None, help="folder (default: RUN/replay)")
+    args = parser.parse_args(argv)
+    if not (args.run / "config.json").is_file():
+        parser.error(f"argument run: {args.run} is not a run folder (no config.json)")
+    if args.thrower == "PPO" and not (args.run / "model.zip").is_file():
+        parser.error(f"argument run: {args.run} has no model.zip")
+    if args.throws < 1:
+        parser.error(f"argument --throws: must be an integer >= 1, got {args.throws}")
+    if args.seed < 0:
+        parser.error(f"argument --seed: must be an integer >= 0, got {args.seed}")
+    if args.target is not None:
+        from dice_env.die import FACE_NORMALS
+
+        if not 1 <= args.target <= len(FACE_NORMALS):
+            parser.error(f"argument --target: must be a face in [1, {len(FACE_NORMALS)}], "
+                         f"got {args.target}")
+    replay(args.run, args.throws, args.seed, args.target, args.thrower, args.out)
+
+
+if __name__ == "__main__":
+    main()
