@@ -3,9 +3,9 @@
 One step of ``real_throw_cube.m`` for one die (the listing's order, "modified forward Euler"):
 
 1. corner offsets ``r_k = Q b_k`` and velocities ``U_k = u + w x r_k`` from the state;
-2. per corner: ``dg = max(0, -n.X_k)``, ``un = n.U_k``, ``fn = max(0, S dg - D un)`` (only
-   corners with ``n.X_k < 0`` under the gated law), friction ``-mu fn Ut/(|Ut| + vmin)``
-   (the listing's) or stick-slip (below);
+2. per corner and plane: ``dg = max(0, d - n.X_k)``, ``un = n.U_k``,
+   ``fn = max(0, S dg - D un)`` (only corners with ``n.X_k < d`` under the gated law),
+   friction ``-mu fn Ut/(|Ut| + vmin)`` (the listing's) or stick-slip (below);
 3. ``u += dt F/m`` (gravity included), then ``x += dt u`` with the new ``u``;
 4. ``L += dt sum_k r_k x F_k`` (offsets before rotating), ``w = I_world^-1 L`` with
    ``I_world = Q I_body Q^T``, then ``Q = R(w dt) Q`` with the Rodrigues rotation
@@ -49,11 +49,21 @@ The friction's limit ``mu fn`` takes the unweighted normal force: weighting it t
 
 Dice are independent: each die steps until its time limit, rest, or a non-finite state, so
 results are bit-identical for any batch size or thread count (``prange`` over the batch).
+
+The die is data: any number of vertices (the contact nodes) and face normals; so are its
+surroundings: any number of planes (a floor and walls), each with its own material. The
+kernel takes a few named groups (:class:`Body`, :class:`Contact`, :class:`Options`,
+:class:`Stops`, :class:`Records`, :class:`Dice`, :class:`Outcome`), built by
+:func:`dice_env.simulate.pack`; each piece of the physics is one small inlined function:
+a vertex on a plane (:func:`vertex_on_plane`), the contact-free jump (:func:`free_steps`,
+:func:`torque_free`), the stop tests (:func:`decided`, :func:`quiet`), the step
+(:func:`step_die`). This module imports nothing else from the package.
 """
 
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit, prange
@@ -61,13 +71,136 @@ from numba import njit, prange
 # Per-die end status.
 RUNNING, SETTLED, NONFINITE, DECIDED, ABORTED = 0, 1, 2, 3, 4
 ABORT_EVERY = 4096  # loop passes between looks at the abort flag (a power of two)
-
-
 SERIES = 2.44140625e-4  # (1/64 rad)^2: below this squared turn, R's coefficients from series
 
 
+class Body(NamedTuple):
+    """The die, body frame about its centre of mass.
+
+    ``vertices`` (N, 3): the contact nodes; ``mass``; ``inv_inertia`` (3, 3): the inverse body
+    inertia; ``inv_iso``: ``1/I`` when the inertia is ``I`` times the identity, else 0;
+    ``inv_i_min``: the inverse of the smallest principal moment; ``r_max``: the farthest
+    vertex's distance; ``faces`` (F, 3): outward unit face normals, in the order of
+    ``Stops.lock``; ``reads_down``: the die is read by the face down (a d4), not up.
+    """
+
+    vertices: np.ndarray
+    mass: float
+    inv_inertia: np.ndarray
+    inv_iso: float
+    inv_i_min: float
+    r_max: float
+    faces: np.ndarray
+    reads_down: bool
+
+
+class Contact(NamedTuple):
+    """The planes the die stays on, ``normals[p] . X >= offsets[p]``, and the contact laws.
+
+    Per plane ``p`` (arrays (P,)): unit ``normals`` (P, 3), pointing into the free side;
+    ``offsets``; ``stiffness`` S, ``damping`` D, ``friction`` mu; the stick-slip spring ``kt``
+    and damper ``ct``. Plane 0 is the floor: the start height in the energy scale and the
+    reading of the face are taken against it. ``gated``: only vertices below a plane feel it
+    (else the listing's law on every vertex); ``stick``: stick-slip friction (else the
+    listing's ``-mu fn Ut/(|Ut| + vmin)``); ``vmin``: that law's speed.
+    """
+
+    normals: np.ndarray
+    offsets: np.ndarray
+    stiffness: np.ndarray
+    damping: np.ndarray
+    friction: np.ndarray
+    kt: np.ndarray
+    ct: np.ndarray
+    gated: bool
+    stick: bool
+    vmin: float
+
+
+class Options(NamedTuple):
+    """The integration.
+
+    ``gravity`` g along -z, step ``dt``; ``rotation`` (False translates only); ``flight``:
+    jump over contact-free steps; ``midpoint``: midpoint contact forces.
+    """
+
+    gravity: float
+    dt: float
+    rotation: bool
+    flight: bool
+    midpoint: bool
+
+
+class Stops(NamedTuple):
+    """When a die ends.
+
+    After ``n_steps``; with ``at_rest``, after ``hold_steps`` quiet steps (three contacts,
+    every vertex slower than ``v_rest``) or at a quiet step whose total energy is less than
+    ``rest_excess`` above ``rest_energy``; whatever ``at_rest``, when its total energy falls
+    below ``lock`` (F,) of the face it reads (``-inf``: never). ``energy_scale`` is added to
+    the start's kinetic and potential energy to measure an energy gain in.
+    """
+
+    n_steps: int
+    at_rest: bool
+    v_rest: float
+    hold_steps: int
+    rest_energy: float
+    rest_excess: float
+    lock: np.ndarray
+    energy_scale: float
+
+
+class Records(NamedTuple):
+    """What is recorded every ``stride`` steps.
+
+    ``x`` (B, n, 3) centre of mass, ``energy`` (B, n or 0) the listing's energy,
+    ``orientation`` (B, n or 0, 3, 3), ``nodes`` (B, n or 0, N, 3).
+    """
+
+    stride: int
+    x: np.ndarray
+    energy: np.ndarray
+    orientation: np.ndarray
+    nodes: np.ndarray
+
+
+class Dice(NamedTuple):
+    """The state of B dice, updated in place.
+
+    ``x`` (B, 3) centre of mass, ``u`` (B, 3) its velocity, ``ang`` (B, 3) angular momentum
+    about it, ``q`` (B, 3, 3) body-to-world rotation, ``w`` (B, 3) the angular velocity used
+    for vertex velocities.
+    """
+
+    x: np.ndarray
+    u: np.ndarray
+    ang: np.ndarray
+    q: np.ndarray
+    w: np.ndarray
+
+
+class Outcome(NamedTuple):
+    """What each die's run gives (arrays (B,)), and the abort flag.
+
+    ``status``, ``unstable`` (a non-finite state), ``rest_time``, ``impacts``, ``max_pen``
+    the deepest sink, ``energy_rise`` the largest gain over the energy scale, ``steps``;
+    ``abort`` (1,): set non-zero from another thread, every die still running ends
+    ``ABORTED`` within ``ABORT_EVERY`` loop passes.
+    """
+
+    status: np.ndarray
+    unstable: np.ndarray
+    rest_time: np.ndarray
+    impacts: np.ndarray
+    max_pen: np.ndarray
+    energy_rise: np.ndarray
+    steps: np.ndarray
+    abort: np.ndarray
+
+
 @njit(cache=True, inline="always")
-def _rotation_series(t2: float) -> tuple[float, float]:
+def rotation_series(t2: float) -> tuple[float, float]:
     """``a = sin(t)/t`` and ``b = (1 - cos t)/t^2`` from their series in ``t^2 < SERIES``.
 
     First omitted terms below 1e-25: no square root, division or library call.
@@ -78,7 +211,7 @@ def _rotation_series(t2: float) -> tuple[float, float]:
 
 
 @njit(cache=True, inline="always")
-def _rodrigues(v0: float, v1: float, v2: float, t2: float, a: float, b: float) -> tuple:
+def rodrigues(v0: float, v1: float, v2: float, t2: float, a: float, b: float) -> tuple:
     """The entries of ``R = (1 - b t^2) E + a [v]x + b v v^T``, row by row."""
     d = 1.0 - b * t2
     r00, r11, r22 = d + b * v0 * v0, d + b * v1 * v1, d + b * v2 * v2
@@ -89,26 +222,26 @@ def _rodrigues(v0: float, v1: float, v2: float, t2: float, a: float, b: float) -
 
 
 @njit(cache=True, inline="always")
-def _rotate(q: np.ndarray, w0: float, w1: float, w2: float, dt: float) -> None:
+def rotate(q: np.ndarray, w0: float, w1: float, w2: float, dt: float) -> None:
     """Left-multiply the orientation ``q`` (3x3, in place) by the Rodrigues rotation R(w dt).
 
     With ``v = w dt`` and ``t = |v|``: ``R = (1 - b t^2) E + a [v]x + b v v^T``,
     ``a = sin(t)/t``, ``b = (1 - cos t)/t^2`` (the listing's ``P + cos(E - P) + sin [k]x``
     rearranged). Below 1/64 rad, a step's rotation as a rule, ``a`` and ``b`` come from their
-    series (:func:`_rotation_series`). ``R = E`` exactly when ``w = 0``.
+    series (:func:`rotation_series`). ``R = E`` exactly when ``w = 0``.
     """
     v0, v1, v2 = w0 * dt, w1 * dt, w2 * dt
     t2 = v0 * v0 + v1 * v1 + v2 * v2
     if t2 == 0.0:
         return
     if t2 < SERIES:
-        a, b = _rotation_series(t2)
+        a, b = rotation_series(t2)
     else:
         t = math.sqrt(t2)
         a = math.sin(t) / t
         half = math.sin(0.5 * t) / t
         b = 2.0 * half * half
-    r00, r01, r02, r10, r11, r12, r20, r21, r22 = _rodrigues(v0, v1, v2, t2, a, b)
+    r00, r01, r02, r10, r11, r12, r20, r21, r22 = rodrigues(v0, v1, v2, t2, a, b)
     for j in range(3):
         q0, q1, q2 = q[0, j], q[1, j], q[2, j]
         q[0, j] = r00 * q0 + r01 * q1 + r02 * q2
@@ -117,12 +250,13 @@ def _rotate(q: np.ndarray, w0: float, w1: float, w2: float, dt: float) -> None:
 
 
 @njit(cache=True, inline="always")
-def _inverse_world_inertia_times(
-    q: np.ndarray, inv_body: np.ndarray, inv_iso: float, l0: float, l1: float, l2: float
-) -> tuple[float, float, float]:
-    """``I_world^-1 L`` with ``I_world = Q I_body Q^T``; ``L * inv_iso`` when ``inv_iso > 0``."""
+def angular_velocity(q: np.ndarray, body: Body, l0: float, l1: float,
+                     l2: float) -> tuple[float, float, float]:
+    """``I_world^-1 L`` with ``I_world = Q I_body Q^T``; ``L * inv_iso`` when isotropic."""
+    inv_iso = body.inv_iso
     if inv_iso > 0.0:
         return l0 * inv_iso, l1 * inv_iso, l2 * inv_iso
+    inv_body = body.inv_inertia
     b0 = q[0, 0] * l0 + q[1, 0] * l1 + q[2, 0] * l2
     b1 = q[0, 1] * l0 + q[1, 1] * l1 + q[2, 1] * l2
     b2 = q[0, 2] * l0 + q[1, 2] * l1 + q[2, 2] * l2
@@ -137,31 +271,38 @@ def _inverse_world_inertia_times(
 
 
 @njit(cache=True, inline="always")
-def _face_up_index(q: np.ndarray, n0: float, n1: float, n2: float) -> int:
-    """Index (0-5, the order of ``die.FACE_NORMALS``) of the face pointing most along ``n``."""
+def face_read(q: np.ndarray, body: Body, n0: float, n1: float, n2: float) -> int:
+    """Index (into ``body.faces``) of the face read.
+
+    The face pointing most along ``n``, or most against it for a die read by the face down;
+    the first of equals.
+    """
     up_x = q[0, 0] * n0 + q[1, 0] * n1 + q[2, 0] * n2  # n in the body frame, Q^T n
     up_y = q[0, 1] * n0 + q[1, 1] * n1 + q[2, 1] * n2
     up_z = q[0, 2] * n0 + q[1, 2] * n1 + q[2, 2] * n2
-    best, index = up_z, 0
-    for value, k in ((up_x, 1), (up_y, 2), (-up_y, 3), (-up_x, 4), (-up_z, 5)):
+    faces = body.faces
+    sign = -1.0 if body.reads_down else 1.0
+    best, index = -np.inf, 0
+    for f in range(faces.shape[0]):
+        value = sign * (faces[f, 0] * up_x + faces[f, 1] * up_y + faces[f, 2] * up_z)
         if value > best:
-            best, index = value, k
+            best, index = value, f
     return index
 
 
 @njit(cache=True, inline="always")
-def _free_steps(lowest: float, un: float, spin: float, r_max: float, dvn: float, dt: float,
-                limit: int) -> int:
-    """Number of steps from now (1 to ``limit``) surely free of contact.
+def free_steps(lowest: float, un: float, spin: float, r_max: float, dvn: float, dt: float,
+               limit: int) -> int:
+    """Number of steps from now (1 to ``limit``) surely free of contact with one plane.
 
-    Given the lowest corner height ``lowest >= 0`` entering this step.
+    Given the lowest vertex height ``lowest >= 0`` above the plane entering this step.
     After ``j`` flight steps the centre has moved ``dt (j un + dvn j(j+1)/2)`` along the normal
-    (``un`` its normal velocity, ``dvn`` the per-step change of it from gravity) and a corner at
+    (``un`` its normal velocity, ``dvn`` the per-step change of it from gravity) and a vertex at
     most ``j dt spin r_max`` relative to it; the count is the last ``j`` where that bound on the
-    lowest corner is still >= 0, plus one.
+    lowest vertex is still >= 0, plus one.
     """
     b = dt * (un - spin * r_max)
-    a = -0.5 * dt * dvn  # >= 0: gravity pulls toward the plane
+    a = -0.5 * dt * dvn  # >= 0 when gravity pulls toward the plane
     if a <= 0.0:
         if b >= 0.0:
             return limit
@@ -176,207 +317,289 @@ def _free_steps(lowest: float, un: float, spin: float, r_max: float, dvn: float,
 
 
 @njit(cache=True, inline="always")
-def _torque_free(q: np.ndarray, inv_body: np.ndarray, inv_iso: float, l0: float, l1: float,
-                 l2: float, dt: float, n: int) -> tuple[float, float, float]:
-    """``n`` rotation steps of step 4 at constant ``L``, in place on ``q``; returns the last ``w``.
+def torque_free(q: np.ndarray, body: Body, l0: float, l1: float, l2: float, dt: float,
+                n: int) -> tuple[float, float, float]:
+    """``n`` rotation steps at constant ``L``, in place on ``q``; returns the last ``w``.
 
     An isotropic die spins at the constant ``w = L / I``: one rotation of angle ``n |w| dt``.
-    A loaded die takes the ``n`` plain steps (``w`` follows ``I_world``).
+    Any other takes the ``n`` plain steps (``w`` follows ``I_world``).
     """
-    w0, w1, w2 = _inverse_world_inertia_times(q, inv_body, inv_iso, l0, l1, l2)
-    if inv_iso > 0.0:
-        _rotate(q, w0, w1, w2, n * dt)
+    w0, w1, w2 = angular_velocity(q, body, l0, l1, l2)
+    if body.inv_iso > 0.0:
+        rotate(q, w0, w1, w2, n * dt)
         return w0, w1, w2
-    _rotate(q, w0, w1, w2, dt)
+    rotate(q, w0, w1, w2, dt)
     for _ in range(n - 1):
-        w0, w1, w2 = _inverse_world_inertia_times(q, inv_body, inv_iso, l0, l1, l2)
-        _rotate(q, w0, w1, w2, dt)
+        w0, w1, w2 = angular_velocity(q, body, l0, l1, l2)
+        rotate(q, w0, w1, w2, dt)
     return w0, w1, w2
 
 
+@njit(cache=True, inline="always")
+def vertex_on_plane(contact: Contact, p: int, height: float, before: float, position: tuple,
+                    velocity: tuple, middle: tuple, midpoint: bool, dt: float, dt_m: float,
+                    anchor: np.ndarray, tied: np.ndarray, slot: int) -> tuple:
+    """The force of plane ``p`` on one vertex, and what the step's books need of it.
+
+    ``height`` of the vertex above the plane now and ``before`` (entering the last step);
+    ``position`` its world position, ``velocity`` its velocity entering the step and
+    ``middle`` that velocity at the middle of the kick (used for damping and friction when
+    ``midpoint``). ``anchor`` (3,) and ``tied[slot]``: the stick-slip spring's tie point and
+    whether it is tied (updated in place). Returns the force (3 floats), the energy stored in
+    the normal spring and in the tangential spring, whether the vertex is below the plane,
+    its sink and its approach speed.
+    """
+    n0, n1, n2 = contact.normals[p, 0], contact.normals[p, 1], contact.normals[p, 2]
+    stiff, damp, mu = contact.stiffness[p], contact.damping[p], contact.friction[p]
+    uk0, uk1, uk2 = velocity
+    dg = max(0.0, -height)
+    un = n0 * uk0 + n1 * uk1 + n2 * uk2
+    below = height < 0.0
+    spring = 0.5 * stiff * dg * dg if below else 0.0
+    approach = -un
+    fn = stiff * dg
+    if midpoint:
+        uk0, uk1, uk2 = middle
+        un = n0 * uk0 + n1 * uk1 + n2 * uk2
+    friction_limit = fn  # normal force for the friction, without the onset weight
+    if damp > 0.0:
+        friction_limit -= damp * un
+        if midpoint and before > 0.0 and height < 0.0:
+            fn -= (0.5 - height / (before - height)) * damp * un
+        else:
+            fn = friction_limit
+    if fn <= 0.0:
+        tied[slot] = False
+        return 0.0, 0.0, 0.0, spring, 0.0, below, dg, approach
+    fk0, fk1, fk2 = fn * n0, fn * n1, fn * n2
+    stored = 0.0
+    if mu > 0.0:
+        cap = mu * max(friction_limit, 0.0)  # Coulomb's limit mu fn
+        ut0, ut1, ut2 = uk0 - un * n0, uk1 - un * n1, uk2 - un * n2
+        if contact.stick:
+            ft0, ft1, ft2, stored = _stick_slip(contact, p, height, before, position,
+                                                (ut0, ut1, ut2), cap, dt, dt_m, anchor,
+                                                tied, slot)
+        else:
+            scale = cap / (math.sqrt(ut0 * ut0 + ut1 * ut1 + ut2 * ut2) + contact.vmin)
+            ft0, ft1, ft2 = -scale * ut0, -scale * ut1, -scale * ut2
+        fk0 += ft0
+        fk1 += ft1
+        fk2 += ft2
+    return fk0, fk1, fk2, spring, stored, below, dg, approach
+
+
+@njit(cache=True, inline="always")
+def _stick_slip(contact: Contact, p: int, height: float, before: float, position: tuple,
+                ut: tuple, cap: float, dt: float, dt_m: float, anchor: np.ndarray,
+                tied: np.ndarray, slot: int) -> tuple:
+    """Stick-slip friction (see the module docstring).
+
+    Returns the tangential force and the energy of its spring; the tie point ``anchor`` and
+    ``tied[slot]`` are updated in place.
+    """
+    n0, n1, n2 = contact.normals[p, 0], contact.normals[p, 1], contact.normals[p, 2]
+    kt, ct = contact.kt[p], contact.ct[p]
+    p0, p1, p2 = position
+    ut0, ut1, ut2 = ut
+    if not tied[slot]:
+        # tied where it crossed the plane during the last step, if it did
+        tied[slot] = True
+        back = dt * height / (before - height) if before > 0.0 else 0.0
+        anchor[0] = p0 + back * ut0
+        anchor[1] = p1 + back * ut1
+        anchor[2] = p2 + back * ut2
+    e0, e1, e2 = p0 - anchor[0], p1 - anchor[1], p2 - anchor[2]
+    en = n0 * e0 + n1 * e1 + n2 * e2
+    e0, e1, e2 = e0 - en * n0, e1 - en * n1, e2 - en * n2
+    ft0, ft1, ft2 = -kt * e0 - ct * ut0, -kt * e1 - ct * ut1, -kt * e2 - ct * ut2
+    size = math.sqrt(ft0 * ft0 + ft1 * ft1 + ft2 * ft2)
+    if size > cap:
+        # slip: Coulomb's force against the slip velocity, or along the spring's pull while
+        # the vertex is slower than one step's friction kick on a quarter of the die could
+        # make it (then its direction means nothing); the tie point follows the vertex
+        speed = math.sqrt(ut0 * ut0 + ut1 * ut1 + ut2 * ut2)
+        if speed > 4.0 * cap * dt_m:
+            ratio = -cap / speed
+            ft0, ft1, ft2 = ratio * ut0, ratio * ut1, ratio * ut2
+        else:
+            ratio = cap / size
+            ft0, ft1, ft2 = ratio * ft0, ratio * ft1, ratio * ft2
+        e0, e1, e2 = -ft0 / kt, -ft1 / kt, -ft2 / kt
+        anchor[0], anchor[1], anchor[2] = p0 - e0, p1 - e1, p2 - e2
+    return ft0, ft1, ft2, 0.5 * kt * (e0 * e0 + e1 * e1 + e2 * e2)
+
+
+@njit(cache=True, inline="always")
+def contact_forces(body: Body, contact: Contact, options: Options, q: np.ndarray, x: tuple,
+                   u: tuple, w: tuple, cu: tuple, cw: tuple, near_rest: bool,
+                   heights: np.ndarray, anchors: np.ndarray, tied: np.ndarray,
+                   lowest: np.ndarray, pen: float) -> tuple:
+    """Steps 1-2: the total force (gravity included) and torque on the die, and the books.
+
+    ``x``, ``u``, ``w`` the state entering the step, ``cu``, ``cw`` the velocities at the
+    middle of the kick; ``heights`` (N, P) the vertex heights entering the last step,
+    ``anchors`` (N, P, 3) and ``tied`` (N, P) the stick-slip ties, ``lowest`` (P,) set to the
+    lowest vertex above each plane (all updated in place). Returns the force and torque,
+    the normal and tangential spring energies, the number of vertex-plane contacts, the
+    fastest approach among them, the deepest sink so far (from ``pen``) and, when
+    ``near_rest``, the largest squared vertex speed.
+    """
+    x0, x1, x2 = x
+    u0, u1, u2 = u
+    w0, w1, w2 = w
+    cu0, cu1, cu2 = cu
+    cw0, cw1, cw2 = cw
+    dt = options.dt
+    dt_m = dt / body.mass
+    f0, f1, f2 = 0.0, 0.0, -body.mass * options.gravity
+    t0, t1, t2 = 0.0, 0.0, 0.0
+    spring, spring_t, touching, approach, fastest = 0.0, 0.0, 0, 0.0, 0.0
+    lowest[:] = np.inf
+    vertices, normals, offsets = body.vertices, contact.normals, contact.offsets
+    for k in range(vertices.shape[0]):
+        b0, b1, b2 = vertices[k, 0], vertices[k, 1], vertices[k, 2]
+        rk0 = q[0, 0] * b0 + q[0, 1] * b1 + q[0, 2] * b2
+        rk1 = q[1, 0] * b0 + q[1, 1] * b1 + q[1, 2] * b2
+        rk2 = q[2, 0] * b0 + q[2, 1] * b1 + q[2, 2] * b2
+        velocity = (u0 + w1 * rk2 - w2 * rk1, u1 + w2 * rk0 - w0 * rk2,
+                    u2 + w0 * rk1 - w1 * rk0)
+        if near_rest:
+            fastest = max(fastest, velocity[0] * velocity[0] + velocity[1] * velocity[1]
+                          + velocity[2] * velocity[2])
+        position = (x0 + rk0, x1 + rk1, x2 + rk2)
+        for p in range(normals.shape[0]):
+            height = (normals[p, 0] * position[0] + normals[p, 1] * position[1]
+                      + normals[p, 2] * position[2]) - offsets[p]
+            lowest[p] = min(lowest[p], height)
+            before = heights[k, p]
+            heights[k, p] = height
+            if height >= 0.0:
+                tied[k, p] = False
+                if contact.gated:
+                    continue
+            middle = velocity
+            if options.midpoint:
+                middle = (cu0 + cw1 * rk2 - cw2 * rk1, cu1 + cw2 * rk0 - cw0 * rk2,
+                          cu2 + cw0 * rk1 - cw1 * rk0)
+            fk0, fk1, fk2, spring_k, stored, below, dg, approach_k = vertex_on_plane(
+                contact, p, height, before, position, velocity, middle, options.midpoint, dt,
+                dt_m, anchors[k, p], tied[k], p)
+            if below:
+                touching += 1
+                spring += spring_k
+                pen = max(pen, dg)
+                approach = max(approach, approach_k)
+            spring_t += stored
+            f0 += fk0
+            f1 += fk1
+            f2 += fk2
+            if options.rotation:
+                t0 += rk1 * fk2 - rk2 * fk1
+                t1 += rk2 * fk0 - rk0 * fk2
+                t2 += rk0 * fk1 - rk1 * fk0
+    return f0, f1, f2, t0, t1, t2, spring, spring_t, touching, approach, pen, fastest
+
+
+@njit(cache=True, inline="always")
+def decided(stops: Stops, body: Body, q: np.ndarray, up: tuple, energy: float,
+            lock_max: float) -> bool:
+    """Whether the die's total ``energy`` is below the lock of the face it reads."""
+    return energy < lock_max and energy < stops.lock[face_read(q, body, up[0], up[1], up[2])]
+
+
+@njit(cache=True, inline="always")
+def relative_rise(e_max: float, e_start: float, e_tol: float) -> float:
+    """The largest energy gain ``e_max - e_start`` over the scale ``e_tol``.
+
+    With nothing to measure against (no gravity, no motion), any gain is infinite.
+    """
+    rise = e_max - e_start
+    if e_tol > 0.0:
+        return rise / e_tol
+    return np.inf if rise > 0.0 else rise
+
+
 @njit(cache=True)
-def _simulate_one(
-    i, x, u, ang, q, w, body, mass, inv_body, iso, inv_i_min, normal, stiff, damp, mu, vmin,
-    stick, kt, ct, g, dt, gated, rotation, flight, midpoint, n_steps, stop_at_rest, v_rest,
-    hold_steps, rest_energy, rest_excess, lock_energy, energy_scale_add, stride, rec_x, rec_e,
-    rec_q, rec_nodes, status, unstable, rest_time, impacts, max_pen, energy_rise, steps, abort,
-):
-    """Advance die ``i`` in place; see :func:`simulate_batch` for the arguments."""
-    n0, n1, n2 = normal[0], normal[1], normal[2]
-    x0, x1, x2 = x[i, 0], x[i, 1], x[i, 2]
-    u0, u1, u2 = u[i, 0], u[i, 1], u[i, 2]
-    l0, l1, l2 = ang[i, 0], ang[i, 1], ang[i, 2]
-    w0, w1, w2 = (w[i, 0], w[i, 1], w[i, 2]) if rotation else (0.0, 0.0, 0.0)
-    inv_iso = 1.0 / iso if iso > 0.0 else 0.0
+def simulate_one(i: int, dice: Dice, body: Body, contact: Contact, options: Options,
+                 stops: Stops, records: Records, out: Outcome) -> None:
+    """Advance die ``i`` in place; see :func:`simulate_batch`."""
+    n0, n1, n2 = contact.normals[0, 0], contact.normals[0, 1], contact.normals[0, 2]
+    up = (n0, n1, n2)
+    x0, x1, x2 = dice.x[i, 0], dice.x[i, 1], dice.x[i, 2]
+    u0, u1, u2 = dice.u[i, 0], dice.u[i, 1], dice.u[i, 2]
+    l0, l1, l2 = dice.ang[i, 0], dice.ang[i, 1], dice.ang[i, 2]
+    rotation, midpoint, dt, g = options.rotation, options.midpoint, options.dt, options.gravity
+    mass = body.mass
+    w0, w1, w2 = (dice.w[i, 0], dice.w[i, 1], dice.w[i, 2]) if rotation else (0.0, 0.0, 0.0)
     dt_m = dt / mass
-    r_max = 0.0
-    for k in range(8):
-        r_max = max(r_max, math.sqrt(body[k, 0] ** 2 + body[k, 1] ** 2 + body[k, 2] ** 2))
-    qi = q[i].copy()
-    n_rec = rec_x.shape[1]
-    record_e, record_q = rec_e.shape[1] > 0, rec_q.shape[1] > 0
-    record_nodes = rec_nodes.shape[1] > 0
-    kinetic_rest = 0.5 * mass * v_rest * v_rest
-    lock_max = lock_energy.max()
-    e_start = 0.0
-    e_tol = 1.0
-    e_max = -np.inf
+    n_steps, stride = stops.n_steps, records.stride
+    qi = dice.q[i].copy()
+    n_rec = records.x.shape[1]
+    kinetic_rest = 0.5 * mass * stops.v_rest * stops.v_rest
+    lock_max = stops.lock.max()
+    e_start, e_tol, e_max = 0.0, 1.0, -np.inf
     quiet = 0
     was_in_contact = True
     end = RUNNING
-    pen = max_pen[i]
-    hits = impacts[i]
+    pen = out.max_pen[i]
+    hits = out.impacts[i]
     step = 0
     passes = 0
     next_record = stride
     pu0, pu1, pu2 = u0, u1, u2  # velocities one step back, for the midpoint forces
     pw0, pw1, pw2 = w0, w1, w2
-    heights = np.full(8, -1.0)  # corner heights entering the last step
-    anchors = np.zeros((8, 3))  # stick-slip: where each corner's tangential spring is tied
-    tied = np.zeros(8, np.bool_)
+    n_vertices, n_planes = body.vertices.shape[0], contact.normals.shape[0]
+    heights = np.full((n_vertices, n_planes), -1.0)  # vertex heights entering the last step
+    anchors = np.zeros((n_vertices, n_planes, 3))  # stick-slip: where each spring is tied
+    tied = np.zeros((n_vertices, n_planes), np.bool_)
+    lowest = np.empty(n_planes)
     while step < n_steps:
         passes += 1
-        if passes & (ABORT_EVERY - 1) == 0 and abort[0] != 0:
+        if passes & (ABORT_EVERY - 1) == 0 and out.abort[0] != 0:
             end = ABORTED
             break
         step += 1
+        cu, cw = (u0, u1, u2), (w0, w1, w2)
         if midpoint:
-            cu0, cu1, cu2 = 1.5 * u0 - 0.5 * pu0, 1.5 * u1 - 0.5 * pu1, 1.5 * u2 - 0.5 * pu2
-            cw0, cw1, cw2 = 1.5 * w0 - 0.5 * pw0, 1.5 * w1 - 0.5 * pw1, 1.5 * w2 - 0.5 * pw2
-        # 1.-2. corners, and the forces and torques of the ground on them
-        f0, f1, f2 = 0.0, 0.0, -mass * g
-        t0, t1, t2 = 0.0, 0.0, 0.0
-        spring = 0.0  # energy in the normal springs
-        spring_t = 0.0  # and in the stick-slip tangential springs
-        touching = 0
-        approach = 0.0
-        lowest = np.inf
-        # kinetic energy of the state entering this step; near rest, the fastest corner
-        wl0, wl1, wl2 = _inverse_world_inertia_times(qi, inv_body, inv_iso, l0, l1, l2)
+            cu = (1.5 * u0 - 0.5 * pu0, 1.5 * u1 - 0.5 * pu1, 1.5 * u2 - 0.5 * pu2)
+            cw = (1.5 * w0 - 0.5 * pw0, 1.5 * w1 - 0.5 * pw1, 1.5 * w2 - 0.5 * pw2)
+        # kinetic energy of the state entering this step; near rest, the fastest vertex
+        wl0, wl1, wl2 = angular_velocity(qi, body, l0, l1, l2)
         kinetic = 0.5 * mass * (u0 * u0 + u1 * u1 + u2 * u2) + 0.5 * (
             l0 * wl0 + l1 * wl1 + l2 * wl2
         )
-        near_rest = stop_at_rest and kinetic < kinetic_rest
-        fastest = 0.0  # largest squared corner speed |u + w x r_k|^2, when near_rest
-        for k in range(8):
-            b0, b1, b2 = body[k, 0], body[k, 1], body[k, 2]
-            rk0 = qi[0, 0] * b0 + qi[0, 1] * b1 + qi[0, 2] * b2
-            rk1 = qi[1, 0] * b0 + qi[1, 1] * b1 + qi[1, 2] * b2
-            rk2 = qi[2, 0] * b0 + qi[2, 1] * b1 + qi[2, 2] * b2
-            height = n0 * (x0 + rk0) + n1 * (x1 + rk1) + n2 * (x2 + rk2)
-            lowest = min(lowest, height)
-            before = heights[k]
-            heights[k] = height
-            if height >= 0.0:
-                tied[k] = False
-                if gated:
-                    if near_rest:
-                        v0 = u0 + w1 * rk2 - w2 * rk1
-                        v1 = u1 + w2 * rk0 - w0 * rk2
-                        v2 = u2 + w0 * rk1 - w1 * rk0
-                        fastest = max(fastest, v0 * v0 + v1 * v1 + v2 * v2)
-                    continue
-            uk0 = u0 + w1 * rk2 - w2 * rk1
-            uk1 = u1 + w2 * rk0 - w0 * rk2
-            uk2 = u2 + w0 * rk1 - w1 * rk0
-            if near_rest:
-                fastest = max(fastest, uk0 * uk0 + uk1 * uk1 + uk2 * uk2)
-            dg = max(0.0, -height)
-            un = n0 * uk0 + n1 * uk1 + n2 * uk2
-            if height < 0.0:
-                touching += 1
-                spring += 0.5 * stiff * dg * dg
-                pen = max(pen, dg)
-                approach = max(approach, -un)
-            fn = stiff * dg
-            if midpoint:
-                uk0 = cu0 + cw1 * rk2 - cw2 * rk1
-                uk1 = cu1 + cw2 * rk0 - cw0 * rk2
-                uk2 = cu2 + cw0 * rk1 - cw1 * rk0
-                un = n0 * uk0 + n1 * uk1 + n2 * uk2
-            friction_limit = fn  # normal force for the friction, without the onset weight
-            if damp > 0.0:
-                friction_limit -= damp * un
-                if midpoint and before > 0.0 and height < 0.0:
-                    fn -= (0.5 - height / (before - height)) * damp * un
-                else:
-                    fn = friction_limit
-            if fn <= 0.0:
-                tied[k] = False
-                continue
-            fk0, fk1, fk2 = fn * n0, fn * n1, fn * n2
-            if mu > 0.0:
-                cap = mu * max(friction_limit, 0.0)  # Coulomb's limit mu fn
-                ut0, ut1, ut2 = uk0 - un * n0, uk1 - un * n1, uk2 - un * n2
-                if stick:
-                    # tangential spring from the tie point plus damping, capped at mu fn
-                    p0, p1, p2 = x0 + rk0, x1 + rk1, x2 + rk2
-                    if not tied[k]:
-                        # tied where it crossed the plane during the last step, if it did
-                        tied[k] = True
-                        back = dt * height / (before - height) if before > 0.0 else 0.0
-                        anchors[k, 0] = p0 + back * ut0
-                        anchors[k, 1] = p1 + back * ut1
-                        anchors[k, 2] = p2 + back * ut2
-                    e0, e1, e2 = p0 - anchors[k, 0], p1 - anchors[k, 1], p2 - anchors[k, 2]
-                    en = n0 * e0 + n1 * e1 + n2 * e2
-                    e0, e1, e2 = e0 - en * n0, e1 - en * n1, e2 - en * n2
-                    ft0, ft1, ft2 = -kt * e0 - ct * ut0, -kt * e1 - ct * ut1, -kt * e2 - ct * ut2
-                    size = math.sqrt(ft0 * ft0 + ft1 * ft1 + ft2 * ft2)
-                    if size > cap:
-                        # slip: Coulomb's force against the slip velocity, or along the
-                        # spring's pull while the corner is slower than one step's friction
-                        # kick on a quarter of the die could make it (then its direction
-                        # means nothing); the tie point follows the corner
-                        speed = math.sqrt(ut0 * ut0 + ut1 * ut1 + ut2 * ut2)
-                        if speed > 4.0 * cap * dt_m:
-                            ratio = -cap / speed
-                            ft0, ft1, ft2 = ratio * ut0, ratio * ut1, ratio * ut2
-                        else:
-                            ratio = cap / size
-                            ft0, ft1, ft2 = ratio * ft0, ratio * ft1, ratio * ft2
-                        e0, e1, e2 = -ft0 / kt, -ft1 / kt, -ft2 / kt
-                        anchors[k, 0], anchors[k, 1], anchors[k, 2] = p0 - e0, p1 - e1, p2 - e2
-                    spring_t += 0.5 * kt * (e0 * e0 + e1 * e1 + e2 * e2)
-                    fk0 += ft0
-                    fk1 += ft1
-                    fk2 += ft2
-                else:
-                    scale = cap / (math.sqrt(ut0 * ut0 + ut1 * ut1 + ut2 * ut2) + vmin)
-                    fk0 -= scale * ut0
-                    fk1 -= scale * ut1
-                    fk2 -= scale * ut2
-            f0 += fk0
-            f1 += fk1
-            f2 += fk2
-            if rotation:
-                t0 += rk1 * fk2 - rk2 * fk1
-                t1 += rk2 * fk0 - rk0 * fk2
-                t2 += rk0 * fk1 - rk1 * fk0
+        near_rest = stops.at_rest and kinetic < kinetic_rest
+        # 1.-2. vertices, and the forces and torques of the planes on them
+        f0, f1, f2, t0, t1, t2, spring, spring_t, touching, approach, pen, fastest = (
+            contact_forces(body, contact, options, qi, (x0, x1, x2), (u0, u1, u2),
+                           (w0, w1, w2), cu, cw, near_rest, heights, anchors, tied, lowest,
+                           pen))
         # energy of the state entering this step. The gain check leaves out the tangential
         # springs: a slip re-ties a spring to carry the whole force mu fn, damping share
-        # included, which can stretch it beyond what the corner's motion put in (on a soft,
+        # included, which can stretch it beyond what the vertex's motion put in (on a soft,
         # heavily damped table, many times the throw's energy) and is shed again as the
         # force falls; the decided-face lock counts them, which only delays it
         checked = kinetic + mass * g * x2 + spring
         energy = checked + spring_t
         if step == 1:
             e_start = checked
-            e_tol = energy_scale_add + kinetic + mass * g * max(0.0, n0 * x0 + n1 * x1 + n2 * x2)
+            e_tol = stops.energy_scale + kinetic + mass * g * max(
+                0.0, (n0 * x0 + n1 * x1 + n2 * x2) - contact.offsets[0])
         else:
             e_max = max(e_max, checked)
-        if touching > 0 and not was_in_contact and approach > v_rest:
+        if touching > 0 and not was_in_contact and approach > stops.v_rest:
             hits += 1
         was_in_contact = touching > 0
-        if energy < lock_max and energy < lock_energy[_face_up_index(qi, n0, n1, n2)]:
+        if decided(stops, body, qi, up, energy, lock_max):
             end = DECIDED
             step -= 1
             break
-        if stop_at_rest:
-            if touching >= 3 and near_rest and fastest < v_rest * v_rest:
+        if stops.at_rest:
+            if touching >= 3 and near_rest and fastest < stops.v_rest * stops.v_rest:
                 quiet += 1
-                if quiet > hold_steps or energy - rest_energy < rest_excess:
-                    rest_time[i] = (step - quiet) * dt
+                if quiet > stops.hold_steps or energy - stops.rest_energy < stops.rest_excess:
+                    out.rest_time[i] = (step - quiet) * dt
                     end = SETTLED
                     step -= 1
                     break
@@ -385,11 +608,9 @@ def _simulate_one(
         # 3. centre of mass: velocity first, then position with the new velocity
         dv0, dv1, dv2 = f0 * dt_m, f1 * dt_m, f2 * dt_m
         jump = 1
-        if flight and touching == 0:
-            spin = math.sqrt(l0 * l0 + l1 * l1 + l2 * l2) * inv_i_min if rotation else 0.0
-            # all but the last free step, so the step before a contact is a plain one
-            jump = max(1, _free_steps(lowest, n0 * u0 + n1 * u1 + n2 * u2, spin, r_max,
-                                      n0 * dv0 + n1 * dv1 + n2 * dv2, dt, n_steps - step + 1) - 1)
+        if options.flight and touching == 0:
+            jump = _jump(body, contact, lowest, (u0, u1, u2), (l0, l1, l2), (dv0, dv1, dv2),
+                         rotation, dt, n_steps - step + 1)
         if jump > 1:
             # records falling inside the jump, from the same closed form (the jump itself does
             # not depend on the recording)
@@ -400,12 +621,11 @@ def _simulate_one(
                 half = 0.5 * j * (j + 1)
                 qj = qi.copy()
                 if rotation:
-                    _torque_free(qj, inv_body, inv_iso, l0, l1, l2, dt, j)
-                _record(s // stride - 1, i, x0 + dt * (j * u0 + half * dv0),
-                        x1 + dt * (j * u1 + half * dv1), x2 + dt * (j * u2 + half * dv2),
-                        u0 + j * dv0, u1 + j * dv1, u2 + j * dv2, l0, l1, l2, qj, inv_body,
-                        inv_iso, body, mass, g, rec_x, rec_e, rec_q, rec_nodes,
-                        record_e, record_q, record_nodes)
+                    torque_free(qj, body, l0, l1, l2, dt, j)
+                _record(records, s // stride - 1, i,
+                        (x0 + dt * (j * u0 + half * dv0), x1 + dt * (j * u1 + half * dv1),
+                         x2 + dt * (j * u2 + half * dv2)),
+                        (u0 + j * dv0, u1 + j * dv1, u2 + j * dv2), (l0, l1, l2), qj, body, g)
             # `jump` flight steps in closed form: u_j = u + j dv, x_j = x + dt (j u + dv j(j+1)/2)
             half = 0.5 * jump * (jump + 1)
             nx0 = x0 + dt * (jump * u0 + half * dv0)
@@ -419,8 +639,7 @@ def _simulate_one(
         nl0, nl1, nl2 = l0, l1, l2
         if rotation:
             nl0, nl1, nl2 = l0 + dt * t0, l1 + dt * t1, l2 + dt * t2
-        finite = math.isfinite(nu0 + nu1 + nu2 + nx0 + nx1 + nx2 + nl0 + nl1 + nl2)
-        if not finite:
+        if not math.isfinite(nu0 + nu1 + nu2 + nx0 + nx1 + nx2 + nl0 + nl1 + nl2):
             end = NONFINITE
             step -= 1
             break
@@ -429,108 +648,100 @@ def _simulate_one(
             pw0, pw1, pw2 = w0, w1, w2
         u0, u1, u2, x0, x1, x2, l0, l1, l2 = nu0, nu1, nu2, nx0, nx1, nx2, nl0, nl1, nl2
         if rotation:
-            w0, w1, w2 = _torque_free(qi, inv_body, inv_iso, l0, l1, l2, dt, jump)
+            w0, w1, w2 = torque_free(qi, body, l0, l1, l2, dt, jump)
         step += jump - 1
         if step >= next_record:  # a multiple of the stride reached or jumped over
             if step % stride == 0 and step // stride <= n_rec:
-                _record(step // stride - 1, i, x0, x1, x2, u0, u1, u2, l0, l1, l2, qi,
-                        inv_body, inv_iso, body, mass, g, rec_x, rec_e, rec_q, rec_nodes,
-                        record_e, record_q, record_nodes)
+                _record(records, step // stride - 1, i, (x0, x1, x2), (u0, u1, u2),
+                        (l0, l1, l2), qi, body, g)
             next_record = (step // stride + 1) * stride
     # a die that stopped early stays where it is for the rest of the record
     for j in range(step // stride, n_rec):
-        _record(j, i, x0, x1, x2, u0, u1, u2, l0, l1, l2, qi, inv_body, inv_iso, body, mass, g,
-                rec_x, rec_e, rec_q, rec_nodes, record_e, record_q, record_nodes)
-    x[i, 0], x[i, 1], x[i, 2] = x0, x1, x2
-    u[i, 0], u[i, 1], u[i, 2] = u0, u1, u2
-    ang[i, 0], ang[i, 1], ang[i, 2] = l0, l1, l2
+        _record(records, j, i, (x0, x1, x2), (u0, u1, u2), (l0, l1, l2), qi, body, g)
+    dice.x[i, 0], dice.x[i, 1], dice.x[i, 2] = x0, x1, x2
+    dice.u[i, 0], dice.u[i, 1], dice.u[i, 2] = u0, u1, u2
+    dice.ang[i, 0], dice.ang[i, 1], dice.ang[i, 2] = l0, l1, l2
     if rotation:
-        w[i, 0], w[i, 1], w[i, 2] = w0, w1, w2
-    q[i] = qi
-    status[i] = end
-    unstable[i] = end == NONFINITE
+        dice.w[i, 0], dice.w[i, 1], dice.w[i, 2] = w0, w1, w2
+    dice.q[i] = qi
+    out.status[i] = end
+    out.unstable[i] = end == NONFINITE
     if end != SETTLED:
-        rest_time[i] = step * dt
-    steps[i] = step
-    max_pen[i] = pen
-    impacts[i] = hits
-    # (e - e0) / tol is monotone in e, so its largest value is that of the largest e; a die
-    # with no energy to measure against (no gravity, no motion) gains infinitely from any
-    rise = e_max - e_start
-    if e_tol > 0.0:
-        rise /= e_tol
-    elif rise > 0.0:
-        rise = np.inf
-    energy_rise[i] = max(energy_rise[i], rise)
+        out.rest_time[i] = step * dt
+    out.steps[i] = step
+    out.max_pen[i] = pen
+    out.impacts[i] = hits
+    # (e - e0) / tol is monotone in e, so its largest value is that of the largest e
+    out.energy_rise[i] = max(out.energy_rise[i], relative_rise(e_max, e_start, e_tol))
 
 
 @njit(cache=True, inline="always")
-def _record(j, i, x0, x1, x2, u0, u1, u2, l0, l1, l2, qi, inv_body, inv_iso, body, mass, g,
-            rec_x, rec_e, rec_q, rec_nodes, record_e, record_q, record_nodes):
+def _jump(body: Body, contact: Contact, lowest: np.ndarray, u: tuple, ang: tuple, dv: tuple,
+          rotation: bool, dt: float, limit: int) -> int:
+    """Flight steps to take at once (at least 1).
+
+    All but the last of those surely free of every plane, so the step before a contact is a
+    plain one.
+    """
+    l0, l1, l2 = ang
+    spin = math.sqrt(l0 * l0 + l1 * l1 + l2 * l2) * body.inv_i_min if rotation else 0.0
+    free = limit
+    normals = contact.normals
+    for p in range(normals.shape[0]):
+        n0, n1, n2 = normals[p, 0], normals[p, 1], normals[p, 2]
+        free = min(free, free_steps(lowest[p], n0 * u[0] + n1 * u[1] + n2 * u[2], spin,
+                                    body.r_max, n0 * dv[0] + n1 * dv[1] + n2 * dv[2], dt,
+                                    limit))
+    return max(1, free - 1)
+
+
+@njit(cache=True, inline="always")
+def _record(records: Records, j: int, i: int, x: tuple, u: tuple, ang: tuple, q: np.ndarray,
+            body: Body, g: float) -> None:
     """Store the state after a step: centre of mass, the listing's energy, orientation, nodes."""
-    rec_x[i, j, 0], rec_x[i, j, 1], rec_x[i, j, 2] = x0, x1, x2
-    if record_e:
-        if inv_iso > 0.0:
-            rot = 0.5 * (l0 * l0 + l1 * l1 + l2 * l2) * inv_iso
+    x0, x1, x2 = x
+    u0, u1, u2 = u
+    l0, l1, l2 = ang
+    records.x[i, j, 0], records.x[i, j, 1], records.x[i, j, 2] = x0, x1, x2
+    if records.energy.shape[1] > 0:
+        if body.inv_iso > 0.0:
+            rot = 0.5 * (l0 * l0 + l1 * l1 + l2 * l2) * body.inv_iso
         else:
-            wl0, wl1, wl2 = _inverse_world_inertia_times(qi, inv_body, inv_iso, l0, l1, l2)
+            wl0, wl1, wl2 = angular_velocity(q, body, l0, l1, l2)
             rot = 0.5 * (l0 * wl0 + l1 * wl1 + l2 * wl2)
-        rec_e[i, j] = 0.5 * mass * (u0 * u0 + u1 * u1 + u2 * u2) + rot + mass * g * x2
-    if record_q:
-        rec_q[i, j] = qi
-    if record_nodes:
-        for k in range(8):
+        records.energy[i, j] = 0.5 * body.mass * (u0 * u0 + u1 * u1 + u2 * u2) + rot \
+            + body.mass * g * x2
+    if records.orientation.shape[1] > 0:
+        records.orientation[i, j] = q
+    if records.nodes.shape[1] > 0:
+        vertices = body.vertices
+        for k in range(vertices.shape[0]):
             for a in range(3):
-                rec_nodes[i, j, k, a] = (
-                    (x0, x1, x2)[a]
-                    + qi[a, 0] * body[k, 0] + qi[a, 1] * body[k, 1] + qi[a, 2] * body[k, 2]
+                records.nodes[i, j, k, a] = (
+                    x[a] + q[a, 0] * vertices[k, 0] + q[a, 1] * vertices[k, 1]
+                    + q[a, 2] * vertices[k, 2]
                 )
 
 
 @njit(cache=True, parallel=True, nogil=True)
-def simulate_batch(*args):
+def simulate_batch(dice: Dice, body: Body, contact: Contact, options: Options, stops: Stops,
+                   records: Records, out: Outcome) -> None:
     """Advance a batch of dice in place, in parallel over dice.
 
-    ``args`` are those of :func:`_simulate_one` after the die's index:
-    ``x, u, ang, q, w, body, mass, inv_body, iso, inv_i_min, normal, stiff, damp, mu, vmin,
-    stick, kt, ct, g, dt, gated, rotation, flight, midpoint, n_steps, stop_at_rest, v_rest,
-    hold_steps, rest_energy, rest_excess, lock_energy, energy_scale_add, stride, rec_x, rec_e,
-    rec_q, rec_nodes, status, unstable, rest_time, impacts, max_pen, energy_rise, steps,
-    abort``.
-
-    State (updated in place), batch size B: ``x`` (B, 3) centre of mass; ``u`` (B, 3) its
-    velocity; ``ang`` (B, 3) angular momentum about it; ``q`` (B, 3, 3) body-to-world rotation;
-    ``w`` (B, 3) angular velocity used for corner velocities.
-    Die: ``body`` (8, 3) corners relative to the centre of mass, body frame; ``mass``;
-    ``inv_body`` (3, 3) inverse body inertia; ``iso`` the scalar inertia when isotropic, else 0;
-    ``inv_i_min`` the inverse of the smallest principal moment.
-    Ground: unit ``normal`` (3,), ``stiff``, ``damp``, ``mu``, ``vmin``; ``g`` along -z; ``gated``
-    (bool) contact law. ``rotation`` (bool): False translates only. ``flight`` (bool; gated law
-    or no damping): jump over contact-free steps. ``midpoint`` (bool): midpoint contact forces
-    (see the module docstring). Run ``n_steps`` of ``dt``;
-    ``stop_at_rest`` ends a die after ``hold_steps`` quiet steps (at least three corners in
-    contact, every corner slower than ``v_rest``), or at a quiet
-    step whose total energy is less than ``rest_excess`` above ``rest_energy`` (0: never).
-    Whatever ``stop_at_rest``, a die whose total energy falls below ``lock_energy`` (6,) of
-    its face up ends decided (``-inf``: never; :func:`dice_env.simulate.lock_energy`).
-    ``energy_rise`` gets the largest rise of total energy above its start in units of
-    ``KE0 + m g h0 + energy_scale_add`` (``h0`` the start height of the centre above the
-    plane); ``unstable`` marks a state that stopped being finite.
-    Records every ``stride`` steps into ``rec_x`` (B, n, 3), ``rec_e`` (B, n or 0), ``rec_q``
-    (B, n or 0, 3, 3), ``rec_nodes`` (B, n or 0, 8, 3). Outputs per die: ``status``,
-    ``unstable``, ``rest_time``, ``impacts``, ``max_pen``, ``energy_rise``, ``steps``.
-    ``abort`` (1,) int: set non-zero from another thread, every die still running ends
-    ``ABORTED`` within ``ABORT_EVERY`` loop passes (the kernel releases the GIL).
+    The groups' docstrings say what each holds. Dice are independent: the results do not
+    depend on the batch or the threads. The kernel releases the GIL, so another thread can
+    set ``out.abort``.
     """
-    for i in prange(args[0].shape[0]):
-        _simulate_one(i, *args)
+    for i in prange(dice.x.shape[0]):
+        simulate_one(i, dice, body, contact, options, stops, records, out)
 
 
 @njit(cache=True, nogil=True)
-def simulate_serial(*args):
+def simulate_serial(dice: Dice, body: Body, contact: Contact, options: Options, stops: Stops,
+                    records: Records, out: Outcome) -> None:
     """:func:`simulate_batch` on the calling thread, with the same results.
 
     Saves the start of a parallel region: for a single throw or one thread.
     """
-    for i in range(args[0].shape[0]):
-        _simulate_one(i, *args)
+    for i in range(dice.x.shape[0]):
+        simulate_one(i, dice, body, contact, options, stops, records, out)

@@ -13,7 +13,7 @@ import numba
 import numpy as np
 
 from dice_env import kernel, vector_kernel
-from dice_env.die import face_up
+from dice_env.die import FACE_NORMALS, face_up
 from dice_env.rotations import orthonormality_error
 from dice_env.scene import ContactLaw, FrictionLaw, Scene, Scheme
 from dice_env.validation import as_batch, check_finite, check_range
@@ -206,7 +206,8 @@ def simulate(
                        ("early_rest", early_rest), ("stop_when_decided", stop_when_decided)):
         if not isinstance(flag, (bool, np.bool_)):
             raise TypeError(f"{name} must be a bool, got {flag!r}")
-    dt, body, inv_inertia, iso, inv_i_min, normal = _scene_constants(scene)
+    body, contact = _packed_scene(scene)
+    dt = scene.step
     n_steps = scene.steps_for(scene.t_max if t_max is None else t_max)
     out = state.copy()
     b = out.batch_size
@@ -216,73 +217,106 @@ def simulate(
         raise ValueError(f"state.position: die {i} starts with a corner {start_sink[i]:.3g} m "
                          f"inside the table, deeper than the scene's sink limit "
                          f"({scene.sink_limit:g} of the edge)")
+    records = _records(record, record_every, b, n_steps, len(body.vertices))
+    options, stops = pack_run(scene, n_steps=n_steps, stop_at_rest=stop_at_rest,
+                              free_flight=free_flight, early_rest=early_rest,
+                              stop_when_decided=stop_when_decided)
+    dice = kernel.Dice(out.position, out.velocity, out.angular_momentum, out.orientation,
+                       out.angular_velocity)
+    outcome = kernel.Outcome(
+        status=np.zeros(b, np.int8), unstable=np.zeros(b, np.bool_), rest_time=np.zeros(b),
+        impacts=np.zeros(b, np.int64), max_pen=np.maximum(start_sink, 0.0),
+        energy_rise=np.zeros(b), steps=np.zeros(b, np.int64), abort=np.zeros(1, np.int64))
+    serial = b == 1 or threads == 1 or _after_fork
+    chosen = vector_kernel if vector_kernel.covers(
+        scene, b, options.flight, records.stride <= n_steps) else kernel
+    run = chosen.simulate_serial if serial else chosen.simulate_batch
+    _run_interruptibly(run, (dice, body, contact, options, stops, records, outcome),
+                       outcome.abort, threads, long=b * n_steps > _LONG_RUN)
+    energy_rise, unstable, status = outcome.energy_rise, outcome.unstable, outcome.status
+    energy_rise /= scene.energy_tol
+    unstable |= energy_rise > 1.0
+    recorded = {}
+    if record_every:
+        n_rec = records.x.shape[1]
+        recorded = {"t": np.arange(1, n_rec + 1) * (records.stride * dt), "x_cm": records.x}
+        fields = {"energy": records.energy, "orientations": records.orientation,
+                  "nodes": records.nodes}
+        recorded.update({name: fields[name] for name in record})
+    max_pen = outcome.max_pen
+    return Result(
+        face=face_up(out.orientation, np.asarray(scene.ground.normal)),
+        settled=status == kernel.SETTLED, decided=status == kernel.DECIDED,
+        rest_time=outcome.rest_time, impacts=outcome.impacts, unstable=unstable,
+        energy_rise=energy_rise, max_penetration=max_pen,
+        sunk=max_pen > scene.sink_limit * scene.die.edge, steps=outcome.steps, final=out,
+        **recorded,
+    )
+
+
+def pack_run(scene: Scene, *, n_steps: int, stop_at_rest: bool = True, free_flight: bool = True,
+             early_rest: bool = False,
+             stop_when_decided: bool = False) -> tuple[kernel.Options, kernel.Stops]:
+    """The kernel's integration options and stop rules for a run of ``n_steps`` in ``scene``.
+
+    The keywords are :func:`simulate`'s. With :func:`pack_scene`, the one place that turns a
+    scene into the kernel's groups.
+    """
+    ground, dt = scene.ground, scene.step
+    gated = ground.contact_law == ContactLaw.GATED
+    options = kernel.Options(
+        gravity=float(scene.gravity), dt=float(dt), rotation=bool(scene.rotation),
+        flight=bool(free_flight and (gated or ground.damping == 0)),
+        midpoint=scene.scheme == Scheme.MIDPOINT)
+    rest_energy, rest_excess = _rest_energy(scene, early_rest)
+    stops = kernel.Stops(
+        n_steps=int(n_steps), at_rest=bool(stop_at_rest), v_rest=float(scene.rest.speed),
+        hold_steps=math.ceil(scene.rest.hold / dt), rest_energy=float(rest_energy),
+        rest_excess=float(rest_excess),
+        lock=lock_energy(scene) if stop_when_decided else _NEVER,
+        energy_scale=float(scene.die.mass * scene.gravity * scene.die.edge))
+    return options, stops
+
+
+def pack_scene(scene: Scene) -> tuple[kernel.Body, kernel.Contact]:
+    """The kernel's die and contact groups for ``scene`` (see :mod:`dice_env.kernel`)."""
+    die, ground = scene.die, scene.ground
+    inertia = die.inertia_body
+    vertices = np.ascontiguousarray(die.corners_body)
+    body = kernel.Body(
+        vertices=vertices, mass=float(die.mass), inv_inertia=np.linalg.inv(inertia),
+        inv_iso=1.0 / float(inertia[0, 0]) if die.is_isotropic else 0.0,
+        inv_i_min=float(1.0 / np.linalg.eigvalsh(inertia)[0]),
+        r_max=float(np.sqrt((vertices**2).sum(axis=1)).max()),
+        faces=np.ascontiguousarray(FACE_NORMALS), reads_down=False)
+    contact = kernel.Contact(
+        normals=np.array([ground.normal]), offsets=np.zeros(1),
+        stiffness=np.array([ground.stiffness], dtype=np.float64),
+        damping=np.array([ground.damping], dtype=np.float64),
+        friction=np.array([ground.friction], dtype=np.float64),
+        kt=np.array([ground.tangential * ground.stiffness]),
+        ct=np.array([ground.tangential * ground.damping]),
+        gated=ground.contact_law == ContactLaw.GATED,
+        stick=scene.friction_law == FrictionLaw.STICK_SLIP, vmin=float(scene.friction_vmin))
+    return body, contact
+
+
+def _records(record: tuple[str, ...], record_every: int, b: int, n_steps: int,
+             n_vertices: int) -> kernel.Records:
+    """Empty records for ``b`` dice every ``record_every`` steps (0: none), size-checked."""
     n_rec = n_steps // record_every if record_every else 0
-    stride = record_every or n_steps + 1
-    sizes = {"x_cm": 3, "energy": 1, "orientations": 9, "nodes": 24}
+    sizes = {"energy": 1, "orientations": 9, "nodes": 3 * n_vertices}
     floats = b * n_rec * (3 + sum(sizes[name] for name in record))
     if floats * 8 > MAX_RECORD_BYTES:
         raise ValueError(f"record_every={record_every} records {n_rec} states of {b} dice "
                          f"({floats * 8 / 2**30:.3g} GiB), more than the limit of "
                          f"{MAX_RECORD_BYTES / 2**30:g} GiB: record less often, fewer dice or "
                          "a shorter t_max")
-    rec = {
-        "x_cm": np.zeros((b, n_rec, 3)),
-        "energy": np.zeros((b, n_rec if "energy" in record else 0)),
-        "orientations": np.zeros((b, n_rec if "orientations" in record else 0, 3, 3)),
-        "nodes": np.zeros((b, n_rec if "nodes" in record else 0, 8, 3)),
-    }
-    status = np.zeros(b, np.int8)
-    unstable = np.zeros(b, np.bool_)
-    rest_time = np.zeros(b)
-    impacts = np.zeros(b, np.int64)
-    max_pen = np.maximum(start_sink, 0.0)
-    energy_rise = np.zeros(b)
-    steps = np.zeros(b, np.int64)
-    die, ground = scene.die, scene.ground
-    gated = ground.contact_law == ContactLaw.GATED
-    stick = scene.friction_law == FrictionLaw.STICK_SLIP
-    flight = free_flight and (gated or ground.damping == 0)
-    lock = lock_energy(scene) if stop_when_decided else _NEVER
-    rest_energy, rest_excess = _rest_energy(scene, early_rest)
-    hold_steps = math.ceil(scene.rest.hold / dt)
-    serial = b == 1 or threads == 1 or _after_fork
-    if vector_kernel.covers(scene, b, flight, stride <= n_steps):
-        run = vector_kernel.simulate_serial if serial else vector_kernel.simulate_batch
-        args = (
-            out.position, out.velocity, out.angular_momentum, out.orientation,
-            out.angular_velocity, body, die.mass, 1.0 / iso, normal, ground.stiffness,
-            ground.damping, ground.friction, scene.friction_vmin, scene.gravity, dt, n_steps,
-            stop_at_rest, scene.rest.speed, hold_steps, rest_energy, rest_excess, lock,
-            die.mass * scene.gravity * die.edge,
-            status, unstable, rest_time, impacts, max_pen, energy_rise, steps,
-        )
-    else:
-        run = kernel.simulate_serial if serial else kernel.simulate_batch
-        args = (
-            out.position, out.velocity, out.angular_momentum, out.orientation,
-            out.angular_velocity, body, die.mass, inv_inertia, iso, inv_i_min, normal,
-            ground.stiffness, ground.damping, ground.friction, scene.friction_vmin, stick,
-            ground.tangential * ground.stiffness, ground.tangential * ground.damping,
-            scene.gravity, dt, gated, scene.rotation, flight, scene.scheme == Scheme.MIDPOINT,
-            n_steps, stop_at_rest, scene.rest.speed, hold_steps, rest_energy, rest_excess,
-            lock, die.mass * scene.gravity * die.edge,
-            stride, rec["x_cm"], rec["energy"], rec["orientations"], rec["nodes"],
-            status, unstable, rest_time, impacts, max_pen, energy_rise, steps,
-        )
-    _run_interruptibly(run, args, threads, long=b * n_steps > _LONG_RUN)
-    energy_rise /= scene.energy_tol
-    unstable |= energy_rise > 1.0
-    settled = status == kernel.SETTLED
-    recorded = {}
-    if record_every:
-        recorded = {"t": np.arange(1, n_rec + 1) * (stride * dt), "x_cm": rec["x_cm"]}
-        recorded.update({name: rec[name] for name in record})
-    return Result(
-        face=face_up(out.orientation, normal),
-        settled=settled, decided=status == kernel.DECIDED, rest_time=rest_time,
-        impacts=impacts, unstable=unstable, energy_rise=energy_rise, max_penetration=max_pen,
-        sunk=max_pen > scene.sink_limit * die.edge, steps=steps, final=out, **recorded,
-    )
+    return kernel.Records(
+        stride=int(record_every or n_steps + 1), x=np.zeros((b, n_rec, 3)),
+        energy=np.zeros((b, n_rec if "energy" in record else 0)),
+        orientation=np.zeros((b, n_rec if "orientations" in record else 0, 3, 3)),
+        nodes=np.zeros((b, n_rec if "nodes" in record else 0, n_vertices, 3)))
 
 
 RECORDS = ("energy", "orientations", "nodes")
@@ -331,21 +365,20 @@ def _thread_count(num_threads: int | None) -> int:
     return int(num_threads)
 
 
-def _run_interruptibly(run: Callable, args: tuple, threads: int, *, long: bool) -> None:
-    """Call the kernel ``run(*args, abort)`` on ``threads`` threads, ending early on Ctrl-C.
+def _run_interruptibly(run: Callable, args: tuple, abort: np.ndarray, threads: int, *,
+                       long: bool) -> None:
+    """Call the kernel ``run(*args)`` on ``threads`` threads, ending early on Ctrl-C.
 
     A long run goes on a worker thread (the kernel releases the GIL) while this one waits
-    where Python can take a signal; on ``KeyboardInterrupt`` the kernel's abort flag ends
+    where Python can take a signal; on ``KeyboardInterrupt`` the kernel's ``abort`` flag ends
     every die within a few thousand steps and the interrupt is raised again. A short run
     is called directly (a thread costs about 0.1 ms).
     """
-    abort = np.zeros(1, np.int64)
-
     def call() -> None:
         previous = numba.get_num_threads()  # per thread in numba
         numba.set_num_threads(threads)
         try:
-            run(*args, abort)
+            run(*args)
         finally:
             numba.set_num_threads(previous)
 
@@ -373,25 +406,15 @@ def _run_interruptibly(run: Callable, args: tuple, threads: int, *, long: bool) 
         raise failure[0]
 
 
-def _scene_constants(scene: Scene) -> tuple:
-    """Kernel constants of ``scene``, computed once per (frozen, hashable) scene.
-
-    The step, corners, inverse inertia, isotropic inertia (or 0), inverse smallest principal
-    moment and ground normal.
-    """
+def _packed_scene(scene: Scene) -> tuple[kernel.Body, kernel.Contact]:
+    """:func:`pack_scene`, computed once per (frozen, hashable) scene."""
     try:
-        return _cached_constants(scene)
+        return _cached_pack(scene)
     except TypeError:  # a scene holding something unhashable
-        return _cached_constants.__wrapped__(scene)
+        return pack_scene(scene)
 
 
-@functools.lru_cache(maxsize=64)
-def _cached_constants(scene: Scene) -> tuple:
-    die = scene.die
-    inertia = die.inertia_body
-    return (scene.step, die.corners_body, np.linalg.inv(inertia),
-            float(inertia[0, 0]) if die.is_isotropic else 0.0,
-            1.0 / np.linalg.eigvalsh(inertia)[0], np.asarray(scene.ground.normal))
+_cached_pack = functools.lru_cache(maxsize=64)(pack_scene)
 
 
 def _rest_energy(scene: Scene, early_rest: bool) -> tuple[float, float]:

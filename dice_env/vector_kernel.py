@@ -6,7 +6,7 @@ all 8 corners whether they touch or not, and the die never jumps. With no branch
 on the die but its end, one pass of a loop over a tile of ``TILE`` dice does one step of every
 die in it, and LLVM turns that pass into SIMD code (4 dice per instruction with AVX2).
 
-The arithmetic is :func:`dice_env.kernel._simulate_one`'s, operation for operation in the same
+The arithmetic is :func:`dice_env.kernel.simulate_one`'s, operation for operation in the same
 order (no fast-math: no reassociation, no fused multiply-add), so its results are
 bit-identical to that kernel's (``tests/test_vector_kernel.py`` checks it); what is a branch
 there is a select here. It serves the runs :func:`covers` accepts (the paper's law and
@@ -16,7 +16,7 @@ goes to :mod:`dice_env.kernel`.
 A die that ends (time limit, rest, decided face, or a state that stops being finite) keeps
 the state and step count it ended with, as in the scalar kernel, and its lane idles; a tile
 stops once all its dice have ended. A turn above 1/64 rad in one step (where ``R(w dt)``
-needs ``sin``) is done for that die after the vector pass by :func:`dice_env.kernel._rotate`.
+needs ``sin``) is done for that die after the vector pass by :func:`dice_env.kernel.rotate`.
 """
 
 from __future__ import annotations
@@ -35,11 +35,18 @@ from dice_env.kernel import (
     RUNNING,
     SERIES,
     SETTLED,
-    _rodrigues,
-    _rotate,
-    _rotation_series,
+    Body,
+    Contact,
+    Dice,
+    Options,
+    Outcome,
+    Records,
+    Stops,
+    relative_rise,
+    rodrigues,
+    rotate,
+    rotation_series,
 )
-from dice_env.scene import ContactLaw, FrictionLaw, Scene, Scheme
 
 TILE = 16  # dice per tile; a compile-time row stride, so LLVM can prove the lanes independent
 X, U, L, W, Q = 0, 3, 6, 9, 12  # centre, velocity, angular momentum, angular velocity, Q (9)
@@ -63,17 +70,19 @@ def disabled() -> Iterator[None]:
         _enabled = was
 
 
-def covers(scene: Scene, batch: int, flight: bool, records: bool) -> bool:
+def covers(scene: object, batch: int, flight: bool, records: bool) -> bool:
     """Whether a run of ``batch`` dice in ``scene`` takes this kernel (else the scalar one).
 
-    The paper's contact law and friction with the listing's step, an isotropic die that
-    rotates, no free-flight jumps and no records; and at least a tile of dice (a tile costs
-    the same for fewer); not inside :func:`disabled`.
+    The paper's contact law and friction with the listing's step, an isotropic eight-corner
+    die that rotates, one plane, no free-flight jumps and no records; and at least a tile of
+    dice (a tile costs the same for fewer); not inside :func:`disabled`. (``scene`` is a
+    :class:`dice_env.scene.Scene`, read by its fields' names: the kernels import nothing
+    above them.)
     """
-    return (_enabled and scene.ground.contact_law == ContactLaw.PAPER
-            and scene.friction_law == FrictionLaw.REGULARIZED and scene.scheme == Scheme.PAPER
-            and scene.rotation and scene.die.is_isotropic and batch >= TILE and not flight
-            and not records)
+    return (_enabled and scene.ground.contact_law.name == "PAPER"
+            and scene.friction_law.name == "REGULARIZED" and scene.scheme.name == "PAPER"
+            and scene.rotation and scene.die.is_isotropic and len(scene.die.corners_body) == 8
+            and batch >= TILE and not flight and not records)
 
 
 @njit(cache=True, inline="always")
@@ -147,40 +156,48 @@ def _add(acc, corner):
 
 
 @njit(cache=True, error_model="numpy")
-def _tile_step_plain(t, body, mass, inv_iso, normal, stiff, damp, mu, vmin, g, dt, stop_at_rest,
-                     v_rest, hold_steps, rest_energy, rest_excess, lock, energy_scale_add):
+def _tile_step_plain(t: np.ndarray, body: Body, contact: Contact, options: Options,
+                     stops: Stops) -> None:
     """:func:`_step` for dice that run to the time limit: no rest test or decided face."""
-    _step(t, body, mass, inv_iso, normal, stiff, damp, mu, vmin, g, dt, stop_at_rest, v_rest,
-          hold_steps, rest_energy, rest_excess, lock, energy_scale_add, False)
+    _step(t, body, contact, options, stops, False)
 
 
 @njit(cache=True, error_model="numpy")
-def _tile_step_ending(t, body, mass, inv_iso, normal, stiff, damp, mu, vmin, g, dt,
-                      stop_at_rest, v_rest, hold_steps, rest_energy, rest_excess, lock,
-                      energy_scale_add):
+def _tile_step_ending(t: np.ndarray, body: Body, contact: Contact, options: Options,
+                      stops: Stops) -> None:
     """:func:`_step` for dice that may end at rest or at a decided face."""
-    _step(t, body, mass, inv_iso, normal, stiff, damp, mu, vmin, g, dt, stop_at_rest, v_rest,
-          hold_steps, rest_energy, rest_excess, lock, energy_scale_add, True)
+    _step(t, body, contact, options, stops, True)
 
 
 @njit(cache=True, inline="always")
-def _step(t, body, mass, inv_iso, normal, stiff, damp, mu, vmin, g, dt, stop_at_rest, v_rest,
-          hold_steps, rest_energy, rest_excess, lock, energy_scale_add, ends):
+def _step(t: np.ndarray, body: Body, contact: Contact, options: Options, stops: Stops,
+          ends: bool) -> None:
     """One step of every die of the tile ``t`` (rows of ``TILE`` lanes), in place.
 
     ``ends`` (a constant in each of the two compiled copies, so its work costs nothing when
     False) enables the rest test and the decided face. Leaves in row ``TURN`` the squared
     turn of each die that the series could not take (else 0).
     """
+    normal = contact.normals[0]
+    stiff, damp, mu = contact.stiffness[0], contact.damping[0], contact.friction[0]
+    vmin, g, dt, mass, inv_iso = contact.vmin, options.gravity, options.dt, body.mass, body.inv_iso
+    stop_at_rest, v_rest, hold_steps = stops.at_rest, stops.v_rest, stops.hold_steps
+    rest_energy, rest_excess, lock = stops.rest_energy, stops.rest_excess, stops.lock
+    energy_scale_add = stops.energy_scale
+    vertices = body.vertices
     n0, n1, n2 = normal[0], normal[1], normal[2]
     dt_m = dt / mass
     kinetic_rest = 0.5 * mass * v_rest * v_rest
     lock0, lock1, lock2, lock3, lock4, lock5 = lock[0], lock[1], lock[2], lock[3], lock[4], lock[5]
     lock_max = _max(_max(_max(lock0, lock1), _max(lock2, lock3)), _max(lock4, lock5))
-    b0, b1 = (body[0, 0], body[0, 1], body[0, 2]), (body[1, 0], body[1, 1], body[1, 2])
-    b2, b3 = (body[2, 0], body[2, 1], body[2, 2]), (body[3, 0], body[3, 1], body[3, 2])
-    b4, b5 = (body[4, 0], body[4, 1], body[4, 2]), (body[5, 0], body[5, 1], body[5, 2])
-    b6, b7 = (body[6, 0], body[6, 1], body[6, 2]), (body[7, 0], body[7, 1], body[7, 2])
+    b0 = (vertices[0, 0], vertices[0, 1], vertices[0, 2])
+    b1 = (vertices[1, 0], vertices[1, 1], vertices[1, 2])
+    b2 = (vertices[2, 0], vertices[2, 1], vertices[2, 2])
+    b3 = (vertices[3, 0], vertices[3, 1], vertices[3, 2])
+    b4 = (vertices[4, 0], vertices[4, 1], vertices[4, 2])
+    b5 = (vertices[5, 0], vertices[5, 1], vertices[5, 2])
+    b6 = (vertices[6, 0], vertices[6, 1], vertices[6, 2])
+    b7 = (vertices[7, 0], vertices[7, 1], vertices[7, 2])
     ground = (n0, n1, n2, stiff, damp, mu, vmin)
     for i in range(TILE):
         x = (t[X * TILE + i], t[(X + 1) * TILE + i], t[(X + 2) * TILE + i])
@@ -258,8 +275,8 @@ def _step(t, body, mass, inv_iso, normal, stiff, damp, mu, vmin, g, dt, stop_at_
         v0, v1, v2 = nw0 * dt, nw1 * dt, nw2 * dt
         turn = v0 * v0 + v1 * v1 + v2 * v2
         series = turn > 0.0 and turn < SERIES
-        a, c = _rotation_series(turn)
-        r00, r01, r02, r10, r11, r12, r20, r21, r22 = _rodrigues(v0, v1, v2, turn, a, c)
+        a, c = rotation_series(turn)
+        r00, r01, r02, r10, r11, r12, r20, r21, r22 = rodrigues(v0, v1, v2, turn, a, c)
         if not moves:  # a die that is done keeps its state (selects, not branches)
             nx0, nx1, nx2, nu0, nu1, nu2, nl0, nl1, nl2 = x0, x1, x2, u0, u1, u2, l0, l1, l2
             nw0, nw1, nw2 = w
@@ -296,11 +313,10 @@ def _all_ended(t: np.ndarray, lanes: int) -> bool:
 
 
 @njit(cache=True)
-def _run_tile(first, last, x, u, ang, q, w, body, mass, inv_iso, normal, stiff, damp, mu, vmin,
-              g, dt, n_steps, stop_at_rest, v_rest, hold_steps, rest_energy, rest_excess, lock,
-              energy_scale_add, status, unstable, rest_time, impacts,
-              max_pen, energy_rise, steps, abort):
-    """Dice ``first`` to ``last - 1`` (at most ``TILE``) for ``n_steps`` steps, in place."""
+def _run_tile(first: int, last: int, dice: Dice, body: Body, contact: Contact, options: Options,
+              stops: Stops, out: Outcome) -> None:
+    """Dice ``first`` to ``last - 1`` (at most ``TILE``) for ``stops.n_steps`` steps, in place."""
+    x, u, ang, q, w = dice
     t = np.zeros(ROWS * TILE)
     qi = np.empty((3, 3))
     lanes = last - first
@@ -316,12 +332,12 @@ def _run_tile(first, last, x, u, ang, q, w, body, mass, inv_iso, normal, stiff, 
         t[E_TOL * TILE + i] = 1.0
         t[E_MAX * TILE + i] = -np.inf
         t[WAS * TILE + i] = 1.0
-        t[PEN * TILE + i] = max_pen[d]
-        t[HITS * TILE + i] = impacts[d]
-    ends = stop_at_rest or lock.max() > -np.inf
-    for step in range(n_steps):
+        t[PEN * TILE + i] = out.max_pen[d]
+        t[HITS * TILE + i] = out.impacts[d]
+    ends = stops.at_rest or stops.lock.max() > -np.inf
+    for step in range(stops.n_steps):
         if step % CHECK_EVERY == 0:
-            if abort[0] != 0:
+            if out.abort[0] != 0:
                 for i in range(lanes):
                     if t[STATUS * TILE + i] == RUNNING:
                         t[STATUS * TILE + i] = ABORTED
@@ -329,19 +345,16 @@ def _run_tile(first, last, x, u, ang, q, w, body, mass, inv_iso, normal, stiff, 
             if _all_ended(t, lanes):
                 break
         if ends:
-            _tile_step_ending(t, body, mass, inv_iso, normal, stiff, damp, mu, vmin, g, dt,
-                              stop_at_rest, v_rest, hold_steps, rest_energy, rest_excess, lock,
-                              energy_scale_add)
+            _tile_step_ending(t, body, contact, options, stops)
         else:
-            _tile_step_plain(t, body, mass, inv_iso, normal, stiff, damp, mu, vmin, g, dt,
-                             stop_at_rest, v_rest, hold_steps, rest_energy, rest_excess, lock,
-                             energy_scale_add)
+            _tile_step_plain(t, body, contact, options, stops)
         for i in range(TILE):  # the rare large turn, exactly as the scalar kernel does it
             if t[TURN * TILE + i] > 0.0:
                 for a in range(3):
                     for c in range(3):
                         qi[a, c] = t[(Q + 3 * a + c) * TILE + i]
-                _rotate(qi, t[W * TILE + i], t[(W + 1) * TILE + i], t[(W + 2) * TILE + i], dt)
+                rotate(qi, t[W * TILE + i], t[(W + 1) * TILE + i], t[(W + 2) * TILE + i],
+                       options.dt)
                 for a in range(3):
                     for c in range(3):
                         t[(Q + 3 * a + c) * TILE + i] = qi[a, c]
@@ -355,36 +368,35 @@ def _run_tile(first, last, x, u, ang, q, w, body, mass, inv_iso, normal, stiff, 
             for c in range(3):
                 q[d, a, c] = t[(Q + 3 * a + c) * TILE + i]
         done = int(t[STEP * TILE + i])
-        status[d] = int(t[STATUS * TILE + i])
-        unstable[d] = status[d] == NONFINITE
-        rest_time[d] = t[REST_T * TILE + i] if status[d] == SETTLED else done * dt
-        steps[d] = done
-        max_pen[d] = t[PEN * TILE + i]
-        impacts[d] = int(t[HITS * TILE + i])
-        energy_rise[d] = max(energy_rise[d], (t[E_MAX * TILE + i] - t[E_START * TILE + i])
-                             / t[E_TOL * TILE + i])
+        status = int(t[STATUS * TILE + i])
+        out.status[d] = status
+        out.unstable[d] = status == NONFINITE
+        out.rest_time[d] = t[REST_T * TILE + i] if status == SETTLED else done * options.dt
+        out.steps[d] = done
+        out.max_pen[d] = t[PEN * TILE + i]
+        out.impacts[d] = int(t[HITS * TILE + i])
+        out.energy_rise[d] = max(out.energy_rise[d], relative_rise(
+            t[E_MAX * TILE + i], t[E_START * TILE + i], t[E_TOL * TILE + i]))
 
 
 @njit(cache=True, parallel=True, nogil=True)
-def simulate_batch(x, u, ang, q, w, body, mass, inv_iso, normal, stiff, damp, mu, vmin, g, dt,
-                   n_steps, stop_at_rest, v_rest, hold_steps, rest_energy, rest_excess, lock,
-                   energy_scale_add, status, unstable, rest_time, impacts,
-                   max_pen, energy_rise, steps, abort):
+def simulate_batch(dice: Dice, body: Body, contact: Contact, options: Options, stops: Stops,
+                   records: Records, out: Outcome) -> None:
     """:func:`dice_env.kernel.simulate_batch` for a scene :func:`covers`, tiles in parallel.
 
-    The arguments are that function's (``inv_iso`` the inverse of the isotropic moment).
+    The arguments are that function's (``records`` is empty: :func:`covers` admits no records).
     """
-    n = x.shape[0]
+    n = dice.x.shape[0]
     for tile in prange((n + TILE - 1) // TILE):
-        _run_tile(tile * TILE, min(n, (tile + 1) * TILE), x, u, ang, q, w, body, mass, inv_iso,
-                  normal, stiff, damp, mu, vmin, g, dt, n_steps, stop_at_rest, v_rest,
-                  hold_steps, rest_energy, rest_excess, lock, energy_scale_add,
-                  status, unstable, rest_time, impacts, max_pen, energy_rise, steps, abort)
+        _run_tile(tile * TILE, min(n, (tile + 1) * TILE), dice, body, contact, options, stops,
+                  out)
 
 
 @njit(cache=True, nogil=True)
-def simulate_serial(*args):
+def simulate_serial(dice: Dice, body: Body, contact: Contact, options: Options, stops: Stops,
+                    records: Records, out: Outcome) -> None:
     """:func:`simulate_batch` on the calling thread, with the same results."""
-    n = args[0].shape[0]
+    n = dice.x.shape[0]
     for tile in range((n + TILE - 1) // TILE):
-        _run_tile(tile * TILE, min(n, (tile + 1) * TILE), *args)
+        _run_tile(tile * TILE, min(n, (tile + 1) * TILE), dice, body, contact, options, stops,
+                  out)
