@@ -525,7 +525,7 @@ def simulate_one(i: int, dice: Dice, body: Body, contact: Contact, options: Opti
                  stops: Stops, records: Records, out: Outcome) -> None:
     """Advance die ``i`` in place; see :func:`simulate_batch`."""
     n0, n1, n2 = contact.normals[0, 0], contact.normals[0, 1], contact.normals[0, 2]
-    up = (n0, n1, n2)
+    up = (0.0, 0.0, 1.0)  # faces are read against gravity
     x0, x1, x2 = dice.x[i, 0], dice.x[i, 1], dice.x[i, 2]
     u0, u1, u2 = dice.u[i, 0], dice.u[i, 1], dice.u[i, 2]
     l0, l1, l2 = dice.ang[i, 0], dice.ang[i, 1], dice.ang[i, 2]

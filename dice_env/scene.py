@@ -6,10 +6,10 @@ Units are SI in the default scene (m, kg, s). The paper's scenes use its own uni
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field, replace
 from enum import IntEnum
-from functools import cached_property
 
 import numpy as np
 
@@ -77,23 +77,24 @@ class FrictionLaw(IntEnum):
 
 
 @dataclass(frozen=True)
-class Ground:
-    """Penalty ground: a plane through the origin with unit ``normal``.
+class Plane:
+    """A penalty half-space: the die stays on the side ``normal . x >= offset``.
 
-    ``stiffness`` S (N/m per corner), ``damping`` D (N s/m per corner), sliding ``friction`` mu;
-    ``tangential``: the stick-slip friction's spring and damper per corner as a fraction of S
-    and D (2/7, the usual choice for discrete elements since Silbert et al. 2001; the same
-    fraction for both keeps the damping proportional to the stiffness, so the stable step stays
-    exact).
-    The defaults are the wooden table of :mod:`dice_env.table` for the default 4.5 g die
-    (restitution 0.45); :func:`dice_env.table.table_scene` recomputes D for another die.
+    ``normal`` (unit, normalised when given) points into the free side; ``offset`` (m) is the
+    plane's signed distance from the origin along it. ``stiffness`` S (N/m per vertex),
+    ``damping`` D (N s/m per vertex), sliding ``friction`` mu; ``tangential``: the stick-slip
+    friction's spring and damper per vertex as a fraction of S and D (2/7, the usual choice
+    for discrete elements since Silbert et al. 2001; the same fraction for both keeps the
+    damping proportional to the stiffness, so the stable step stays exact). The defaults
+    are the wooden table of :mod:`dice_env.table` for the default 4.5 g die (restitution
+    0.45); :func:`dice_env.table.table_scene` recomputes D for another die.
     """
 
     stiffness: float = table.STIFFNESS
     damping: float = table.DAMPING
     friction: float = table.FRICTION
     normal: tuple[float, float, float] = (0.0, 0.0, 1.0)
-    contact_law: ContactLaw = ContactLaw.GATED
+    offset: float = 0.0
     tangential: float = 2.0 / 7.0
 
     def __post_init__(self) -> None:
@@ -103,6 +104,7 @@ class Ground:
             raise ValueError("tangential must be in (0, 1], got 0")
         check_nonnegative("damping", self.damping)
         check_nonnegative("friction", self.friction)
+        check_finite("offset", self.offset)
         normal = np.asarray(self.normal, dtype=np.float64)
         if normal.shape != (3,):
             raise ValueError(f"normal must have shape (3,), got {normal.shape}")
@@ -110,10 +112,28 @@ class Ground:
         norm = float(np.linalg.norm(normal))
         if norm == 0.0:
             raise ValueError("normal must be a non-zero vector (it is normalised), got (0, 0, 0)")
-        if normal[2] / norm <= 0:
+        object.__setattr__(self, "normal", tuple(float(v) for v in normal / norm))
+        object.__setattr__(self, "offset", float(self.offset))
+
+    def height(self, points: np.ndarray) -> np.ndarray:
+        """Signed distance (m) of ``points`` (..., 3) from the plane, > 0 on the free side."""
+        return np.asarray(points) @ np.asarray(self.normal) - self.offset
+
+
+@dataclass(frozen=True)
+class Ground(Plane):
+    """The floor: a :class:`Plane` whose ``normal`` points up (through the origin by default).
+
+    It also holds the contact law of every plane of the scene (see :class:`ContactLaw`).
+    """
+
+    contact_law: ContactLaw = ContactLaw.GATED
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if self.normal[2] <= 0:
             raise ValueError(f"normal must point upward (n_z > 0) so the table holds the die, "
                              f"got {self.normal}")
-        object.__setattr__(self, "normal", tuple(float(v) for v in normal / norm))
         object.__setattr__(self, "contact_law",
                            as_enum("contact_law", ContactLaw, self.contact_law))
 
@@ -123,6 +143,30 @@ class Ground:
         check_range("angle_deg", angle_deg, 0.0, 90.0, high_open=True)
         a = math.radians(angle_deg)
         return cls(normal=(math.sin(a), 0.0, math.cos(a)), **kwargs)
+
+
+@dataclass(frozen=True)
+class Wall(Plane):
+    """A wall: a :class:`Plane` with its own material; ``normal`` points into the room.
+
+    ``Wall.through(point, normal)`` places it through a point.
+    """
+
+    normal: tuple[float, float, float] = (1.0, 0.0, 0.0)
+
+    @classmethod
+    def through(cls, point: tuple[float, float, float], normal: tuple[float, float, float],
+                **material: float) -> Wall:
+        """The wall through ``point`` facing ``normal`` (any length), with ``material``."""
+        point = np.asarray(point, dtype=np.float64)
+        if point.shape != (3,):
+            raise ValueError(f"point must have shape (3,), got {point.shape}")
+        check_finite("point", point)
+        n = np.asarray(normal, dtype=np.float64)
+        length = float(np.linalg.norm(n)) if n.shape == (3,) else 0.0
+        if length == 0.0 or not math.isfinite(length):
+            raise ValueError(f"normal must be a finite non-zero vector (3,), got {normal!r}")
+        return cls(normal=tuple(n / length), offset=float(point @ n) / length, **material)
 
 
 @dataclass(frozen=True)
@@ -146,6 +190,8 @@ class Rest:
 class Scene:
     """Everything that stays fixed during a throw.
 
+    The die, the floor (``ground``) and any ``walls``, gravity and the integrator settings.
+
     ``dt=None`` picks ``safety * critical_dt`` (0.15: landed faces of gentle throws agree with
     a quarter step as well as at 0.1, and at 0.2 less well; docs/model.md). A ``dt``
     above :attr:`critical_dt` raises unless
@@ -166,6 +212,7 @@ class Scene:
 
     die: Die = field(default_factory=Die)
     ground: Ground = field(default_factory=Ground)
+    walls: tuple[Wall, ...] = ()
     gravity: float = 9.81
     dt: float | None = None
     safety: float = 0.15
@@ -184,6 +231,10 @@ class Scene:
             if not isinstance(getattr(self, name), kind):
                 raise TypeError(f"{name} must be a {kind.__name__}, "
                                 f"got {type(getattr(self, name)).__name__}")
+        walls = (self.walls,) if isinstance(self.walls, Wall) else self.walls
+        if not isinstance(walls, (tuple, list)) or not all(isinstance(w, Wall) for w in walls):
+            raise TypeError(f"walls must be a tuple of Wall, got {self.walls!r}")
+        object.__setattr__(self, "walls", tuple(walls))
         for name in ("rotation", "allow_unstable"):
             if not isinstance(getattr(self, name), (bool, np.bool_)):
                 raise TypeError(f"{name} must be a bool, got {getattr(self, name)!r}")
@@ -217,52 +268,50 @@ class Scene:
             )
         self.steps_for(self.t_max)
 
-    @cached_property
-    def effective_mass(self) -> float:
-        """Smallest effective mass per contact corner, ``S / omega_max**2``.
+    @property
+    def planes(self) -> tuple[Plane, ...]:
+        """The floor, then the walls: every plane the die touches."""
+        return (self.ground, *self.walls)
 
-        ``omega_max`` is the fastest contact mode with one whole face on the ground (the stiffest
-        contact a flat table allows): the largest eigenvalue of ``M^-1 K`` with
-        ``K = S * sum_k a_k a_k^T``, ``a_k = (n, r_k x n)`` over the face's corners, and
+    @property
+    def effective_mass(self) -> float:
+        """Smallest effective mass per contact vertex on the floor (:meth:`effective_mass_on`)."""
+        return self.effective_mass_on(self.ground)
+
+    def effective_mass_on(self, plane: Plane) -> float:
+        """Smallest effective mass per contact vertex on ``plane``, ``S / omega_max**2``.
+
+        ``omega_max`` is the fastest contact mode with one whole face on the plane (the
+        stiffest contact a flat plane allows): the largest eigenvalue of ``M^-1 K`` with
+        ``K = S * sum_k a_k a_k^T``, ``a_k = (n, r_k x n)`` over the face's vertices, and
         ``M = diag(m, m, m, I)``; sticking friction adds ``tangential * S`` springs along two
         tangents ``t`` (``a_k = (t, r_k x t)``). For a fair solid die it is ``m/6`` without
         them (rocking about an edge axis) and ``m/8`` with them (sliding coupled to rocking);
         with ``rotation=False`` it is ``m/4`` (the four corners moving together).
         """
-        die = self.die
         if not self.rotation:
-            return die.mass / 4
-        sticks = self.friction_law == FrictionLaw.STICK_SLIP and self.ground.friction > 0
-        inv_sqrt_m = np.zeros((6, 6))
-        inv_sqrt_m[:3, :3] = np.eye(3) / math.sqrt(die.mass)
-        inv_sqrt_m[3:, 3:] = _inv_sqrt_spd(die.inertia_body)
-        corners = die.corners_body
-        face_signs = np.sign(corners @ FACE_NORMALS.T)
-        worst = 0.0
-        for f, n in enumerate(FACE_NORMALS):
-            on_face = corners[face_signs[:, f] > 0]
-            tangents = np.eye(3)[np.abs(n) < 0.5]  # the face normals are axes: the other two
-            springs = [(1.0, n)] + [(self.ground.tangential, t) for t in tangents if sticks]
-            stiffness = np.zeros((6, 6))
-            for weight, d in springs:
-                a = np.hstack([np.tile(d, (len(on_face), 1)), np.cross(on_face, d)])
-                stiffness += weight * (a.T @ a)
-            k = inv_sqrt_m @ stiffness @ inv_sqrt_m
-            worst = max(worst, float(np.linalg.eigvalsh(k)[-1]))
-        return 1.0 / worst
+            return self.die.mass / 4
+        sticks = self.friction_law == FrictionLaw.STICK_SLIP and plane.friction > 0
+        return _effective_mass(self.die, plane.tangential if sticks else 0.0)
 
     @property
     def critical_dt(self) -> float:
-        """Largest stable step of the scheme for the stiffest contact mode.
+        """Largest stable step of the scheme for the stiffest contact mode of any plane.
 
         The modified (symplectic) Euler step of ``m_eff x'' = -S x - D x'`` is stable iff
         ``(w dt)^2 + 2 (D/m_eff) dt < 4`` with ``w^2 = S/m_eff``, i.e.
         ``dt < (sqrt(D^2 + 4 S m_eff) - D) / S``. With the midpoint damping
         (``1.5 v_n - 0.5 v_n-1``) the eigenvalue -1 is reached at
         ``(w dt)^2 + 4 (D/m_eff) dt = 4``, i.e. ``dt < 2 (sqrt(D^2 + S m_eff) - D) / S``.
+        The smallest over the planes; a die pressed into a floor and a wall at once is
+        stiffer still (up to twice the stiffness: ``1/sqrt(2)`` of the step), which the
+        default safety of 0.15 covers.
         """
-        s, d, m = self.ground.stiffness, self.ground.damping, self.effective_mass
-        # the same roots rationalised, with no cancellation when D^2 >> S m_eff
+        return min(self._critical_dt(plane) for plane in self.planes)
+
+    def _critical_dt(self, plane: Plane) -> float:
+        s, d, m = plane.stiffness, plane.damping, self.effective_mass_on(plane)
+        # the roots rationalised, with no cancellation when D^2 >> S m_eff
         if self.scheme == Scheme.MIDPOINT:
             return 2.0 * m / (math.sqrt(d * d + s * m) + d)
         return 4.0 * m / (math.sqrt(d * d + 4.0 * s * m) + d)
@@ -291,17 +340,42 @@ class Scene:
         return max(1, round(count))
 
     def sink(self, position: np.ndarray, orientation: np.ndarray) -> np.ndarray:
-        """Depth (m) of the deepest corner below the table for each die, (B,); < 0 above it.
+        """Depth (m) of the deepest vertex inside any plane for each die, (B,); < 0 if none.
 
         ``position`` (B, 3) centre of mass, ``orientation`` (B, 3, 3) body-to-world.
         """
-        corners = position[:, None, :] + np.einsum("bij,kj->bki", orientation,
-                                                   self.die.corners_body)
-        return -(corners @ np.asarray(self.ground.normal)).min(axis=1)
+        vertices = position[:, None, :] + np.einsum("bij,kj->bki", orientation,
+                                                    self.die.corners_body)
+        return -np.min([plane.height(vertices).min(axis=1) for plane in self.planes], axis=0)
 
     def with_(self, **changes: object) -> Scene:
         """A copy with some fields changed (validated again)."""
         return replace(self, **changes)
+
+
+@functools.lru_cache(maxsize=256)
+def _effective_mass(die: Die, tangential: float) -> float:
+    """:meth:`Scene.effective_mass_on` for ``die``.
+
+    With sticking springs of ``tangential`` times S along the face (0: none).
+    """
+    inv_sqrt_m = np.zeros((6, 6))
+    inv_sqrt_m[:3, :3] = np.eye(3) / math.sqrt(die.mass)
+    inv_sqrt_m[3:, 3:] = _inv_sqrt_spd(die.inertia_body)
+    corners = die.corners_body
+    face_signs = np.sign(corners @ FACE_NORMALS.T)
+    worst = 0.0
+    for f, n in enumerate(FACE_NORMALS):
+        on_face = corners[face_signs[:, f] > 0]
+        tangents = np.eye(3)[np.abs(n) < 0.5]  # the face normals are axes: the other two
+        springs = [(1.0, n)] + [(tangential, t) for t in tangents if tangential > 0]
+        stiffness = np.zeros((6, 6))
+        for weight, d in springs:
+            a = np.hstack([np.tile(d, (len(on_face), 1)), np.cross(on_face, d)])
+            stiffness += weight * (a.T @ a)
+        k = inv_sqrt_m @ stiffness @ inv_sqrt_m
+        worst = max(worst, float(np.linalg.eigvalsh(k)[-1]))
+    return 1.0 / worst
 
 
 def _inv_sqrt_spd(matrix: np.ndarray) -> np.ndarray:

@@ -120,7 +120,7 @@ class State:
 class Result:
     """Outcome of a batch of throws (arrays over the batch, B).
 
-    - ``face``: 1–6, the face up relative to the ground normal at the end;
+    - ``face``: 1–6, the face up (against gravity, whatever the floor's tilt) at the end;
     - ``settled``: came to rest; ``rest_time``: when the rest began (s; the time simulated if
       not settled);
     - ``decided``: ended by ``stop_when_decided`` with too little energy left to change face;
@@ -245,7 +245,7 @@ def simulate(
         recorded.update({name: fields[name] for name in record})
     max_pen = outcome.max_pen
     return Result(
-        face=face_up(out.orientation, np.asarray(scene.ground.normal)),
+        face=face_up(out.orientation, UP),
         settled=status == kernel.SETTLED, decided=status == kernel.DECIDED,
         rest_time=outcome.rest_time, impacts=outcome.impacts, unstable=unstable,
         energy_rise=energy_rise, max_penetration=max_pen,
@@ -289,13 +289,15 @@ def pack_scene(scene: Scene) -> tuple[kernel.Body, kernel.Contact]:
         inv_i_min=float(1.0 / np.linalg.eigvalsh(inertia)[0]),
         r_max=float(np.sqrt((vertices**2).sum(axis=1)).max()),
         faces=np.ascontiguousarray(FACE_NORMALS), reads_down=False)
+    planes = scene.planes
     contact = kernel.Contact(
-        normals=np.array([ground.normal]), offsets=np.zeros(1),
-        stiffness=np.array([ground.stiffness], dtype=np.float64),
-        damping=np.array([ground.damping], dtype=np.float64),
-        friction=np.array([ground.friction], dtype=np.float64),
-        kt=np.array([ground.tangential * ground.stiffness]),
-        ct=np.array([ground.tangential * ground.damping]),
+        normals=np.array([plane.normal for plane in planes], dtype=np.float64),
+        offsets=np.array([plane.offset for plane in planes], dtype=np.float64),
+        stiffness=np.array([plane.stiffness for plane in planes], dtype=np.float64),
+        damping=np.array([plane.damping for plane in planes], dtype=np.float64),
+        friction=np.array([plane.friction for plane in planes], dtype=np.float64),
+        kt=np.array([plane.tangential * plane.stiffness for plane in planes], dtype=np.float64),
+        ct=np.array([plane.tangential * plane.damping for plane in planes], dtype=np.float64),
         gated=ground.contact_law == ContactLaw.GATED,
         stick=scene.friction_law == FrictionLaw.STICK_SLIP, vmin=float(scene.friction_vmin))
     return body, contact
@@ -319,6 +321,7 @@ def _records(record: tuple[str, ...], record_every: int, b: int, n_steps: int,
         nodes=np.zeros((b, n_rec if "nodes" in record else 0, n_vertices, 3)))
 
 
+UP = np.array([0.0, 0.0, 1.0])  # against gravity: faces are read relative to it
 RECORDS = ("energy", "orientations", "nodes")
 RELEASE_SINK = 1e-3  # deepest corner of a release, as a fraction of the edge
 MAX_RECORD_BYTES = 4 * 2**30  # records larger than this are refused before any work
