@@ -158,6 +158,7 @@ class Die:
                              f"got {name!r}")
         size = STANDARD_SIZES[name] if size is None else size
         check_positive("size", size)
+        _check_mass(mass)
         shape = _unit_shape(name)
         vertices = shape.vertices * size
         volume = size * size * size if name == "d6" else polyhedra.mass_properties(
@@ -176,6 +177,7 @@ class Die:
         sides = np.asarray(sides, dtype=np.float64)
         if sides.shape != (3,) or not np.all(np.isfinite(sides)) or np.any(sides <= 0):
             raise ValueError(f"sides must be three finite numbers > 0 (x, y, z), got {sides}")
+        _check_mass(mass)
         x, y, z = (float(s) for s in sides)
         if x == y == z:
             return cls.standard("d6", size=x, mass=mass)
@@ -196,12 +198,13 @@ class Die:
         order. The vertices are moved so that the solid's centroid is the origin. ``mass``
         defaults to :data:`DENSITY` times the volume; ``reads_down`` reads the face down.
         """
+        _check_mass(mass)
+        if not isinstance(reads_down, (bool, np.bool_)):
+            raise ValueError(f"reads_down must be a bool, got {reads_down!r}")
         faces = polyhedra.convex_faces(vertices, "vertices")
         points = np.asarray(vertices, dtype=np.float64)
         if labels is not None:
             faces = _in_label_order(faces, _checked_labels(labels, len(faces)))
-        if not isinstance(reads_down, (bool, np.bool_)):
-            raise ValueError(f"reads_down must be a bool, got {reads_down!r}")
         volume, centroid, _ = polyhedra.mass_properties(points, faces)
         if np.abs(centroid).max() > 1e-12 * np.abs(points).max():
             points = points - centroid
@@ -424,8 +427,7 @@ class Die:
             raise ValueError(f"com must have shape (3,), got {com.shape}")
         check_finite("com", com)
         normals = polyhedra.face_normals(vertices, faces)
-        distances = np.array([normals[f] @ vertices[face[0]] for f, face in enumerate(faces)])
-        if np.any(normals @ com >= distances):
+        if np.any(normals @ com >= _face_distances(vertices, faces, normals)):
             raise ValueError("com must lie inside the die (closer to the geometric centre than "
                              f"every face plane), got {tuple(com)}")
         if inertia is None:
@@ -446,9 +448,7 @@ class Die:
     @cached_property
     def _face_distances(self) -> np.ndarray:
         """Distance (m) of each face plane from the geometric centre, (F,)."""
-        vertices = np.array(self.vertices)
-        return np.array([n @ vertices[face[0]] for n, face in zip(self.face_normals, self.faces,
-                                                                  strict=True)])
+        return _face_distances(np.array(self.vertices), self.faces, self.face_normals)
 
 
 # --- shapes -------------------------------------------------------------------------------
@@ -526,6 +526,12 @@ def _checked_labels(labels: object, n: int) -> np.ndarray:
     return values
 
 
+def _face_distances(vertices: np.ndarray, faces: tuple[tuple[int, ...], ...],
+                    normals: np.ndarray) -> np.ndarray:
+    """Distance of each face plane from the origin, (F,)."""
+    return np.einsum("fi,fi->f", normals, vertices[[face[0] for face in faces]])
+
+
 def _least_height(vertices: np.ndarray, faces: tuple[tuple[int, ...], ...]) -> float:
     """The least height of the solid lying on one of its faces."""
     spans = polyhedra.face_normals(vertices, faces) @ vertices.T
@@ -534,12 +540,14 @@ def _least_height(vertices: np.ndarray, faces: tuple[tuple[int, ...], ...]) -> f
 
 # --- mass ---------------------------------------------------------------------------------
 
+def _check_mass(mass: float | None) -> None:
+    if mass is not None:
+        check_positive("mass", mass)
+
+
 def _mass(mass: float | None, volume: float) -> float:
-    """``mass`` if given (checked), else the default density's: ``DIE_MASS`` per ``DIE_VOLUME``."""
-    if mass is None:
-        return DIE_MASS * (volume / DIE_VOLUME)
-    check_positive("mass", mass)
-    return mass
+    """``mass`` if given, else the default density's: ``DIE_MASS`` per ``DIE_VOLUME``."""
+    return DIE_MASS * (volume / DIE_VOLUME) if mass is None else mass
 
 
 def _solid_inertia(name: str, vertices: np.ndarray, faces: tuple[tuple[int, ...], ...],

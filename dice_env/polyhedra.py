@@ -71,12 +71,12 @@ def checked_points(points: np.ndarray, name: str = "vertices") -> np.ndarray:
 
 def face_normals(points: np.ndarray, faces: tuple[tuple[int, ...], ...]) -> np.ndarray:
     """Outward unit normals (F, 3) of ``faces`` (counter-clockwise seen from outside)."""
-    out = np.empty((len(faces), 3))
-    for f, face in enumerate(faces):
-        corners = points[list(face)] - points[face[0]]
-        area = np.cross(corners[1:-1], corners[2:]).sum(axis=0)
-        out[f] = area / np.linalg.norm(area)
-    return out
+    fans = np.array([[f, face[0], face[k], face[k + 1]] for f, face in enumerate(faces)
+                     for k in range(1, len(face) - 1)])
+    origin = points[fans[:, 1]]
+    area = np.zeros((len(faces), 3))
+    np.add.at(area, fans[:, 0], np.cross(points[fans[:, 2]] - origin, points[fans[:, 3]] - origin))
+    return area / np.linalg.norm(area, axis=1, keepdims=True)
 
 
 def edges(faces: tuple[tuple[int, ...], ...]) -> np.ndarray:
