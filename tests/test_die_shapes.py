@@ -278,6 +278,21 @@ def test_from_vertices_builds_the_hull_and_centres_it():
     assert prism.volume == pytest.approx(0.5)
 
 
+@pytest.mark.parametrize("n", [4, 12, 40, polyhedra.MAX_VERTICES])
+def test_hull_of_random_points_on_a_sphere_agrees_with_scipy(n):
+    spatial = pytest.importorskip("scipy.spatial")
+    rng = np.random.default_rng(n)
+    points = rng.normal(size=(n, 3))
+    points /= np.linalg.norm(points, axis=1, keepdims=True)
+    faces = polyhedra.convex_faces(points)
+    reference = spatial.ConvexHull(points)
+    assert sorted(map(sorted, faces)) == sorted(map(sorted, reference.simplices.tolist()))
+    volume, centroid, _ = polyhedra.mass_properties(points, faces)
+    assert volume == pytest.approx(reference.volume, rel=1e-12)
+    normals = polyhedra.face_normals(points, faces)
+    assert (np.einsum("fi,fi->f", normals, points[[f[0] for f in faces]] - centroid) > 0).all()
+
+
 def test_dice_are_hashable_and_frozen():
     dice = {Die.standard(name): name for name in STANDARD_SIZES}
     assert dice[Die.standard("d20")] == "d20"
@@ -303,6 +318,8 @@ CUBE = CORNER_SIGNS.tolist()
     (lambda: Die.from_vertices([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0], [2, 3, 0]]),
      "vertices must not all lie in one plane"),
     (lambda: Die.from_vertices([[0, 0, 0], [1, 0, 0], [0, 1, 0]]), "vertices must hold 4 to"),
+    (lambda: Die.from_vertices(np.random.default_rng(0).normal(size=(65, 3))),
+     "vertices must hold 4 to 64 points"),
     (lambda: Die.from_vertices([*CUBE, CUBE[3]]), r"vertices\[3\] and vertices\[8\] coincide"),
     (lambda: Die.from_vertices([[0, 0, 0], [1, 0, 0], [0, 1, np.nan], [0, 0, 1]]),
      "vertices must be finite"),
