@@ -1,8 +1,12 @@
-"""The die: eight corner nodes, a mass distribution and numbered faces.
+"""The die: a convex polyhedron whose corners are the contact nodes, its mass and its faces.
 
-Body frame: origin at the geometric centre, axes along the edges. Faces follow a standard
-(right-handed, "Western") die: opposite faces sum to 7 and the faces 1, 2, 3 meet at the
-corner (+, +, +) and run counter-clockwise seen from outside that corner.
+Body frame: origin at the geometric centre (the uniform solid's centroid); the centre of mass
+``com`` is measured from it. Faces are stored in label order: face ``k`` (0-based) carries the
+printed label ``k + 1``.
+
+The d6 (the default, :class:`Die` ``()``) follows a standard (right-handed, "Western") die:
+opposite faces sum to 7 and the faces 1, 2, 3 meet at the corner (+, +, +) and run
+counter-clockwise seen from outside that corner.
 
 ======  ==========  ======  ==========
 face    outward     face    outward
@@ -11,16 +15,22 @@ face    outward     face    outward
 2       +x          5       -x
 3       +y          4       -y
 ======  ==========  ======  ==========
+
+The other standard dice (:meth:`Die.standard`) and any convex vertex set
+(:meth:`Die.from_vertices`) are described there.
 """
 
 from __future__ import annotations
 
+import itertools
 import math
-from dataclasses import dataclass, field
-from functools import cached_property
+from dataclasses import dataclass
+from functools import cache, cached_property, lru_cache
+from typing import NamedTuple
 
 import numpy as np
 
+from dice_env import polyhedra
 from dice_env.table import DIE_EDGE, DIE_MASS
 from dice_env.validation import check_finite, check_positive, check_range
 
@@ -42,6 +52,18 @@ FACE_NORMALS = np.array(
     [[0, 0, 1], [1, 0, 0], [0, 1, 0], [0, -1, 0], [-1, 0, 0], [0, 0, -1]], dtype=np.float64
 )
 
+# Default density (kg/m^3), the default d6's: 4.5 g at 16 mm, 1099 kg/m^3 (acrylic/resin).
+DIE_VOLUME = DIE_EDGE * DIE_EDGE * DIE_EDGE
+DENSITY = DIE_MASS / DIE_VOLUME
+# Default sizes (m): the least height of the die lying on a face (across faces; the d4's
+# height). Round figures for a common acrylic polyhedral set next to the 16 mm d6: our
+# estimate of retail dice, not a measured sample; pass ``size=`` for a measured die.
+STANDARD_SIZES = {"d4": 0.014, "d6": DIE_EDGE, "d8": 0.014, "d10": 0.014, "d12": 0.018,
+                  "d20": 0.020}
+# Tipping heights sample each tie arc at most this far apart (rad): the cube's end spacing
+# of 4001 points over its arc, 1 / (2000 sqrt 2).
+ARC_STEP = 1.0 / (2000.0 * math.sqrt(2.0))
+
 
 def paper_side_length(r: float) -> float:
     """The paper's side length for corner distance ``r``: ``s = -sqrt(2) + 2*sqrt(0.5 + r^2)``.
@@ -58,43 +80,136 @@ def solid_cube_inertia(mass: float, edge: float) -> np.ndarray:
     return np.eye(3) * (mass * edge * edge / 6.0)
 
 
-@dataclass(frozen=True)
-class Die:
-    """A cubic die of edge ``edge`` and mass ``mass``; corners are the contact nodes.
+class _Shape(NamedTuple):
+    """A die's geometry at size 1: centred corners, faces in label order, how it is read."""
 
-    The default is a uniform solid die (the paper's inertia, ``(1/6) m s^2``). A loaded die
-    carries its centre of mass ``com`` (body frame, from the geometric centre) and its inertia
-    tensor ``inertia`` about that centre of mass; build one with :meth:`loaded` or
-    :meth:`from_node_masses`.
+    vertices: np.ndarray
+    faces: tuple[tuple[int, ...], ...]
+    reads_down: bool
+
+
+@dataclass(frozen=True, init=False, repr=False)
+class Die:
+    """A convex polyhedral die; its corners are the contact nodes.
+
+    ``Die(edge, mass, com, inertia)`` is the cubic d6 of edge ``edge`` (the default: 16 mm,
+    4.5 g, uniform solid, the paper's inertia ``(1/6) m s^2``); other shapes come from
+    :meth:`standard`, :meth:`cuboid` and :meth:`from_vertices`, loaded dice from :meth:`load`.
+
+    Fields (hashable): ``name``; ``vertices`` (body frame, about the geometric centre);
+    ``faces`` (corner indices, counter-clockwise seen from outside, in label order); ``size``
+    (m: the least height of the die lying on a face, i.e. the least distance between a face and
+    the farthest corner from it: the cube's edge, a cuboid's shortest side, the distance
+    between opposite faces of the d8, d10, d12 and d20, the d4's height ``sqrt(2/3)`` edge);
+    ``mass``; ``com`` (centre of mass from the geometric centre); ``inertia`` (about the
+    centre of mass, body frame); ``reads_down`` (True for the d4, read by the face down).
     """
 
-    edge: float = DIE_EDGE
-    mass: float = DIE_MASS
-    com: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    inertia: tuple[tuple[float, ...], ...] | None = field(default=None)
+    name: str
+    vertices: tuple[tuple[float, float, float], ...]
+    faces: tuple[tuple[int, ...], ...]
+    size: float
+    mass: float
+    com: tuple[float, float, float]
+    inertia: tuple[tuple[float, float, float], ...]
+    reads_down: bool
 
-    def __post_init__(self) -> None:
-        check_positive("edge", self.edge)
-        check_positive("mass", self.mass)
-        com = np.asarray(self.com, dtype=np.float64)
-        if com.shape != (3,):
-            raise ValueError(f"com must have shape (3,), got {com.shape}")
-        check_finite("com", com)
-        if np.any(np.abs(com) >= self.edge / 2):
-            raise ValueError(f"com must lie inside the die, |com_i| < edge/2 = {self.edge / 2}")
-        if self.inertia is not None:
-            inertia = np.asarray(self.inertia, dtype=np.float64)
-            if inertia.shape != (3, 3):
-                raise ValueError(f"inertia must have shape (3, 3), got {inertia.shape}")
-            check_finite("inertia", inertia)
-            if not np.allclose(inertia, inertia.T, rtol=1e-12, atol=0.0):
-                raise ValueError("inertia must be symmetric")
-            principal = np.linalg.eigvalsh(inertia)
-            if principal[0] <= 0 or principal[2] > principal[0] + principal[1] * (1 + 1e-12):
-                raise ValueError(
-                    "inertia must be positive definite with principal moments obeying the "
-                    f"triangle inequality, got principal moments {principal}"
-                )
+    def __init__(
+        self,
+        edge: float = DIE_EDGE,
+        mass: float = DIE_MASS,
+        com: tuple[float, float, float] = (0.0, 0.0, 0.0),
+        inertia: tuple[tuple[float, ...], ...] | None = None,
+    ) -> None:
+        check_positive("edge", edge)
+        shape = _unit_shape("d6")
+        self._set("d6", shape.vertices * edge, shape.faces, edge, mass, com, inertia, False)
+
+    # --- constructors ---------------------------------------------------------------------
+
+    @classmethod
+    def standard(cls, name: str = "d6", size: float | None = None,
+                 mass: float | None = None) -> Die:
+        """A uniform standard die: "d4", "d6", "d8", "d10", "d12" or "d20".
+
+        ``size`` (m) as the field (default :data:`STANDARD_SIZES`); ``mass`` (kg) defaults to
+        :data:`DENSITY` times the volume. Numbering (Wikipedia, "Dice" and "Pentagonal
+        trapezohedron"): opposite faces sum to ``n + 1`` on the d6, d8, d12 and d20.
+
+        - d4: regular tetrahedron with corners ``(1, 1, 1), (1, -1, -1), (-1, 1, -1),
+          (-1, -1, 1)`` (scaled); face ``k`` lies opposite corner ``k``. Read by the face down,
+          i.e. the corner up, as players read it.
+        - d6: the cube above (``Die.standard("d6") == Die()``).
+        - d8: regular octahedron, corners on the axes; the odd faces 1, 3, 5, 7 meet at the
+          +z corner (counter-clockwise from azimuth 45 degrees), the even ones at -z.
+        - d10: the pentagonal trapezohedron dual to the uniform pentagonal antiprism
+          (:func:`polyhedra.pentagonal_trapezohedron`), apexes on the z axis. Labels 1–10 are
+          the printed digits 0–9 plus one, so opposite faces sum to 11 (digits to 9); going
+          counter-clockwise around the zigzag from the face at azimuth 0, the digits read
+          0, 7, 4, 1, 6, 9, 2, 5, 8, 3 (the common configuration): labels 1, 3, 5, 7, 9 meet at
+          the +z apex. Real d10s are often squatter than this canonical shape.
+        - d12, d20: regular dodecahedron and icosahedron lying on face 1 (its normal +z);
+          the upper faces take 1 … n/2 by descending height, then counter-clockwise azimuth
+          from +x; each lower face takes ``n + 1`` minus its opposite's label. Beyond the
+          opposite sums, this arrangement is ours, not a manufacturer's.
+        """
+        if name not in STANDARD_SIZES:
+            raise ValueError(f"name must be one of {', '.join(map(repr, STANDARD_SIZES))}, "
+                             f"got {name!r}")
+        size = STANDARD_SIZES[name] if size is None else size
+        check_positive("size", size)
+        _check_mass(mass)
+        shape = _unit_shape(name)
+        vertices = shape.vertices * size
+        volume = size * size * size if name == "d6" else polyhedra.mass_properties(
+            vertices, shape.faces)[0]
+        return cls._make(name, vertices, shape.faces, size, _mass(mass, volume),
+                         shape.reads_down)
+
+    @classmethod
+    def cuboid(cls, sides: tuple[float, float, float], mass: float | None = None) -> Die:
+        """A uniform rectangular box of ``sides`` (x, y, z) (m), numbered like the d6.
+
+        1 = +z, 6 = -z, 2 = +x, 5 = -x, 3 = +y, 4 = -y; ``size`` is the shortest side. Equal
+        sides give the d6 of :meth:`standard`. ``mass`` defaults to :data:`DENSITY` times the
+        volume.
+        """
+        sides = np.asarray(sides, dtype=np.float64)
+        if sides.shape != (3,) or not np.all(np.isfinite(sides)) or np.any(sides <= 0):
+            raise ValueError(f"sides must be three finite numbers > 0 (x, y, z), got {sides}")
+        _check_mass(mass)
+        x, y, z = (float(s) for s in sides)
+        if x == y == z:
+            return cls.standard("d6", size=x, mass=mass)
+        shape = _unit_shape("d6")
+        vertices = shape.vertices * sides
+        return cls._make("cuboid", vertices, shape.faces, min(x, y, z), _mass(mass, x * y * z),
+                         False)
+
+    @classmethod
+    def from_vertices(cls, vertices: np.ndarray, labels: np.ndarray | None = None,
+                      mass: float | None = None, *, reads_down: bool = False) -> Die:
+        """A uniform die on any convex vertex set (N, 3) (m): its corners are the contact nodes.
+
+        The faces come from the convex hull (coplanar corners make one polygon face); every
+        point must be a corner (:func:`polyhedra.convex_faces`). ``labels`` gives the label of
+        each hull face in the order of :func:`polyhedra.convex_faces` (the faces of
+        ``Die.from_vertices(vertices).faces``), a permutation of 1 … F; default 1 … F in that
+        order. The vertices are moved so that the solid's centroid is the origin. ``mass``
+        defaults to :data:`DENSITY` times the volume; ``reads_down`` reads the face down.
+        """
+        _check_mass(mass)
+        if not isinstance(reads_down, (bool, np.bool_)):
+            raise ValueError(f"reads_down must be a bool, got {reads_down!r}")
+        faces = polyhedra.convex_faces(vertices, "vertices")
+        points = np.asarray(vertices, dtype=np.float64)
+        if labels is not None:
+            faces = _in_label_order(faces, _checked_labels(labels, len(faces)))
+        volume, centroid, _ = polyhedra.mass_properties(points, faces)
+        if np.abs(centroid).max() > 1e-12 * np.abs(points).max():
+            points = points - centroid
+        return cls._make("polyhedron", points, faces, _least_height(points, faces),
+                         _mass(mass, volume), bool(reads_down))
 
     @classmethod
     def paper(cls, r: float = 1.0, mass: float = 1.0) -> Die:
@@ -111,52 +226,140 @@ class Die:
         edge: float = DIE_EDGE,
         mass: float = DIE_MASS,
     ) -> Die:
-        """A die with ``fraction`` of its mass moved into a point weight toward ``face``.
-
-        The weight sits on the axis of ``face`` at ``depth`` times the half edge from the centre;
-        the rest of the mass stays a uniform solid cube. The heavy face tends to land down, so
-        its opposite (``7 - face``) shows up more often.
-        """
-        if not isinstance(face, (int, np.integer)) or isinstance(face, bool) or not 1 <= face <= 6:
-            raise ValueError(f"face must be an int in [1, 6], got {face!r}")
-        check_range("fraction", fraction, 0.0, 1.0, high_open=True)
-        check_range("depth", depth, 0.0, 1.0, high_open=True)
-        p = FACE_NORMALS[face - 1] * depth * edge / 2
-        solid = (1 - fraction) * solid_cube_inertia(mass, edge)
-        weight = fraction * mass * (p @ p * np.eye(3) - np.outer(p, p))
-        com = fraction * p
-        about_com = solid + weight - mass * (com @ com * np.eye(3) - np.outer(com, com))
-        return cls(edge=edge, mass=mass, com=tuple(com), inertia=_as_tuple(about_com))
+        """The d6 of ``edge`` and ``mass`` loaded toward ``face``: ``Die(edge, mass).load(...)``."""
+        return cls(edge=edge, mass=mass).load(face, fraction, depth)
 
     @classmethod
     def from_node_masses(cls, masses: np.ndarray, edge: float = DIE_EDGE) -> Die:
-        """A die whose whole mass sits in its 8 corner nodes (inertia of those point masses)."""
+        """A d6 whose whole mass sits in its 8 corner nodes (inertia of those point masses)."""
         masses = np.asarray(masses, dtype=np.float64)
         if masses.shape != (8,):
             raise ValueError(f"masses must have shape (8,), got {masses.shape}")
         check_finite("masses", masses)
         if np.any(masses <= 0):
             raise ValueError("masses must all be > 0")
+        die = cls(edge=edge)
         total = float(masses.sum())
-        corners = CORNER_SIGNS * edge / 2
+        corners = np.asarray(die.vertices)
         com = masses @ corners / total
         rel = corners - com
         inertia = sum(
             mk * (rk @ rk * np.eye(3) - np.outer(rk, rk))
             for mk, rk in zip(masses, rel, strict=True)
         )
-        return cls(edge=edge, mass=total, com=tuple(com), inertia=_as_tuple(inertia))
+        return die._with_mass(total, com, inertia)
+
+    def load(self, face: int, fraction: float = 0.1, depth: float = 0.8) -> Die:
+        """A copy with ``fraction`` of the mass moved into a point weight toward ``face``.
+
+        The weight sits on the axis of face ``face`` (a label) at ``depth`` times that face's
+        distance from the geometric centre; the rest of the mass keeps its distribution. The
+        heavy face tends to land down: on a die read up its opposite shows more often, on the
+        d4 (read down) the loaded face itself.
+        """
+        n = self.n_faces
+        if not isinstance(face, (int, np.integer)) or isinstance(face, bool) or not 1 <= face <= n:
+            raise ValueError(f"face must be an int in [1, {n}], got {face!r}")
+        check_range("fraction", fraction, 0.0, 1.0, high_open=True)
+        check_range("depth", depth, 0.0, 1.0, high_open=True)
+        p = self.face_normals[face - 1] * depth * self._face_distances[face - 1]
+        c0 = np.asarray(self.com)
+        solid = (1 - fraction) * (self.inertia_body + self.mass * _shift(c0))
+        weight = fraction * self.mass * _shift(p)
+        com = (1 - fraction) * c0 + fraction * p
+        about_com = solid + weight - self.mass * _shift(com)
+        return self._with_mass(self.mass, com, about_com)
+
+    # --- geometry -------------------------------------------------------------------------
 
     @property
-    def half_edge(self) -> float:
-        """Half the edge length (m)."""
-        return self.edge / 2
+    def vertices_body(self) -> np.ndarray:
+        """Corner positions relative to the centre of mass, body frame, shape (N, 3)."""
+        return np.array(self.vertices) - np.asarray(self.com)
+
+    @cached_property
+    def face_normals(self) -> np.ndarray:
+        """Outward unit normals (F, 3), body frame, in label order (read-only)."""
+        return _frozen(polyhedra.face_normals(np.array(self.vertices), self.faces))
+
+    @property
+    def labels(self) -> np.ndarray:
+        """The printed label of each face, in the order of :attr:`face_normals`: 1 … F."""
+        return np.arange(1, self.n_faces + 1)
+
+    @property
+    def n_faces(self) -> int:
+        """Number of faces (and of outcomes)."""
+        return len(self.faces)
+
+    @cached_property
+    def edges(self) -> np.ndarray:
+        """The edges as corner-index pairs (E, 2), for drawing (read-only)."""
+        return _frozen(polyhedra.edges(self.faces))
+
+    @cached_property
+    def volume(self) -> float:
+        """Volume of the solid (m^3)."""
+        if self.name == "d6":
+            return self.size * self.size * self.size
+        return polyhedra.mass_properties(np.array(self.vertices), self.faces)[0]
+
+    def face_read(self, orientation: np.ndarray, up: np.ndarray) -> np.ndarray:
+        """The label read in each orientation (..., 3, 3) (body to world): int array (...).
+
+        The face whose outward normal points most along ``up`` (3,) (against gravity); for a
+        die that :attr:`reads_down` (the d4), the face pointing most along ``-up``.
+        """
+        orientation = np.asarray(orientation, dtype=np.float64)
+        up = np.asarray(up, dtype=np.float64)
+        if orientation.shape[-2:] != (3, 3) or up.shape != (3,):
+            raise ValueError(f"orientation must have shape (..., 3, 3) and up (3,), got "
+                             f"{orientation.shape} and {up.shape}")
+        world = np.einsum("...ij,fj->...fi", orientation, self._reading)
+        return self.labels[np.argmax(world @ up, axis=-1)]
+
+    @property
+    def resting_heights(self) -> np.ndarray:
+        """Height (m) of the centre of mass above its lowest corner, each face read, (F,).
+
+        In the orientation where the face's reading direction (its normal, or minus it for
+        the d4) points straight up: lying flat on the opposite face (on the face, for the d4).
+        """
+        return _heights_above_lowest_corner(self.vertices_body, self._reading)
+
+    @cached_property
+    def tipping_heights(self) -> np.ndarray:
+        """Least height (m) of the centre of mass above its lowest corner as each face tips, (F,).
+
+        A die can stop showing face ``F`` only through an orientation in which ``F`` ties
+        with another face ``G``, both read at least as much as any other: the up direction
+        ``u`` lies on an arc of the great circle ``(a_F - a_G) . u = 0`` (``a``: the reading
+        directions). Each such arc is found exactly and sampled at most :data:`ARC_STEP`
+        apart; the minimum is lowered by the height's Lipschitz bound (the largest corner
+        distance) times half the gap, so it is never above the true minimum (fair cube:
+        ``sqrt(2)`` half edges, balanced on an edge). Computed once per die (read-only).
+        """
+        corners, reading = self.vertices_body, self._reading
+        r_max = float(np.linalg.norm(corners, axis=1).max())
+        out = np.full(self.n_faces, np.inf)
+        for f, g in itertools.combinations(range(self.n_faces), 2):
+            arc = _tie_arc(reading, f, g)
+            if arc is None:
+                continue
+            lo, hi, m, w = arc
+            n = math.ceil((hi - lo) / ARC_STEP) + 1
+            phi = np.linspace(lo, hi, n)
+            up = np.cos(phi)[:, None] * m + np.sin(phi)[:, None] * w
+            gap = (hi - lo) / (n - 1) if n > 1 else 0.0
+            low = float(_heights_above_lowest_corner(corners, up).min()) - r_max * gap / 2
+            out[f], out[g] = min(out[f], low), min(out[g], low)
+        return _frozen(out)
+
+    # --- mass -----------------------------------------------------------------------------
 
     @property
     def inertia_body(self) -> np.ndarray:
         """Body-frame inertia tensor about the centre of mass, shape (3, 3)."""
-        if self.inertia is None:
-            return solid_cube_inertia(self.mass, self.edge)
         return np.array(self.inertia, dtype=np.float64)
 
     @property
@@ -166,42 +369,249 @@ class Die:
         return bool(np.all(inertia == inertia[0, 0] * np.eye(3)))
 
     @property
-    def corners_body(self) -> np.ndarray:
-        """Corner positions relative to the centre of mass, body frame, shape (8, 3)."""
-        return CORNER_SIGNS * self.half_edge - np.asarray(self.com)
+    def is_fair(self) -> bool:
+        """True when every face is alike by symmetry.
+
+        A standard die, centred, with isotropic inertia or the uniform solid's.
+        """
+        return (not any(self.com) and self.name in STANDARD_SIZES
+                and (self.is_isotropic or self.inertia_body.tolist() == _solid_inertia(
+                    self.name, np.array(self.vertices), self.faces, self.size,
+                    self.mass).tolist()))
+
+    # --- the cube's names, kept until the kernel reads the fields above -------------------
 
     @property
-    def resting_heights(self) -> np.ndarray:
-        """Height (m) of the centre of mass above the plane with each face up, lying flat, (6,)."""
-        return _heights_above_lowest_corner(self.corners_body, FACE_NORMALS)
+    def edge(self) -> float:
+        """Edge length (m) of the cubic die (d6 only): its :attr:`size`."""
+        if self.name != "d6":
+            raise AttributeError(f"edge is defined for the d6 only (this die is a {self.name}); "
+                                 "use size")
+        return self.size
+
+    @property
+    def half_edge(self) -> float:
+        """Half the edge length (m) of the cubic die (d6 only)."""
+        return self.edge / 2
+
+    @property
+    def corners_body(self) -> np.ndarray:
+        """Same as :attr:`vertices_body`."""
+        return self.vertices_body
+
+    # --- internals ------------------------------------------------------------------------
+
+    def __repr__(self) -> str:
+        com = "" if not any(self.com) else f", com={tuple(round(c, 9) for c in self.com)}"
+        return f"Die({self.name!r}, size={self.size:g}, mass={self.mass:g}{com})"
+
+    @classmethod
+    def _make(cls, name: str, vertices: np.ndarray, faces: tuple[tuple[int, ...], ...],
+              size: float, mass: float, reads_down: bool) -> Die:
+        die = object.__new__(cls)
+        die._set(name, vertices, faces, size, mass, (0.0, 0.0, 0.0), None, reads_down)
+        return die
+
+    def _with_mass(self, mass: float, com: np.ndarray, inertia: np.ndarray) -> Die:
+        die = object.__new__(type(self))
+        die._set(self.name, np.array(self.vertices), self.faces, self.size, mass, com,
+                 _as_tuple(inertia), self.reads_down)
+        return die
+
+    def _set(self, name: str, vertices: np.ndarray, faces: tuple[tuple[int, ...], ...],
+             size: float, mass: float, com: tuple[float, ...] | np.ndarray,
+             inertia: tuple[tuple[float, ...], ...] | None, reads_down: bool) -> None:
+        check_positive("mass", mass)
+        com = np.asarray(com, dtype=np.float64)
+        if com.shape != (3,):
+            raise ValueError(f"com must have shape (3,), got {com.shape}")
+        check_finite("com", com)
+        normals = polyhedra.face_normals(vertices, faces)
+        if np.any(normals @ com >= _face_distances(vertices, faces, normals)):
+            raise ValueError("com must lie inside the die (closer to the geometric centre than "
+                             f"every face plane), got {tuple(com)}")
+        if inertia is None:
+            inertia = _solid_inertia(name, vertices, faces, size, mass)
+        _check_inertia(inertia)
+        values = {"name": name, "vertices": _as_tuple(vertices), "faces": faces,
+                  "size": float(size), "mass": float(mass), "com": tuple(float(c) for c in com),
+                  "inertia": _as_tuple(np.asarray(inertia, dtype=np.float64)),
+                  "reads_down": reads_down}
+        for key, value in values.items():
+            object.__setattr__(self, key, value)
 
     @cached_property
-    def tipping_heights(self) -> np.ndarray:
-        """Least height (m) of the centre of mass above its lowest corner as each face tips, (6,).
+    def _reading(self) -> np.ndarray:
+        """Reading directions (F, 3): the outward normals, negated for a die read down."""
+        return _frozen(-self.face_normals if self.reads_down else self.face_normals)
 
-        A die can stop showing face ``F`` up only through an orientation in which ``F`` and an
-        adjacent face ``G`` point equally far up, further than any other (``u = s (f_F + f_G)
-        + t f_F x f_G`` with ``|t| <= s``, ``u`` the up direction in the body frame): for a
-        fair die balanced on an edge, ``sqrt(2)`` half edges. Taken as the minimum over a dense
-        sampling of those four arcs, lowered by the height's Lipschitz bound times the sampling
-        gap, so it is never above the true minimum. Computed once per die (about 10 ms).
-        """
-        corners = self.corners_body
-        t = np.linspace(-1.0, 1.0, 4001) / math.sqrt(3.0)
-        s = np.sqrt((1.0 - t * t) / 2.0)
-        # |du/dt| <= sqrt(3/2) on an arc; the height is max|r_k|-Lipschitz in u
-        slack = float(np.linalg.norm(corners, axis=1).max()) * math.sqrt(1.5) * (t[1] - t[0]) / 2
-        out = np.full(6, np.inf)
-        for f, normal in enumerate(FACE_NORMALS):
-            for other in FACE_NORMALS[FACE_NORMALS @ normal == 0]:
-                up = s[:, None] * (normal + other) + t[:, None] * np.cross(normal, other)
-                out[f] = min(out[f], _heights_above_lowest_corner(corners, up).min() - slack)
-        return out
+    @cached_property
+    def _face_distances(self) -> np.ndarray:
+        """Distance (m) of each face plane from the geometric centre, (F,)."""
+        return _face_distances(np.array(self.vertices), self.faces, self.face_normals)
 
-    @property
-    def is_fair(self) -> bool:
-        """True for a centred, isotropic die."""
-        return not any(self.com) and self.is_isotropic
+
+# --- shapes -------------------------------------------------------------------------------
+
+@cache
+def _unit_shape(name: str) -> _Shape:
+    """The standard die ``name`` at size 1 (its least height on a face)."""
+    raw, upper = {
+        "d4": (polyhedra.tetrahedron, None),
+        "d6": (lambda: CORNER_SIGNS, None),
+        "d8": (polyhedra.octahedron, [1, 3, 5, 7]),
+        "d10": (polyhedra.pentagonal_trapezohedron, [1, 5, 7, 3, 9]),
+        "d12": (lambda: _face_up(polyhedra.dodecahedron()), range(1, 7)),
+        "d20": (lambda: _face_up(polyhedra.icosahedron()), range(1, 11)),
+    }[name]
+    raw = raw()
+    faces = polyhedra.convex_faces(raw)
+    normals = polyhedra.face_normals(raw, faces)
+    if name == "d4":  # face k opposite corner k
+        labels = _nearest_labels(normals, -raw / math.sqrt(3.0))
+    elif name == "d6":
+        labels = _nearest_labels(normals, FACE_NORMALS)
+    else:
+        labels = _labels_by_azimuth(normals, upper)
+    faces = _in_label_order(faces, labels)
+    return _Shape(_frozen(raw / _least_height(raw, faces)), faces, name == "d4")
+
+
+def _nearest_labels(normals: np.ndarray, directions: np.ndarray) -> np.ndarray:
+    """Label ``k + 1`` for the face whose normal is nearest ``directions[k]``."""
+    labels = np.argmax(normals @ directions.T, axis=1) + 1
+    assert sorted(labels) == list(range(1, len(normals) + 1))
+    return labels
+
+
+def _labels_by_azimuth(normals: np.ndarray, upper: object) -> np.ndarray:
+    """Labels: ``upper`` for the faces with ``n_z > 0``, ``F + 1`` minus the opposite's below.
+
+    The upper faces in order of descending ``n_z``, then azimuth from +x.
+    """
+    z = np.round(normals[:, 2], 9)
+    azimuth = np.mod(np.round(np.arctan2(normals[:, 1], normals[:, 0]), 9), 2 * math.pi)
+    top = np.flatnonzero(z > 0)
+    top = top[np.lexsort((azimuth[top], -z[top]))]
+    labels = np.zeros(len(normals), dtype=np.int64)
+    labels[top] = list(upper)
+    for f in np.flatnonzero(z < 0):
+        labels[f] = len(normals) + 1 - labels[np.argmin(normals @ normals[f])]
+    assert sorted(labels) == list(range(1, len(normals) + 1))
+    return labels
+
+
+def _face_up(points: np.ndarray) -> np.ndarray:
+    """``points`` turned so that the face normal nearest +z (then +x) points along +z."""
+    normals = polyhedra.face_normals(points, polyhedra.convex_faces(points))
+    top = normals[np.lexsort((np.round(normals[:, 0], 9), np.round(normals[:, 2], 9)))[-1]]
+    axis = np.cross(top, [0.0, 0.0, 1.0])
+    sin = np.linalg.norm(axis)
+    k = np.cross(np.eye(3), axis / sin)  # cross-product matrix of the unit axis
+    rotation = np.eye(3) + sin * k + (1.0 - top[2]) * (k @ k)
+    return points @ rotation.T
+
+
+def _in_label_order(faces: tuple[tuple[int, ...], ...],
+                    labels: np.ndarray) -> tuple[tuple[int, ...], ...]:
+    return tuple(faces[i] for i in np.argsort(labels))
+
+
+def _checked_labels(labels: object, n: int) -> np.ndarray:
+    values = np.asarray(labels)
+    if (values.shape != (n,) or not np.issubdtype(values.dtype, np.integer)
+            or sorted(values.tolist()) != list(range(1, n + 1))):
+        raise ValueError(f"labels must be a permutation of 1 … {n} (one per hull face), "
+                         f"got {labels!r}")
+    return values
+
+
+def _face_distances(vertices: np.ndarray, faces: tuple[tuple[int, ...], ...],
+                    normals: np.ndarray) -> np.ndarray:
+    """Distance of each face plane from the origin, (F,)."""
+    return np.einsum("fi,fi->f", normals, vertices[[face[0] for face in faces]])
+
+
+def _least_height(vertices: np.ndarray, faces: tuple[tuple[int, ...], ...]) -> float:
+    """The least height of the solid lying on one of its faces."""
+    spans = polyhedra.face_normals(vertices, faces) @ vertices.T
+    return float(np.ptp(spans, axis=1).min())
+
+
+# --- mass ---------------------------------------------------------------------------------
+
+def _check_mass(mass: float | None) -> None:
+    if mass is not None:
+        check_positive("mass", mass)
+
+
+def _mass(mass: float | None, volume: float) -> float:
+    """``mass`` if given, else the default density's: ``DIE_MASS`` per ``DIE_VOLUME``."""
+    return DIE_MASS * (volume / DIE_VOLUME) if mass is None else mass
+
+
+def _solid_inertia(name: str, vertices: np.ndarray, faces: tuple[tuple[int, ...], ...],
+                   size: float, mass: float) -> np.ndarray:
+    """Inertia of the uniform solid about its centroid: the d6's closed form, else integrated.
+
+    Rounding noise is removed: entries below 1e-12 of the trace become 0, and a diagonal
+    tensor whose moments agree to 1e-12 becomes exactly isotropic.
+    """
+    if name == "d6":
+        return solid_cube_inertia(mass, size)
+    per_mass = polyhedra.mass_properties(vertices, faces)[2]
+    scale = np.trace(per_mass)
+    per_mass = np.where(np.abs(per_mass) <= 1e-12 * scale, 0.0, per_mass)
+    moments = np.diag(per_mass)
+    if not (per_mass - np.diag(moments)).any() and np.ptp(moments) <= 1e-12 * scale:
+        per_mass = np.eye(3) * (scale / 3.0)
+    return mass * per_mass
+
+
+def _check_inertia(inertia: object) -> None:
+    inertia = np.asarray(inertia, dtype=np.float64)
+    if inertia.shape != (3, 3):
+        raise ValueError(f"inertia must have shape (3, 3), got {inertia.shape}")
+    check_finite("inertia", inertia)
+    if not np.allclose(inertia, inertia.T, rtol=1e-12, atol=0.0):
+        raise ValueError("inertia must be symmetric")
+    principal = np.linalg.eigvalsh(inertia)
+    if principal[0] <= 0 or principal[2] > principal[0] + principal[1] * (1 + 1e-12):
+        raise ValueError(
+            "inertia must be positive definite with principal moments obeying the "
+            f"triangle inequality, got principal moments {principal}"
+        )
+
+
+def _shift(r: np.ndarray) -> np.ndarray:
+    """Inertia of a unit point mass at ``r`` about the origin: ``|r|^2 I - r r^T``."""
+    return r @ r * np.eye(3) - np.outer(r, r)
+
+
+# --- reading and tipping ------------------------------------------------------------------
+
+def _tie_arc(reading: np.ndarray, f: int, g: int
+             ) -> tuple[float, float, np.ndarray, np.ndarray] | None:
+    """The arc where faces ``f`` and ``g`` tie and no other face reads more, or None.
+
+    Up directions ``u = cos(phi) m + sin(phi) w`` with ``m`` the bisector of the two reading
+    directions and ``w`` their common normal; ``phi`` in ``[lo, hi]`` within ``[-pi/2, pi/2]``
+    (the other half circle reads both below zero, so below some other face). Each other face
+    ``k`` asks ``(a_f - a_k) . u >= 0``: a half circle in ``phi``.
+    """
+    a, b = reading[f], reading[g]
+    bisector = a + b
+    length = np.linalg.norm(bisector)
+    if length < 1e-9:  # opposite directions: another face always reads more on their tie
+        return None
+    m = bisector / length
+    w = np.cross(a, b)
+    w /= np.linalg.norm(w)
+    d = a - np.delete(reading, [f, g], axis=0)
+    psi = np.arctan2(d @ w, d @ m)
+    lo = max(-math.pi / 2, float((psi - math.pi / 2).max(initial=-math.inf)))
+    hi = min(math.pi / 2, float((psi + math.pi / 2).min(initial=math.inf)))
+    return (lo, hi, m, w) if lo <= hi else None
 
 
 def _heights_above_lowest_corner(corners: np.ndarray, up: np.ndarray) -> np.ndarray:
@@ -213,10 +623,17 @@ def _as_tuple(matrix: np.ndarray) -> tuple[tuple[float, ...], ...]:
     return tuple(tuple(float(v) for v in row) for row in matrix)
 
 
-def face_up(orientation: np.ndarray, normal: np.ndarray) -> np.ndarray:
-    """Number (1–6) of the face whose outward normal points most along the ground ``normal``.
+def _frozen(array: np.ndarray) -> np.ndarray:
+    array = np.array(array)
+    array.flags.writeable = False
+    return array
 
-    ``orientation``: (..., 3, 3) body-to-world rotation matrices. Returns an int array (...).
-    """
-    world_normals = np.einsum("...ij,fj->...fi", orientation, FACE_NORMALS)
-    return np.argmax(world_normals @ np.asarray(normal, dtype=np.float64), axis=-1) + 1
+
+@lru_cache(maxsize=1)
+def _default_die() -> Die:
+    return Die()
+
+
+def face_up(orientation: np.ndarray, normal: np.ndarray) -> np.ndarray:
+    """Number (1–6) of the default d6's face up: ``Die().face_read(orientation, normal)``."""
+    return _default_die().face_read(orientation, normal)
