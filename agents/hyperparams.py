@@ -16,11 +16,14 @@ one-hot and hand orientation).
 
 Where DiceThrow-v0's values come from: ``python benchmarks/learn_from_scratch.py`` (default task:
 1.5 cm release, 5 % hand noise; success of the policy's mean action on fixed random throws; one
-kernel thread and one PyTorch thread). With them PPO lands the target face in 0.94 of throws
-after 800k throws (seed 0: 0.928 and 0.942 on two sets of 1000 throws to rest, 0.940 on 2000;
-the hand-written thrower 0.69-0.73 on the same throws; about 11 min of training on a busy
-2-core machine). Variants, each changing one value (``--set KEY=VALUE``), on 512 fixed throws
-(``--eval-throws 512``; this set reads 0.02-0.03 above larger ones near the top):
+kernel thread and one PyTorch thread). With them PPO lands the target face in 0.93-0.94 of
+throws after 800k throws: ``--seeds 1`` (benchmarks/results/learn_from_scratch.json) 0.52 at
+100k, 0.77 at 150k, 0.90 at 250k, 0.92 at 350k, 0.94 at 650k-800k on 2000 throws, then 0.934
+[0.922, 0.944] on 2000 throws to rest, against 0.70 for the hand-written thrower on the same
+throws, in 11 min of training on a busy 2-core machine; seed 0: 0.928 and 0.942 on two sets of
+1000 throws to rest. About 0.96 of the oracle's 0.975 (README). Variants, each changing one
+value (``--set KEY=VALUE``), on 512 fixed throws (``--eval-throws 512``; this set reads
+0.02-0.03 above larger ones near the top):
 
 * Every episode is one throw, so the advantage is the reward minus the value whatever ``gamma``
   and ``gae_lambda`` are; they stay at SB3's defaults.
