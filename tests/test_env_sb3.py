@@ -3,11 +3,13 @@
 import gymnasium as gym
 import numpy as np
 import pytest
+from stable_baselines3 import PPO
 from stable_baselines3.common.monitor import Monitor
-from stable_baselines3.common.vec_env import VecMonitor
+from stable_baselines3.common.vec_env import VecCheckNan, VecMonitor
 
 import dice_env  # noqa: F401  (registers DiceThrow-v0)
 from dice_env.envs import DiceThrowSB3VecEnv
+from dice_env.envs.sb3 import make_sb3_env
 
 FAST = {"t_max": 2.0}  # gentle throws settle well within 2 s
 
@@ -90,3 +92,50 @@ def test_attributes_methods_and_wrappers():
     assert sb3.render().dtype == np.uint8  # the N frames tiled
     with pytest.raises(ValueError, match="venv"):
         DiceThrowSB3VecEnv(gym.make_vec("CartPole-v1", num_envs=2))
+
+
+def test_make_sb3_env_is_one_monitored_batch():
+    env = make_sb3_env(n_envs=4, seed=0, **FAST)
+    assert isinstance(env, VecMonitor) and isinstance(env.venv, DiceThrowSB3VecEnv)
+    assert env.num_envs == 4 and env.observation_space.shape == (15,)
+    assert env.action_space.shape == (6,)
+    checked = VecCheckNan(env, raise_exception=True)  # SB3's NaN/inf check of obs and rewards
+    checked.reset()
+    _, rewards, dones, infos = checked.step(np.zeros((4, 6), np.float32))
+    assert rewards.shape == (4,) and dones.all()
+    assert all(info["episode"]["l"] == 1 for info in infos)
+
+
+def test_make_sb3_env_seeding_reproducible():
+    actions = np.random.default_rng(2).uniform(-1, 1, (3, 6)).astype(np.float32)
+
+    def run(seed: int | None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        env = make_sb3_env(n_envs=3, seed=seed, **FAST)
+        first = env.reset()
+        _, rewards, _, infos = env.step(actions)
+        return first, rewards, np.array([info["face"] for info in infos])
+
+    (obs_a, rewards_a, faces_a), (obs_b, rewards_b, faces_b) = run(7), run(7)
+    assert np.array_equal(obs_a, obs_b) and np.array_equal(faces_a, faces_b)
+    assert np.array_equal(rewards_a, rewards_b)
+    venv = gym.make_vec("DiceThrow-v0", num_envs=3, **FAST)
+    assert np.array_equal(venv.reset(seed=7)[0], obs_a)  # seed s: env i seeded with s + i
+    assert not np.array_equal(run(8)[0], obs_a)
+
+
+def test_make_sb3_env_passes_keywords_and_trains_ppo():
+    env = make_sb3_env(n_envs=8, seed=1, shaping=0.5, until="decided", **FAST)
+    assert env.get_attr("task")[0].shaping == 0.5
+    model = PPO("MlpPolicy", env, n_steps=2, batch_size=16, n_epochs=1, seed=0, device="cpu")
+    model.learn(16)
+    assert model.num_timesteps == 16
+
+
+@pytest.mark.parametrize(("kwargs", "match"), [
+    ({"n_envs": 0}, "num_envs"), ({"n_envs": 2.5}, "num_envs"), ({"seed": -1}, "seed"),
+    ({"seed": "0"}, "seed"), ({"seed": True}, "seed"), ({"shaping": -1.0}, "shaping"),
+    ({"until": "never"}, "until"),
+])
+def test_make_sb3_env_refuses_bad_values(kwargs: dict, match: str):
+    with pytest.raises(ValueError, match=match):
+        make_sb3_env(**{"n_envs": 2, **kwargs})

@@ -1,7 +1,9 @@
 """DiceThrow-v0's native batch as a Stable-Baselines3 ``VecEnv`` (SB3 cannot take a Gymnasium one).
 
-    venv = DiceThrowSB3VecEnv(gym.make_vec("DiceThrow-v0", num_envs=16))
-    model = PPO("MlpPolicy", venv)
+    env = make_sb3_env(n_envs=256, seed=0)       # one call, like SB3's make_vec_env
+    model = PPO("MlpPolicy", env)
+
+or by hand: ``DiceThrowSB3VecEnv(gym.make_vec("DiceThrow-v0", num_envs=16))``.
 
 Each ``step_wait`` throws all N dice in one kernel call. Every episode is one throw, so every
 step ends every episode: ``dones`` is all True, ``infos[i]["terminal_observation"]`` holds env
@@ -18,10 +20,33 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 from gymnasium.vector import VectorEnv
-from stable_baselines3.common.vec_env import VecEnv
+from stable_baselines3.common.vec_env import VecEnv, VecMonitor
 from stable_baselines3.common.vec_env.base_vec_env import VecEnvIndices, VecEnvStepReturn
 
 from dice_env.envs.vector import DiceThrowVectorEnv
+
+
+def make_sb3_env(
+    n_envs: int = 256, seed: int | None = None, *, env_id: str = "DiceThrow-v0",
+    **env_kwargs: Any,
+) -> VecMonitor:
+    """``n_envs`` DiceThrow envs as one SB3 VecEnv, stepped in one kernel call per step.
+
+    The batch wrapped in :class:`DiceThrowSB3VecEnv` and SB3's ``VecMonitor`` (episode return
+    and length in ``infos[i]["episode"]``), as ``make_vec_env(env_id, n_envs, seed)`` would give.
+    ``seed`` (None: unseeded) seeds env ``i`` with ``seed + i`` at the first ``reset``;
+    ``env_kwargs`` are ``gym.make("DiceThrow-v0")``'s keywords (e.g. ``shaping=0.5``,
+    ``until="decided"``), checked here. ``env_id`` must name an env with DiceThrow-v0's native
+    batch (a registered id or ``"module:Name"``).
+    """
+    if seed is not None and (isinstance(seed, bool) or not isinstance(seed, (int, np.integer))
+                             or seed < 0):
+        raise ValueError(f"seed must be None or an int >= 0, got {seed!r}")
+    env = DiceThrowSB3VecEnv(gym.make_vec(env_id, num_envs=n_envs, vectorization_mode=None,
+                                          **env_kwargs))
+    if seed is not None:
+        env.seed(int(seed))
+    return VecMonitor(env)
 
 
 class DiceThrowSB3VecEnv(VecEnv):
