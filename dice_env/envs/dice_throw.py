@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from typing import Any, ClassVar
 
 import gymnasium as gym
@@ -11,10 +12,10 @@ from gymnasium import spaces
 from dice_env.envs.task import (
     ACTION_DIM,
     OBS_DIM,
-    ORIENTATION_MODES,
     ThrowTask,
     check_actions,
     check_face,
+    check_orientation_mode,
     check_rotation,
     check_task_keywords,
     make_task,
@@ -22,6 +23,7 @@ from dice_env.envs.task import (
 
 RENDER_MODES = ("human", "rgb_array", "rgb_array_list")
 RENDER_FPS = 30
+MAX_FRAME_BYTES = 2**30  # the frames one throw may keep in "rgb_array_list" mode
 
 
 def observation_space() -> spaces.Box:
@@ -39,19 +41,29 @@ def check_episode_keywords(target_face: int | None, orientation_mode: str) -> No
     """Validate the per-episode keywords shared by the single and the vector env."""
     if target_face is not None:
         check_face("target_face", target_face)
-    if orientation_mode not in ORIENTATION_MODES:
-        raise ValueError(f"orientation_mode must be one of {ORIENTATION_MODES}, "
-                         f"got {orientation_mode!r}")
+    check_orientation_mode(orientation_mode)
 
 
 def check_render(render_mode: str | None, modes: tuple[str, ...], width: int, height: int) -> None:
     """Validate the render keywords."""
-    if render_mode is not None and render_mode not in modes:
+    if render_mode is not None and not (isinstance(render_mode, str) and render_mode in modes):
         raise ValueError(f"render_mode must be None or one of {modes}, got {render_mode!r}")
     for name, value in (("render_width", width), ("render_height", height)):
         if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not (
                 16 <= value <= 4096):
             raise ValueError(f"{name} must be an int in [16, 4096], got {value!r}")
+
+
+def check_frame_memory(render_mode: str | None, t_max: float, width: int, height: int) -> None:
+    """Refuse an "rgb_array_list" env whose throw could keep more than 1 GiB of frames."""
+    frames = math.ceil(t_max * RENDER_FPS) + 2  # in the hand, the throw, at rest
+    size = frames * width * height * 3
+    if render_mode == "rgb_array_list" and size > MAX_FRAME_BYTES:
+        raise ValueError(
+            f"t_max must be at most {MAX_FRAME_BYTES / (width * height * 3 * RENDER_FPS):.4g} s "
+            f"with render_mode='rgb_array_list' at {width}x{height}: a throw that does not "
+            f"settle keeps t_max x {RENDER_FPS} frames, {size / 2**30:.3g} GiB at "
+            f"t_max={t_max:g} s (at most 1 GiB); lower t_max or render_width/render_height")
 
 
 def configure(
@@ -172,6 +184,7 @@ class DiceThrowEnv(gym.Env):
         self.task: ThrowTask = configure(self, RENDER_MODES, render_mode, target_face,
                                          orientation_mode, render_width, render_height,
                                          task_keywords)
+        check_frame_memory(render_mode, self.task.scene.t_max, render_width, render_height)
         self.observation_space = observation_space()
         self.action_space = action_space()
         self._target = 1
@@ -198,9 +211,12 @@ class DiceThrowEnv(gym.Env):
 
     def step(self, action: np.ndarray) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
         """Throw once and simulate to rest."""
-        action = check_actions(action)
+        checked = check_actions(action)
+        if np.shape(action) != (ACTION_DIM,):
+            raise ValueError(f"action must have shape (6,) (one throw; DiceThrowVectorEnv takes "
+                             f"(n, 6)), got {np.shape(action)}")
         noise = self.task.sample_noise(self.np_random)
-        throw = self.task.throw(action, [self._target], self._hand[None], noise,
+        throw = self.task.throw(checked, [self._target], self._hand[None], noise,
                                 record_every=self._record_every())
         result = throw.result
         self._pose = (result.final.position[0], result.final.orientation[0])

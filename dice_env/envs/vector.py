@@ -22,6 +22,8 @@ from dice_env.envs.task import (
     check_rotation,
 )
 
+MAX_NUM_ENVS = 2**20  # about 1 kB per env in the kernel's and the env's arrays
+
 
 class DiceThrowVectorEnv(VectorEnv):
     """``num_envs`` DiceThrow-v0 envs stepped together (``gym.make_vec("DiceThrow-v0", n)``).
@@ -51,9 +53,9 @@ class DiceThrowVectorEnv(VectorEnv):
         render_height: int = 240,
         **task_keywords: Any,
     ) -> None:
-        if isinstance(num_envs, bool) or not isinstance(num_envs, (int, np.integer)) or (
-                num_envs < 1):
-            raise ValueError(f"num_envs must be an int >= 1, got {num_envs!r}")
+        if isinstance(num_envs, bool) or not isinstance(num_envs, (int, np.integer)) or not (
+                1 <= num_envs <= MAX_NUM_ENVS):
+            raise ValueError(f"num_envs must be an int in [1, {MAX_NUM_ENVS}], got {num_envs!r}")
         self.task: ThrowTask = configure(self, ("rgb_array",), render_mode, target_face,
                                          orientation_mode, render_width, render_height,
                                          task_keywords)
