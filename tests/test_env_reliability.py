@@ -265,3 +265,12 @@ def test_fuzz_keywords_and_actions():
                                                                    "orientation_mode"}
     outcomes = fuzz(np.random.default_rng(14), budget_s=6.0)
     assert outcomes["stepped"] >= 10 and outcomes["refused"] >= 10, outcomes
+
+
+@pytest.mark.slow
+def test_fuzz_keywords_and_actions_long():
+    totals = {"made": 0, "refused": 0, "stepped": 0}
+    for seed in range(200, 230):  # 30 seeds x 20 s
+        for key, count in fuzz(np.random.default_rng(seed), budget_s=20.0).items():
+            totals[key] += count
+    print(totals)

@@ -97,7 +97,8 @@ class DiceThrowEnv(gym.Env):
     ## Action Space
     ``Box(-1, 1, (6,), float32)``: release velocity ``(vx, vy, vz) * max_speed`` (m/s) and
     angular velocity ``(wx, wy, wz) * max_spin`` (rad/s), world frame, z up. Out-of-range actions
-    are clipped (``info["action_clipped"]``); NaN/inf raise ``ValueError``.
+    are clipped (``info["action_clipped"]``); NaN/inf or another shape than (6,) raise
+    ``ValueError`` before anything is simulated.
 
     ## Observation Space
     ``Box((15,), float32)``: ``[0:6]`` one-hot target face (1–6), ``[6:15]`` the die's
@@ -107,7 +108,7 @@ class DiceThrowEnv(gym.Env):
     ## Rewards
     ``reward_success`` 1.0 if the target face is up at rest, else 0.0, plus
     ``reward_shaping = shaping * (n_target . n_table)`` at rest (``shaping=0`` by default).
-    A void throw (foul, unstable, or not settled within ``t_max``) gets 0;
+    A void throw (foul, unstable, or not settled within ``t_max``: quiet for ``rest_hold``) gets 0;
     ``info["void_reason"]`` says why. With ``until="decided"`` a throw ends as soon as its face
     is decided (the face it rests on; about 2.4 times the throws per second at the defaults,
     ``docs/performance.md``): "at rest" above then means "at that moment", ``settled`` is
@@ -140,16 +141,21 @@ class DiceThrowEnv(gym.Env):
     | ``shaping`` | 0.0 | weight of the dense term |
     | ``target_face`` | None | fix the target (1–6) instead of drawing it |
     | ``orientation_mode`` | "uniform" | how the hand orientation is drawn |
-    | ``t_max`` | 5.0 | simulated time limit per throw (s) |
+    | ``t_max`` | 5.0 | simulated time limit per throw (s; the scene's when ``scene`` is given) |
     | ``edge``, ``mass`` | Scene() | die edge (m) and mass (kg) |
     | ``load_face``, ``load_fraction``, ``load_depth`` | 6, 0, 0.8 | a loaded die (Die.loaded) |
+    | | | (``edge``, ``mass``, ``load_*`` need a uniform die in ``scene``) |
     | ``stiffness``, ``damping``, ``friction`` | Scene() | table contact (N/m, N s/m, mu) |
-    | ``tilt_deg`` | 0 | table tilt about y (degrees) |
-    | ``contact_law`` | Scene() | "gated" or "paper" |
+    | ``tilt_deg`` | 0 | table tilt about y from level (degrees) |
+    | ``contact_law`` | Scene() | "gated" or "paper" (or a ContactLaw; "paper" needs a tiny |
+    | | | ``damping``: its air drag 8·D·v must not outweigh the die, docs/environment.md) |
     | ``gravity``, ``dt``, ``safety`` | Scene() | m/s², step (s; None = automatic), step safety |
     | ``rest_speed``, ``rest_hold``, ``energy_tol`` | Scene() | rest detection, unstable flag |
-    | ``scene`` | None | a base :class:`dice_env.Scene` the keywords above modify |
-    | ``num_threads`` | None | numba threads for the kernel (None: all cores) |
+    | ``scheme``, ``friction_law`` | Scene() | names or members of Scheme, FrictionLaw |
+    | ``friction_vmin`` | Scene() | umin of friction_law="regularized" (refused otherwise) |
+    | ``scene`` | None | a base :class:`dice_env.Scene`: each keyword above changes only what |
+    | | | it names, the rest of the scene (t_max, die, table, ...) is kept |
+    | ``num_threads`` | None | numba threads, 1 to NUMBA_NUM_THREADS (None: all cores) |
     | ``until`` | "rest" | "rest", or "decided": end a throw when its face is decided |
     | ``render_mode`` | None | "rgb_array", "rgb_array_list" or "human" |
     | ``render_width``, ``render_height`` | 320, 240 | frame size (pixels) |
