@@ -120,6 +120,18 @@ def test_a_batch_of_actions_to_the_single_env_is_refused_before_simulating(monke
             env.step(bad)
 
 
+def test_unknown_reset_options_are_refused():
+    env = make()
+    venv = gym.make_vec("DiceThrow-v0", num_envs=2, **FAST)
+    for reset in (env.reset, venv.reset):
+        for bad in ({"target": 3}, {"target_face": 3, "seed": 1}, [("target_face", 3)]):
+            with pytest.raises(ValueError, match="options must be None or a dict with keys among"):
+                reset(seed=0, options=bad)
+        with pytest.raises(ValueError, match="orientation_mode must be one of"):
+            reset(seed=0, options={"orientation_mode": ["flat"]})
+    assert env.reset(seed=0, options={"target_face": 3})[0][2] == 1.0
+
+
 # --- keywords modify the given scene, never replace parts of it ------------------------------
 
 def test_keywords_keep_the_rest_of_the_given_scene():

@@ -84,6 +84,24 @@ def configure(
     return task
 
 
+RESET_OPTIONS = ("target_face", "orientation", "orientation_mode")
+
+
+def episode_hand(
+    env: Any, rng: np.random.Generator, options: dict[str, Any] | None
+) -> tuple[int, np.ndarray]:
+    """One episode's target and hand orientation for ``env``, ``reset`` options applied."""
+    options = {} if options is None else options
+    if not isinstance(options, dict) or set(options) - set(RESET_OPTIONS):
+        raise ValueError(f"options must be None or a dict with keys among {RESET_OPTIONS}, "
+                         f"got {options!r}")
+    target, hand = env.task.sample_hand(rng, options.get("target_face", env.target_face),
+                                        options.get("orientation_mode", env.orientation_mode))
+    if "orientation" in options:
+        hand = check_rotation("options['orientation']", options["orientation"])
+    return target, hand
+
+
 class DiceThrowEnv(gym.Env):
     """Throw a die from the hand so that the target face ends up.
 
@@ -204,12 +222,7 @@ class DiceThrowEnv(gym.Env):
     ) -> tuple[np.ndarray, dict[str, Any]]:
         """Put the die in the hand and draw the target; options override one episode."""
         super().reset(seed=seed)
-        options = options or {}
-        self._target, self._hand = self.task.sample_hand(
-            self.np_random, options.get("target_face", self.target_face),
-            options.get("orientation_mode", self.orientation_mode))
-        if "orientation" in options:
-            self._hand = check_rotation("options['orientation']", options["orientation"])
+        self._target, self._hand = episode_hand(self, self.np_random, options)
         self._pose = (self.task.release_position, self._hand)
         self._frames = []
         self._draw([self._pose])

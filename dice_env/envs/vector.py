@@ -14,13 +14,10 @@ from dice_env.envs.dice_throw import (
     RENDER_FPS,
     action_space,
     configure,
+    episode_hand,
     observation_space,
 )
-from dice_env.envs.task import (
-    ThrowTask,
-    check_actions,
-    check_rotation,
-)
+from dice_env.envs.task import ThrowTask, check_actions
 
 MAX_NUM_ENVS = 2**20  # about 1 kB per env in the kernel's and the env's arrays
 
@@ -98,7 +95,7 @@ class DiceThrowVectorEnv(VectorEnv):
         for i in range(self.num_envs):
             if seeds[i] is not None:
                 self._rngs[i] = seeding.np_random(seeds[i])[0]
-            self._new_hand(i, options[i] or {})
+            self._targets[i], self._hands[i] = episode_hand(self, self._rngs[i], options[i])
         return self.task.observe(self._targets, self._hands)
 
     def step(
@@ -132,10 +129,3 @@ class DiceThrowVectorEnv(VectorEnv):
 
         return tuple(render_die(self.task.scene, self.task.release_position, self._hands[i],
                                 size=self.render_size) for i in range(self.num_envs))
-
-    def _new_hand(self, i: int, options: dict[str, Any]) -> None:
-        self._targets[i], self._hands[i] = self.task.sample_hand(
-            self._rngs[i], options.get("target_face", self.target_face),
-            options.get("orientation_mode", self.orientation_mode))
-        if "orientation" in options:
-            self._hands[i] = check_rotation("options['orientation']", options["orientation"])
