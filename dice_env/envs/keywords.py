@@ -128,20 +128,24 @@ def _check_steps(scene: Scene) -> None:
 
 
 def _check_paper_drag(scene: Scene, release_height: float) -> None:
-    """The paper law's air drag (8 D v) must not outweigh the die in a drop from the hand."""
+    """The paper law's air drag (8 D v) must not outweigh the die in a drop from the hand.
+
+    Without gravity toward the table the drag stops every die in the air: always refused.
+    """
     g = scene.gravity * scene.ground.normal[2]
     weight = scene.die.mass * g
     drop_speed = math.sqrt(2.0 * g * release_height)
     damping = scene.ground.damping
-    if 8.0 * damping * drop_speed <= weight:
+    if g > 0 and 8.0 * damping * drop_speed <= weight:
         return
+    limit = weight / (8.0 * drop_speed) if g > 0 else 0.0
     raise ValueError(
         f"contact_law='paper' needs damping <= m g / (8 sqrt(2 g release_height)) = "
-        f"{weight / (8.0 * drop_speed):.4g} N s/m, got damping={damping:g}: the paper's law "
-        "pushes every corner moving toward the table with D times its speed even in the air, "
-        f"an air drag of 8 D v, so the die falls at most m g / (8 D) = "
-        f"{weight / (8.0 * damping):.3g} m/s (a drop from release_height={release_height:g} m "
-        f"reaches {drop_speed:.3g} m/s) and the throws hardly land. Use contact_law='gated' (the "
+        f"{limit:.4g} N s/m, got damping={damping:g}: the paper's law pushes every corner "
+        "moving toward the table with D times its speed even in the air, an air drag of 8 D v, "
+        f"so the die falls at most m g / (8 D) = {weight / (8.0 * damping):.3g} m/s (a drop "
+        f"from release_height={release_height:g} m reaches {drop_speed:.3g} m/s; gravity="
+        f"{scene.gravity:g} m/s^2) and the throws hardly land. Use contact_law='gated' (the "
         "default: a real table), or a damping that small (the table then barely damps impacts: "
         "restitution near 1)")
 
