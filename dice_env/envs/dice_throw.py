@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from typing import Any, ClassVar
 
 import gymnasium as gym
@@ -11,10 +12,10 @@ from gymnasium import spaces
 from dice_env.envs.task import (
     ACTION_DIM,
     OBS_DIM,
-    ORIENTATION_MODES,
     ThrowTask,
     check_actions,
     check_face,
+    check_orientation_mode,
     check_rotation,
     check_task_keywords,
     make_task,
@@ -22,6 +23,7 @@ from dice_env.envs.task import (
 
 RENDER_MODES = ("human", "rgb_array", "rgb_array_list")
 RENDER_FPS = 30
+MAX_FRAME_BYTES = 2**30  # the frames one throw may keep in "rgb_array_list" mode
 
 
 def observation_space() -> spaces.Box:
@@ -39,19 +41,29 @@ def check_episode_keywords(target_face: int | None, orientation_mode: str) -> No
     """Validate the per-episode keywords shared by the single and the vector env."""
     if target_face is not None:
         check_face("target_face", target_face)
-    if orientation_mode not in ORIENTATION_MODES:
-        raise ValueError(f"orientation_mode must be one of {ORIENTATION_MODES}, "
-                         f"got {orientation_mode!r}")
+    check_orientation_mode(orientation_mode)
 
 
 def check_render(render_mode: str | None, modes: tuple[str, ...], width: int, height: int) -> None:
     """Validate the render keywords."""
-    if render_mode is not None and render_mode not in modes:
+    if render_mode is not None and not (isinstance(render_mode, str) and render_mode in modes):
         raise ValueError(f"render_mode must be None or one of {modes}, got {render_mode!r}")
     for name, value in (("render_width", width), ("render_height", height)):
         if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not (
                 16 <= value <= 4096):
             raise ValueError(f"{name} must be an int in [16, 4096], got {value!r}")
+
+
+def check_frame_memory(render_mode: str | None, t_max: float, width: int, height: int) -> None:
+    """Refuse an "rgb_array_list" env whose throw could keep more than 1 GiB of frames."""
+    frames = math.ceil(t_max * RENDER_FPS) + 2  # in the hand, the throw, at rest
+    size = frames * width * height * 3
+    if render_mode == "rgb_array_list" and size > MAX_FRAME_BYTES:
+        raise ValueError(
+            f"t_max must be at most {MAX_FRAME_BYTES / (width * height * 3 * RENDER_FPS):.4g} s "
+            f"with render_mode='rgb_array_list' at {width}x{height}: a throw that does not "
+            f"settle keeps t_max x {RENDER_FPS} frames, {size / 2**30:.3g} GiB at "
+            f"t_max={t_max:g} s (at most 1 GiB); lower t_max or render_width/render_height")
 
 
 def configure(
@@ -72,6 +84,24 @@ def configure(
     return task
 
 
+RESET_OPTIONS = ("target_face", "orientation", "orientation_mode")
+
+
+def episode_hand(
+    env: Any, rng: np.random.Generator, options: dict[str, Any] | None
+) -> tuple[int, np.ndarray]:
+    """One episode's target and hand orientation for ``env``, ``reset`` options applied."""
+    options = {} if options is None else options
+    if not isinstance(options, dict) or set(options) - set(RESET_OPTIONS):
+        raise ValueError(f"options must be None or a dict with keys among {RESET_OPTIONS}, "
+                         f"got {options!r}")
+    target, hand = env.task.sample_hand(rng, options.get("target_face", env.target_face),
+                                        options.get("orientation_mode", env.orientation_mode))
+    if "orientation" in options:
+        hand = check_rotation("options['orientation']", options["orientation"])
+    return target, hand
+
+
 class DiceThrowEnv(gym.Env):
     """Throw a die from the hand so that the target face ends up.
 
@@ -85,7 +115,8 @@ class DiceThrowEnv(gym.Env):
     ## Action Space
     ``Box(-1, 1, (6,), float32)``: release velocity ``(vx, vy, vz) * max_speed`` (m/s) and
     angular velocity ``(wx, wy, wz) * max_spin`` (rad/s), world frame, z up. Out-of-range actions
-    are clipped (``info["action_clipped"]``); NaN/inf raise ``ValueError``.
+    are clipped (``info["action_clipped"]``); NaN/inf or another shape than (6,) raise
+    ``ValueError`` before anything is simulated.
 
     ## Observation Space
     ``Box((15,), float32)``: ``[0:6]`` one-hot target face (1–6), ``[6:15]`` the die's
@@ -95,7 +126,7 @@ class DiceThrowEnv(gym.Env):
     ## Rewards
     ``reward_success`` 1.0 if the target face is up at rest, else 0.0, plus
     ``reward_shaping = shaping * (n_target . n_table)`` at rest (``shaping=0`` by default).
-    A void throw (foul, unstable, or not settled within ``t_max``) gets 0;
+    A void throw (foul, unstable, or not settled within ``t_max``: quiet for ``rest_hold``) gets 0;
     ``info["void_reason"]`` says why. With ``until="decided"`` a throw ends as soon as its face
     is decided (the face it rests on; about 2.4 times the throws per second at the defaults,
     ``docs/performance.md``): "at rest" above then means "at that moment", ``settled`` is
@@ -128,16 +159,21 @@ class DiceThrowEnv(gym.Env):
     | ``shaping`` | 0.0 | weight of the dense term |
     | ``target_face`` | None | fix the target (1–6) instead of drawing it |
     | ``orientation_mode`` | "uniform" | how the hand orientation is drawn |
-    | ``t_max`` | 5.0 | simulated time limit per throw (s) |
+    | ``t_max`` | 5.0 | simulated time limit per throw (s; the scene's when ``scene`` is given) |
     | ``edge``, ``mass`` | Scene() | die edge (m) and mass (kg) |
     | ``load_face``, ``load_fraction``, ``load_depth`` | 6, 0, 0.8 | a loaded die (Die.loaded) |
+    | | | (``edge``, ``mass``, ``load_*`` need a uniform die in ``scene``) |
     | ``stiffness``, ``damping``, ``friction`` | Scene() | table contact (N/m, N s/m, mu) |
-    | ``tilt_deg`` | 0 | table tilt about y (degrees) |
-    | ``contact_law`` | Scene() | "gated" or "paper" |
+    | ``tilt_deg`` | 0 | table tilt about y from level (degrees) |
+    | ``contact_law`` | Scene() | "gated" or "paper" (or a ContactLaw; "paper" needs a tiny |
+    | | | ``damping``: its air drag 8·D·v must not outweigh the die, docs/environment.md) |
     | ``gravity``, ``dt``, ``safety`` | Scene() | m/s², step (s; None = automatic), step safety |
     | ``rest_speed``, ``rest_hold``, ``energy_tol`` | Scene() | rest detection, unstable flag |
-    | ``scene`` | None | a base :class:`dice_env.Scene` the keywords above modify |
-    | ``num_threads`` | None | numba threads for the kernel (None: all cores) |
+    | ``scheme``, ``friction_law`` | Scene() | names or members of Scheme, FrictionLaw |
+    | ``friction_vmin`` | Scene() | umin of friction_law="regularized" (refused otherwise) |
+    | ``scene`` | None | a base :class:`dice_env.Scene`: each keyword above changes only what |
+    | | | it names, the rest of the scene (t_max, die, table, ...) is kept |
+    | ``num_threads`` | None | numba threads, 1 to NUMBA_NUM_THREADS (None: all cores) |
     | ``until`` | "rest" | "rest", or "decided": end a throw when its face is decided |
     | ``render_mode`` | None | "rgb_array", "rgb_array_list" or "human" |
     | ``render_width``, ``render_height`` | 320, 240 | frame size (pixels) |
@@ -172,6 +208,7 @@ class DiceThrowEnv(gym.Env):
         self.task: ThrowTask = configure(self, RENDER_MODES, render_mode, target_face,
                                          orientation_mode, render_width, render_height,
                                          task_keywords)
+        check_frame_memory(render_mode, self.task.scene.t_max, render_width, render_height)
         self.observation_space = observation_space()
         self.action_space = action_space()
         self._target = 1
@@ -185,12 +222,7 @@ class DiceThrowEnv(gym.Env):
     ) -> tuple[np.ndarray, dict[str, Any]]:
         """Put the die in the hand and draw the target; options override one episode."""
         super().reset(seed=seed)
-        options = options or {}
-        self._target, self._hand = self.task.sample_hand(
-            self.np_random, options.get("target_face", self.target_face),
-            options.get("orientation_mode", self.orientation_mode))
-        if "orientation" in options:
-            self._hand = check_rotation("options['orientation']", options["orientation"])
+        self._target, self._hand = episode_hand(self, self.np_random, options)
         self._pose = (self.task.release_position, self._hand)
         self._frames = []
         self._draw([self._pose])
@@ -198,9 +230,12 @@ class DiceThrowEnv(gym.Env):
 
     def step(self, action: np.ndarray) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
         """Throw once and simulate to rest."""
-        action = check_actions(action)
+        checked = check_actions(action)
+        if np.shape(action) != (ACTION_DIM,):
+            raise ValueError(f"action must have shape (6,) (one throw; DiceThrowVectorEnv takes "
+                             f"(n, 6)), got {np.shape(action)}")
         noise = self.task.sample_noise(self.np_random)
-        throw = self.task.throw(action, [self._target], self._hand[None], noise,
+        throw = self.task.throw(checked, [self._target], self._hand[None], noise,
                                 record_every=self._record_every())
         result = throw.result
         self._pose = (result.final.position[0], result.final.orientation[0])

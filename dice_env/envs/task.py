@@ -16,16 +16,18 @@ from __future__ import annotations
 import inspect
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
-from enum import IntEnum
+from dataclasses import dataclass, replace
+from typing import Any
 
+import numba
 import numpy as np
 
-from dice_env.die import FACE_NORMALS, Die
+from dice_env.die import FACE_NORMALS
+from dice_env.envs.keywords import build_scene, check_face, check_scene
 from dice_env.rotations import orthonormality_error, quaternion_to_matrix, uniform_rotations
-from dice_env.scene import ContactLaw, FrictionLaw, Ground, Rest, Scene, Scheme
+from dice_env.scene import Scene
 from dice_env.simulate import Result, State, lock_energy, simulate
-from dice_env.validation import check_nonnegative, check_positive, check_range
+from dice_env.validation import check_nonnegative, check_positive
 
 OBS_DIM = 15  # target one-hot (6) + hand orientation, row-major 3x3 (9)
 ACTION_DIM = 6  # release velocity (3) + angular velocity (3), world frame, in [-1, 1]
@@ -71,9 +73,12 @@ class ThrowTask:
         clearance = float(np.linalg.norm(self.scene.die.corners_body, axis=1).max())
         check_positive("release_height", self.release_height)
         if self.release_height <= clearance:
-            raise ValueError(f"release_height must be > {clearance:.6g} m (the farthest "
-                             "corner from the centre of mass, so no corner starts in the "
-                             f"table), got {self.release_height!r}")
+            raise ValueError(
+                f"release_height must be > {clearance:.6g} m, the distance of the die's "
+                f"farthest corner from its centre of mass, so that no corner starts in the "
+                f"table; got {self.release_height!r}. Raise release_height, or make the die "
+                f"smaller (edge={self.scene.die.edge:g} m) or its load (load_fraction, "
+                "load_depth) lighter")
         check_positive("max_speed", self.max_speed)
         check_positive("max_spin", self.max_spin)
         check_nonnegative("hand_noise", self.hand_noise)
@@ -81,15 +86,13 @@ class ThrowTask:
         check_nonnegative("min_speed", self.min_speed)
         check_nonnegative("min_spin", self.min_spin)
         check_nonnegative("shaping", self.shaping)
-        if self.until not in UNTIL:
+        if not isinstance(self.until, str) or self.until not in UNTIL:
             raise ValueError(f"until must be one of {list(UNTIL)}, got {self.until!r}")
         if self.until == "decided" and not np.isfinite(lock_energy(self.scene)).all():
             raise ValueError("until='decided' needs a horizontal table with gravity (no energy "
                              "bound decides the face on a slope); use until='rest'")
-        if self.num_threads is not None and (
-            not isinstance(self.num_threads, (int, np.integer)) or self.num_threads < 1
-        ):
-            raise ValueError(f"num_threads must be None or an int >= 1, got {self.num_threads!r}")
+        check_num_threads(self.num_threads)
+        check_scene(self.scene, self.release_height)
 
     @property
     def release_position(self) -> np.ndarray:
@@ -124,9 +127,7 @@ class ThrowTask:
         """
         if target_face is not None:
             check_face("target_face", target_face)
-        if orientation_mode not in ORIENTATION_MODES:
-            raise ValueError(f"orientation_mode must be one of {ORIENTATION_MODES}, "
-                             f"got {orientation_mode!r}")
+        check_orientation_mode(orientation_mode)
         targets = np.full(len(rngs), target_face or 0, np.int64)
         draws = np.zeros((len(rngs), 3))
         for i, rng in enumerate(rngs):
@@ -200,6 +201,8 @@ class ThrowTask:
         result = simulate(self.scene, state, record_every=record_every, record=record,
                           num_threads=self.num_threads, early_rest=not decided,
                           stop_when_decided=decided)
+        if not decided:
+            result = _held_within_t_max(result, self.scene)
         normal = np.asarray(self.scene.ground.normal)
         speed = np.linalg.norm(state.velocity, axis=1)
         spin = np.linalg.norm(state.angular_velocity, axis=1)
@@ -250,7 +253,11 @@ class Throw:
 
 def check_actions(actions: np.ndarray) -> np.ndarray:
     """Actions as a float64 (n, 6) array; NaN/inf or a wrong shape raise ``ValueError``."""
-    array = np.asarray(actions, dtype=np.float64)
+    try:
+        array = np.asarray(actions, dtype=np.float64)
+    except (TypeError, ValueError) as error:
+        raise ValueError(f"action must be an array of numbers, shape (6,) or (n, 6), got "
+                         f"{actions!r}") from error
     if array.shape == (ACTION_DIM,):
         array = array[None]
     if array.ndim != 2 or array.shape[1] != ACTION_DIM:
@@ -258,6 +265,12 @@ def check_actions(actions: np.ndarray) -> np.ndarray:
     if not np.all(np.isfinite(array)):
         raise ValueError(f"action must be finite (no NaN or inf), got {actions!r}")
     return array
+
+
+def check_orientation_mode(value: object) -> None:
+    """``ValueError`` unless ``value`` is one of :data:`ORIENTATION_MODES`."""
+    if not (isinstance(value, str) and value in ORIENTATION_MODES):
+        raise ValueError(f"orientation_mode must be one of {ORIENTATION_MODES}, got {value!r}")
 
 
 def check_rotation(name: str, value: object) -> np.ndarray:
@@ -281,84 +294,33 @@ def make_task(
     num_threads: int | None = None,
     until: str = "rest",
     scene: Scene | None = None,
-    t_max: float = 5.0,
-    edge: float | None = None,
-    mass: float | None = None,
-    load_face: int = 6,
-    load_fraction: float = 0.0,
-    load_depth: float = 0.8,
-    stiffness: float | None = None,
-    damping: float | None = None,
-    friction: float | None = None,
-    tilt_deg: float = 0.0,
-    contact_law: str | None = None,
-    gravity: float | None = None,
-    dt: float | None = None,
-    safety: float | None = None,
-    rest_speed: float | None = None,
-    rest_hold: float | None = None,
-    energy_tol: float | None = None,
-    scheme: str | None = None,
-    friction_law: str | None = None,
-    friction_vmin: float | None = None,
+    **physics: Any,
 ) -> ThrowTask:
     """A validated :class:`ThrowTask` from flat keywords (the env's ``gym.make`` keywords).
 
-    Physical keywords left at None keep the defaults of :class:`~dice_env.scene.Scene` (or of
-    ``scene`` when one is given), so changes to the default scene flow through. ``load_fraction``
-    > 0 builds :meth:`Die.loaded` toward ``load_face``; ``tilt_deg`` tilts the table about y;
-    ``contact_law`` is "gated" or "paper"; ``scheme`` is "paper" or "midpoint" (see
-    :class:`~dice_env.scene.Scheme`); ``friction_law`` is "stick_slip" or "regularized" (the
-    listing's, whose ``friction_vmin`` is its umin; see :class:`~dice_env.scene.FrictionLaw`).
+    ``physics`` are :func:`~dice_env.envs.keywords.build_scene`'s keywords (``t_max``, ``mass``,
+    ``stiffness``, ...): each one given modifies ``scene`` (default: ``Scene()`` with ``t_max``
+    5 s), whose other fields are kept, so changes to the default scene flow through.
     """
-    base = Scene() if scene is None else scene
-    if not isinstance(base, Scene):
-        raise ValueError(f"scene must be a Scene or None, got {type(base).__name__}")
-    check_range("load_fraction", load_fraction, 0.0, 1.0, high_open=True)
-    die = base.die
-    if edge is not None or mass is not None:
-        die = Die(**_given(edge=edge, mass=mass, default=base.die))
-    if load_fraction > 0:
-        die = Die.loaded(check_face("load_face", load_face), load_fraction, load_depth,
-                         edge=die.edge, mass=die.mass)
-    ground_kw = _given(stiffness=stiffness, damping=damping, friction=friction,
-                       contact_law=contact_law, default=base.ground)
-    ground_kw["contact_law"] = _choice("contact_law", contact_law, ContactLaw,
-                                       base.ground.contact_law)
-    check_range("tilt_deg", tilt_deg, 0.0, 90.0, high_open=True)
-    ground = Ground.tilted(tilt_deg, **ground_kw) if tilt_deg else Ground(
-        normal=base.ground.normal, **ground_kw)
-    rest = Rest(**_given(speed=rest_speed, hold=rest_hold, default=base.rest))
-    scene_kw = _given(gravity=gravity, safety=safety, energy_tol=energy_tol,
-                      friction_vmin=friction_vmin, default=base)
-    scene_kw["scheme"] = _choice("scheme", scheme, Scheme, base.scheme)
-    scene_kw["friction_law"] = _choice("friction_law", friction_law, FrictionLaw,
-                                       base.friction_law)
-    scene = base.with_(die=die, ground=ground, rest=rest, t_max=t_max,
-                       dt=base.dt if dt is None else dt, **scene_kw)
-    return ThrowTask(scene, release_height, max_speed, max_spin, hand_noise, orientation_noise,
-                     min_speed, min_spin, shaping, num_threads, until)
+    check_task_keywords(physics)
+    return ThrowTask(build_scene(scene, **physics), release_height, max_speed, max_spin,
+                     hand_noise, orientation_noise, min_speed, min_spin, shaping, num_threads,
+                     until)
 
 
-def _choice(name: str, value: str | None, kind: type[IntEnum], default: IntEnum) -> IntEnum:
-    """The member of ``kind`` named ``value`` in lower case (``default`` for None)."""
-    members = {member.name.lower(): member for member in kind}
-    if value is not None and value not in members:
-        raise ValueError(f"{name} must be one of {sorted(members)}, got {value!r}")
-    return default if value is None else members[value]
-
-
-def check_face(name: str, value: object) -> int:
-    """``value`` as a face number 1–6, or ``ValueError`` naming ``name``."""
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
-        raise ValueError(f"{name} must be an int in [1, 6], got {value!r}")
-    check_range(name, int(value), 1, 6)
-    return int(value)
+def check_num_threads(value: object) -> None:
+    """``ValueError`` unless ``value`` is None or an int in [1, numba's thread count]."""
+    limit = numba.config.NUMBA_NUM_THREADS
+    if value is not None and (isinstance(value, bool) or not isinstance(
+            value, (int, np.integer)) or not 1 <= value <= limit):
+        raise ValueError(f"num_threads must be None or an int in [1, {limit}] "
+                         f"(numba.config.NUMBA_NUM_THREADS), got {value!r}")
 
 
 def check_task_keywords(keywords: dict[str, object]) -> dict[str, object]:
     """``keywords`` unchanged if :func:`make_task` takes them all, else ``ValueError``."""
-    known = inspect.signature(make_task).parameters
+    known = {*inspect.signature(make_task).parameters,
+             *inspect.signature(build_scene).parameters} - {"physics"}
     unknown = sorted(set(keywords) - set(known))
     if unknown:
         raise ValueError(f"unknown keyword(s) {unknown}; DiceThrow-v0 takes {sorted(known)} "
@@ -367,9 +329,22 @@ def check_task_keywords(keywords: dict[str, object]) -> dict[str, object]:
     return keywords
 
 
-def _given(default: object, **values: object) -> dict[str, object]:
-    """The keywords that were given, others taken from the dataclass ``default``."""
-    return {k: getattr(default, k) if v is None else v for k, v in values.items()}
+def _held_within_t_max(result: Result, scene: Scene) -> Result:
+    """``result`` of an early-rest run with ``settled`` as if the rest hold had been waited out.
+
+    Early rest settles a die the moment its energy proves it stays quiet, with the same face
+    and rest time as waiting out ``scene.rest.hold``; waiting it out also needs the hold to end
+    within ``t_max`` (``simulate`` counts ``ceil(hold / dt)`` quiet steps after the first). A die
+    that went quiet later is not settled, its rest time ``t_max``, as without early rest.
+    """
+    dt = scene.step
+    hold_steps = math.ceil(scene.rest.hold / dt)
+    n_steps = max(1, round(scene.t_max / dt))
+    late = result.settled & (np.rint(result.rest_time / dt) + 1 + hold_steps > n_steps)
+    if not late.any():
+        return result
+    return replace(result, settled=result.settled & ~late,
+                   rest_time=np.where(late, n_steps * dt, result.rest_time))
 
 
 def _rotation_vector_quaternion(vectors: np.ndarray) -> np.ndarray:

@@ -14,13 +14,12 @@ from dice_env.envs.dice_throw import (
     RENDER_FPS,
     action_space,
     configure,
+    episode_hand,
     observation_space,
 )
-from dice_env.envs.task import (
-    ThrowTask,
-    check_actions,
-    check_rotation,
-)
+from dice_env.envs.task import ThrowTask, check_actions
+
+MAX_NUM_ENVS = 2**20  # about 1 kB per env in the kernel's and the env's arrays
 
 
 class DiceThrowVectorEnv(VectorEnv):
@@ -51,9 +50,9 @@ class DiceThrowVectorEnv(VectorEnv):
         render_height: int = 240,
         **task_keywords: Any,
     ) -> None:
-        if isinstance(num_envs, bool) or not isinstance(num_envs, (int, np.integer)) or (
-                num_envs < 1):
-            raise ValueError(f"num_envs must be an int >= 1, got {num_envs!r}")
+        if isinstance(num_envs, bool) or not isinstance(num_envs, (int, np.integer)) or not (
+                1 <= num_envs <= MAX_NUM_ENVS):
+            raise ValueError(f"num_envs must be an int in [1, {MAX_NUM_ENVS}], got {num_envs!r}")
         self.task: ThrowTask = configure(self, ("rgb_array",), render_mode, target_face,
                                          orientation_mode, render_width, render_height,
                                          task_keywords)
@@ -96,7 +95,7 @@ class DiceThrowVectorEnv(VectorEnv):
         for i in range(self.num_envs):
             if seeds[i] is not None:
                 self._rngs[i] = seeding.np_random(seeds[i])[0]
-            self._new_hand(i, options[i] or {})
+            self._targets[i], self._hands[i] = episode_hand(self, self._rngs[i], options[i])
         return self.task.observe(self._targets, self._hands)
 
     def step(
@@ -130,10 +129,3 @@ class DiceThrowVectorEnv(VectorEnv):
 
         return tuple(render_die(self.task.scene, self.task.release_position, self._hands[i],
                                 size=self.render_size) for i in range(self.num_envs))
-
-    def _new_hand(self, i: int, options: dict[str, Any]) -> None:
-        self._targets[i], self._hands[i] = self.task.sample_hand(
-            self._rngs[i], options.get("target_face", self.target_face),
-            options.get("orientation_mode", self.orientation_mode))
-        if "orientation" in options:
-            self._hands[i] = check_rotation("options['orientation']", options["orientation"])

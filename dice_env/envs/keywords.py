@@ -1,0 +1,241 @@
+"""The env's physical keywords: each validated where given, applied to a base scene.
+
+:func:`build_scene` turns ``gym.make`` keywords into a :class:`~dice_env.scene.Scene`. A keyword
+changes only what it names; every other field of the base scene (its die, ground, rest test,
+``t_max``, ...) is kept. A keyword that cannot be applied to the base scene (``mass`` on a loaded
+die) or that would have no effect (``safety`` with a fixed ``dt``) is refused, never dropped.
+
+:func:`check_scene` refuses scenes the env cannot run as throws, whether built from keywords or
+passed as ``scene``: a die whose weight alone sinks it into the table, ``t_max`` or a rest hold
+of more than :data:`MAX_STEPS` steps, and the paper's contact law with a damping whose
+air drag keeps the die from falling.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+from enum import IntEnum
+
+import numpy as np
+
+from dice_env.die import Die
+from dice_env.scene import ContactLaw, FrictionLaw, Ground, Rest, Scene, Scheme
+from dice_env.validation import check_nonnegative, check_positive, check_range
+
+DEFAULT_T_MAX = 5.0  # s, without a base scene: gentle throws settle in well under 2 s
+MAX_STEPS = 10**7  # steps per throw: about 2.5 s for one die that never settles, on one core
+MAX_SINK = 0.1  # the weight's sink of a flat die's corners into the table, in edges
+
+
+def check_face(name: str, value: object) -> int:
+    """``value`` as a face number 1–6, or ``ValueError`` naming ``name``."""
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
+        raise ValueError(f"{name} must be an int in [1, 6], got {value!r}")
+    check_range(name, int(value), 1, 6)
+    return int(value)
+
+
+def build_scene(
+    scene: Scene | None = None,
+    *,
+    t_max: float | None = None,
+    edge: float | None = None,
+    mass: float | None = None,
+    load_face: int | None = None,
+    load_fraction: float | None = None,
+    load_depth: float | None = None,
+    stiffness: float | None = None,
+    damping: float | None = None,
+    friction: float | None = None,
+    tilt_deg: float | None = None,
+    contact_law: str | ContactLaw | None = None,
+    gravity: float | None = None,
+    dt: float | None = None,
+    safety: float | None = None,
+    rest_speed: float | None = None,
+    rest_hold: float | None = None,
+    energy_tol: float | None = None,
+    scheme: str | Scheme | None = None,
+    friction_law: str | FrictionLaw | None = None,
+    friction_vmin: float | None = None,
+) -> Scene:
+    """``scene`` (default ``Scene(t_max=DEFAULT_T_MAX)``) with the keywords given (not None).
+
+    ``edge``, ``mass`` and ``load_*`` build the die (``load_fraction`` > 0: :meth:`Die.loaded`
+    toward ``load_face``, at ``load_depth``; they need a uniform base die); ``tilt_deg`` tilts the
+    table about y from level; the enum keywords take a member or its name (any case).
+    """
+    if scene is None:
+        scene = Scene(t_max=DEFAULT_T_MAX)
+    if not isinstance(scene, Scene):
+        raise ValueError(f"scene must be a dice_env.Scene or None, got {type(scene).__name__}")
+    changes = _given(t_max=t_max, gravity=gravity, dt=dt, safety=safety, energy_tol=energy_tol,
+                     friction_vmin=friction_vmin)
+    for name, value, kind in (("scheme", scheme, Scheme),
+                              ("friction_law", friction_law, FrictionLaw)):
+        if value is not None:
+            changes[name] = _choice(name, value, kind)
+    built = scene.with_(
+        die=_die(scene.die, edge, mass, load_face, load_fraction, load_depth),
+        ground=_ground(scene.ground, stiffness, damping, friction, contact_law, tilt_deg),
+        rest=_rest(scene.rest, rest_speed, rest_hold), **changes)
+    if safety is not None and built.dt is not None:
+        raise ValueError(f"safety has no effect with a fixed step (dt={built.dt:g} s): give "
+                         "safety or dt, not both")
+    if friction_vmin is not None and built.friction_law != FrictionLaw.REGULARIZED:
+        raise ValueError("friction_vmin acts only with friction_law='regularized' (the scene's "
+                         f"is {built.friction_law.name.lower()!r}): give both or neither")
+    return built
+
+
+def check_scene(scene: Scene, release_height: float) -> None:
+    """Refuse a scene the env cannot run as throws from ``release_height``; see the module."""
+    _check_sink(scene)
+    _check_steps(scene)
+    if scene.ground.contact_law == ContactLaw.PAPER and scene.ground.damping > 0:
+        _check_paper_drag(scene, release_height)
+
+
+def _check_sink(scene: Scene) -> None:
+    """The die's weight alone must not sink it more than :data:`MAX_SINK` edges."""
+    die, ground = scene.die, scene.ground
+    sink = die.mass * scene.gravity * ground.normal[2] / (4.0 * ground.stiffness)
+    if sink > MAX_SINK * die.edge:
+        raise ValueError(
+            f"the die's weight would press a flat face's corners {sink:.3g} m into the table, "
+            f"more than {MAX_SINK} of the edge ({die.edge:g} m): mass={die.mass:g} kg, "
+            f"gravity={scene.gravity:g} m/s^2, stiffness={ground.stiffness:g} N/m; raise "
+            "stiffness or edge, or lower mass or gravity")
+
+
+def _check_steps(scene: Scene) -> None:
+    """A throw may take at most :data:`MAX_STEPS` steps of a computable step."""
+    with np.errstate(all="ignore"):
+        try:
+            step = scene.step
+        except (ArithmeticError, np.linalg.LinAlgError):
+            step = math.nan
+    if not math.isfinite(step) or step <= 0:
+        raise ValueError(f"the step comes out as {step:g} s for {_step_origin(scene)}, "
+                         f"edge={scene.die.edge:g}: bring them nearer the defaults")
+    for name, value in (("t_max", scene.t_max), ("rest_hold", scene.rest.hold)):
+        if value / step > MAX_STEPS:
+            raise ValueError(
+                f"{name} must be at most {MAX_STEPS:.0e} steps: {name}={value:g} s over a step "
+                f"of {step:.3g} s is {value / step:.3g} steps ({_step_origin(scene)}); lower "
+                f"{name}, or make the step longer")
+
+
+def _check_paper_drag(scene: Scene, release_height: float) -> None:
+    """The paper law's air drag (8 D v) must not outweigh the die in a drop from the hand.
+
+    Without gravity toward the table the drag stops every die in the air: always refused.
+    """
+    g = scene.gravity * scene.ground.normal[2]
+    weight = scene.die.mass * g
+    drop_speed = math.sqrt(2.0 * g * release_height)
+    damping = scene.ground.damping
+    if g > 0 and 8.0 * damping * drop_speed <= weight:
+        return
+    limit = weight / (8.0 * drop_speed) if g > 0 else 0.0
+    raise ValueError(
+        f"contact_law='paper' needs damping <= m g / (8 sqrt(2 g release_height)) = "
+        f"{limit:.4g} N s/m, got damping={damping:g}: the paper's law pushes every corner "
+        "moving toward the table with D times its speed even in the air, an air drag of 8 D v, "
+        f"so the die falls at most m g / (8 D) = {weight / (8.0 * damping):.3g} m/s (a drop "
+        f"from release_height={release_height:g} m reaches {drop_speed:.3g} m/s; gravity="
+        f"{scene.gravity:g} m/s^2) and the throws hardly land. Use contact_law='gated' (the "
+        "default: a real table), or a damping that small (the table then barely damps impacts: "
+        "restitution near 1)")
+
+
+def _step_origin(scene: Scene) -> str:
+    """Where the scene's step comes from, naming the keywords that set it."""
+    if scene.dt is not None:
+        return f"dt={scene.dt:g}"
+    return (f"safety={scene.safety:g} times the critical step of stiffness="
+            f"{scene.ground.stiffness:g}, damping={scene.ground.damping:g}, "
+            f"mass={scene.die.mass:g}")
+
+
+def _die(
+    base: Die, edge: float | None, mass: float | None, load_face: int | None,
+    load_fraction: float | None, load_depth: float | None,
+) -> Die:
+    """``base`` with the die keywords given; only a uniform ``base`` can take them."""
+    if load_face is not None:
+        check_face("load_face", load_face)
+    if load_fraction is not None:
+        check_range("load_fraction", load_fraction, 0.0, 1.0, high_open=True)
+    if load_depth is not None:
+        check_range("load_depth", load_depth, 0.0, 1.0, high_open=True)
+    given = _given(edge=edge, mass=mass, load_face=load_face, load_fraction=load_fraction,
+                   load_depth=load_depth)
+    if not given:
+        return base
+    if base != Die(edge=base.edge, mass=base.mass):
+        com = ", ".join(f"{c:g}" for c in base.com)
+        raise ValueError(
+            f"{', '.join(given)} cannot be applied to the scene's die: it is not a uniform die "
+            f"(com ({com}) m, its own inertia), so it cannot be rebuilt from keywords without "
+            "losing its mass distribution. Build the die you want in the scene (e.g. "
+            "Die.loaded(face, fraction, depth, edge=..., mass=...)) and leave out "
+            f"{', '.join(given)}")
+    size = {"edge": base.edge if edge is None else edge,
+            "mass": base.mass if mass is None else mass}
+    for name, value in size.items():
+        check_positive(name, value)
+    problem = f"edge={size['edge']:g} m, mass={size['mass']:g} kg and load_fraction="
+    problem += f"{load_fraction} give no valid die"
+    try:
+        die = Die(**size) if not load_fraction else Die.loaded(
+            fraction=load_fraction, **_given(face=load_face, depth=load_depth), **size)
+    except ValueError as error:  # the inertia of an extreme size underflows
+        raise ValueError(f"{problem}: {error}") from error
+    with np.errstate(all="ignore"):
+        moments = np.linalg.eigvalsh(die.inertia_body)
+        usable = np.isfinite(moments).all() and np.isfinite(1.0 / moments).all()
+    if not (usable and moments[0] > 0):
+        raise ValueError(f"{problem}: its moments of inertia {moments} under- or overflow")
+    return die
+
+
+def _ground(
+    base: Ground, stiffness: float | None, damping: float | None, friction: float | None,
+    contact_law: str | ContactLaw | None, tilt_deg: float | None,
+) -> Ground:
+    """``base`` with the table keywords given."""
+    changes = _given(stiffness=stiffness, damping=damping, friction=friction)
+    if contact_law is not None:
+        changes["contact_law"] = _choice("contact_law", contact_law, ContactLaw)
+    if tilt_deg is not None:
+        check_range("tilt_deg", tilt_deg, 0.0, 90.0, high_open=True)
+        changes["normal"] = Ground.tilted(tilt_deg).normal
+    return replace(base, **changes) if changes else base
+
+
+def _rest(base: Rest, speed: float | None, hold: float | None) -> Rest:
+    """``base`` with ``rest_speed`` and ``rest_hold`` if given."""
+    if speed is not None:
+        check_positive("rest_speed", speed)
+    if hold is not None:
+        check_nonnegative("rest_hold", hold)
+    changes = _given(speed=speed, hold=hold)
+    return replace(base, **changes) if changes else base
+
+
+def _choice(name: str, value: object, kind: type[IntEnum]) -> IntEnum:
+    """``value`` as a member of ``kind``: a member itself or its name in any case."""
+    if isinstance(value, kind):
+        return value
+    members = {member.name.lower(): member for member in kind}
+    if isinstance(value, str) and value.lower() in members:
+        return members[value.lower()]
+    raise ValueError(f"{name} must be one of {sorted(members)} or a {kind.__name__} member, "
+                     f"got {value!r}")
+
+
+def _given(**values: object) -> dict[str, object]:
+    """The keywords whose value is not None."""
+    return {name: value for name, value in values.items() if value is not None}
