@@ -55,9 +55,12 @@ surroundings: any number of planes (a floor and walls), each with its own materi
 kernel takes a few named groups (:class:`Body`, :class:`Contact`, :class:`Options`,
 :class:`Stops`, :class:`Records`, :class:`Dice`, :class:`Outcome`), built by
 :func:`dice_env.simulate.pack`; each piece of the physics is one small inlined function:
-a vertex on a plane (:func:`vertex_on_plane`), the contact-free jump (:func:`free_steps`,
-:func:`torque_free`), the stop tests (:func:`decided`, :func:`quiet`), the step
-(:func:`step_die`). This module imports nothing else from the package.
+a vertex on a plane (:func:`vertex_on_plane`, :func:`_stick_slip`), the contact-free jump
+(:func:`free_steps`, :func:`torque_free`), the face read and the decided-face test
+(:func:`face_read`, :func:`decided`), the rotation (:func:`rotate`); :func:`simulate_one`
+loops them. The hot loop hands those pieces numbers, not arrays: in numba each array handed
+on costs an atomic reference count, which cost the loop more than its arithmetic. This
+module imports nothing else from the package.
 """
 
 from __future__ import annotations
@@ -94,24 +97,24 @@ class Body(NamedTuple):
     reads_down: bool
 
 
-class Contact(NamedTuple):
-    """The planes the die stays on, ``normals[p] . X >= offsets[p]``, and the contact laws.
+# Columns of Contact.planes: unit normal (3), offset, stiffness, damping, friction, the
+# stick-slip spring and damper.
+NX, NY, NZ, OFFSET, STIFF, DAMP, MU, KT, CT = range(9)
 
-    Per plane ``p`` (arrays (P,)): unit ``normals`` (P, 3), pointing into the free side;
-    ``offsets``; ``stiffness`` S, ``damping`` D, ``friction`` mu; the stick-slip spring ``kt``
-    and damper ``ct``. Plane 0 is the floor: the start height in the energy scale and the
-    reading of the face are taken against it. ``gated``: only vertices below a plane feel it
-    (else the listing's law on every vertex); ``stick``: stick-slip friction (else the
-    listing's ``-mu fn Ut/(|Ut| + vmin)``); ``vmin``: that law's speed.
+
+class Contact(NamedTuple):
+    """The planes the die stays on, ``n . X >= offset``, and the contact laws.
+
+    ``planes`` (P, 9): per plane its unit normal (pointing into the free side), offset,
+    stiffness S, damping D, friction mu, and the stick-slip spring ``kt`` and damper ``ct``
+    (columns ``NX`` ... ``CT``; one array, read element by element in the loop). Plane 0 is the
+    floor: the start height in the energy scale is taken against it. ``gated``: only
+    vertices below a plane feel it (else the listing's law on every vertex); ``stick``:
+    stick-slip friction (else the listing's ``-mu fn Ut/(|Ut| + vmin)``); ``vmin``: that
+    law's speed.
     """
 
-    normals: np.ndarray
-    offsets: np.ndarray
-    stiffness: np.ndarray
-    damping: np.ndarray
-    friction: np.ndarray
-    kt: np.ndarray
-    ct: np.ndarray
+    planes: np.ndarray
     gated: bool
     stick: bool
     vmin: float
@@ -250,13 +253,15 @@ def rotate(q: np.ndarray, w0: float, w1: float, w2: float, dt: float) -> None:
 
 
 @njit(cache=True, inline="always")
-def angular_velocity(q: np.ndarray, body: Body, l0: float, l1: float,
+def angular_velocity(q: np.ndarray, inv_body: np.ndarray, inv_iso: float, l0: float, l1: float,
                      l2: float) -> tuple[float, float, float]:
-    """``I_world^-1 L`` with ``I_world = Q I_body Q^T``; ``L * inv_iso`` when isotropic."""
-    inv_iso = body.inv_iso
+    """``I_world^-1 L`` with ``I_world = Q I_body Q^T``; ``L * inv_iso`` when ``inv_iso > 0``.
+
+    ``inv_body`` (3, 3) the inverse body inertia (the hot loop passes arrays and numbers, not
+    the groups: taking an array out of a group costs a reference count).
+    """
     if inv_iso > 0.0:
         return l0 * inv_iso, l1 * inv_iso, l2 * inv_iso
-    inv_body = body.inv_inertia
     b0 = q[0, 0] * l0 + q[1, 0] * l1 + q[2, 0] * l2
     b1 = q[0, 1] * l0 + q[1, 1] * l1 + q[2, 1] * l2
     b2 = q[0, 2] * l0 + q[1, 2] * l1 + q[2, 2] * l2
@@ -271,8 +276,9 @@ def angular_velocity(q: np.ndarray, body: Body, l0: float, l1: float,
 
 
 @njit(cache=True, inline="always")
-def face_read(q: np.ndarray, body: Body, n0: float, n1: float, n2: float) -> int:
-    """Index (into ``body.faces``) of the face read.
+def face_read(q: np.ndarray, faces: np.ndarray, reads_down: bool, n0: float, n1: float,
+              n2: float) -> int:
+    """Index (into ``faces`` (F, 3), outward normals) of the face read.
 
     The face pointing most along ``n``, or most against it for a die read by the face down;
     the first of equals.
@@ -280,8 +286,7 @@ def face_read(q: np.ndarray, body: Body, n0: float, n1: float, n2: float) -> int
     up_x = q[0, 0] * n0 + q[1, 0] * n1 + q[2, 0] * n2  # n in the body frame, Q^T n
     up_y = q[0, 1] * n0 + q[1, 1] * n1 + q[2, 1] * n2
     up_z = q[0, 2] * n0 + q[1, 2] * n1 + q[2, 2] * n2
-    faces = body.faces
-    sign = -1.0 if body.reads_down else 1.0
+    sign = -1.0 if reads_down else 1.0
     best, index = -np.inf, 0
     for f in range(faces.shape[0]):
         value = sign * (faces[f, 0] * up_x + faces[f, 1] * up_y + faces[f, 2] * up_z)
@@ -317,40 +322,42 @@ def free_steps(lowest: float, un: float, spin: float, r_max: float, dvn: float, 
 
 
 @njit(cache=True, inline="always")
-def torque_free(q: np.ndarray, body: Body, l0: float, l1: float, l2: float, dt: float,
-                n: int) -> tuple[float, float, float]:
+def torque_free(q: np.ndarray, inv_body: np.ndarray, inv_iso: float, l0: float, l1: float,
+                l2: float, dt: float, n: int) -> tuple[float, float, float]:
     """``n`` rotation steps at constant ``L``, in place on ``q``; returns the last ``w``.
 
     An isotropic die spins at the constant ``w = L / I``: one rotation of angle ``n |w| dt``.
     Any other takes the ``n`` plain steps (``w`` follows ``I_world``).
     """
-    w0, w1, w2 = angular_velocity(q, body, l0, l1, l2)
-    if body.inv_iso > 0.0:
+    w0, w1, w2 = angular_velocity(q, inv_body, inv_iso, l0, l1, l2)
+    if inv_iso > 0.0:
         rotate(q, w0, w1, w2, n * dt)
         return w0, w1, w2
     rotate(q, w0, w1, w2, dt)
     for _ in range(n - 1):
-        w0, w1, w2 = angular_velocity(q, body, l0, l1, l2)
+        w0, w1, w2 = angular_velocity(q, inv_body, inv_iso, l0, l1, l2)
         rotate(q, w0, w1, w2, dt)
     return w0, w1, w2
 
 
 @njit(cache=True, inline="always")
-def vertex_on_plane(contact: Contact, p: int, height: float, before: float, position: tuple,
-                    velocity: tuple, middle: tuple, midpoint: bool, dt: float, dt_m: float,
-                    anchor: np.ndarray, tied: np.ndarray, slot: int) -> tuple:
-    """The force of plane ``p`` on one vertex, and what the step's books need of it.
+def vertex_on_plane(plane: tuple, stick: bool, vmin: float, height: float, before: float,
+                    position: tuple, velocity: tuple, middle: tuple, midpoint: bool, dt: float,
+                    dt_m: float, anchor: tuple, tied: bool) -> tuple:
+    """The force of a plane on one vertex, and the step's books.
+
+    ``plane``: its row of ``Contact.planes`` as numbers (arrays passed into the hot loop
+    cost a reference count each).
 
     ``height`` of the vertex above the plane now and ``before`` (entering the last step);
     ``position`` its world position, ``velocity`` its velocity entering the step and
     ``middle`` that velocity at the middle of the kick (used for damping and friction when
-    ``midpoint``). ``anchor`` (3,) and ``tied[slot]``: the stick-slip spring's tie point and
-    whether it is tied (updated in place). Returns the force (3 floats), the energy stored in
-    the normal spring and in the tangential spring, whether the vertex is below the plane,
-    its sink and its approach speed.
+    ``midpoint``); ``anchor`` and ``tied``: the stick-slip spring's tie point and whether it
+    is tied. Returns the force (3), the energy in the normal and in the tangential spring,
+    whether the vertex is below the plane, its sink, its approach speed, and the tie point (3)
+    and tie after the step.
     """
-    n0, n1, n2 = contact.normals[p, 0], contact.normals[p, 1], contact.normals[p, 2]
-    stiff, damp, mu = contact.stiffness[p], contact.damping[p], contact.friction[p]
+    n0, n1, n2, _, stiff, damp, mu, _, _ = plane
     uk0, uk1, uk2 = velocity
     dg = max(0.0, -height)
     un = n0 * uk0 + n1 * uk1 + n2 * uk2
@@ -369,47 +376,42 @@ def vertex_on_plane(contact: Contact, p: int, height: float, before: float, posi
         else:
             fn = friction_limit
     if fn <= 0.0:
-        tied[slot] = False
-        return 0.0, 0.0, 0.0, spring, 0.0, below, dg, approach
+        return 0.0, 0.0, 0.0, spring, 0.0, below, dg, approach, anchor, False
     fk0, fk1, fk2 = fn * n0, fn * n1, fn * n2
     stored = 0.0
     if mu > 0.0:
         cap = mu * max(friction_limit, 0.0)  # Coulomb's limit mu fn
         ut0, ut1, ut2 = uk0 - un * n0, uk1 - un * n1, uk2 - un * n2
-        if contact.stick:
-            ft0, ft1, ft2, stored = _stick_slip(contact, p, height, before, position,
-                                                (ut0, ut1, ut2), cap, dt, dt_m, anchor,
-                                                tied, slot)
+        if stick:
+            ft0, ft1, ft2, stored, anchor = _stick_slip(
+                plane, height, before, position, (ut0, ut1, ut2), cap, dt, dt_m, anchor, tied)
+            tied = True
         else:
-            scale = cap / (math.sqrt(ut0 * ut0 + ut1 * ut1 + ut2 * ut2) + contact.vmin)
+            scale = cap / (math.sqrt(ut0 * ut0 + ut1 * ut1 + ut2 * ut2) + vmin)
             ft0, ft1, ft2 = -scale * ut0, -scale * ut1, -scale * ut2
         fk0 += ft0
         fk1 += ft1
         fk2 += ft2
-    return fk0, fk1, fk2, spring, stored, below, dg, approach
+    return fk0, fk1, fk2, spring, stored, below, dg, approach, anchor, tied
 
 
 @njit(cache=True, inline="always")
-def _stick_slip(contact: Contact, p: int, height: float, before: float, position: tuple,
-                ut: tuple, cap: float, dt: float, dt_m: float, anchor: np.ndarray,
-                tied: np.ndarray, slot: int) -> tuple:
+def _stick_slip(plane: tuple, height: float, before: float, position: tuple, ut: tuple,
+                cap: float, dt: float, dt_m: float, anchor: tuple, tied: bool) -> tuple:
     """Stick-slip friction (see the module docstring).
 
-    Returns the tangential force and the energy of its spring; the tie point ``anchor`` and
-    ``tied[slot]`` are updated in place.
+    Returns the tangential force (3), the energy of its spring and the tie point (3) after
+    the step (tied now, where it crossed the plane during the last step if it was not).
     """
-    n0, n1, n2 = contact.normals[p, 0], contact.normals[p, 1], contact.normals[p, 2]
-    kt, ct = contact.kt[p], contact.ct[p]
+    n0, n1, n2, _, _, _, _, kt, ct = plane
     p0, p1, p2 = position
     ut0, ut1, ut2 = ut
-    if not tied[slot]:
-        # tied where it crossed the plane during the last step, if it did
-        tied[slot] = True
-        back = dt * height / (before - height) if before > 0.0 else 0.0
-        anchor[0] = p0 + back * ut0
-        anchor[1] = p1 + back * ut1
-        anchor[2] = p2 + back * ut2
-    e0, e1, e2 = p0 - anchor[0], p1 - anchor[1], p2 - anchor[2]
+    a0, a1, a2 = anchor
+    if not tied:
+        crossed = before > 0.0 and height < 0.0  # (the paper's law also ties vertices above)
+        back = dt * height / (before - height) if crossed else 0.0
+        a0, a1, a2 = p0 + back * ut0, p1 + back * ut1, p2 + back * ut2
+    e0, e1, e2 = p0 - a0, p1 - a1, p2 - a2
     en = n0 * e0 + n1 * e1 + n2 * e2
     e0, e1, e2 = e0 - en * n0, e1 - en * n1, e2 - en * n2
     ft0, ft1, ft2 = -kt * e0 - ct * ut0, -kt * e1 - ct * ut1, -kt * e2 - ct * ut2
@@ -426,86 +428,18 @@ def _stick_slip(contact: Contact, p: int, height: float, before: float, position
             ratio = cap / size
             ft0, ft1, ft2 = ratio * ft0, ratio * ft1, ratio * ft2
         e0, e1, e2 = -ft0 / kt, -ft1 / kt, -ft2 / kt
-        anchor[0], anchor[1], anchor[2] = p0 - e0, p1 - e1, p2 - e2
-    return ft0, ft1, ft2, 0.5 * kt * (e0 * e0 + e1 * e1 + e2 * e2)
+        a0, a1, a2 = p0 - e0, p1 - e1, p2 - e2
+    return ft0, ft1, ft2, 0.5 * kt * (e0 * e0 + e1 * e1 + e2 * e2), (a0, a1, a2)
 
 
 @njit(cache=True, inline="always")
-def contact_forces(body: Body, contact: Contact, options: Options, q: np.ndarray, x: tuple,
-                   u: tuple, w: tuple, cu: tuple, cw: tuple, near_rest: bool,
-                   heights: np.ndarray, anchors: np.ndarray, tied: np.ndarray,
-                   lowest: np.ndarray, pen: float) -> tuple:
-    """Steps 1-2: the total force (gravity included) and torque on the die, and the books.
+def decided(lock: np.ndarray, faces: np.ndarray, reads_down: bool, q: np.ndarray, up: tuple,
+            energy: float) -> bool:
+    """Whether the die's total ``energy`` is below the ``lock`` (F,) of the face it reads.
 
-    ``x``, ``u``, ``w`` the state entering the step, ``cu``, ``cw`` the velocities at the
-    middle of the kick; ``heights`` (N, P) the vertex heights entering the last step,
-    ``anchors`` (N, P, 3) and ``tied`` (N, P) the stick-slip ties, ``lowest`` (P,) set to the
-    lowest vertex above each plane (all updated in place). Returns the force and torque,
-    the normal and tangential spring energies, the number of vertex-plane contacts, the
-    fastest approach among them, the deepest sink so far (from ``pen``) and, when
-    ``near_rest``, the largest squared vertex speed.
+    Call it only below the largest lock (most steps are above it, and a call binds arrays).
     """
-    x0, x1, x2 = x
-    u0, u1, u2 = u
-    w0, w1, w2 = w
-    cu0, cu1, cu2 = cu
-    cw0, cw1, cw2 = cw
-    dt = options.dt
-    dt_m = dt / body.mass
-    f0, f1, f2 = 0.0, 0.0, -body.mass * options.gravity
-    t0, t1, t2 = 0.0, 0.0, 0.0
-    spring, spring_t, touching, approach, fastest = 0.0, 0.0, 0, 0.0, 0.0
-    lowest[:] = np.inf
-    vertices, normals, offsets = body.vertices, contact.normals, contact.offsets
-    for k in range(vertices.shape[0]):
-        b0, b1, b2 = vertices[k, 0], vertices[k, 1], vertices[k, 2]
-        rk0 = q[0, 0] * b0 + q[0, 1] * b1 + q[0, 2] * b2
-        rk1 = q[1, 0] * b0 + q[1, 1] * b1 + q[1, 2] * b2
-        rk2 = q[2, 0] * b0 + q[2, 1] * b1 + q[2, 2] * b2
-        velocity = (u0 + w1 * rk2 - w2 * rk1, u1 + w2 * rk0 - w0 * rk2,
-                    u2 + w0 * rk1 - w1 * rk0)
-        if near_rest:
-            fastest = max(fastest, velocity[0] * velocity[0] + velocity[1] * velocity[1]
-                          + velocity[2] * velocity[2])
-        position = (x0 + rk0, x1 + rk1, x2 + rk2)
-        for p in range(normals.shape[0]):
-            height = (normals[p, 0] * position[0] + normals[p, 1] * position[1]
-                      + normals[p, 2] * position[2]) - offsets[p]
-            lowest[p] = min(lowest[p], height)
-            before = heights[k, p]
-            heights[k, p] = height
-            if height >= 0.0:
-                tied[k, p] = False
-                if contact.gated:
-                    continue
-            middle = velocity
-            if options.midpoint:
-                middle = (cu0 + cw1 * rk2 - cw2 * rk1, cu1 + cw2 * rk0 - cw0 * rk2,
-                          cu2 + cw0 * rk1 - cw1 * rk0)
-            fk0, fk1, fk2, spring_k, stored, below, dg, approach_k = vertex_on_plane(
-                contact, p, height, before, position, velocity, middle, options.midpoint, dt,
-                dt_m, anchors[k, p], tied[k], p)
-            if below:
-                touching += 1
-                spring += spring_k
-                pen = max(pen, dg)
-                approach = max(approach, approach_k)
-            spring_t += stored
-            f0 += fk0
-            f1 += fk1
-            f2 += fk2
-            if options.rotation:
-                t0 += rk1 * fk2 - rk2 * fk1
-                t1 += rk2 * fk0 - rk0 * fk2
-                t2 += rk0 * fk1 - rk1 * fk0
-    return f0, f1, f2, t0, t1, t2, spring, spring_t, touching, approach, pen, fastest
-
-
-@njit(cache=True, inline="always")
-def decided(stops: Stops, body: Body, q: np.ndarray, up: tuple, energy: float,
-            lock_max: float) -> bool:
-    """Whether the die's total ``energy`` is below the lock of the face it reads."""
-    return energy < lock_max and energy < stops.lock[face_read(q, body, up[0], up[1], up[2])]
+    return energy < lock[face_read(q, faces, reads_down, up[0], up[1], up[2])]
 
 
 @njit(cache=True, inline="always")
@@ -524,7 +458,11 @@ def relative_rise(e_max: float, e_start: float, e_tol: float) -> float:
 def simulate_one(i: int, dice: Dice, body: Body, contact: Contact, options: Options,
                  stops: Stops, records: Records, out: Outcome) -> None:
     """Advance die ``i`` in place; see :func:`simulate_batch`."""
-    n0, n1, n2 = contact.normals[0, 0], contact.normals[0, 1], contact.normals[0, 2]
+    # the groups' arrays taken out once: each taking costs a reference count
+    vertices, planes, faces, lock = body.vertices, contact.planes, body.faces, stops.lock
+    inv_body, inv_iso, reads_down = body.inv_inertia, body.inv_iso, body.reads_down
+    gated, stick, vmin = contact.gated, contact.stick, contact.vmin
+    n0, n1, n2, floor = planes[0, NX], planes[0, NY], planes[0, NZ], planes[0, OFFSET]
     up = (0.0, 0.0, 1.0)  # faces are read against gravity
     x0, x1, x2 = dice.x[i, 0], dice.x[i, 1], dice.x[i, 2]
     u0, u1, u2 = dice.u[i, 0], dice.u[i, 1], dice.u[i, 2]
@@ -537,7 +475,7 @@ def simulate_one(i: int, dice: Dice, body: Body, contact: Contact, options: Opti
     qi = dice.q[i].copy()
     n_rec = records.x.shape[1]
     kinetic_rest = 0.5 * mass * stops.v_rest * stops.v_rest
-    lock_max = stops.lock.max()
+    lock_max = lock.max()
     e_start, e_tol, e_max = 0.0, 1.0, -np.inf
     quiet = 0
     was_in_contact = True
@@ -549,7 +487,7 @@ def simulate_one(i: int, dice: Dice, body: Body, contact: Contact, options: Opti
     next_record = stride
     pu0, pu1, pu2 = u0, u1, u2  # velocities one step back, for the midpoint forces
     pw0, pw1, pw2 = w0, w1, w2
-    n_vertices, n_planes = body.vertices.shape[0], contact.normals.shape[0]
+    n_vertices, n_planes = vertices.shape[0], planes.shape[0]
     heights = np.full((n_vertices, n_planes), -1.0)  # vertex heights entering the last step
     anchors = np.zeros((n_vertices, n_planes, 3))  # stick-slip: where each spring is tied
     tied = np.zeros((n_vertices, n_planes), np.bool_)
@@ -565,16 +503,71 @@ def simulate_one(i: int, dice: Dice, body: Body, contact: Contact, options: Opti
             cu = (1.5 * u0 - 0.5 * pu0, 1.5 * u1 - 0.5 * pu1, 1.5 * u2 - 0.5 * pu2)
             cw = (1.5 * w0 - 0.5 * pw0, 1.5 * w1 - 0.5 * pw1, 1.5 * w2 - 0.5 * pw2)
         # kinetic energy of the state entering this step; near rest, the fastest vertex
-        wl0, wl1, wl2 = angular_velocity(qi, body, l0, l1, l2)
+        wl0, wl1, wl2 = angular_velocity(qi, inv_body, inv_iso, l0, l1, l2)
         kinetic = 0.5 * mass * (u0 * u0 + u1 * u1 + u2 * u2) + 0.5 * (
             l0 * wl0 + l1 * wl1 + l2 * wl2
         )
         near_rest = stops.at_rest and kinetic < kinetic_rest
         # 1.-2. vertices, and the forces and torques of the planes on them
-        f0, f1, f2, t0, t1, t2, spring, spring_t, touching, approach, pen, fastest = (
-            contact_forces(body, contact, options, qi, (x0, x1, x2), (u0, u1, u2),
-                           (w0, w1, w2), cu, cw, near_rest, heights, anchors, tied, lowest,
-                           pen))
+        cu0, cu1, cu2 = cu
+        cw0, cw1, cw2 = cw
+        f0, f1, f2 = 0.0, 0.0, -mass * g
+        t0, t1, t2 = 0.0, 0.0, 0.0
+        spring, spring_t, touching, approach, fastest = 0.0, 0.0, 0, 0.0, 0.0
+        n_planes = planes.shape[0]
+        for p in range(n_planes):
+            lowest[p] = np.inf
+        for k in range(vertices.shape[0]):
+            b0, b1, b2 = vertices[k, 0], vertices[k, 1], vertices[k, 2]
+            rk0 = qi[0, 0] * b0 + qi[0, 1] * b1 + qi[0, 2] * b2
+            rk1 = qi[1, 0] * b0 + qi[1, 1] * b1 + qi[1, 2] * b2
+            rk2 = qi[2, 0] * b0 + qi[2, 1] * b1 + qi[2, 2] * b2
+            velocity = (u0 + w1 * rk2 - w2 * rk1, u1 + w2 * rk0 - w0 * rk2,
+                        u2 + w0 * rk1 - w1 * rk0)
+            if near_rest:
+                fastest = max(fastest, velocity[0] * velocity[0] + velocity[1] * velocity[1]
+                              + velocity[2] * velocity[2])
+            position = (x0 + rk0, x1 + rk1, x2 + rk2)
+            for p in range(n_planes):
+                height = (planes[p, NX] * position[0] + planes[p, NY] * position[1]
+                          + planes[p, NZ] * position[2]) - planes[p, OFFSET]
+                lowest[p] = min(lowest[p], height)
+                before = heights[k, p]
+                heights[k, p] = height
+                if height >= 0.0:
+                    tied[k, p] = False
+                    if gated:
+                        continue
+                middle = velocity
+                if midpoint:
+                    middle = (cu0 + cw1 * rk2 - cw2 * rk1, cu1 + cw2 * rk0 - cw0 * rk2,
+                              cu2 + cw0 * rk1 - cw1 * rk0)
+                plane = (planes[p, NX], planes[p, NY], planes[p, NZ], planes[p, OFFSET],
+                         planes[p, STIFF], planes[p, DAMP], planes[p, MU], planes[p, KT],
+                         planes[p, CT])
+                anchor, tie = (0.0, 0.0, 0.0), False  # the ties matter to stick-slip only
+                if stick:
+                    anchor = (anchors[k, p, 0], anchors[k, p, 1], anchors[k, p, 2])
+                    tie = tied[k, p]
+                fk0, fk1, fk2, spring_k, stored, below, dg, approach_k, anchor, tie = (
+                    vertex_on_plane(plane, stick, vmin, height, before, position, velocity,
+                                    middle, midpoint, dt, dt_m, anchor, tie))
+                if stick:
+                    anchors[k, p, 0], anchors[k, p, 1], anchors[k, p, 2] = anchor
+                    tied[k, p] = tie
+                if below:
+                    touching += 1
+                    spring += spring_k
+                    pen = max(pen, dg)
+                    approach = max(approach, approach_k)
+                spring_t += stored
+                f0 += fk0
+                f1 += fk1
+                f2 += fk2
+                if rotation:
+                    t0 += rk1 * fk2 - rk2 * fk1
+                    t1 += rk2 * fk0 - rk0 * fk2
+                    t2 += rk0 * fk1 - rk1 * fk0
         # energy of the state entering this step. The gain check leaves out the tangential
         # springs: a slip re-ties a spring to carry the whole force mu fn, damping share
         # included, which can stretch it beyond what the vertex's motion put in (on a soft,
@@ -585,13 +578,13 @@ def simulate_one(i: int, dice: Dice, body: Body, contact: Contact, options: Opti
         if step == 1:
             e_start = checked
             e_tol = stops.energy_scale + kinetic + mass * g * max(
-                0.0, (n0 * x0 + n1 * x1 + n2 * x2) - contact.offsets[0])
+                0.0, (n0 * x0 + n1 * x1 + n2 * x2) - floor)
         else:
             e_max = max(e_max, checked)
         if touching > 0 and not was_in_contact and approach > stops.v_rest:
             hits += 1
         was_in_contact = touching > 0
-        if decided(stops, body, qi, up, energy, lock_max):
+        if energy < lock_max and decided(lock, faces, reads_down, qi, up, energy):
             end = DECIDED
             step -= 1
             break
@@ -609,8 +602,9 @@ def simulate_one(i: int, dice: Dice, body: Body, contact: Contact, options: Opti
         dv0, dv1, dv2 = f0 * dt_m, f1 * dt_m, f2 * dt_m
         jump = 1
         if options.flight and touching == 0:
-            jump = _jump(body, contact, lowest, (u0, u1, u2), (l0, l1, l2), (dv0, dv1, dv2),
-                         rotation, dt, n_steps - step + 1)
+            spin = math.sqrt(l0 * l0 + l1 * l1 + l2 * l2) * body.inv_i_min if rotation else 0.0
+            jump = _jump(planes, lowest, (u0, u1, u2), spin, body.r_max, (dv0, dv1, dv2), dt,
+                         n_steps - step + 1)
         if jump > 1:
             # records falling inside the jump, from the same closed form (the jump itself does
             # not depend on the recording)
@@ -621,7 +615,7 @@ def simulate_one(i: int, dice: Dice, body: Body, contact: Contact, options: Opti
                 half = 0.5 * j * (j + 1)
                 qj = qi.copy()
                 if rotation:
-                    torque_free(qj, body, l0, l1, l2, dt, j)
+                    torque_free(qj, inv_body, inv_iso, l0, l1, l2, dt, j)
                 _record(records, s // stride - 1, i,
                         (x0 + dt * (j * u0 + half * dv0), x1 + dt * (j * u1 + half * dv1),
                          x2 + dt * (j * u2 + half * dv2)),
@@ -648,7 +642,7 @@ def simulate_one(i: int, dice: Dice, body: Body, contact: Contact, options: Opti
             pw0, pw1, pw2 = w0, w1, w2
         u0, u1, u2, x0, x1, x2, l0, l1, l2 = nu0, nu1, nu2, nx0, nx1, nx2, nl0, nl1, nl2
         if rotation:
-            w0, w1, w2 = torque_free(qi, body, l0, l1, l2, dt, jump)
+            w0, w1, w2 = torque_free(qi, inv_body, inv_iso, l0, l1, l2, dt, jump)
         step += jump - 1
         if step >= next_record:  # a multiple of the stride reached or jumped over
             if step % stride == 0 and step // stride <= n_rec:
@@ -676,22 +670,18 @@ def simulate_one(i: int, dice: Dice, body: Body, contact: Contact, options: Opti
 
 
 @njit(cache=True, inline="always")
-def _jump(body: Body, contact: Contact, lowest: np.ndarray, u: tuple, ang: tuple, dv: tuple,
-          rotation: bool, dt: float, limit: int) -> int:
+def _jump(planes: np.ndarray, lowest: np.ndarray, u: tuple, spin: float, r_max: float,
+          dv: tuple, dt: float, limit: int) -> int:
     """Flight steps to take at once (at least 1).
 
     All but the last of those surely free of every plane, so the step before a contact is a
     plain one.
     """
-    l0, l1, l2 = ang
-    spin = math.sqrt(l0 * l0 + l1 * l1 + l2 * l2) * body.inv_i_min if rotation else 0.0
     free = limit
-    normals = contact.normals
-    for p in range(normals.shape[0]):
-        n0, n1, n2 = normals[p, 0], normals[p, 1], normals[p, 2]
+    for p in range(planes.shape[0]):
+        n0, n1, n2 = planes[p, NX], planes[p, NY], planes[p, NZ]
         free = min(free, free_steps(lowest[p], n0 * u[0] + n1 * u[1] + n2 * u[2], spin,
-                                    body.r_max, n0 * dv[0] + n1 * dv[1] + n2 * dv[2], dt,
-                                    limit))
+                                    r_max, n0 * dv[0] + n1 * dv[1] + n2 * dv[2], dt, limit))
     return max(1, free - 1)
 
 
@@ -707,7 +697,7 @@ def _record(records: Records, j: int, i: int, x: tuple, u: tuple, ang: tuple, q:
         if body.inv_iso > 0.0:
             rot = 0.5 * (l0 * l0 + l1 * l1 + l2 * l2) * body.inv_iso
         else:
-            wl0, wl1, wl2 = angular_velocity(q, body, l0, l1, l2)
+            wl0, wl1, wl2 = angular_velocity(q, body.inv_inertia, body.inv_iso, l0, l1, l2)
             rot = 0.5 * (l0 * wl0 + l1 * wl1 + l2 * wl2)
         records.energy[i, j] = 0.5 * body.mass * (u0 * u0 + u1 * u1 + u2 * u2) + rot \
             + body.mass * g * x2

@@ -14,7 +14,7 @@ from enum import IntEnum
 import numpy as np
 
 from dice_env import table
-from dice_env.die import FACE_NORMALS, Die
+from dice_env.die import Die
 from dice_env.validation import check_finite, check_nonnegative, check_positive, check_range
 
 MAX_STEPS = 10**9  # steps of one throw to t_max: more is refused (about a minute a die)
@@ -201,8 +201,8 @@ class Scene:
     Coulomb well above it and viscous below it. ``scheme``: see
     :class:`Scheme`. A throw is flagged unstable when its total energy (kinetic + potential +
     normal ground springs) exceeds its start by more than ``energy_tol`` times
-    ``KE0 + m*g*(h0 + edge)``, ``h0`` the start height of the centre above the table. A throw
-    whose deepest corner sinks more than ``sink_limit`` times the edge into the table is
+    ``KE0 + m*g*(h0 + size)``, ``h0`` the start height of the centre above the table. A throw
+    whose deepest vertex sinks more than ``sink_limit`` times the die's size into a plane is
     flagged ``sunk`` (the contact too soft for the load or the impact).
 
     Checked when built: every field's type and range, and the run it implies: a step
@@ -263,8 +263,8 @@ class Scene:
             raise ValueError(
                 f"the step must be in (0, t_max = {self.t_max:g}] s, got {step:.6g} s from "
                 f"dt={self.dt}, safety={self.safety:g} and the critical step for stiffness "
-                f"{self.ground.stiffness:g}, damping {self.ground.damping:g} and effective "
-                f"mass {self.effective_mass:.6g}"
+                f"{self.ground.stiffness:g}, damping {self.ground.damping:g} and mass "
+                f"{self.die.mass:g} (effective mass {self.effective_mass:.6g})"
             )
         self.steps_for(self.t_max)
 
@@ -345,7 +345,7 @@ class Scene:
         ``position`` (B, 3) centre of mass, ``orientation`` (B, 3, 3) body-to-world.
         """
         vertices = position[:, None, :] + np.einsum("bij,kj->bki", orientation,
-                                                    self.die.corners_body)
+                                                    self.die.vertices_body)
         return -np.min([plane.height(vertices).min(axis=1) for plane in self.planes], axis=0)
 
     def with_(self, **changes: object) -> Scene:
@@ -362,13 +362,11 @@ def _effective_mass(die: Die, tangential: float) -> float:
     inv_sqrt_m = np.zeros((6, 6))
     inv_sqrt_m[:3, :3] = np.eye(3) / math.sqrt(die.mass)
     inv_sqrt_m[3:, 3:] = _inv_sqrt_spd(die.inertia_body)
-    corners = die.corners_body
-    face_signs = np.sign(corners @ FACE_NORMALS.T)
+    vertices = die.vertices_body
     worst = 0.0
-    for f, n in enumerate(FACE_NORMALS):
-        on_face = corners[face_signs[:, f] > 0]
-        tangents = np.eye(3)[np.abs(n) < 0.5]  # the face normals are axes: the other two
-        springs = [(1.0, n)] + [(tangential, t) for t in tangents if tangential > 0]
+    for face, n in zip(die.faces, die.face_normals, strict=True):
+        on_face = vertices[sorted(face)]
+        springs = [(1.0, n)] + [(tangential, t) for t in _tangents(n) if tangential > 0]
         stiffness = np.zeros((6, 6))
         for weight, d in springs:
             a = np.hstack([np.tile(d, (len(on_face), 1)), np.cross(on_face, d)])
@@ -376,6 +374,16 @@ def _effective_mass(die: Die, tangential: float) -> float:
         k = inv_sqrt_m @ stiffness @ inv_sqrt_m
         worst = max(worst, float(np.linalg.eigvalsh(k)[-1]))
     return 1.0 / worst
+
+
+def _tangents(normal: np.ndarray) -> np.ndarray:
+    """Two orthonormal vectors across the unit ``normal`` (the other two axes for an axis)."""
+    axis = np.abs(normal) < 0.5
+    if np.count_nonzero(normal) == 1:
+        return np.eye(3)[axis]
+    first = np.cross(normal, np.eye(3)[np.argmin(np.abs(normal))])
+    first /= np.linalg.norm(first)
+    return np.array([first, np.cross(normal, first)])
 
 
 def _inv_sqrt_spd(matrix: np.ndarray) -> np.ndarray:

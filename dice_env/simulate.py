@@ -13,7 +13,6 @@ import numba
 import numpy as np
 
 from dice_env import kernel, vector_kernel
-from dice_env.die import FACE_NORMALS, face_up
 from dice_env.rotations import orthonormality_error
 from dice_env.scene import ContactLaw, FrictionLaw, Scene, Scheme
 from dice_env.validation import as_batch, check_finite, check_range
@@ -72,7 +71,7 @@ class State:
         Each argument is (3,) or (B, 3) (orientation (3, 3) or (B, 3, 3)) and is broadcast to
         the batch; ``angular_velocity`` defaults to zero, ``orientation`` to the identity.
         A die must start above the table or touching it: no corner deeper than
-        :data:`RELEASE_SINK` of the edge, or than the die's weight presses one corner in
+        :data:`RELEASE_SINK` of the die's size, or than its weight presses one corner in
         (``m g / S``), whichever is more.
         """
         position = as_batch("position", position, (3,))
@@ -90,7 +89,7 @@ class State:
                                                                                spin))
         rot = np.broadcast_to(rot, (size, 3, 3))
         sink = scene.sink(position, rot)
-        pressed = max(RELEASE_SINK * scene.die.edge,
+        pressed = max(RELEASE_SINK * scene.die.size,
                       scene.die.mass * scene.gravity / scene.ground.stiffness)
         if sink.max() > pressed:
             i = int(sink.argmax())
@@ -212,11 +211,11 @@ def simulate(
     out = state.copy()
     b = out.batch_size
     start_sink = scene.sink(out.position, out.orientation)
-    if start_sink.max() > scene.sink_limit * scene.die.edge:
+    if start_sink.max() > scene.sink_limit * scene.die.size:
         i = int(start_sink.argmax())
         raise ValueError(f"state.position: die {i} starts with a corner {start_sink[i]:.3g} m "
                          f"inside the table, deeper than the scene's sink limit "
-                         f"({scene.sink_limit:g} of the edge)")
+                         f"({scene.sink_limit:g} of the die's size)")
     records = _records(record, record_every, b, n_steps, len(body.vertices))
     options, stops = pack_run(scene, n_steps=n_steps, stop_at_rest=stop_at_rest,
                               free_flight=free_flight, early_rest=early_rest,
@@ -245,11 +244,11 @@ def simulate(
         recorded.update({name: fields[name] for name in record})
     max_pen = outcome.max_pen
     return Result(
-        face=face_up(out.orientation, UP),
+        face=scene.die.face_read(out.orientation, UP),
         settled=status == kernel.SETTLED, decided=status == kernel.DECIDED,
         rest_time=outcome.rest_time, impacts=outcome.impacts, unstable=unstable,
         energy_rise=energy_rise, max_penetration=max_pen,
-        sunk=max_pen > scene.sink_limit * scene.die.edge, steps=outcome.steps, final=out,
+        sunk=max_pen > scene.sink_limit * scene.die.size, steps=outcome.steps, final=out,
         **recorded,
     )
 
@@ -273,8 +272,8 @@ def pack_run(scene: Scene, *, n_steps: int, stop_at_rest: bool = True, free_flig
         n_steps=int(n_steps), at_rest=bool(stop_at_rest), v_rest=float(scene.rest.speed),
         hold_steps=math.ceil(scene.rest.hold / dt), rest_energy=float(rest_energy),
         rest_excess=float(rest_excess),
-        lock=lock_energy(scene) if stop_when_decided else _NEVER,
-        energy_scale=float(scene.die.mass * scene.gravity * scene.die.edge))
+        lock=lock_energy(scene) if stop_when_decided else np.full(scene.die.n_faces, -math.inf),
+        energy_scale=float(scene.die.mass * scene.gravity * scene.die.size))
     return options, stops
 
 
@@ -282,22 +281,18 @@ def pack_scene(scene: Scene) -> tuple[kernel.Body, kernel.Contact]:
     """The kernel's die and contact groups for ``scene`` (see :mod:`dice_env.kernel`)."""
     die, ground = scene.die, scene.ground
     inertia = die.inertia_body
-    vertices = np.ascontiguousarray(die.corners_body)
+    vertices = np.ascontiguousarray(die.vertices_body)
     body = kernel.Body(
         vertices=vertices, mass=float(die.mass), inv_inertia=np.linalg.inv(inertia),
         inv_iso=1.0 / float(inertia[0, 0]) if die.is_isotropic else 0.0,
         inv_i_min=float(1.0 / np.linalg.eigvalsh(inertia)[0]),
         r_max=float(np.sqrt((vertices**2).sum(axis=1)).max()),
-        faces=np.ascontiguousarray(FACE_NORMALS), reads_down=False)
-    planes = scene.planes
+        faces=np.ascontiguousarray(die.face_normals), reads_down=bool(die.reads_down))
     contact = kernel.Contact(
-        normals=np.array([plane.normal for plane in planes], dtype=np.float64),
-        offsets=np.array([plane.offset for plane in planes], dtype=np.float64),
-        stiffness=np.array([plane.stiffness for plane in planes], dtype=np.float64),
-        damping=np.array([plane.damping for plane in planes], dtype=np.float64),
-        friction=np.array([plane.friction for plane in planes], dtype=np.float64),
-        kt=np.array([plane.tangential * plane.stiffness for plane in planes], dtype=np.float64),
-        ct=np.array([plane.tangential * plane.damping for plane in planes], dtype=np.float64),
+        planes=np.array([[*plane.normal, plane.offset, plane.stiffness, plane.damping,
+                          plane.friction, plane.tangential * plane.stiffness,
+                          plane.tangential * plane.damping] for plane in scene.planes],
+                        dtype=np.float64),
         gated=ground.contact_law == ContactLaw.GATED,
         stick=scene.friction_law == FrictionLaw.STICK_SLIP, vmin=float(scene.friction_vmin))
     return body, contact
@@ -323,7 +318,7 @@ def _records(record: tuple[str, ...], record_every: int, b: int, n_steps: int,
 
 UP = np.array([0.0, 0.0, 1.0])  # against gravity: faces are read relative to it
 RECORDS = ("energy", "orientations", "nodes")
-RELEASE_SINK = 1e-3  # deepest corner of a release, as a fraction of the edge
+RELEASE_SINK = 1e-3  # deepest corner of a release, as a fraction of the die's size
 MAX_RECORD_BYTES = 4 * 2**30  # records larger than this are refused before any work
 ROTATION_TOL = 1e-6  # State.orientation's allowed orthonormality error (a long run drifts)
 _LONG_RUN = 2_000_000  # die-steps (about 0.1 s) from which a run goes on a worker thread
@@ -423,29 +418,31 @@ _cached_pack = functools.lru_cache(maxsize=64)(pack_scene)
 def _rest_energy(scene: Scene, early_rest: bool) -> tuple[float, float]:
     """Lowest total energy of the die and the excess above it that proves rest (0: none).
 
-    For a fair die on a horizontal table the lowest energy is flat on a face, each corner
-    carrying a quarter of the weight: ``m g h - (m g)^2 / (8 S)``. With less than
-    ``(m g)^2 / (8 S)`` above it the die cannot lift off, and with kinetic energy below
-    ``v^2 / (2 (1/m + r_max^2 / I))`` no corner moves at ``v`` (Cauchy-Schwarz on
-    ``|u| + |w| r_max``). Half the smaller of the two allows for the scheme's energy wobble.
+    For a fair, isotropic die on a horizontal table whose faces all have ``k`` vertices, the
+    lowest energy is flat on a face, each vertex carrying ``1/k`` of the weight:
+    ``m g h - (m g)^2 / (2 k S)``. With less than ``(m g)^2 / (2 k S)`` above it the die
+    cannot lift off, and with kinetic energy below ``v^2 / (2 (1/m + r_max^2 / I))`` no vertex
+    moves at ``v`` (Cauchy-Schwarz on ``|u| + |w| r_max``). Half the smaller of the two allows
+    for the scheme's energy wobble. Walls can only hold the die higher.
     """
     die, ground = scene.die, scene.ground
-    if not early_rest or not die.is_fair or ground.normal != (0.0, 0.0, 1.0):
+    corners = {len(face) for face in die.faces}
+    if (not early_rest or not die.is_fair or not die.is_isotropic or len(corners) > 1
+            or ground.normal != (0.0, 0.0, 1.0)):
         return -math.inf, 0.0
     weight = die.mass * scene.gravity
-    lift = weight**2 / (8.0 * ground.stiffness)
-    r_max2 = float((die.corners_body**2).sum(axis=1).max())
+    lift = weight**2 / (2.0 * corners.pop() * ground.stiffness)
+    r_max2 = float((die.vertices_body**2).sum(axis=1).max())
     move = scene.rest.speed**2 / (2.0 * (1.0 / die.mass + r_max2 / die.inertia_body[0, 0]))
-    return weight * die.half_edge - lift, 0.5 * min(lift, move)
+    return weight * float(die.resting_heights.min()) - lift, 0.5 * min(lift, move)
 
 
 LOCK_MARGIN = 0.25  # the energy's rise after a decision: <= 0.04 of the barrier at the
 # default step, 0.18 at safety 0.9 (tests/test_decided.py, slow)
-_NEVER = np.full(6, -math.inf)
 
 
 def lock_energy(scene: Scene, margin: float = LOCK_MARGIN) -> np.ndarray:
-    """Total energy (J) below which each face up (1–6) can no longer change, (6,).
+    """Total energy (J) below which each face read can no longer change, (F,) in label order.
 
     A die stops showing ``F`` up only through an orientation in which ``F`` ties with an
     adjacent face, with the centre of mass at least ``Die.tipping_heights[F]`` above the
@@ -460,7 +457,7 @@ def lock_energy(scene: Scene, margin: float = LOCK_MARGIN) -> np.ndarray:
     check_range("margin", margin, 0.0, 1.0)
     die, ground = scene.die, scene.ground
     if ground.normal != (0.0, 0.0, 1.0) or scene.gravity == 0 or not scene.rotation:
-        return np.full(6, -math.inf)
+        return np.full(die.n_faces, -math.inf)
     weight = die.mass * scene.gravity
     tip, rest = die.tipping_heights, die.resting_heights
     return weight * (tip - margin * (tip - rest)) - weight**2 / (2.0 * ground.stiffness)

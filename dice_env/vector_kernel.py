@@ -30,11 +30,17 @@ from numba import njit, prange
 
 from dice_env.kernel import (
     ABORTED,
+    DAMP,
     DECIDED,
+    MU,
     NONFINITE,
+    NX,
+    NY,
+    NZ,
     RUNNING,
     SERIES,
     SETTLED,
+    STIFF,
     Body,
     Contact,
     Dice,
@@ -178,8 +184,9 @@ def _step(t: np.ndarray, body: Body, contact: Contact, options: Options, stops: 
     False) enables the rest test and the decided face. Leaves in row ``TURN`` the squared
     turn of each die that the series could not take (else 0).
     """
-    normal = contact.normals[0]
-    stiff, damp, mu = contact.stiffness[0], contact.damping[0], contact.friction[0]
+    planes = contact.planes
+    normal = (planes[0, NX], planes[0, NY], planes[0, NZ])
+    stiff, damp, mu = planes[0, STIFF], planes[0, DAMP], planes[0, MU]
     vmin, g, dt, mass, inv_iso = contact.vmin, options.gravity, options.dt, body.mass, body.inv_iso
     stop_at_rest, v_rest, hold_steps = stops.at_rest, stops.v_rest, stops.hold_steps
     rest_energy, rest_excess, lock = stops.rest_energy, stops.rest_excess, stops.lock

@@ -218,3 +218,10 @@ def test_a_fork_started_pool_works_after_a_batched_run():
     out = subprocess.run(code, capture_output=True, text=True, timeout=300)
     assert out.returncode == 0, out.stderr
     assert "done" in out.stdout and "unsafe" not in out.stderr
+
+
+def test_the_paper_law_with_stick_slip_ties_a_vertex_in_the_air_without_dividing_by_zero():
+    scene = Scene(ground=Ground(contact_law=ContactLaw.PAPER), gravity=0.0, t_max=1.0)
+    start = State.release(scene, [0, 0, 0.015], [[0.3, 0.2, -0.5]], [[5.0, -3.0, 2.0]])
+    result = run(scene, start)
+    assert np.isfinite(result.final.position).all()
