@@ -20,13 +20,13 @@ if ENV_ID not in registry:
     )
 
 __all__ = ["ENV_ID", "DiceThrowEnv", "DiceThrowSB3VecEnv", "DiceThrowVectorEnv", "Throw",
-           "ThrowTask", "make_task"]
+           "ThrowTask", "make_sb3_env", "make_task"]
 
 
 def __getattr__(name: str) -> object:
-    """``DiceThrowSB3VecEnv`` on first use, so importing dice_env does not import SB3 and torch."""
-    if name == "DiceThrowSB3VecEnv":
-        from dice_env.envs.sb3 import DiceThrowSB3VecEnv
+    """The SB3 adapter on first use, so importing dice_env does not import SB3 and torch."""
+    if name in ("DiceThrowSB3VecEnv", "make_sb3_env"):
+        from dice_env.envs import sb3
 
-        return DiceThrowSB3VecEnv
+        return getattr(sb3, name)
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -143,7 +143,8 @@ class DiceThrowEnv(gym.Env):
 
     ## Info
     ``is_success``, ``target_face``, ``face`` (landed, 1–6), ``settled``, ``unstable``, ``fair``,
-    ``void_reason`` ("" or "foul", "unstable", "not_settled", "not_decided"), ``rest_time`` (s),
+    ``void_reason`` ("" or "foul", "unstable", "sunk", "not_settled", "not_decided"), ``sunk``,
+    ``max_sink`` (m, the deepest corner's), ``rest_time`` (s),
     ``impacts``, ``reward_success``, ``reward_shaping``, ``release_velocity`` (3),
     ``release_spin`` (3), ``release_orientation`` (3, 3), ``action_clipped``.
 

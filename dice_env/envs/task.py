@@ -208,8 +208,9 @@ class ThrowTask:
         spin = np.linalg.norm(state.angular_velocity, axis=1)
         fair = (speed >= self.min_speed) & (spin >= self.min_spin)
         ended = result.decided if decided else result.settled
-        void = np.where(~fair, "foul", np.where(result.unstable, "unstable",
-                                                np.where(ended, "", UNTIL[self.until])))
+        void = np.where(~fair, "foul", np.where(
+            result.unstable, "unstable", np.where(
+                result.sunk, "sunk", np.where(ended, "", UNTIL[self.until]))))
         counts = void == ""
         success = counts & (result.face == targets)
         alignment = np.einsum("bij,bj,i->b", result.final.orientation,
@@ -222,6 +223,8 @@ class ThrowTask:
             "face": result.face,
             "settled": result.settled,
             "unstable": result.unstable,
+            "sunk": result.sunk,
+            "max_sink": result.max_penetration,
             "fair": fair,
             "void_reason": void,
             "rest_time": result.rest_time,
