@@ -25,6 +25,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from agents.hyperparams import NON_PPO_KEYS, PPO_HYPERPARAMS, learning_rate
+
 # PPO for a one-step task (a contextual bandit): every episode ends after one throw, so the
 # advantage is the reward minus the value (gamma and lambda do not matter); large batches of
 # throws per update, a few epochs, a small initial action noise around the hand-sized throws.
@@ -46,12 +48,19 @@ _TRAIN = {"shaping": 0.5}
 # in 40k throws; from the hand's throws it refines them.
 _WARM = {"imitation_throws": 20_000, "imitation_steps": 1500}
 
+# From scratch: plain MlpPolicy PPO with the recommended hyperparameters (agents/hyperparams.py).
+_PLAIN = PPO_HYPERPARAMS["DiceThrow-v0"]
+
 HYPERPARAMS: dict[str, dict[str, dict[str, Any]]] = {
     "DiceThrow-v0": {
         "quick": {"total_timesteps": 150_000, "n_envs": 256, "ppo": _PPO_COMMON,
                   "env": _TASK, "train_env": _TRAIN, **_WARM},
         "best": {"total_timesteps": 500_000, "n_envs": 256, "ppo": _PPO_COMMON,
                  "env": _TASK, "train_env": _TRAIN, **_WARM},
+        "scratch": {"total_timesteps": _PLAIN["n_timesteps"], "n_envs": _PLAIN["n_envs"],
+                    "ppo": {k: v for k, v in _PLAIN.items() if k not in NON_PPO_KEYS},
+                    "env": _TASK, "train_env": _PLAIN["env_kwargs"],
+                    "imitation_throws": 0, "imitation_steps": 0},
     },
 }
 
@@ -63,7 +72,8 @@ class Config:
     env_id: str = "DiceThrow-v0"
     """Gymnasium id of the environment (hyperparameters per id in agents/config.py)."""
     preset: str = "quick"
-    """Hyperparameter preset: "quick" (the README's default, minutes) or "best" (longer)."""
+    """Hyperparameter preset: "quick" (the README's default, minutes), "best" (longer), or
+    "scratch" (plain MlpPolicy PPO, no imitation warm start: agents/hyperparams.py)."""
     seed: int = 0
     """Seed of the policy, the training envs and the evaluation (0 to 2**31 - 1)."""
     total_timesteps: int | None = None
@@ -128,6 +138,9 @@ class Config:
     def ppo_kwargs(self) -> dict[str, Any]:
         """The preset's PPO keywords, ``"module:Name"`` classes in policy_kwargs imported."""
         ppo = self.hyperparams()["ppo"]
+        ppo.pop("policy", None)
+        if "learning_rate" in ppo:
+            ppo["learning_rate"] = learning_rate(ppo["learning_rate"])
         policy = ppo.get("policy_kwargs", {})
         for key, value in policy.items():
             if key.endswith("_class") and isinstance(value, str):

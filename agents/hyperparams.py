@@ -65,7 +65,7 @@ PPO_HYPERPARAMS: dict[str, dict[str, Any]] = {
         "n_steps": 4,
         "batch_size": 256,
         "n_epochs": 10,
-        "learning_rate": LinearSchedule(3e-4, 0.0, 1.0),
+        "learning_rate": "lin_3e-4",
         "policy_kwargs": {"net_arch": [256, 256], "log_std_init": -2.0},
     },
 }
@@ -75,5 +75,20 @@ def ppo_kwargs(env_id: str = "DiceThrow-v0") -> dict[str, Any]:
     """PPO's keywords for ``env_id`` (a fresh copy): ``PPO(policy, env, **ppo_kwargs(env_id))``."""
     if env_id not in PPO_HYPERPARAMS:
         raise ValueError(f"env_id must be one of {sorted(PPO_HYPERPARAMS)}, got {env_id!r}")
-    return {key: copy.deepcopy(value) for key, value in PPO_HYPERPARAMS[env_id].items()
-            if key not in NON_PPO_KEYS}
+    kwargs = {key: copy.deepcopy(value) for key, value in PPO_HYPERPARAMS[env_id].items()
+              if key not in NON_PPO_KEYS}
+    kwargs["learning_rate"] = learning_rate(kwargs["learning_rate"])
+    return kwargs
+
+
+def learning_rate(value: float | str) -> float | LinearSchedule:
+    """A learning rate as written in the tables.
+
+    A number, or ``"lin_X"`` for a linear decay from X to 0 over training (rl-zoo3's
+    notation, which keeps the tables plain data).
+    """
+    if isinstance(value, str):
+        if not value.startswith("lin_"):
+            raise ValueError(f"learning_rate must be a number or 'lin_<number>', got {value!r}")
+        return LinearSchedule(float(value[4:]), 0.0, 1.0)
+    return value

@@ -21,9 +21,9 @@ def test_help_shows_field_docs(capsys):
 
 
 def test_env_keywords_are_literals_not_code(tmp_path):
-    config = parse_config(["--env", "friction=0.6", "--env", "contact_law=paper",
+    config = parse_config(["--env", "friction=0.6", "--env", "until=decided",
                            "--env", "target_face=3", "--runs", str(tmp_path)])
-    assert config.env_kwargs() == {"friction": 0.6, "contact_law": "paper", "target_face": 3}
+    assert config.env_kwargs() == {"friction": 0.6, "until": "decided", "target_face": 3}
     with pytest.raises(ValueError, match="KEY=VALUE"):
         Config(env=["friction"]).env_kwargs()
 
