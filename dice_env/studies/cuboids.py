@@ -32,7 +32,7 @@ from dice_env.table import DIE_EDGE, RESTITUTION, damping_for_restitution
 RATIOS = (0.45, 0.55, 0.65, 0.8, 0.9, 1.0, 1.1, 1.25, 1.5, 1.8, 2.2, 2.7)
 QUICK_RATIOS = (0.45, 1.0, 2.7)
 # Throws per shape and condition: the full run's default and the quick run's.
-FULL, QUICK = 4000, 150
+FULL, QUICK = 4000, 100
 # Gentle hand throws (units of the 16 mm edge, as VIGOROUS): 1.6–6.4 cm up, 0.08–0.4 m/s,
 # 2–20 rad/s.
 GENTLE = Vigour(clearance=(1.0, 4.0), speed=(5.0, 25.0), spin=(2.0, 20.0))
