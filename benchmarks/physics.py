@@ -21,7 +21,10 @@ Prints a table and writes ``benchmarks/results/physics.json`` (``--out`` to chan
   rest rule holds, and until the same decided-face rule holds (its kinetic and potential energy
   below :func:`dice_env.simulate.lock_energy`), each timed as one ``mj_step(nstep=...)`` call
   per throw, with ratios (our decided throws against its decided throws);
-- cost against batch size and against simulated time.
+- cost against batch size and against simulated time;
+- per shape: throws/s to a decided face on 2 threads for each standard die
+  (``Die.standard``) on the default table, from the same kind of hand throws, with what the
+  die's vertex count and step explain of the cost.
 
 Best of three repeats (MuJoCo's included; one with ``--quick``). One-thread figures are the
 calling thread's CPU time (not inflated by other processes on shared cores), two-thread
@@ -47,7 +50,7 @@ import numba
 import numpy as np
 
 from dice_env import Scene, State, simulate, vector_kernel
-from dice_env.die import face_up
+from dice_env.die import STANDARD_SIZES, Die, face_up
 from dice_env.paper import paper_scene
 from dice_env.rotations import quaternion_to_matrix, random_rotations
 from dice_env.simulate import lock_energy
@@ -419,6 +422,35 @@ def time_scaling(scene: Scene, start: State, quick: bool) -> dict:
     return out
 
 
+def per_shape(quick: bool) -> dict:
+    """Throws/s to a decided face on 2 threads for every standard die on the default table.
+
+    Seeded :func:`hand_throws` (a batch of 256, 64 with ``quick``), best of two (one with
+    ``quick``), wall clock. ``explained`` is the die's vertices times its simulated steps to
+    the decision (time / step), relative to the d6's; ``cost`` its time per throw relative to
+    the d6's: a ratio near 1 means the vertex count and step explain the cost.
+    """
+    n = 64 if quick else 256
+    out = {}
+    for name in STANDARD_SIZES:
+        scene = Scene(die=Die.standard(name))
+        start = hand_throws(scene, n, seed=3)
+        simulate(scene, subset(start, slice(0, 2)), t_max=1e-3, num_threads=2)  # load
+        elapsed, res = timed(lambda s=scene, st=start: simulate(
+            s, st, num_threads=2, stop_when_decided=True), 1 if quick else 2, threads=2)
+        time_to_face = float(res.rest_time.mean())
+        out[name] = {"vertices": len(scene.die.vertices), "faces": scene.die.n_faces,
+                     "dt_s": scene.step, "throws": n, "throws_per_s_2threads": n / elapsed,
+                     "decided_fraction": float(res.decided.mean()),
+                     "mean_time_to_face_s": time_to_face,
+                     "vertex_steps": len(scene.die.vertices) * time_to_face / scene.step}
+    d6 = out["d6"]
+    for row in out.values():
+        row["cost_vs_d6"] = d6["throws_per_s_2threads"] / row["throws_per_s_2threads"]
+        row["explained_vs_d6"] = row["vertex_steps"] / d6["vertex_steps"]
+    return out
+
+
 def scenes() -> dict[str, Scene]:
     """The default scene, and the realistic table of ``dice_env.table`` if it differs."""
     out = {"Scene()": Scene()}
@@ -463,6 +495,7 @@ def main() -> None:
                     rest["step_budget"]["vectorised_ceiling_throws_per_s_2cores"]
                     / (2 * mj["throws_per_s_1thread"]))
             rest["mujoco"] = mj
+    report["per_shape_decided"] = per_shape(args.quick)
     report["machine"]["load_average_end"] = os.getloadavg()
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text(json.dumps(report, indent=2) + "\n")
@@ -557,6 +590,14 @@ def format_report(r: dict) -> str:
     lines += ["", f"Scene(), {FASTEST}: batch size -> settled throws/s (2 threads)"]
     lines += [f"  {size:>6} {rate:10.0f}" for size, rate in
               r["throws_per_s_vs_batch_2threads"].items()]
+    lines += ["", "every standard die on the default table: throws/s to a decided face "
+              "(2 threads)", "  die   vertices  dt (us)  throws/s  decided  to face (s)  "
+              "cost/d6  vertices x steps/d6"]
+    lines += [f"  {name:<5} {row['vertices']:8d} {row['dt_s'] * 1e6:8.2f} "
+              f"{row['throws_per_s_2threads']:9.0f} {row['decided_fraction']:8.3f} "
+              f"{row['mean_time_to_face_s']:11.3f} {row['cost_vs_d6']:8.2f} "
+              f"{row['explained_vs_d6']:20.2f}"
+              for name, row in r["per_shape_decided"].items()]
     lines += ["", "Scene(): simulated time -> ms of CPU per throw (1 thread, no stop at rest)",
               "       t_max   free flight   plain stepping"]
     lines += [f"  {float(t):8.2f} s {v['ms_per_throw']:10.3f} {v['ms_per_throw_plain']:14.3f}"

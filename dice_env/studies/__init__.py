@@ -1,7 +1,8 @@
 """Studies that regenerate ``docs/``: ``python -m dice_env.studies NAME [--quick] [--out DIR]``.
 
 Each entry of :data:`STUDIES` names a module with ``run(out: Path, quick: bool) -> dict``
-that writes its markdown and figures under ``out`` and returns its headline numbers.
+that writes its markdown and figures under ``out`` and returns its headline numbers. Those in
+:data:`SIZED` also take ``throws`` (the sample size per die or per point).
 """
 
 from __future__ import annotations
@@ -14,11 +15,22 @@ STUDIES = {
     "stability": "dice_env.studies.stability",
     "fairness": "dice_env.studies.fairness",
     "error": "dice_env.studies.convergence",
+    "shapes": "dice_env.studies.shapes",
+    "cuboids": "dice_env.studies.cuboids",
 }
+SIZED = ("shapes", "cuboids")
 
 
-def run(name: str, out: Path, quick: bool = False) -> dict[str, float]:
-    """Run study ``name`` (a key of :data:`STUDIES`) into ``out``."""
+def run(name: str, out: Path, quick: bool = False,
+        throws: int | None = None) -> dict[str, float]:
+    """Run study ``name`` (a key of :data:`STUDIES`) into ``out``.
+
+    ``throws`` (studies in :data:`SIZED` only) replaces the study's sample size.
+    """
     if name not in STUDIES:
         raise ValueError(f"name must be one of {sorted(STUDIES)}, got {name!r}")
-    return import_module(STUDIES[name]).run(out, quick)
+    if throws is None:
+        return import_module(STUDIES[name]).run(out, quick)
+    if name not in SIZED:
+        raise ValueError(f"throws is taken by the studies {', '.join(SIZED)} only, not {name!r}")
+    return import_module(STUDIES[name]).run(out, quick, throws=throws)

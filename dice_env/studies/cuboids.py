@@ -1,0 +1,197 @@
+"""Square-cuboid dice, a prediction: the chance of landing on a square face against x/y.
+
+``run(out, quick, throws)`` writes ``out/cuboids.md`` and ``out/figures/cuboids.png``.
+
+A square cuboid has two square faces of side ``y`` and height ``x`` along their normal:
+``Die.cuboid((y, y, x))``, whose square faces are 1 (+z) and 6 (-z). Every cuboid keeps the
+volume (and mass, 4.5 g) of the default 16 mm die, so that the table's damping, set for that
+mass, gives every shape the same restitution. Each shape is thrown ``throws`` times in each
+:data:`CONDITIONS` (throw energy × table), each throw until its face is decided. Nothing is
+fitted: this is the model's prediction, to be compared with experiments.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt
+import numpy as np
+
+from dice_env.die import Die
+from dice_env.scene import Ground, Scene
+from dice_env.studies.fairness import VIGOROUS, Vigour, wilson
+from dice_env.studies.paper_figures import DOCS, progress, save_figure
+from dice_env.studies.shapes import Faces, hand_throws, throw_faces
+from dice_env.table import DIE_EDGE, RESTITUTION, damping_for_restitution
+
+# x/y of the shapes thrown (1 is the cube).
+RATIOS = (0.45, 0.55, 0.65, 0.8, 0.9, 1.0, 1.1, 1.25, 1.5, 1.8, 2.2, 2.7)
+QUICK_RATIOS = (0.45, 1.0, 2.7)
+# Throws per shape and condition: the full run's default and the quick run's.
+FULL, QUICK = 4000, 100
+# Gentle hand throws (units of the 16 mm edge, as VIGOROUS): 1.6–6.4 cm up, 0.08–0.4 m/s,
+# 2–20 rad/s.
+GENTLE = Vigour(clearance=(1.0, 4.0), speed=(5.0, 25.0), spin=(2.0, 20.0))
+# A soft, slippery cloth: a tenth of the wooden table's stiffness, half its friction, the
+# damping recomputed for the same restitution.
+SOFT_STIFFNESS, SOFT_FRICTION = 1e4, 0.2
+SOFT = Ground(stiffness=SOFT_STIFFNESS, friction=SOFT_FRICTION,
+              damping=damping_for_restitution(RESTITUTION, SOFT_STIFFNESS, 0.0045))
+# (label, throws, table); the first is the prediction of record.
+CONDITIONS = (("vigorous, wooden table", VIGOROUS, Ground()),
+              ("gentle, wooden table", GENTLE, Ground()),
+              ("vigorous, soft cloth", VIGOROUS, SOFT),
+              ("gentle, soft cloth", GENTLE, SOFT))
+SQUARE_FACES = (1, 6)
+
+
+def square_cuboid(ratio: float, volume: float = DIE_EDGE**3) -> Die:
+    """The square cuboid of ``x/y = ratio`` and the given volume (m^3): ``(y, y, x)``."""
+    if not (isinstance(ratio, (int, float)) and math.isfinite(ratio) and ratio > 0):
+        raise ValueError(f"ratio must be a finite number > 0, got {ratio!r}")
+    y = (volume / ratio) ** (1.0 / 3.0)
+    return Die.cuboid((y, y, ratio * y))
+
+
+def solid_angle_share(ratio: float) -> float:
+    """Share of the full solid angle that the two square faces subtend from the centre.
+
+    A naive reference (each face as likely as the directions it covers), not a fit: a
+    rectangle of half-sides ``a``, ``b`` at distance ``d`` subtends
+    ``4 atan(a b / (d sqrt(a^2 + b^2 + d^2)))``; here ``a = b = 1/2``, ``d = ratio / 2``.
+    """
+    a, d = 0.5, 0.5 * ratio
+    omega = 4.0 * math.atan(a * a / (d * math.sqrt(2 * a * a + d * d)))
+    return 2.0 * omega / (4.0 * math.pi)
+
+
+def square_share(faces: Faces) -> tuple[float, np.ndarray]:
+    """Share of the counted throws that land on a square face, and its 95% Wilson interval."""
+    hits = int(sum(faces.counts[f - 1] for f in SQUARE_FACES))
+    return hits / faces.ended, wilson(hits, faces.ended)
+
+
+def run(out: Path = DOCS, quick: bool = False, seed: int = 2026,
+        throws: int | None = None) -> dict[str, float]:
+    """Regenerate ``cuboids.md`` and ``figures/cuboids.png`` under ``out``; the headline numbers.
+
+    ``throws`` per shape and condition (default :data:`FULL`, or :data:`QUICK` with ``quick``).
+    """
+    if throws is not None and (not isinstance(throws, (int, np.integer))
+                               or isinstance(throws, bool) or throws < 20):
+        raise ValueError(f"throws must be an int >= 20, got {throws!r}")
+    n = throws if throws is not None else (QUICK if quick else FULL)
+    ratios = QUICK_RATIOS if quick else RATIOS
+    rng = np.random.default_rng(seed)
+    bar = progress(len(ratios) * len(CONDITIONS) * n, "cuboid throws")
+    bar.unit = "throw"
+    table = {}
+    for label, vigour, ground in CONDITIONS:
+        for ratio in ratios:
+            scene = Scene(die=square_cuboid(ratio), ground=ground)
+            faces = throw_faces(scene, hand_throws(scene, n, rng, vigour), bar)
+            table[label, ratio] = (faces, *square_share(faces))
+    bar.close()
+    _plot(table, ratios, n, out / "figures" / "cuboids.png")
+    first = CONDITIONS[0][0]
+    numbers = {f"p_{r:g}": table[first, r][1] for r in ratios}
+    numbers["cube_p"] = table[first, 1.0][1]
+    numbers["cube_lo"], numbers["cube_hi"] = (float(v) for v in table[first, 1.0][2])
+    numbers["undecided"] = max(f.undecided for f, _, _ in table.values()) / n
+    (out / "cuboids.md").write_text(_markdown(table, ratios, n, seed, quick, throws))
+    return numbers
+
+
+def _plot(table: dict, ratios: tuple[float, ...], n: int, path: Path) -> None:
+    fig, ax = plt.subplots(figsize=(8, 5), layout="constrained")
+    fine = np.geomspace(ratios[0], ratios[-1], 200)
+    ax.plot(fine, [solid_angle_share(r) for r in fine], color="0.5", ls="--", lw=1,
+            label="solid-angle share (naive reference)")
+    for k, (label, _, _) in enumerate(CONDITIONS):
+        p = np.array([table[label, r][1] for r in ratios])
+        ci = np.array([table[label, r][2] for r in ratios])
+        ax.plot(ratios, p, "o-", color=f"C{k}", ms=4, label=label)
+        ax.fill_between(ratios, ci[:, 0], ci[:, 1], color=f"C{k}", alpha=0.2, lw=0)
+    ax.axhline(1 / 3, color="k", ls=":", lw=1)
+    ax.axvline(1.0, color="k", ls=":", lw=1)
+    ax.set_xscale("log")
+    ax.set_xticks(ratios)
+    ax.set_xticklabels([f"{r:g}" for r in ratios])
+    ax.minorticks_off()
+    ax.set_xlabel("x / y (height along the square faces' normal / side of the square)")
+    ax.set_ylabel("P(lands on a square face), 95% band")
+    ax.set_ylim(0, 1)
+    ax.set_title(f"Square-cuboid dice, {n} throws per point (prediction, nothing fitted)")
+    ax.legend(fontsize=8)
+    save_figure(fig, path)
+
+
+def _markdown(table: dict, ratios: tuple[float, ...], n: int, seed: int, quick: bool,
+              throws: int | None) -> str:
+    command = "python -m dice_env.studies cuboids" + (" --quick" if quick else "") + (
+        f" --throws {throws}" if throws is not None else "")
+    labels = [label for label, _, _ in CONDITIONS]
+    header = "| x/y | y × x (mm) | solid angle | " + " | ".join(labels) + " |"
+    rows = []
+    for r in ratios:
+        die = square_cuboid(r)
+        y, x = die.vertices[0][0] * 2e3, die.vertices[0][2] * 2e3
+        cells = []
+        for label in labels:
+            p, (lo, hi) = table[label, r][1], table[label, r][2]
+            cells.append(f"{p:.3f} [{lo:.3f}, {hi:.3f}]")
+        rows.append(f"| {r:g} | {abs(y):.2f} × {abs(x):.2f} | {solid_angle_share(r):.3f} | "
+                    + " | ".join(cells) + " |")
+    undecided = {label: sum(table[label, r][0].undecided for r in ratios) for label in labels}
+    cube = {label: table[label, 1.0] for label in labels}
+    cube_lines = "\n".join(
+        f"- {label}: {p:.3f} [{ci[0]:.3f}, {ci[1]:.3f}]: 1/3 is "
+        f"{'inside' if ci[0] <= 1 / 3 <= ci[1] else 'OUTSIDE'} the interval."
+        for label, (_, p, ci) in cube.items())
+    g = Ground()
+    v, s = VIGOROUS, GENTLE
+    return f"""# Square-cuboid dice: a prediction
+
+Generated by `{command}` (module `dice_env/studies/cuboids.py`, seed {seed});
+{n} throws per shape and condition. **A prediction: nothing is fitted to measured numbers.**
+
+A square cuboid has two square faces of side y and height x along their normal
+(`Die.cuboid((y, y, x))`, square faces labelled 1 and 6). Every shape keeps the volume and
+mass of the default die (16 mm cube, 4.5 g, uniform), so its size changes with x/y (table);
+at x/y = 1 it is the default d6, whose six faces are alike, so the chance of a square face
+is 1/3 by symmetry. Each throw runs until its face is decided (`stop_when_decided`; the face
+it rests on) or 10 s.
+
+Conditions (throws in units of the 16 mm edge, uniform random orientation and directions):
+
+- **vigorous**: released {v.clearance[0]:g}–{v.clearance[1]:g} edges above touching
+  ({v.clearance[0] * 1.6:g}–{v.clearance[1] * 1.6:g} cm), {v.speed[0]:g}–{v.speed[1]:g}
+  edges/s toward the table, {v.spin[0]:g}–{v.spin[1]:g} rad/s (the throws of
+  `fairness.md`);
+- **gentle**: {s.clearance[0]:g}–{s.clearance[1]:g} edges, {s.speed[0]:g}–{s.speed[1]:g}
+  edges/s, {s.spin[0]:g}–{s.spin[1]:g} rad/s;
+- **wooden table** (the default): S = {g.stiffness:g} N/m, D = {g.damping:.4g} N s/m,
+  mu = {g.friction:g} per vertex, restitution {RESTITUTION:g};
+- **soft cloth**: S = {SOFT.stiffness:g} N/m (a tenth), mu = {SOFT.friction:g} (half),
+  D = {SOFT.damping:.4g} N s/m (the same restitution).
+
+![cuboids](figures/cuboids.png)
+
+P(lands on a square face) [95% Wilson interval]; "solid angle" is the share of directions the
+two square faces cover from the centre, a naive reference, not a fit.
+
+{header}
+|{'---|' * (3 + len(labels))}
+{chr(10).join(rows)}
+
+Undecided throws (no face within 10 s, unstable or sunk; not counted), per condition over all
+shapes: {', '.join(f'{label} {k}' for label, k in undecided.items())}.
+
+**The cube (x/y = 1) against 1/3:**
+
+{cube_lines}
+"""
