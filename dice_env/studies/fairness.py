@@ -84,9 +84,12 @@ def release_state(scene: Scene, orientation: np.ndarray, clearance: np.ndarray,
 
 
 def vigorous_throws(scene: Scene, n: int, rng: np.random.Generator,
-                    vigour: Vigour = VIGOROUS) -> State:
-    """``n`` random throws drawn from ``vigour`` (see :class:`Vigour`)."""
-    a = scene.die.edge
+                    vigour: Vigour = VIGOROUS, unit: float | None = None) -> State:
+    """``n`` random throws drawn from ``vigour`` (see :class:`Vigour`).
+
+    Lengths and speeds in units of ``unit`` (m; default the die's size).
+    """
+    a = scene.die.size if unit is None else unit
     orientation = random_orientations(rng, n)
     clearance = rng.uniform(*vigour.clearance, n) * a
     direction = toward_table(scene, random_directions(rng, n))

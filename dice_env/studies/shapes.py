@@ -34,8 +34,7 @@ from dice_env.studies.fairness import (
     Vigour,
     random_directions,
     random_orientations,
-    release_state,
-    toward_table,
+    vigorous_throws,
     wilson,
 )
 from dice_env.studies.paper_figures import DOCS, progress, save_figure
@@ -62,12 +61,7 @@ def hand_throws(scene: Scene, n: int, rng: np.random.Generator,
     8–32 cm above touching, 0.48–2.4 m/s toward the table, 10–100 rad/s about a uniform
     axis, orientation uniform.
     """
-    orientation = random_orientations(rng, n)
-    clearance = rng.uniform(*vigour.clearance, n) * unit
-    direction = toward_table(scene, random_directions(rng, n))
-    velocity = direction * rng.uniform(*vigour.speed, n)[:, None] * unit
-    spin = random_directions(rng, n) * rng.uniform(*vigour.spin, n)[:, None]
-    return release_state(scene, orientation, clearance, velocity, spin)
+    return vigorous_throws(scene, n, rng, vigour, unit)
 
 
 @dataclass
