@@ -184,12 +184,12 @@ class DiceThrowEnv(gym.Env):
       half diagonal is 1.39 cm): measured there, a hand-written thrower lands the target 0.73,
       an oracle search 0.98, PPO 0.98; at 5 cm all three sat at 0.77-0.80 (hand noise sets the
       ceiling), too easy to tell a learned thrower from the rule (docs/environment.md).
-    * v0, physics revision (session 2): the default scene moved to stick-slip friction,
+    * v0, physics revision: the default scene moved to stick-slip friction,
       the midpoint step at 0.15 of its critical step, and a rest test that needs three corners
       on the table, so that landed faces converge in the step; at 1.5 cm the rule now lands
       0.71, the oracle and PPO 0.975. ``friction_law="regularized", scheme="paper",
       safety=0.1`` restores the earlier physics (rest test aside).
-    * v0, session 3: keyword ``until`` ("decided" ends throws when their face is decided);
+    * v0: keyword ``until`` ("decided" ends throws when their face is decided);
       the default, "rest", is unchanged.
     """
 
