@@ -282,6 +282,15 @@ class Die:
         """Outward unit normals (F, 3), body frame, in label order (read-only)."""
         return _frozen(polyhedra.face_normals(np.array(self.vertices), self.faces))
 
+    @cached_property
+    def reading(self) -> np.ndarray:
+        """Reading directions (F, 3), body frame, in label order (read-only).
+
+        Face ``k + 1`` is read when its direction points most along ``up``: the outward
+        normals, negated for a die that :attr:`reads_down` (the d4).
+        """
+        return _frozen(-self.face_normals if self.reads_down else self.face_normals)
+
     @property
     def labels(self) -> np.ndarray:
         """The printed label of each face, in the order of :attr:`face_normals`: 1 … F."""
@@ -315,7 +324,7 @@ class Die:
         if orientation.shape[-2:] != (3, 3) or up.shape != (3,):
             raise ValueError(f"orientation must have shape (..., 3, 3) and up (3,), got "
                              f"{orientation.shape} and {up.shape}")
-        world = np.einsum("...ij,fj->...fi", orientation, self._reading)
+        world = np.einsum("...ij,fj->...fi", orientation, self.reading)
         return self.labels[np.argmax(world @ up, axis=-1)]
 
     @property
@@ -325,7 +334,7 @@ class Die:
         In the orientation where the face's reading direction (its normal, or minus it for
         the d4) points straight up: lying flat on the opposite face (on the face, for the d4).
         """
-        return _heights_above_lowest_corner(self.vertices_body, self._reading)
+        return _heights_above_lowest_corner(self.vertices_body, self.reading)
 
     @cached_property
     def tipping_heights(self) -> np.ndarray:
@@ -339,7 +348,7 @@ class Die:
         distance) times half the gap, so it is never above the true minimum (fair cube:
         ``sqrt(2)`` half edges, balanced on an edge). Computed once per die (read-only).
         """
-        corners, reading = self.vertices_body, self._reading
+        corners, reading = self.vertices_body, self.reading
         r_max = float(np.linalg.norm(corners, axis=1).max())
         out = np.full(self.n_faces, np.inf)
         for f, g in itertools.combinations(range(self.n_faces), 2):
@@ -439,11 +448,6 @@ class Die:
                   "reads_down": reads_down}
         for key, value in values.items():
             object.__setattr__(self, key, value)
-
-    @cached_property
-    def _reading(self) -> np.ndarray:
-        """Reading directions (F, 3): the outward normals, negated for a die read down."""
-        return _frozen(-self.face_normals if self.reads_down else self.face_normals)
 
     @cached_property
     def _face_distances(self) -> np.ndarray:
