@@ -13,10 +13,9 @@ from typing import Protocol
 
 import numpy as np
 
-from dice_env.die import FACE_NORMALS
-from dice_env.envs.task import ACTION_DIM, ThrowTask
+from dice_env.envs.task import ACTION_DIM, ORIENTATION_DIM, ThrowTask
 
-ROTATION_DIM = 9  # the hand's orientation, a row-major 3x3 matrix, after the one-hot
+ROTATION_DIM = ORIENTATION_DIM  # the hand's orientation, a row-major 3x3 matrix, after the one-hot
 
 
 class Thrower(Protocol):
@@ -68,7 +67,8 @@ class RandomThrower:
 class HandThrower:
     """Toss the die up a little and spin it so the target face turns up as it lands.
 
-    The target's normal in the world, ``n = R e_target``, is turned toward the table normal
+    The target's reading direction in the world, ``n = R r_target`` (its outward normal; minus
+    it for the d4, read face down), is turned toward the table normal
     ``z`` about the axis ``n x z`` by the angle between them, at the constant rate that completes
     the turn in ``turn`` times the flight time of a toss at vertical speed ``toss`` (m/s) from
     the release height (the die then lands with the target near the top and settles there).
@@ -82,7 +82,7 @@ class HandThrower:
         """Actions (n, 6): a vertical toss and the spin that brings the target face up."""
         targets, hands = decode(observations)
         up = np.asarray(self.task.scene.ground.normal, dtype=np.float64)
-        normal = np.einsum("nij,nj->ni", hands, FACE_NORMALS[targets - 1])
+        normal = np.einsum("nij,nj->ni", hands, self.task.scene.die.reading[targets - 1])
         axis = np.cross(normal, up)
         sine = np.linalg.norm(axis, axis=1)
         angle = np.arctan2(sine, normal @ up)
@@ -99,8 +99,11 @@ class HandThrower:
         return np.clip(actions, -1.0, 1.0)
 
     def flight_time(self) -> float:
-        """Time (s) until the die's lowest point would reach the table, tossed at ``toss``."""
+        """Time (s) until the die's lowest point would reach the table, tossed at ``toss``.
+
+        The lowest point of the die lying on a face: its least resting height.
+        """
         scene = self.task.scene
-        drop = self.task.release_height - scene.die.edge / 2
+        drop = self.task.release_height - float(scene.die.resting_heights.min())
         g = scene.gravity * float(np.asarray(scene.ground.normal)[2])
         return (self.toss + math.sqrt(self.toss**2 + 2 * g * drop)) / g

@@ -23,9 +23,12 @@ import textwrap
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from agents.hyperparams import NON_PPO_KEYS, PPO_HYPERPARAMS, learning_rate
+
+if TYPE_CHECKING:
+    from dice_env.die import Die
 
 # PPO for a one-step task (a contextual bandit): every episode ends after one throw, so the
 # advantage is the reward minus the value (gamma and lambda do not matter); large batches of
@@ -135,8 +138,12 @@ class Config:
                 params[key] = getattr(self, key)
         return params
 
-    def ppo_kwargs(self) -> dict[str, Any]:
-        """The preset's PPO keywords, ``"module:Name"`` classes in policy_kwargs imported."""
+    def ppo_kwargs(self, die: Die | None = None) -> dict[str, Any]:
+        """The preset's PPO keywords, ``"module:Name"`` classes in policy_kwargs imported.
+
+        A features extractor that takes ``reading`` (:class:`agents.policy.TargetNormal`) gets
+        ``die``'s reading directions unless the preset gives them.
+        """
         ppo = self.hyperparams()["ppo"]
         ppo.pop("policy", None)
         if "learning_rate" in ppo:
@@ -146,6 +153,11 @@ class Config:
             if key.endswith("_class") and isinstance(value, str):
                 module, _, name = value.partition(":")
                 policy[key] = getattr(importlib.import_module(module), name)
+        extractor = policy.get("features_extractor_class")
+        if die is not None and extractor is not None and "reading" in inspect.signature(
+                extractor).parameters:
+            extra = policy.setdefault("features_extractor_kwargs", {})
+            extra.setdefault("reading", die.reading.tolist())
         return ppo
 
     def env_kwargs(self) -> dict[str, Any]:

@@ -2,10 +2,12 @@
 
 For the hand-written thrower, the oracle and (optionally) a trained PPO policy:
 
-    python -m agents.controllability [--run RUN_DIR] [--out docs]
+    python -m agents.controllability [--run RUN_DIR] [--die d6] [--out docs]
 
 Writes ``controllability.md`` and ``controllability.png`` into ``--out``. The noise level sets
-both ``hand_noise`` (fraction of each action range) and ``orientation_noise`` (rad).
+both ``hand_noise`` (fraction of each action range) and ``orientation_noise`` (rad). Release
+heights below the die's lowest (its default, :class:`dice_env.envs.task.ThrowTask`) are raised
+to it.
 """
 
 from __future__ import annotations
@@ -20,8 +22,7 @@ import numpy as np
 from agents.baselines import HandThrower, Thrower
 from agents.evaluate import Batch, clustered, wilson
 from agents.oracle import CEM, score, score_noise, search
-from dice_env.die import FACE_NORMALS
-from dice_env.envs.task import make_task
+from dice_env.envs.task import ThrowTask, make_task
 
 HEIGHTS = (0.015, 0.02, 0.03, 0.05, 0.15)  # release height of the die's centre (m)
 NOISES = (0.01, 0.03, 0.05, 0.1)  # hand noise level (0.05: the env default)
@@ -32,17 +33,20 @@ MAP_CEM = CEM(global_candidates=32, iterations=4, population=16, noise_samples=1
 def controllability(
     heights: tuple[float, ...] = HEIGHTS, noises: tuple[float, ...] = NOISES,
     throws: int = 500, oracle_observations: int = 10, ppo: Thrower | None = None,
-    seed: int = 0, num_threads: int | None = None,
+    seed: int = 0, num_threads: int | None = None, die: str = "d6",
 ) -> dict[str, np.ndarray]:
-    """Success (rate, low, high) per cell (height, noise) for each thrower: arrays (h, n, 3)."""
+    """Success (rate, low, high) per cell (height, noise) for each thrower: arrays (h, n, 3).
+
+    ``die``: the env's ``die`` keyword; ``heights`` must be at least its release height.
+    """
     names = ["hand-written", "oracle"] + (["PPO"] if ppo is not None else [])
     maps = {name: np.zeros((len(heights), len(noises), 3)) for name in names}
     threads = {} if num_threads is None else {"num_threads": num_threads}
     for i, height in enumerate(heights):
         for j, noise in enumerate(noises):
             start = time.perf_counter()
-            task = make_task(release_height=height, hand_noise=noise, orientation_noise=noise,
-                             **threads)
+            task = make_task(die=die, release_height=height, hand_noise=noise,
+                             orientation_noise=noise, **threads)
             rng = np.random.default_rng(seed)
             batch = Batch.sample(task, throws, rng)
             throwers: dict[str, Thrower] = {"hand-written": HandThrower(task)}
@@ -62,9 +66,14 @@ def controllability(
     return maps
 
 
+def heights_for(task: ThrowTask, heights: tuple[float, ...] = HEIGHTS) -> tuple[float, ...]:
+    """``heights`` with those below ``task``'s release height raised to it (no repeats)."""
+    return tuple(sorted({max(h, task.release_height) for h in heights}))
+
+
 def plot(path: Path, maps: dict[str, np.ndarray], heights: tuple[float, ...],
-         noises: tuple[float, ...]) -> Path:
-    """One heatmap of success per thrower, chance (1/6) at the colour map's low end."""
+         noises: tuple[float, ...], faces: int) -> Path:
+    """One heatmap of success per thrower, chance (1 / ``faces``) at the colour map's low end."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -72,7 +81,7 @@ def plot(path: Path, maps: dict[str, np.ndarray], heights: tuple[float, ...],
 
     fig, axes = plt.subplots(1, len(maps), figsize=(4.0 * len(maps), 3.8), squeeze=False)
     for ax, (name, m) in zip(axes[0], maps.items(), strict=True):
-        ax.imshow(m[..., 0], vmin=1 / len(FACE_NORMALS), vmax=1, cmap="magma", origin="lower",
+        ax.imshow(m[..., 0], vmin=1 / faces, vmax=1, cmap="magma", origin="lower",
                   aspect="auto")
         for i in range(len(heights)):
             for j in range(len(noises)):
@@ -88,13 +97,17 @@ def plot(path: Path, maps: dict[str, np.ndarray], heights: tuple[float, ...],
 
 
 def write_markdown(path: Path, maps: dict[str, np.ndarray], heights: tuple[float, ...],
-                   noises: tuple[float, ...], command: str, seconds: float) -> Path:
-    """The map as tables (rate [95% CI]) with how it was made."""
+                   noises: tuple[float, ...], task: ThrowTask, command: str,
+                   seconds: float) -> Path:
+    """The map as tables (rate [95% CI]) with how it was made; ``task``: the lowest cell's."""
+    die, faces = task.scene.die, task.n_faces
+    reach = float(np.linalg.norm(die.vertices_body, axis=1).max())
     lines = ["# How controllable is a die?", "",
-             "Success (target face up at rest) of a thrower that sees the target and the die's "
-             "orientation in the hand, over the release height (of the die's centre above the "
-             "table; the die is 16 mm, so 1.4 cm is the lowest possible) and the hand-noise level "
-             "(`hand_noise` = `orientation_noise`). Chance is 1/6 ≈ 0.167. Other keywords at "
+             "Success (target face read at rest) of a thrower that sees the target and the "
+             "die's orientation in the hand, over the release height (of the die's centre above "
+             f"the table; the die is a {die.name} of {1e3 * die.size:g} mm, its corners reach "
+             f"{100 * reach:.2g} cm from its centre) and the hand-noise level (`hand_noise` = "
+             f"`orientation_noise`). Chance is 1/{faces} ≈ {1 / faces:.3f}. Other keywords at "
              "DiceThrow-v0's defaults.", "",
              f"![controllability]({path.with_suffix('.png').name})", ""]
     for name, m in maps.items():
@@ -113,7 +126,7 @@ def write_markdown(path: Path, maps: dict[str, np.ndarray], heights: tuple[float
     lines += ["", "A die released gently just above the table is controllable: the target comes "
               "up in most throws while the hand is steady, and the hand noise takes that away. "
               "Released high, it bounces and tumbles long enough that success falls to about "
-              "chance (1/6) unless the hand is very steady: the fair, vigorous throw.", ""]
+              f"chance (1/{faces}) unless the hand is very steady: the fair, vigorous throw.", ""]
     if "PPO" in maps:
         lines += ["PPO is the policy of the given run, trained in one setting (its env keywords); "
                   "the release height and the noise are not in its observation, so elsewhere it "
@@ -139,6 +152,7 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--oracle-observations", type=int, default=10,
                         help="observations the oracle searches per cell")
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--die", default="d6", help="the env's die keyword (d4 ... d20)")
     args = parser.parse_args(argv)
     ppo = None
     if args.run is not None:
@@ -147,14 +161,19 @@ def main(argv: list[str] | None = None) -> None:
         from agents.evaluate import PolicyThrower
 
         ppo = PolicyThrower(PPO.load(args.run / "model.zip", device="cpu"))
+    try:
+        task = make_task(die=args.die)
+    except ValueError as error:
+        parser.error(f"argument --die: {error}")
+    heights = heights_for(task)
     start = time.perf_counter()
-    maps = controllability(throws=args.throws, oracle_observations=args.oracle_observations,
-                           ppo=ppo, seed=args.seed)
+    maps = controllability(heights, throws=args.throws, ppo=ppo, seed=args.seed, die=args.die,
+                           oracle_observations=args.oracle_observations)
     args.out.mkdir(parents=True, exist_ok=True)
-    png = plot(args.out / "controllability.png", maps, HEIGHTS, NOISES)
+    png = plot(args.out / "controllability.png", maps, heights, NOISES, task.n_faces)
     command = " ".join(["python -m agents.controllability",
                         *(sys.argv[1:] if argv is None else argv)])
-    md = write_markdown(png.with_suffix(".md"), maps, HEIGHTS, NOISES, command,
+    md = write_markdown(png.with_suffix(".md"), maps, heights, NOISES, task, command,
                         time.perf_counter() - start)
     print(f"wrote {md} and {png}")
 

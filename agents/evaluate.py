@@ -26,7 +26,6 @@ from agents.baselines import HandThrower, RandomThrower, Thrower, decode, n_face
 from agents.config import Config, field_docs
 from agents.oracle import CEM, score, score_noise, search
 from agents.progress import announce_compile, bar
-from dice_env.die import FACE_NORMALS
 from dice_env.envs.task import ThrowTask, make_task
 
 Z95 = 1.959964  # two-sided 95% normal quantile
@@ -231,10 +230,13 @@ def trained_values(task: ThrowTask) -> dict[str, float]:
 
 
 def tilt(observations: np.ndarray, task: ThrowTask) -> tuple[np.ndarray, np.ndarray]:
-    """The target's angle from the table normal in the hand (rad) and its normal (n, 3)."""
+    """The target's angle from the table normal in the hand (rad) and its direction (n, 3).
+
+    The direction is the target's reading direction (:attr:`dice_env.Die.reading`) in the world.
+    """
     targets, hands = decode(observations)
     up = np.asarray(task.scene.ground.normal)
-    normal = np.einsum("nij,nj->ni", hands, FACE_NORMALS[targets - 1])
+    normal = np.einsum("nij,nj->ni", hands, task.scene.die.reading[targets - 1])
     return np.arccos(np.clip(normal @ up, -1, 1)), normal
 
 

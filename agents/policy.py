@@ -1,38 +1,53 @@
 """A features extractor that hands the policy the target face's direction in the world.
 
 The observation holds the target as a one-hot and the die's orientation R as 9 numbers; the
-direction the throw must turn toward the table normal is the target's normal in the world,
-``n = R e_target``, a product of the two that a plain MLP has to discover from many throws. The
-extractor computes it (the rest of the observation passes through unchanged). In a trial released
-2 cm above the table, PPO with it passed 0.6 success after 20k throws; a plain MLP was still at
-chance (0.18) after 30k. It adds no knowledge of the physics.
+direction the throw must turn toward the table normal is the target's reading direction in the
+world, ``n = R r_target`` (its outward normal; minus it for the d4, read face down), a product
+of the two that a plain MLP has to discover from many throws. The extractor computes it (the
+rest of the observation passes through unchanged). In a trial released 2 cm above the table,
+PPO with it passed 0.6 success after 20k throws; a plain MLP was still at chance (0.18) after
+30k. It adds no knowledge of the physics.
 """
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import gymnasium as gym
+import numpy as np
 import torch
 from stable_baselines3.common.torch_layers import BaseFeaturesExtractor
 
 from agents.baselines import ROTATION_DIM, n_faces
-from dice_env.die import FACE_NORMALS
+from dice_env.die import STANDARD_SIZES, Die
 
 
 class TargetNormal(BaseFeaturesExtractor):
-    """Features (n, size + 3): the observation and the target's normal in the world (3).
+    """Features (n, size + 3): the observation and the target's reading direction in the world.
 
     Sized from the observation space: the one-hot before the 3x3 orientation has one entry per
-    face of the die (:data:`dice_env.die.FACE_NORMALS`).
+    face. ``reading`` (faces, 3): the die's body-frame reading directions in label order
+    (:attr:`dice_env.Die.reading`; ``train.py`` passes the task's); None: those of the standard
+    die with that many faces (a cuboid's are the d6's).
     """
 
-    def __init__(self, observation_space: gym.spaces.Box) -> None:
+    def __init__(self, observation_space: gym.spaces.Box,
+                 reading: Sequence[Sequence[float]] | None = None) -> None:
         size = observation_space.shape[0]
         super().__init__(observation_space, features_dim=size + 3)
         self.faces = n_faces(size)
-        if self.faces != len(FACE_NORMALS):
-            raise ValueError(f"observation space of size {size} has a one-hot of {self.faces} "
-                             f"faces; the die has {len(FACE_NORMALS)}")
-        self.register_buffer("normals", torch.as_tensor(FACE_NORMALS, dtype=torch.float32))
+        if reading is None:
+            name = f"d{self.faces}"
+            if name not in STANDARD_SIZES:
+                raise ValueError(f"observation space of size {size} has a one-hot of "
+                                 f"{self.faces} faces, no standard die's: pass reading (the "
+                                 "die's Die.reading) in features_extractor_kwargs")
+            reading = Die.standard(name).reading
+        reading = np.asarray(reading, dtype=np.float32)
+        if reading.shape != (self.faces, 3):
+            raise ValueError(f"reading must have shape ({self.faces}, 3) for an observation "
+                             f"space of size {size}, got {reading.shape}")
+        self.register_buffer("normals", torch.as_tensor(reading))
 
     def forward(self, observations: torch.Tensor) -> torch.Tensor:
         """Append ``R @ n_body(target)``, with the one-hot weighting the body normals."""

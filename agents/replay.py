@@ -130,10 +130,12 @@ def main(argv: list[str] | None = None) -> None:
     if args.seed < 0:
         parser.error(f"argument --seed: must be an integer >= 0, got {args.seed}")
     if args.target is not None:
-        from dice_env.die import FACE_NORMALS
+        from agents.config import Config
+        from agents.evaluate import make_eval_task
 
-        if not 1 <= args.target <= len(FACE_NORMALS):
-            parser.error(f"argument --target: must be a face in [1, {len(FACE_NORMALS)}], "
+        faces = make_eval_task(Config.load(args.run / "config.json"))[0].n_faces
+        if not 1 <= args.target <= faces:
+            parser.error(f"argument --target: must be a face of the run's die, in [1, {faces}], "
                          f"got {args.target}")
     replay(args.run, args.throws, args.seed, args.target, args.thrower, args.out)
 

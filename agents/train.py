@@ -241,7 +241,7 @@ def train(config: Config, run: Path | None = None) -> Path:
     announce_compile()
     if model is None:
         model = PPO("MlpPolicy", env, seed=config.seed, tensorboard_log=tensorboard,
-                    device="cpu", verbose=0, **config.ppo_kwargs())
+                    device="cpu", verbose=0, **config.ppo_kwargs(env.get_attr("task")[0].scene.die))
         if params["imitation_steps"]:
             loss = imitate(model, config, params["imitation_throws"], params["imitation_steps"])
             print(f"warm start: imitated the hand-written thrower, MSE {loss:.2e}")

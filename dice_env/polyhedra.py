@@ -76,7 +76,12 @@ def face_normals(points: np.ndarray, faces: tuple[tuple[int, ...], ...]) -> np.n
     origin = points[fans[:, 1]]
     area = np.zeros((len(faces), 3))
     np.add.at(area, fans[:, 0], np.cross(points[fans[:, 2]] - origin, points[fans[:, 3]] - origin))
-    return area / np.linalg.norm(area, axis=1, keepdims=True)
+    norm = np.linalg.norm(area, axis=1, keepdims=True)
+    if not np.all(norm > 0):
+        raise ValueError(f"faces must have a non-zero area; face(s) "
+                         f"{np.flatnonzero(~(norm[:, 0] > 0)).tolist()} have none (a degenerate "
+                         "or underflowing vertex set)")
+    return area / norm
 
 
 def edges(faces: tuple[tuple[int, ...], ...]) -> np.ndarray:
@@ -103,6 +108,9 @@ def mass_properties(
     volumes = np.einsum("ti,ti->t", a, np.cross(b, c)) / 6.0
     s = a + b + c
     volume = float(volumes.sum())
+    if not volume > 0:
+        raise ValueError(f"the solid must have a positive volume, got {volume:g} (a flat, "
+                         "inside-out or underflowing vertex set)")
     first = (volumes[:, None] * s).sum(axis=0) / 4.0 / volume
     second = np.einsum("t,tij->ij", volumes / 20.0, _outer(a) + _outer(b) + _outer(c) + _outer(s))
     second = second / volume - np.outer(first, first)

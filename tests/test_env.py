@@ -11,11 +11,11 @@ from gymnasium.utils.env_checker import check_env
 from scipy import ndimage
 
 import dice_env  # noqa: F401
-from dice_env import Scene
+from dice_env import Die, Scene
 from dice_env.envs import DiceThrowEnv
 from dice_env.envs.dice_throw import RENDER_FPS
 from dice_env.envs.render import render_die
-from dice_env.envs.task import _FACE_UP, make_task
+from dice_env.envs.task import face_up_rotation, make_task
 from dice_env.envs.video import save_video
 
 FAST = {"t_max": 2.0}  # gentle throws settle in under 2 s
@@ -210,7 +210,7 @@ def test_reset_options():
 def test_placed_die_lands_as_held():
     # No noise, no velocity, face 3 held up a few mm above the table: it lands with 3 up.
     env = make(hand_noise=0.0, orientation_noise=0.0, release_height=0.015, target_face=3)
-    env.reset(seed=0, options={"orientation": _FACE_UP[2]})
+    env.reset(seed=0, options={"orientation": face_up_rotation(Die(), 3)})
     _, reward, _, _, info = env.step(np.zeros(6))
     assert info["face"] == 3 and reward == 1.0 and info["settled"]
 
@@ -224,7 +224,8 @@ def test_render_top_face_shows_its_number():
     scene = Scene()
     position = np.array([0.0, 0.0, scene.die.half_edge])
     for k in range(6):
-        image = render_die(scene, position, _FACE_UP[k], size=(96, 96), elevation=90.0)
+        image = render_die(scene, position, face_up_rotation(scene.die, k + 1), size=(96, 96),
+                           elevation=90.0)
         assert image.shape == (96, 96, 3) and image.dtype == np.uint8
         assert count_pips(image) == k + 1
 

@@ -196,13 +196,15 @@ CHOICES = {
     "scheme": ["paper", "midpoint", Scheme.MIDPOINT],
     "friction_law": ["stick_slip", "regularized", FrictionLaw.REGULARIZED],
     "until": ["rest", "decided"],
+    "die": ["d4", "d6", "d8", "d10", "d12", "d20"],
+    "walls": ["none", "tray", "craps"],
 }
 RANGES = {  # name: (low, high, log scale)
     "release_height": (0.0145, 0.1, True), "max_speed": (0.1, 5.0, True),
     "max_spin": (1.0, 100.0, True), "hand_noise": (0.0, 0.5, False),
     "orientation_noise": (0.0, 0.5, False), "min_speed": (0.0, 1.0, False),
     "min_spin": (0.0, 20.0, False), "shaping": (0.0, 1.0, False), "t_max": (0.05, 2.0, True),
-    "edge": (0.005, 0.03, True), "mass": (1e-3, 0.05, True), "load_fraction": (0.0, 0.5, False),
+    "edge": (0.005, 0.03, True), "size": (0.005, 0.03, True), "mass": (1e-3, 0.05, True), "load_fraction": (0.0, 0.5, False),
     "load_depth": (0.0, 0.99, False), "stiffness": (1e3, 1e7, True), "damping": (1e-3, 20.0, True),
     "friction": (0.0, 1.0, False), "tilt_deg": (0.0, 30.0, False), "gravity": (0.0, 30.0, False),
     "dt": (1e-6, 1e-4, True), "safety": (0.05, 1.0, False), "rest_speed": (1e-4, 0.05, True),

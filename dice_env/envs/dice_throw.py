@@ -11,7 +11,7 @@ from gymnasium import spaces
 
 from dice_env.envs.task import (
     ACTION_DIM,
-    OBS_DIM,
+    ORIENTATION_DIM,
     ThrowTask,
     check_actions,
     check_face,
@@ -26,10 +26,10 @@ RENDER_FPS = 30
 MAX_FRAME_BYTES = 2**30  # the frames one throw may keep in "rgb_array_list" mode
 
 
-def observation_space() -> spaces.Box:
-    """One-hot target in [0, 1] (6), then the orientation's entries in [-1, 1] (9)."""
-    low = np.r_[np.zeros(6), -np.ones(9)].astype(np.float32)
-    return spaces.Box(low, np.ones(OBS_DIM, np.float32), dtype=np.float32)
+def observation_space(task: ThrowTask) -> spaces.Box:
+    """One-hot target in [0, 1] (``n_faces``), then the orientation's entries in [-1, 1] (9)."""
+    low = np.r_[np.zeros(task.n_faces), -np.ones(ORIENTATION_DIM)].astype(np.float32)
+    return spaces.Box(low, np.ones(task.obs_dim, np.float32), dtype=np.float32)
 
 
 def action_space() -> spaces.Box:
@@ -37,10 +37,11 @@ def action_space() -> spaces.Box:
     return spaces.Box(-1.0, 1.0, (ACTION_DIM,), np.float32)
 
 
-def check_episode_keywords(target_face: int | None, orientation_mode: str) -> None:
+def check_episode_keywords(task: ThrowTask, target_face: int | None,
+                           orientation_mode: str) -> None:
     """Validate the per-episode keywords shared by the single and the vector env."""
     if target_face is not None:
-        check_face("target_face", target_face)
+        check_face("target_face", target_face, task.n_faces)
     check_orientation_mode(orientation_mode)
 
 
@@ -74,9 +75,9 @@ def configure(
 
     Returns the :class:`ThrowTask` built from ``task_keywords``.
     """
-    check_episode_keywords(target_face, orientation_mode)
     check_render(render_mode, modes, width, height)
     task = make_task(**check_task_keywords(task_keywords))
+    check_episode_keywords(task, target_face, orientation_mode)
     env.target_face = target_face
     env.orientation_mode = orientation_mode
     env.render_mode = render_mode
@@ -107,10 +108,12 @@ class DiceThrowEnv(gym.Env):
 
     ## Description
     Each episode is one throw. The die sits in the hand ``release_height`` above the table in an
-    orientation drawn uniformly over all rotations; a target face 1–6 is drawn uniformly. The
+    orientation drawn uniformly over all rotations; a target face 1 … n (the die's faces: 6
+    by default) is drawn uniformly. The
     agent chooses the release velocity and spin; the release actually used is perturbed by
     seeded hand noise; the throw is simulated to rest with the compiled corner-node model
-    (:func:`dice_env.simulate`) in the default :class:`dice_env.Scene` (a 16 mm die on a table).
+    (:func:`dice_env.simulate`) in the default :class:`dice_env.Scene` (a 16 mm d6 on a table;
+    ``die="d20"`` and ``walls="tray"`` choose another die and surroundings).
 
     ## Action Space
     ``Box(-1, 1, (6,), float32)``: release velocity ``(vx, vy, vz) * max_speed`` (m/s) and
@@ -119,13 +122,15 @@ class DiceThrowEnv(gym.Env):
     ``ValueError`` before anything is simulated.
 
     ## Observation Space
-    ``Box((15,), float32)``: ``[0:6]`` one-hot target face (1–6), ``[6:15]`` the die's
-    orientation (body-to-world rotation matrix, row-major) in the hand after ``reset`` and at
-    rest after ``step``. Body frame: face 1 +z, 2 +x, 3 +y, 4 -y, 5 -x, 6 -z.
+    ``Box((n + 9,), float32)`` for a die of n faces (15 for the d6): ``[0:n]`` one-hot target
+    face, ``[n:n+9]`` the die's orientation (body-to-world rotation matrix, row-major) in the
+    hand after ``reset`` and at rest after ``step``. The d6's body frame: face 1 +z, 2 +x, 3 +y,
+    4 -y, 5 -x, 6 -z; other dice: :class:`dice_env.Die` (``face_normals``, ``reading``).
 
     ## Rewards
-    ``reward_success`` 1.0 if the target face is up at rest, else 0.0, plus
-    ``reward_shaping = shaping * (n_target . n_table)`` at rest (``shaping=0`` by default).
+    ``reward_success`` 1.0 if the target face is read at rest (up; the d4's face down), else
+    0.0, plus ``reward_shaping = shaping * (r_target . n_table)`` at rest (``r``: the target's
+    reading direction) (``shaping=0`` by default).
     A void throw (foul, unstable, or not settled within ``t_max``: quiet for ``rest_hold``) gets 0;
     ``info["void_reason"]`` says why. With ``until="decided"`` a throw ends as soon as its face
     is decided (the face it rests on; about 2.4 times the throws per second at the defaults,
@@ -142,7 +147,7 @@ class DiceThrowEnv(gym.Env):
     same hand with fresh noise.
 
     ## Info
-    ``is_success``, ``target_face``, ``face`` (landed, 1–6), ``settled``, ``unstable``, ``fair``,
+    ``is_success``, ``target_face``, ``face`` (landed, 1 … n), ``settled``, ``unstable``, ``fair``,
     ``void_reason`` ("" or "foul", "unstable", "sunk", "not_settled", "not_decided"), ``sunk``,
     ``max_sink`` (m, the deepest corner's), ``rest_time`` (s),
     ``impacts``, ``reward_success``, ``reward_shaping``, ``release_velocity`` (3),
@@ -151,19 +156,22 @@ class DiceThrowEnv(gym.Env):
     ## Arguments
     | keyword | default | meaning |
     |---|---|---|
-    | ``release_height`` | 0.015 | centre height above the table at release (m) |
+    | ``release_height`` | 0.015 | centre height above the table at release (m; higher for a |
+    | | | die whose corners reach further: ThrowTask) |
     | ``max_speed`` | 1.0 | release speed per component at action ±1 (m/s) |
     | ``max_spin`` | 40.0 | angular velocity per component at action ±1 (rad/s) |
     | ``hand_noise`` | 0.05 | std of the noise on each action component (fraction of its max) |
     | ``orientation_noise`` | 0.05 | std of each component of a rotation vector on the hand (rad) |
     | ``min_speed``, ``min_spin`` | 0, 0 | fair-throw rule: slower releases are fouls (m/s, rad/s) |
     | ``shaping`` | 0.0 | weight of the dense term |
-    | ``target_face`` | None | fix the target (1–6) instead of drawing it |
+    | ``target_face`` | None | fix the target (1 … n) instead of drawing it |
     | ``orientation_mode`` | "uniform" | how the hand orientation is drawn |
     | ``t_max`` | 5.0 | simulated time limit per throw (s; the scene's when ``scene`` is given) |
-    | ``edge``, ``mass`` | Scene() | die edge (m) and mass (kg) |
-    | ``load_face``, ``load_fraction``, ``load_depth`` | 6, 0, 0.8 | a loaded die (Die.loaded) |
-    | | | (``edge``, ``mass``, ``load_*`` need a uniform die in ``scene``) |
+    | ``die`` | "d6" | "d4", "d6", "d8", "d10", "d12", "d20" (Die.standard) or a Die |
+    | ``size`` (``edge``: d6), ``mass`` | Scene() | die size (m, Die.size) and mass (kg) |
+    | ``load_face``, ``load_fraction``, ``load_depth`` | n, 0, 0.8 | a loaded die (Die.load) |
+    | | | (``size``, ``mass``, ``load_*`` need a uniform standard die) |
+    | ``walls`` | "none" | "tray", "craps" (dice_env.surroundings) or a tuple of Wall |
     | ``stiffness``, ``damping``, ``friction`` | Scene() | table contact (N/m, N s/m, mu) |
     | ``tilt_deg`` | 0 | table tilt about y from level (degrees) |
     | ``contact_law`` | Scene() | "gated" or "paper" (or a ContactLaw; "paper" needs a tiny |
@@ -191,6 +199,9 @@ class DiceThrowEnv(gym.Env):
       safety=0.1`` restores the earlier physics (rest test aside).
     * v0: keyword ``until`` ("decided" ends throws when their face is decided);
       the default, "rest", is unchanged.
+    * v0: keywords ``die``, ``size`` and ``walls`` (any standard die, a tray or a craps table);
+      the observation's one-hot has one entry per face. The default (a d6, no walls) is
+      unchanged.
     """
 
     metadata: ClassVar[dict[str, Any]] = {"render_modes": list(RENDER_MODES),
@@ -210,7 +221,7 @@ class DiceThrowEnv(gym.Env):
                                          orientation_mode, render_width, render_height,
                                          task_keywords)
         check_frame_memory(render_mode, self.task.scene.t_max, render_width, render_height)
-        self.observation_space = observation_space()
+        self.observation_space = observation_space(self.task)
         self.action_space = action_space()
         self._target = 1
         self._hand = np.eye(3)

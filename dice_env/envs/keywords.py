@@ -19,20 +19,22 @@ from enum import IntEnum
 
 import numpy as np
 
-from dice_env.die import Die
-from dice_env.scene import ContactLaw, FrictionLaw, Ground, Rest, Scene, Scheme
+from dice_env.die import STANDARD_SIZES, Die
+from dice_env.scene import ContactLaw, FrictionLaw, Ground, Rest, Scene, Scheme, Wall
+from dice_env.surroundings import PRESETS
+from dice_env.surroundings import walls as preset_walls
 from dice_env.validation import check_nonnegative, check_positive, check_range
 
 DEFAULT_T_MAX = 5.0  # s, without a base scene: gentle throws settle in well under 2 s
 MAX_STEPS = 10**7  # steps per throw: about 2.5 s for one die that never settles, on one core
-MAX_SINK = 0.1  # the weight's sink of a flat die's corners into the table, in edges
+MAX_SINK = 0.1  # the weight's sink of a flat die's corners into the table, in die sizes
 
 
-def check_face(name: str, value: object) -> int:
-    """``value`` as a face number 1–6, or ``ValueError`` naming ``name``."""
+def check_face(name: str, value: object, n_faces: int = 6) -> int:
+    """``value`` as a face label 1 … ``n_faces``, or ``ValueError`` naming ``name``."""
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
-        raise ValueError(f"{name} must be an int in [1, 6], got {value!r}")
-    check_range(name, int(value), 1, 6)
+        raise ValueError(f"{name} must be an int in [1, {n_faces}], got {value!r}")
+    check_range(name, int(value), 1, n_faces)
     return int(value)
 
 
@@ -40,6 +42,8 @@ def build_scene(
     scene: Scene | None = None,
     *,
     t_max: float | None = None,
+    die: str | Die | None = None,
+    size: float | None = None,
     edge: float | None = None,
     mass: float | None = None,
     load_face: int | None = None,
@@ -59,12 +63,17 @@ def build_scene(
     scheme: str | Scheme | None = None,
     friction_law: str | FrictionLaw | None = None,
     friction_vmin: float | None = None,
+    walls: str | tuple[Wall, ...] | None = None,
 ) -> Scene:
     """``scene`` (default ``Scene(t_max=DEFAULT_T_MAX)``) with the keywords given (not None).
 
-    ``edge``, ``mass`` and ``load_*`` build the die (``load_fraction`` > 0: :meth:`Die.loaded`
-    toward ``load_face``, at ``load_depth``; they need a uniform base die); ``tilt_deg`` tilts the
-    table about y from level; the enum keywords take a member or its name (any case).
+    ``die`` replaces the scene's die: a :class:`Die` or a standard name ("d4" … "d20",
+    :meth:`Die.standard` with its default size and density). ``size`` (``edge``: the same, for
+    the d6 only), ``mass`` and ``load_*`` rebuild a uniform standard die (``load_fraction`` > 0:
+    :meth:`Die.load` toward ``load_face``, at ``load_depth``). ``walls`` replaces the scene's
+    walls: a preset name of :mod:`dice_env.surroundings` ("none", "tray", "craps") or a tuple of
+    :class:`Wall`. ``tilt_deg`` tilts the table about y from level; the enum keywords take a
+    member or its name (any case).
     """
     if scene is None:
         scene = Scene(t_max=DEFAULT_T_MAX)
@@ -77,7 +86,9 @@ def build_scene(
         if value is not None:
             changes[name] = _choice(name, value, kind)
     built = scene.with_(
-        die=_die(scene.die, edge, mass, load_face, load_fraction, load_depth),
+        die=_die(_base_die(scene.die, die), _size(die, size, edge), mass, load_face,
+                 load_fraction, load_depth, size_name="size" if edge is None else "edge"),
+        walls=scene.walls if walls is None else _walls(walls),
         ground=_ground(scene.ground, stiffness, damping, friction, contact_law, tilt_deg),
         rest=_rest(scene.rest, rest_speed, rest_hold), **changes)
     if safety is not None and built.dt is not None:
@@ -98,15 +109,19 @@ def check_scene(scene: Scene, release_height: float) -> None:
 
 
 def _check_sink(scene: Scene) -> None:
-    """The die's weight alone must not sink it more than :data:`MAX_SINK` edges."""
+    """The die's weight alone must not sink it more than :data:`MAX_SINK` die sizes.
+
+    The die lies on its face with the fewest corners (4 for the d6, 3 for the d4).
+    """
     die, ground = scene.die, scene.ground
-    sink = die.mass * scene.gravity * ground.normal[2] / (4.0 * ground.stiffness)
-    if sink > MAX_SINK * die.edge:
+    corners = min(len(face) for face in die.faces)
+    sink = die.mass * scene.gravity * ground.normal[2] / (corners * ground.stiffness)
+    if sink > MAX_SINK * die.size:
         raise ValueError(
             f"the die's weight would press a flat face's corners {sink:.3g} m into the table, "
-            f"more than {MAX_SINK} of the edge ({die.edge:g} m): mass={die.mass:g} kg, "
+            f"more than {MAX_SINK} of the die's size ({die.size:g} m): mass={die.mass:g} kg, "
             f"gravity={scene.gravity:g} m/s^2, stiffness={ground.stiffness:g} N/m; raise "
-            "stiffness or edge, or lower mass or gravity")
+            "stiffness or size, or lower mass or gravity")
 
 
 def _check_steps(scene: Scene) -> None:
@@ -118,7 +133,7 @@ def _check_steps(scene: Scene) -> None:
             step = math.nan
     if not math.isfinite(step) or step <= 0:
         raise ValueError(f"the step comes out as {step:g} s for {_step_origin(scene)}, "
-                         f"edge={scene.die.edge:g}: bring them nearer the defaults")
+                         f"size={scene.die.size:g}: bring them nearer the defaults")
     for name, value in (("t_max", scene.t_max), ("rest_hold", scene.rest.hold)):
         if value / step > MAX_STEPS:
             raise ValueError(
@@ -159,38 +174,64 @@ def _step_origin(scene: Scene) -> str:
             f"mass={scene.die.mass:g}")
 
 
+def _base_die(base: Die, die: str | Die | None) -> Die:
+    """The scene's die, or the die the ``die`` keyword names."""
+    if die is None or isinstance(die, Die):
+        return base if die is None else die
+    if not (isinstance(die, str) and die in STANDARD_SIZES):
+        raise ValueError(f"die must be a Die or one of {list(STANDARD_SIZES)}, got {die!r}")
+    return Die.standard(die)
+
+
+def _size(die: str | Die | None, size: float | None, edge: float | None) -> float | None:
+    """The size keyword: ``size``, or ``edge`` for a d6 (never both)."""
+    if edge is None:
+        return size
+    if size is not None:
+        raise ValueError(f"give size or edge, not both (size={size!r}, edge={edge!r})")
+    name = die.name if isinstance(die, Die) else die
+    if name not in (None, "d6"):
+        raise ValueError(f"edge is the d6's size; the die is a {name}: use size")
+    return edge
+
+
 def _die(
-    base: Die, edge: float | None, mass: float | None, load_face: int | None,
-    load_fraction: float | None, load_depth: float | None,
+    base: Die, size: float | None, mass: float | None, load_face: int | None,
+    load_fraction: float | None, load_depth: float | None, size_name: str = "size",
 ) -> Die:
-    """``base`` with the die keywords given; only a uniform ``base`` can take them."""
+    """``base`` with the die keywords given; only a uniform standard ``base`` can take them.
+
+    ``size_name``: the keyword that gave ``size`` ("size", or "edge" for a d6), for messages.
+    """
     if load_face is not None:
-        check_face("load_face", load_face)
+        check_face("load_face", load_face, base.n_faces)
     if load_fraction is not None:
         check_range("load_fraction", load_fraction, 0.0, 1.0, high_open=True)
     if load_depth is not None:
         check_range("load_depth", load_depth, 0.0, 1.0, high_open=True)
-    given = _given(edge=edge, mass=mass, load_face=load_face, load_fraction=load_fraction,
+    given = _given(**{size_name: size}, mass=mass, load_face=load_face, load_fraction=load_fraction,
                    load_depth=load_depth)
     if not given:
         return base
-    if base != Die(edge=base.edge, mass=base.mass):
+    if base.name not in STANDARD_SIZES or base != Die.standard(base.name, base.size, base.mass):
         com = ", ".join(f"{c:g}" for c in base.com)
         raise ValueError(
             f"{', '.join(given)} cannot be applied to the scene's die: it is not a uniform die "
-            f"(com ({com}) m, its own inertia), so it cannot be rebuilt from keywords without "
-            "losing its mass distribution. Build the die you want in the scene (e.g. "
-            "Die.loaded(face, fraction, depth, edge=..., mass=...)) and leave out "
-            f"{', '.join(given)}")
-    size = {"edge": base.edge if edge is None else edge,
+            f"of a standard shape ({base!r}, com ({com}) m), so it cannot be rebuilt from keywords "
+            "without losing its shape or mass distribution. Build the die you want in the "
+            "scene (e.g. Die.standard(name, size, mass).load(face, fraction, depth)) and leave "
+            f"out {', '.join(given)}")
+    dims = {"size": base.size if size is None else size,
             "mass": base.mass if mass is None else mass}
-    for name, value in size.items():
-        check_positive(name, value)
-    problem = f"edge={size['edge']:g} m, mass={size['mass']:g} kg and load_fraction="
-    problem += f"{load_fraction} give no valid die"
+    check_positive(size_name, dims["size"])
+    check_positive("mass", dims["mass"])
+    problem = (f"{size_name}={dims['size']:g} m, mass={dims['mass']:g} kg and load_fraction="
+               f"{load_fraction} give no valid die (a {base.name})")
     try:
-        die = Die(**size) if not load_fraction else Die.loaded(
-            fraction=load_fraction, **_given(face=load_face, depth=load_depth), **size)
+        die = Die.standard(base.name, **dims)
+        if load_fraction:
+            die = die.load(**_given(face=load_face if load_face is not None else die.n_faces,
+                                    fraction=load_fraction, depth=load_depth))
     except ValueError as error:  # the inertia of an extreme size underflows
         raise ValueError(f"{problem}: {error}") from error
     with np.errstate(all="ignore"):
@@ -199,6 +240,21 @@ def _die(
     if not (usable and moments[0] > 0):
         raise ValueError(f"{problem}: its moments of inertia {moments} under- or overflow")
     return die
+
+
+def _walls(walls: str | tuple[Wall, ...]) -> tuple[Wall, ...]:
+    """The ``walls`` keyword: a preset name or the walls themselves."""
+    if isinstance(walls, str):
+        if walls not in PRESETS:
+            raise ValueError(f"walls must be one of {sorted(PRESETS)} or a tuple of Wall, "
+                             f"got {walls!r}")
+        return preset_walls(walls)
+    if isinstance(walls, Wall):
+        return (walls,)
+    if not (isinstance(walls, (tuple, list)) and all(isinstance(w, Wall) for w in walls)):
+        raise ValueError(f"walls must be one of {sorted(PRESETS)} or a tuple of Wall, "
+                         f"got {walls!r}")
+    return tuple(walls)
 
 
 def _ground(

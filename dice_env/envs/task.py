@@ -22,26 +22,33 @@ from typing import Any
 import numba
 import numpy as np
 
-from dice_env.die import FACE_NORMALS
+from dice_env.die import Die
 from dice_env.envs.keywords import build_scene, check_face, check_scene
 from dice_env.rotations import orthonormality_error, quaternion_to_matrix, uniform_rotations
 from dice_env.scene import Scene
 from dice_env.simulate import Result, State, lock_energy, simulate
 from dice_env.validation import check_nonnegative, check_positive
 
-OBS_DIM = 15  # target one-hot (6) + hand orientation, row-major 3x3 (9)
+ORIENTATION_DIM = 9  # the observation's orientation, row-major 3x3, after the target's one-hot
 ACTION_DIM = 6  # release velocity (3) + angular velocity (3), world frame, in [-1, 1]
 NOISE_DIM = 9  # standard normals: velocity (3), spin (3), orientation rotation vector (3)
 ORIENTATION_MODES = ("uniform", "flat", "identity")
 # How far a throw is simulated, and the void reason of one that does not get there in t_max.
 UNTIL = {"rest": "not_settled", "decided": "not_decided"}
+# Default release height (m) of the d6, and the least gap (m) it leaves below the lowest corner
+# in any orientation: 1.5 cm against a half diagonal of 1.386 cm. A die whose corners reach
+# further is released higher by default, with the same gap.
+RELEASE_HEIGHT = 0.015
+RELEASE_GAP = RELEASE_HEIGHT - math.sqrt(3.0) * 0.008
 
 
 @dataclass(frozen=True)
 class ThrowTask:
     """A throw from the hand: how actions become releases and how a landing is scored.
 
-    ``release_height`` (m): height of the die's centre above the table at release.
+    ``release_height`` (m): height of the die's centre above the table at release (None:
+    :data:`RELEASE_HEIGHT`, or :data:`RELEASE_GAP` above the die's farthest corner, rounded
+    to 0.1 mm, if that is higher).
     ``max_speed`` (m/s) and ``max_spin`` (rad/s): release velocity and angular velocity per
     component at action ±1. ``hand_noise``: standard deviation of the noise added to each action
     component before scaling (so 0.05 is 5% of that component's maximum). ``orientation_noise``
@@ -56,7 +63,7 @@ class ThrowTask:
     """
 
     scene: Scene
-    release_height: float = 0.015
+    release_height: float | None = None
     max_speed: float = 1.0
     max_spin: float = 40.0
     hand_noise: float = 0.05
@@ -70,14 +77,18 @@ class ThrowTask:
     def __post_init__(self) -> None:
         if not isinstance(self.scene, Scene):
             raise ValueError(f"scene must be a Scene, got {type(self.scene).__name__}")
-        clearance = float(np.linalg.norm(self.scene.die.corners_body, axis=1).max())
+        clearance = float(np.linalg.norm(self.scene.die.vertices_body, axis=1).max())
+        if self.release_height is None:
+            object.__setattr__(self, "release_height",
+                               max(RELEASE_HEIGHT, round(clearance + RELEASE_GAP, 4),
+                                   clearance * (1 + 1e-9)))  # above a giant die's reach too
         check_positive("release_height", self.release_height)
         if self.release_height <= clearance:
             raise ValueError(
                 f"release_height must be > {clearance:.6g} m, the distance of the die's "
                 f"farthest corner from its centre of mass, so that no corner starts in the "
                 f"table; got {self.release_height!r}. Raise release_height, or make the die "
-                f"smaller (edge={self.scene.die.edge:g} m) or its load (load_fraction, "
+                f"smaller (size={self.scene.die.size:g} m) or its load (load_fraction, "
                 "load_depth) lighter")
         check_positive("max_speed", self.max_speed)
         check_positive("max_spin", self.max_spin)
@@ -95,6 +106,16 @@ class ThrowTask:
         check_scene(self.scene, self.release_height)
 
     @property
+    def n_faces(self) -> int:
+        """Number of faces of the die: targets are 1 … ``n_faces``."""
+        return self.scene.die.n_faces
+
+    @property
+    def obs_dim(self) -> int:
+        """Observation size: the target's one-hot (``n_faces``) and the orientation (9)."""
+        return self.n_faces + ORIENTATION_DIM
+
+    @property
     def release_position(self) -> np.ndarray:
         """Centre of the die at release: ``release_height`` along the table normal (3,)."""
         return self.release_height * np.asarray(self.scene.ground.normal)
@@ -107,9 +128,10 @@ class ThrowTask:
     ) -> tuple[int, np.ndarray]:
         """One episode's context: the target face and the hand's orientation (3, 3).
 
-        The target is uniform over 1–6 unless ``target_face`` is given. ``orientation_mode``
-        "uniform": over all rotations; "flat": a uniform face up (relative to world z) with a
-        uniform turn about the vertical; "identity": face 1 up, no draw.
+        The target is uniform over 1 … ``n_faces`` unless ``target_face`` is given.
+        ``orientation_mode`` "uniform": over all rotations; "flat": a uniform face read (its
+        reading direction along world z) with a uniform turn about the vertical; "identity":
+        the body frame, no draw.
         """
         targets, hands = self.sample_hands([rng], target_face, orientation_mode)
         return int(targets[0]), hands[0]
@@ -126,22 +148,23 @@ class ThrowTask:
         built in one batch.
         """
         if target_face is not None:
-            check_face("target_face", target_face)
+            check_face("target_face", target_face, self.n_faces)
         check_orientation_mode(orientation_mode)
         targets = np.full(len(rngs), target_face or 0, np.int64)
         draws = np.zeros((len(rngs), 3))
         for i, rng in enumerate(rngs):
             if target_face is None:
-                targets[i] = rng.integers(1, 7)
+                targets[i] = rng.integers(1, self.n_faces + 1)
             if orientation_mode == "uniform":
                 draws[i] = rng.random(3)
             elif orientation_mode == "flat":
-                draws[i, 0], draws[i, 1] = rng.integers(0, 6), rng.uniform(0, 2 * np.pi)
+                draws[i, 0] = rng.integers(0, self.n_faces)
+                draws[i, 1] = rng.uniform(0, 2 * np.pi)
         if orientation_mode == "uniform":
             return targets, uniform_rotations(draws.T)
         if orientation_mode == "flat":
-            return targets, np.stack([_z_turn(turn) @ _FACE_UP[int(face)]
-                                      for face, turn, _ in draws])
+            return targets, np.stack([_z_turn(turn) @ face_up_rotation(self.scene.die, int(f) + 1)
+                                      for f, turn, _ in draws])
         return targets, np.tile(np.eye(3), (len(rngs), 1, 1))
 
     @staticmethod
@@ -149,13 +172,12 @@ class ThrowTask:
         """Hand noise for ``n`` throws: standard normals (n, 9), scaled by :meth:`release`."""
         return rng.standard_normal((n, NOISE_DIM))
 
-    @staticmethod
-    def observe(targets: np.ndarray, orientations: np.ndarray) -> np.ndarray:
-        """Observations (n, 15) float32: one-hot target (6), then the orientation row-major (9)."""
+    def observe(self, targets: np.ndarray, orientations: np.ndarray) -> np.ndarray:
+        """Observations (n, :attr:`obs_dim`) float32: one-hot target, orientation row-major."""
         targets = np.asarray(targets).reshape(-1)
-        obs = np.zeros((targets.size, OBS_DIM), np.float32)
+        obs = np.zeros((targets.size, self.obs_dim), np.float32)
         obs[np.arange(targets.size), targets - 1] = 1.0
-        obs[:, 6:] = np.clip(np.asarray(orientations).reshape(-1, 9), -1.0, 1.0)
+        obs[:, self.n_faces:] = np.clip(np.asarray(orientations).reshape(-1, 9), -1.0, 1.0)
         return obs
 
     def release(
@@ -188,9 +210,9 @@ class ThrowTask:
     ) -> Throw:
         """Simulate ``n`` throws to rest in one kernel call and score them.
 
-        ``actions`` (n, 6) in [-1, 1]; ``targets`` (n,) in 1–6; ``hands`` (n, 3, 3) orientations
-        in the hand; ``noise`` (n, 9) from :meth:`sample_noise`. ``record_every`` > 0 records the
-        centre and orientation every that many steps (for rendering).
+        ``actions`` (n, 6) in [-1, 1]; ``targets`` (n,) in 1 … n_faces; ``hands`` (n, 3, 3)
+        orientations in the hand; ``noise`` (n, 9) from :meth:`sample_noise`. ``record_every``
+        > 0 records the centre and orientation every that many steps (for rendering).
         """
         targets = np.array(targets, dtype=np.int64).reshape(-1)  # a copy: envs redraw theirs
         state, clipped = self.release(actions, hands, noise)
@@ -214,7 +236,7 @@ class ThrowTask:
         counts = void == ""
         success = counts & (result.face == targets)
         alignment = np.einsum("bij,bj,i->b", result.final.orientation,
-                              FACE_NORMALS[targets - 1], normal)
+                              self.scene.die.reading[targets - 1], normal)
         shaping = np.where(counts, self.shaping * alignment, 0.0)
         reward_success = success.astype(np.float64)
         info = {
@@ -245,7 +267,7 @@ class Throw:
     """Outcome of a batch of n throws.
 
     ``reward`` (n,); ``info`` arrays over n, keys as in the env's ``info``; ``observation``
-    (n, 15) of the dice at rest; ``result`` from the kernel.
+    (n, obs_dim) of the dice at rest; ``result`` from the kernel.
     """
 
     reward: np.ndarray
@@ -286,7 +308,7 @@ def check_rotation(name: str, value: object) -> np.ndarray:
 
 def make_task(
     *,
-    release_height: float = 0.015,
+    release_height: float | None = None,
     max_speed: float = 1.0,
     max_spin: float = 40.0,
     hand_noise: float = 0.05,
@@ -362,13 +384,17 @@ def _z_turn(angle: float) -> np.ndarray:
     return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
 
 
-def _face_up_rotation(face_normal: np.ndarray) -> np.ndarray:
-    """A rotation taking the body vector ``face_normal`` to world +z (axes permuted/flipped)."""
-    z = face_normal
+def face_up_rotation(die: Die, face: int) -> np.ndarray:
+    """An orientation (body to world, 3x3) in which ``die`` reads ``face`` (a label).
+
+    The face's reading direction (:attr:`Die.reading`) points to world +z. Rows: the body axes
+    that map to world x, y, z; the x row is the direction's absolute value rolled by one, made
+    orthogonal to it (for the cube's axis normals a permuted, flipped frame).
+    """
+    z = die.reading[check_face("face", face, die.n_faces) - 1]
     x = np.roll(np.abs(z), 1)
-    y = np.cross(z, x)
-    return np.stack([x, y, z])
-
-
-# Rotations putting face k+1 up (rows: the body axes that map to world x, y, z).
-_FACE_UP = np.stack([_face_up_rotation(n) for n in FACE_NORMALS])
+    x = x - (x @ z) * z
+    if np.linalg.norm(x) < 1e-6:  # |direction| with equal components: roll maps it to itself
+        x = np.cross(z, [1.0, 0.0, 0.0] if abs(z[0]) < 0.9 else [0.0, 1.0, 0.0])
+    x = x / np.linalg.norm(x)
+    return np.stack([x, np.cross(z, x), z])

@@ -57,7 +57,7 @@ class DiceThrowVectorEnv(VectorEnv):
                                          orientation_mode, render_width, render_height,
                                          task_keywords)
         self.num_envs = int(num_envs)
-        self.single_observation_space = observation_space()
+        self.single_observation_space = observation_space(self.task)
         self.single_action_space = action_space()
         self.observation_space = batch_space(self.single_observation_space, self.num_envs)
         self.action_space = batch_space(self.single_action_space, self.num_envs)
