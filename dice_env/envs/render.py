@@ -58,8 +58,8 @@ WALL_ALPHA = 0.35  # opacity of a wall in front of the die
 # Numerals: glyph box 0.6 wide by 1 high, strokes of half-width STROKE, digits ADVANCE apart,
 # the underline UNDERLINE below the baseline.
 STROKE = 0.08
-ADVANCE = 0.8
-UNDERLINE = -0.22
+ADVANCE = 0.85
+UNDERLINE = -0.25
 NUMERAL_FILL = 0.9  # the widest label's box, underline included, spans this much of the
 # face's inscribed circle
 D4_PLACE, D4_HEIGHT = 0.5, 0.38  # d4 numerals: centre and height in centre-to-corner distances
@@ -104,7 +104,8 @@ class _FaceArt:
     ``centre`` (3,) body frame; ``axes`` (2, 3): the in-face unit axes u, v (u x v the
     outward normal); ``edges`` (P, 3): the polygon's inward edge lines ``(n_u, n_v, c)``,
     distance ``n . (u, v) - c``; ``pips`` (Q, 2) and ``pip_radius``; ``strokes`` (S, 2, 2)
-    the numerals' segments and ``widths`` (S,) their half-widths.
+    the numerals' segments, ``widths`` (S,) their half-widths, all within ``reach`` of the
+    face's origin.
     """
 
     centre: np.ndarray
@@ -114,6 +115,7 @@ class _FaceArt:
     pip_radius: float
     strokes: np.ndarray
     widths: np.ndarray
+    reach: float
 
 
 def render_die(
@@ -150,6 +152,8 @@ def render_die(
     image = _floor(scene, centre, floor, orientation, xs, ys, scale)
     depth = np.full((height, width), np.inf)
     for planes in _boards(scene, centre):
+        if not _in_view(planes, floor, xs, ys):
+            continue
         t, face = _clip(planes, camera, xs, ys)
         near = t < depth
         depth[near] = t[near]
@@ -241,6 +245,17 @@ def _boards(scene: Scene, centre: np.ndarray) -> list[np.ndarray]:
         ends = [thick - row for j, row in enumerate(rows) if j != i]
         boards.append(np.array([wall, thick - wall, floor + high, -floor, *ends]))
     return boards
+
+
+def _in_view(planes: np.ndarray, floor: _Lines, xs: np.ndarray, ys: np.ndarray) -> bool:
+    """Whether the board (K, 4) may be in view.
+
+    It is not when every corner of the view's box, from the floor up to :data:`WALL_HEIGHT`,
+    lies outside one of its half-spaces.
+    """
+    corners = np.array([floor.base + x * floor.dx + y * floor.dy + h * floor.direction
+                        for x in xs[[0, -1]] for y in ys[[0, -1]] for h in (0.0, WALL_HEIGHT)])
+    return not np.any(np.all(corners @ planes[:, :3].T > planes[:, 3], axis=0))
 
 
 def _plane_row(normal: tuple[float, ...], offset: float, centre: np.ndarray) -> np.ndarray:
@@ -338,8 +353,9 @@ def _face_colour(art: _FaceArt, uv: np.ndarray, shade: float, rim: float,
         gaps = ((uv[:, None, :] - art.pips[None]) ** 2).sum(axis=-1)
         ink = (gaps.min(axis=1) < art.pip_radius**2).astype(float)
     if len(art.strokes):
-        reach = (art.widths - _segment_distance(uv, art.strokes)).max(axis=1)
-        ink = np.clip(reach / scale + 0.5, 0.0, 1.0)  # about one pixel of antialiasing
+        near = np.einsum("mi,mi->m", uv, uv) < (art.reach + scale) ** 2
+        depth = (art.widths - _segment_distance(uv[near], art.strokes)).max(axis=1)
+        ink[near] = np.clip(depth / scale + 0.5, 0.0, 1.0)  # about one pixel of antialiasing
     return face + ink[:, None] * (PIP_COLOUR - face)
 
 
@@ -347,8 +363,10 @@ def _segment_distance(points: np.ndarray, segments: np.ndarray) -> np.ndarray:
     """Distance (M, S) from each point (M, 2) to each segment (S, 2, 2)."""
     start, step = segments[:, 0], segments[:, 1] - segments[:, 0]
     rel = points[:, None, :] - start[None]
-    along = np.clip((rel * step).sum(-1) / np.maximum((step * step).sum(-1), 1e-300), 0, 1)
-    return np.linalg.norm(rel - along[..., None] * step, axis=-1)
+    length2 = np.maximum(np.einsum("si,si->s", step, step), 1e-300)
+    along = np.clip(np.einsum("msi,si->ms", rel, step) / length2, 0.0, 1.0)
+    gap = rel - along[..., None] * step
+    return np.sqrt(np.einsum("msi,msi->ms", gap, gap))
 
 
 # --- what each face carries ---------------------------------------------------------------
@@ -394,7 +412,7 @@ def _pip_face(polygon: np.ndarray, k: int) -> _FaceArt:
     flat = _flat(polygon, centre, axes)
     half = float(np.ptp(flat, axis=0).min()) / 2
     return _FaceArt(centre, axes, _edge_lines(flat), np.array(PIPS[k], float) * half,
-                    PIP_RADIUS * half, np.zeros((0, 2, 2)), np.zeros(0))
+                    PIP_RADIUS * half, np.zeros((0, 2, 2)), np.zeros(0), 0.0)
 
 
 def _numeral_frame(polygon: np.ndarray, normal: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -472,8 +490,10 @@ def _numeral_face(centre: np.ndarray, axes: np.ndarray, flat: np.ndarray,
         turn = np.array([[up[1], -up[0]], [up[0], up[1]]])  # glyph x, y to face u, v
         strokes.append(middle + height * glyph @ turn)
         widths.append(np.full(len(glyph), STROKE * height))
-    return _FaceArt(centre, axes, _edge_lines(flat), np.zeros((0, 2)), 0.0,
-                    np.concatenate(strokes), np.concatenate(widths))
+    strokes, widths = np.concatenate(strokes), np.concatenate(widths)
+    reach = float(np.linalg.norm(strokes, axis=-1).max() + widths.max())
+    return _FaceArt(centre, axes, _edge_lines(flat), np.zeros((0, 2)), 0.0, strokes, widths,
+                    reach)
 
 
 @lru_cache(maxsize=256)
@@ -542,9 +562,9 @@ def _figure_d20() -> np.ndarray:
 def _figure_tray() -> np.ndarray:
     """The default d6 at rest in the dice tray, the whole tray in view."""
     scene = Scene(walls=walls("tray"))
-    position, orientation = resting(scene.die, 5, at=(0.03, 0.02), turn=0.4)
-    return render_die(scene, position, orientation, size=(360, 480), elevation=50.0,
-                      view_edges=26.0)
+    position, orientation = resting(scene.die, 5, at=(-0.01, 0.01), turn=0.4)
+    return render_die(scene, position, orientation, size=(480, 640), elevation=50.0,
+                      view_edges=25.0)
 
 
 # The README's pictures: ``python -m dice_env.envs.render NAME --out PATH``. Placed by
