@@ -140,6 +140,12 @@ def test_bad_input_names_the_parameter(keyword, value):
         render_die(Scene(), args["position"], args["orientation"], **kwargs)
 
 
+def test_resting_refuses_a_label_the_die_lacks():
+    for label in (0, 7, 2.0, True):
+        with pytest.raises(ValueError, match=r"label must be an int in \[1, 6\]"):
+            resting(Die(), label)
+
+
 def test_figures_are_written(tmp_path):
     for name in FIGURES:
         main([name, "--out", str(tmp_path / f"{name}.png")])

@@ -60,8 +60,7 @@ WALL_ALPHA = 0.35  # opacity of a wall in front of the die
 STROKE = 0.08
 ADVANCE = 0.85
 UNDERLINE = -0.25
-NUMERAL_FILL = 0.9  # the widest label's box, underline included, spans this much of the
-# face's inscribed circle
+NUMERAL_FILL = 0.9  # the diagonal of the widest label's box over the inscribed diameter
 D4_PLACE, D4_HEIGHT = 0.5, 0.38  # d4 numerals: centre and height in centre-to-corner distances
 # Digits that read as a digit upside down (turned by 180 degrees).
 UPSIDE_DOWN = {"0": "0", "1": "1", "6": "9", "8": "8", "9": "6"}
@@ -541,12 +540,16 @@ def resting(die: Die, label: int, at: tuple[float, float] = (0.0, 0.0),
     ``label`` read (its reading direction straight up), at ``at`` (x, y) (m), turned by
     ``turn`` (rad) about the vertical.
     """
+    if (isinstance(label, bool) or not isinstance(label, (int, np.integer))
+            or not 1 <= label <= die.n_faces):
+        raise ValueError(f"label must be an int in [1, {die.n_faces}], got {label!r}")
     reading = die.reading[label - 1]
     axis = np.cross(reading, [0.0, 0.0, 1.0])
     if np.linalg.norm(axis) > 1e-12:
         tilt = axis_angle(axis, math.acos(np.clip(reading[2], -1.0, 1.0)))
     else:  # already vertical: upright, or half a turn about x
-        tilt = np.diag([1.0, *[np.sign(reading[2])] * 2])
+        flip = float(np.sign(reading[2]))
+        tilt = np.diag([1.0, flip, flip])
     orientation = axis_angle([0.0, 0.0, 1.0], turn) @ tilt
     return np.array([*at, die.resting_heights[label - 1]]), orientation
 
