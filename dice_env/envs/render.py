@@ -1,26 +1,42 @@
-"""A headless software renderer of the die with its pips (numpy only), and a window for "human".
+"""A headless software renderer of any convex die with its labels, the walls and the floor.
 
-Orthographic camera looking down at the die from ``elevation`` degrees above the table, centred
-on the die so a rolling die stays in view; the table carries a grid of one edge
-length (to show motion) and the die's shadow straight below it. Faces are shaded by a fixed
-light; pips are drawn as discs on the faces in the standard layout.
+numpy only; a matplotlib window for "human". Orthographic camera looking down at the die from
+``elevation`` degrees above the floor, centred on the die so a rolling die stays in view. Each
+pixel casts a ray against the die (the intersection of its face half-spaces) and the walls;
+the floor carries a grid of one die size (to show motion) and the die's shadow straight
+below it. Faces are shaded by a fixed light and darkened near their rims. A d6-like die (six
+faces numbered like the d6: the d6 and the cuboids) shows pips in the standard layout; every
+other die shows numerals from a built-in stroke font (6 and 9 underlined), the d10 its digits
+0-9, the d4 on each face near each corner the label read when that corner is up.
+
+Walls are infinite half-spaces in the physics; they are drawn as boards of
+:data:`WALL_HEIGHT` above the floor and :data:`WALL_THICKNESS` behind their plane. Where a
+board stands between the camera and the die, it is drawn translucent so the die stays visible.
+
+``python -m dice_env.envs.render NAME --out PATH`` writes a figure of :data:`FIGURES`.
 """
 
 from __future__ import annotations
 
+import argparse
 import math
 import os
 import sys
+from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 
-from dice_env.die import FACE_NORMALS
+from dice_env.die import FACE_NORMALS, Die
+from dice_env.rotations import axis_angle
 from dice_env.scene import Scene
+from dice_env.surroundings import walls
+from dice_env.validation import check_finite, check_positive, check_range
 
-# In-face axes (u, v) per face, body frame, so that u x v is the outward normal.
+# In-face axes (u, v) of the d6's pip faces, body frame, so that u x v is the outward normal.
 FACE_U = np.array([[1, 0, 0], [0, 1, 0], [0, 0, 1], [0, 0, 1], [0, 0, 1], [0, 1, 0]], float)
 FACE_V = np.cross(FACE_NORMALS, FACE_U)
-# Pip centres in face coordinates (u, v in [-1, 1]) for faces 1-6.
+# Pip centres in face coordinates (u, v in [-1, 1], units of half the face's shorter side).
 PIPS = (
     ((0, 0),),
     ((-0.5, -0.5), (0.5, 0.5)),
@@ -29,11 +45,76 @@ PIPS = (
     ((-0.5, -0.5), (-0.5, 0.5), (0.5, -0.5), (0.5, 0.5), (0, 0)),
     ((-0.5, -0.5), (-0.5, 0), (-0.5, 0.5), (0.5, -0.5), (0.5, 0), (0.5, 0.5)),
 )
-PIP_RADIUS = 0.19  # in units of the half edge
+PIP_RADIUS = 0.19  # in units of half the face's shorter side
+RIM_WIDTH = 0.035  # faces are darkened this close to their edges, in die sizes
 FACE_COLOUR = np.array([245, 240, 225], float)
-PIP_COLOUR = np.array([25, 25, 35], float)
+PIP_COLOUR = np.array([25, 25, 35], float)  # pips and numerals
 TABLE_COLOUR = np.array([40, 110, 60], float)  # felt green
-SKY_COLOUR = np.array([200, 210, 225], float)
+BEYOND_COLOUR = np.array([95, 90, 85], float)  # the floor outside the walls
+WALL_COLOUR = np.array([120, 75, 40], float)  # dark wood
+WALL_HEIGHT = 0.025  # m: drawn height of a wall above the floor (drawing only)
+WALL_THICKNESS = 0.006  # m: drawn thickness behind the wall's plane (drawing only)
+WALL_ALPHA = 0.35  # opacity of a wall in front of the die
+# Numerals: glyph box 0.6 wide by 1 high, strokes of half-width STROKE, digits ADVANCE apart,
+# the underline UNDERLINE below the baseline.
+STROKE = 0.08
+ADVANCE = 0.85
+UNDERLINE = -0.25
+NUMERAL_FILL = 0.9  # the diagonal of the widest label's box over the inscribed diameter
+D4_PLACE, D4_HEIGHT = 0.5, 0.38  # d4 numerals: centre and height in centre-to-corner distances
+# Digits that read as a digit upside down (turned by 180 degrees).
+UPSIDE_DOWN = {"0": "0", "1": "1", "6": "9", "8": "8", "9": "6"}
+
+
+def _arc(cx: float, cy: float, rx: float, ry: float, start: float, stop: float,
+         n: int = 12) -> np.ndarray:
+    """Points (n, 2) on an elliptic arc from ``start`` to ``stop`` degrees."""
+    angle = np.radians(np.linspace(start, stop, n))
+    return np.stack([cx + rx * np.cos(angle), cy + ry * np.sin(angle)], axis=1)
+
+
+def _glyphs() -> dict[str, tuple[np.ndarray, ...]]:
+    """The digits as polylines in their box (x in [0, 0.6], y in [0, 1], y up)."""
+    six = (np.vstack([_arc(0.62, 0.32, 0.62, 0.68, 100, 180, 6),
+                      _arc(0.3, 0.3, 0.3, 0.3, 180, -180, 20)]),)
+    return {
+        "0": (_arc(0.3, 0.5, 0.3, 0.5, 0, 360, 24),),
+        "1": (np.array([(0.1, 0.78), (0.32, 1.0), (0.32, 0.0)]),),
+        "2": (np.vstack([_arc(0.3, 0.7, 0.28, 0.3, 165, -30, 10), [(0, 0), (0.6, 0)]]),),
+        "3": (np.vstack([_arc(0.3, 0.76, 0.26, 0.24, 150, -90, 10),
+                         _arc(0.3, 0.27, 0.3, 0.27, 90, -150, 12)]),),
+        "4": (np.array([(0.45, 0.0), (0.45, 1.0), (0.0, 0.32), (0.6, 0.32)]),),
+        "5": (np.vstack([[(0.55, 1.0), (0.1, 1.0), (0.06, 0.56)],
+                         _arc(0.3, 0.32, 0.3, 0.32, 135, -140, 12)]),),
+        "6": six,
+        "7": (np.array([(0.0, 1.0), (0.6, 1.0), (0.18, 0.0)]),),
+        "8": (_arc(0.3, 0.76, 0.24, 0.24, 0, 360, 16), _arc(0.3, 0.27, 0.3, 0.27, 0, 360, 20)),
+        "9": tuple((0.6, 1.0) - line for line in six),
+    }
+
+
+GLYPHS = _glyphs()
+
+
+@dataclass(frozen=True)
+class _FaceArt:
+    """What is drawn on one face, in its own frame (metres).
+
+    ``centre`` (3,) body frame; ``axes`` (2, 3): the in-face unit axes u, v (u x v the
+    outward normal); ``edges`` (P, 3): the polygon's inward edge lines ``(n_u, n_v, c)``,
+    distance ``n . (u, v) - c``; ``pips`` (Q, 2) and ``pip_radius``; ``strokes`` (S, 2, 2)
+    the numerals' segments, ``widths`` (S,) their half-widths, all within ``reach`` of the
+    face's origin.
+    """
+
+    centre: np.ndarray
+    axes: np.ndarray
+    edges: np.ndarray
+    pips: np.ndarray
+    pip_radius: float
+    strokes: np.ndarray
+    widths: np.ndarray
+    reach: float
 
 
 def render_die(
@@ -46,45 +127,81 @@ def render_die(
     azimuth: float = -60.0,
     view_edges: float = 5.0,
 ) -> np.ndarray:
-    """An RGB image (height, width, 3) uint8 of the die over the scene's table.
+    """An RGB image (height, width, 3) uint8 of the die in the scene: floor, walls, shadow.
 
-    ``position`` (3,) centre of mass, ``orientation`` (3, 3) body to world.
-    ``elevation``/``azimuth`` (degrees) place the camera; ``view_edges`` is the image width in
-    die edges.
+    ``position`` (3,) centre of mass, ``orientation`` (3, 3) body to world. ``size`` (height,
+    width) in pixels; ``elevation`` (degrees, in (0, 90]) and ``azimuth`` (degrees, in
+    [-360, 360]) place the camera; ``view_edges`` is the image width in die sizes
+    (:attr:`Die.size`).
     """
-    height, width = size
+    position, orientation = _check_view(position, orientation, size, elevation, azimuth,
+                                        view_edges)
     die = scene.die
-    half = die.half_edge
+    height, width = size
     normal = np.asarray(scene.ground.normal)
     forward, right, up = _camera(normal, math.radians(elevation), math.radians(azimuth))
-    scale = view_edges * die.edge / width  # metres per pixel
+    scale = view_edges * die.size / width  # metres per pixel
     centre = position - orientation @ np.asarray(die.com)  # geometric centre, camera target
     xs = (np.arange(width) - (width - 1) / 2) * scale
     ys = ((height - 1) / 2 - np.arange(height)) * scale
-    px, py = np.meshgrid(xs, ys)
-    origin = centre + px[..., None] * right + py[..., None] * up  # (H, W, 3) ray origins
-
-    image = _table(origin, forward, normal, die.edge, centre, orientation, half)
+    camera = _Lines(np.zeros(3), forward, right, up)
     light = _unit(normal + 0.4 * right + 0.3 * up)
-    for k in range(6):
-        n = orientation @ FACE_NORMALS[k]
-        if n @ forward >= 0:  # faces away from the camera
+
+    floor = _floor_lines(scene, centre, camera)
+    image = _floor(scene, centre, floor, orientation, xs, ys, scale)
+    depth = np.full((height, width), np.inf)
+    for planes in _boards(scene, centre):
+        if not _in_view(planes, floor, xs, ys):
             continue
-        a, b = orientation @ FACE_U[k], orientation @ FACE_V[k]
-        offset = half * n
-        m = np.array([[right @ a, right @ b], [up @ a, up @ b]]) * half
-        u, v = np.einsum("ij,hwj->ihw", np.linalg.inv(m),
-                         np.stack([px - right @ offset, py - up @ offset], -1))
-        inside = (np.abs(u) <= 1) & (np.abs(v) <= 1)
-        shade = 0.45 + 0.55 * max(0.0, float(n @ light))
-        rim = np.maximum(np.abs(u), np.abs(v)) > 0.93
-        pip = np.zeros_like(inside)
-        for cu, cv in PIPS[k]:
-            pip |= (u - cu) ** 2 + (v - cv) ** 2 < PIP_RADIUS**2
-        colour = np.where(pip[..., None], PIP_COLOUR, FACE_COLOUR * shade)
-        colour = np.where((rim & ~pip)[..., None], colour * 0.8, colour)
-        image = np.where(inside[..., None], colour, image)
+        t, face = _clip(planes, camera, xs, ys)
+        near = t < depth
+        depth[near] = t[near]
+        shade = 0.45 + 0.55 * np.maximum(0.0, planes[:, :3] @ light)
+        image[near] = WALL_COLOUR * shade[face[near], None]
+    _draw_die(image, depth, die, centre, orientation, camera, xs, ys, scale, light)
     return np.clip(image, 0, 255).astype(np.uint8)
+
+
+# --- geometry -----------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class _Lines:
+    """A family of lines ``base + x dx + y dy + t direction`` (relative to the die's centre)."""
+
+    base: np.ndarray
+    direction: np.ndarray
+    dx: np.ndarray
+    dy: np.ndarray
+
+    def at(self, vector: np.ndarray, xs: np.ndarray, ys: np.ndarray,
+           constant: float = 0.0) -> np.ndarray:
+        """``vector . (base + x dx + y dy) - constant`` on the grid (len(ys), len(xs))."""
+        row = xs * (vector @ self.dx) + (vector @ self.base - constant)
+        return (ys * (vector @ self.dy))[:, None] + row[None, :]
+
+
+def _clip(planes: np.ndarray, lines: _Lines, xs: np.ndarray,
+          ys: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Where each line enters the convex set ``n . x <= c`` of ``planes`` (K, 4) rows (n, c).
+
+    Returns the entry parameter t along ``lines.direction`` (inf where the line misses the
+    set) and the index of the entry plane.
+    """
+    shape = (len(ys), len(xs))
+    low, high = np.full(shape, -np.inf), np.full(shape, np.inf)
+    entry = np.zeros(shape, dtype=np.intp)
+    for k, (n, c) in enumerate(zip(planes[:, :3], planes[:, 3], strict=True)):
+        rate = n @ lines.direction
+        if rate == 0.0:  # parallel: inside the half-space or not at all
+            np.maximum(low, np.where(lines.at(n, xs, ys, c) > 0, np.inf, -np.inf), out=low)
+            continue
+        t = lines.at(n, xs, ys, c) * (-1.0 / rate)
+        if rate < 0:
+            entry[t > low] = k
+            np.maximum(low, t, out=low)
+        else:
+            np.minimum(high, t, out=high)
+    return np.where(low <= high, low, np.inf), entry
 
 
 def _camera(normal: np.ndarray, elevation: float, azimuth: float) -> tuple[np.ndarray, ...]:
@@ -102,33 +219,360 @@ def _plane_axes(normal: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return np.cross(bitangent, normal), bitangent
 
 
-def _table(
-    origin: np.ndarray, forward: np.ndarray, normal: np.ndarray, edge: float,
-    centre: np.ndarray, orientation: np.ndarray, half: float,
-) -> np.ndarray:
-    """Colour where each ray meets the table: felt, a grid of one edge, the die's shadow."""
-    t = -(origin @ normal) / (forward @ normal)
-    hit = origin + t[..., None] * forward
-    in_plane = hit @ np.stack(_plane_axes(normal), axis=1) / edge
-    grid = np.any(np.abs((in_plane + 0.5) % 1.0 - 0.5) < 0.02, axis=-1)
-    # Shadow: the vertical line through the hit point crosses the die (slab test, body frame).
-    rel = (hit - centre) @ orientation
-    direction = orientation.T @ normal
-    with np.errstate(divide="ignore", invalid="ignore"):
-        t1 = (-half - rel) / direction
-        t2 = (half - rel) / direction
-    lo = np.where(direction == 0, np.where(np.abs(rel) <= half, -np.inf, np.inf),
-                  np.minimum(t1, t2)).max(axis=-1)
-    hi = np.where(direction == 0, np.where(np.abs(rel) <= half, np.inf, -np.inf),
-                  np.maximum(t1, t2)).min(axis=-1)
-    shadow = lo <= hi
-    colour = np.where(grid[..., None], TABLE_COLOUR * 1.25, TABLE_COLOUR)
-    return np.where(shadow[..., None], colour * 0.55, colour)
-
-
 def _unit(v: np.ndarray) -> np.ndarray:
     v = np.asarray(v, dtype=np.float64)
     return v / np.linalg.norm(v)
+
+
+def _die_planes(die: Die, orientation: np.ndarray) -> np.ndarray:
+    """The die's face half-spaces (F, 4) rows (n, c), world normals, about its centre."""
+    normals = die.face_normals @ orientation.T
+    return np.column_stack([normals, _face_offsets(die)])
+
+
+def _boards(scene: Scene, centre: np.ndarray) -> list[np.ndarray]:
+    """Each wall's board as half-spaces (K, 4) rows (n, c) about ``centre``.
+
+    Behind the wall's plane by :data:`WALL_THICKNESS`, from the floor to :data:`WALL_HEIGHT`,
+    and along the wall as far as the other walls' outer faces.
+    """
+    floor = _plane_row(scene.ground.normal, scene.ground.offset, centre)
+    rows = [_plane_row(w.normal, w.offset, centre) for w in scene.walls]
+    thick, high = np.array([0, 0, 0, WALL_THICKNESS]), np.array([0, 0, 0, WALL_HEIGHT])
+    boards = []
+    for i, wall in enumerate(rows):
+        ends = [thick - row for j, row in enumerate(rows) if j != i]
+        boards.append(np.array([wall, thick - wall, floor + high, -floor, *ends]))
+    return boards
+
+
+def _in_view(planes: np.ndarray, floor: _Lines, xs: np.ndarray, ys: np.ndarray) -> bool:
+    """Whether the board (K, 4) may be in view.
+
+    It is not when every corner of the view's box, from the floor up to :data:`WALL_HEIGHT`,
+    lies outside one of its half-spaces.
+    """
+    corners = np.array([floor.base + x * floor.dx + y * floor.dy + h * floor.direction
+                        for x in xs[[0, -1]] for y in ys[[0, -1]] for h in (0.0, WALL_HEIGHT)])
+    return not np.any(np.all(corners @ planes[:, :3].T > planes[:, 3], axis=0))
+
+
+def _plane_row(normal: tuple[float, ...], offset: float, centre: np.ndarray) -> np.ndarray:
+    """The half-space ``normal . x <= offset`` about ``centre``, as a row (n, c)."""
+    n = np.asarray(normal)
+    return np.append(n, offset - n @ centre)
+
+
+# --- the floor ----------------------------------------------------------------------------
+
+def _floor_lines(scene: Scene, centre: np.ndarray, camera: _Lines) -> _Lines:
+    """The vertical lines through the points where the camera rays meet the floor."""
+    normal, offset = np.asarray(scene.ground.normal), scene.ground.offset
+    rate = camera.direction @ normal
+    base = camera.direction * (offset - normal @ centre) / rate
+
+    def along(d: np.ndarray) -> np.ndarray:
+        return d - camera.direction * (normal @ d) / rate
+
+    return _Lines(base, normal, along(camera.dx), along(camera.dy))
+
+
+def _floor(scene: Scene, centre: np.ndarray, floor: _Lines, orientation: np.ndarray,
+           xs: np.ndarray, ys: np.ndarray, scale: float) -> np.ndarray:
+    """Floor colour per pixel: felt inside the walls, a grid of one die size, the shadow."""
+    size = scene.die.size
+    width = max(0.02, 0.6 * scale / size)  # grid line half-width, in sizes
+    grid = np.zeros((len(ys), len(xs)), dtype=bool)
+    for axis in _plane_axes(floor.direction):
+        cells = floor.at(axis, xs, ys, -axis @ centre) / size
+        grid |= np.abs((cells + 0.5) % 1.0 - 0.5) < width
+    beyond = np.zeros_like(grid)
+    for wall in scene.walls:
+        row = _plane_row(wall.normal, wall.offset, centre)
+        beyond |= floor.at(row[:3], xs, ys, row[3]) < 0
+    colour = np.where(beyond[..., None], BEYOND_COLOUR, TABLE_COLOUR)
+    image = np.where(grid[..., None], colour * 1.25, colour)
+    rows, cols = _box(_shadow_corners(scene, centre, orientation), floor, xs, ys)
+    t, _ = _clip(_die_planes(scene.die, orientation), floor, xs[cols], ys[rows])
+    image[rows, cols] *= np.where(np.isfinite(t), 0.55, 1.0)[..., None]
+    return image
+
+
+def _shadow_corners(scene: Scene, centre: np.ndarray, orientation: np.ndarray) -> np.ndarray:
+    """The die's corners dropped onto the floor, about ``centre`` (N, 3)."""
+    normal = np.asarray(scene.ground.normal)
+    corners = np.asarray(scene.die.vertices) @ orientation.T
+    return corners - np.outer(corners @ normal + normal @ centre - scene.ground.offset, normal)
+
+
+def _box(points: np.ndarray, lines: _Lines, xs: np.ndarray,
+         ys: np.ndarray) -> tuple[slice, slice]:
+    """The pixel rows and columns whose lines pass near ``points`` (N, 3), about the centre."""
+    basis = np.array([lines.dx, lines.dy])
+    screen = np.linalg.solve(basis @ basis.T, basis @ (points - lines.base).T)
+    step = xs[1] - xs[0] if len(xs) > 1 else 1.0
+    cols = np.searchsorted(xs, [screen[0].min() - step, screen[0].max() + step])
+    rows = np.searchsorted(-ys, [-screen[1].max() - step, -screen[1].min() + step])
+    return slice(*rows), slice(*cols)
+
+
+# --- the die ------------------------------------------------------------------------------
+
+def _draw_die(image: np.ndarray, depth: np.ndarray, die: Die, centre: np.ndarray,
+              orientation: np.ndarray, camera: _Lines, xs: np.ndarray, ys: np.ndarray,
+              scale: float, light: np.ndarray) -> None:
+    """Draw the die into ``image`` in place; a nearer board stays in front, translucent."""
+    rows, cols = _box(np.asarray(die.vertices) @ orientation.T, camera, xs, ys)
+    planes = _die_planes(die, orientation)
+    t, entry = _clip(planes, camera, xs[cols], ys[rows])
+    crop, behind = image[rows, cols], depth[rows, cols]
+    px, py = np.meshgrid(xs[cols], ys[rows])
+    for k, art in enumerate(_face_art(die)):
+        hit = np.isfinite(t) & (entry == k)
+        if not hit.any():
+            continue
+        axes, origin = art.axes @ orientation.T, orientation @ art.centre  # world frame
+        screen = np.array([camera.dx, camera.dy])
+        uv = np.linalg.solve(screen @ axes.T, np.stack([px[hit], py[hit]]) -
+                             (screen @ origin)[:, None]).T
+        shade = 0.45 + 0.55 * max(0.0, float(planes[k, :3] @ light))
+        colour = _face_colour(art, uv, shade, RIM_WIDTH * die.size, scale)
+        ahead = (t[hit] < behind[hit])[:, None]
+        crop[hit] = np.where(ahead, colour, WALL_ALPHA * crop[hit] + (1 - WALL_ALPHA) * colour)
+    image[rows, cols] = crop
+
+
+def _face_colour(art: _FaceArt, uv: np.ndarray, shade: float, rim: float,
+                 scale: float) -> np.ndarray:
+    """Colour (M, 3) of the face at points ``uv`` (M, 2): shaded, darker near the rim, inked."""
+    edge = (uv @ art.edges[:, :2].T - art.edges[:, 2]).min(axis=1)
+    face = FACE_COLOUR * np.where(edge < rim, 0.8 * shade, shade)[:, None]
+    ink = np.zeros(len(uv))
+    if len(art.pips):
+        gaps = ((uv[:, None, :] - art.pips[None]) ** 2).sum(axis=-1)
+        ink = (gaps.min(axis=1) < art.pip_radius**2).astype(float)
+    if len(art.strokes):
+        near = np.einsum("mi,mi->m", uv, uv) < (art.reach + scale) ** 2
+        depth = (art.widths - _segment_distance(uv[near], art.strokes)).max(axis=1)
+        ink[near] = np.clip(depth / scale + 0.5, 0.0, 1.0)  # about one pixel of antialiasing
+    return face + ink[:, None] * (PIP_COLOUR - face)
+
+
+def _segment_distance(points: np.ndarray, segments: np.ndarray) -> np.ndarray:
+    """Distance (M, S) from each point (M, 2) to each segment (S, 2, 2)."""
+    start, step = segments[:, 0], segments[:, 1] - segments[:, 0]
+    rel = points[:, None, :] - start[None]
+    length2 = np.maximum(np.einsum("si,si->s", step, step), 1e-300)
+    along = np.clip(np.einsum("msi,si->ms", rel, step) / length2, 0.0, 1.0)
+    gap = rel - along[..., None] * step
+    return np.sqrt(np.einsum("msi,msi->ms", gap, gap))
+
+
+# --- what each face carries ---------------------------------------------------------------
+
+@lru_cache(maxsize=64)
+def _face_offsets(die: Die) -> np.ndarray:
+    """Distance (m) of each face plane from the geometric centre, (F,)."""
+    vertices = np.asarray(die.vertices)
+    return np.einsum("fi,fi->f", die.face_normals, vertices[[f[0] for f in die.faces]])
+
+
+def has_pips(die: Die) -> bool:
+    """True for a die drawn with pips: six faces numbered like the d6 (the d6, the cuboids)."""
+    return (die.n_faces == 6 and not die.reads_down
+            and bool(np.allclose(die.face_normals, FACE_NORMALS, atol=1e-9)))
+
+
+@lru_cache(maxsize=64)
+def _face_art(die: Die) -> tuple[_FaceArt, ...]:
+    """What each face of ``die`` carries, in label order (computed once per die)."""
+    vertices = np.asarray(die.vertices)
+    polygons = [vertices[list(face)] for face in die.faces]
+    if has_pips(die):
+        return tuple(_pip_face(polygon, k) for k, polygon in enumerate(polygons))
+    texts = _texts(die)
+    fit = max(_text_radius(text, texts) for text in texts)
+    art = []
+    for text, polygon, normal in zip(texts, polygons, die.face_normals, strict=True):
+        centre, axes = _numeral_frame(polygon, normal)
+        flat = _flat(polygon, centre, axes)
+        if die.reads_down:
+            placed = _corner_placements(die, texts, polygon, flat)
+        else:
+            placed = [(text, np.zeros(2), np.array([0.0, 1.0]),
+                       NUMERAL_FILL * _inradius(flat) / fit)]
+        art.append(_numeral_face(centre, axes, flat, placed, texts))
+    return tuple(art)
+
+
+def _pip_face(polygon: np.ndarray, k: int) -> _FaceArt:
+    """Face ``k`` of a d6-like die: pips of face ``k + 1`` on its own axes FACE_U, FACE_V."""
+    centre, axes = polygon.mean(axis=0), np.array([FACE_U[k], FACE_V[k]])
+    flat = _flat(polygon, centre, axes)
+    half = float(np.ptp(flat, axis=0).min()) / 2
+    return _FaceArt(centre, axes, _edge_lines(flat), np.array(PIPS[k], float) * half,
+                    PIP_RADIUS * half, np.zeros((0, 2, 2)), np.zeros(0), 0.0)
+
+
+def _numeral_frame(polygon: np.ndarray, normal: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The face's area centroid and in-face axes (u, v), v (the numeral's up) towards a corner.
+
+    The corner nearest the body's +z seen along the face (+y for a face nearly level).
+    """
+    fan = np.cross(polygon[1:-1] - polygon[0], polygon[2:] - polygon[0]) @ normal
+    centre = (fan @ (polygon[0] + polygon[1:-1] + polygon[2:]) / 3) / fan.sum()
+    reference = np.eye(3)[2] - normal[2] * normal
+    if np.linalg.norm(reference) < 0.3:
+        reference = np.eye(3)[1] - normal[1] * normal
+    corners = polygon - centre
+    up = _unit(corners[np.argmax(corners @ reference / np.linalg.norm(corners, axis=1))])
+    return centre, np.array([np.cross(up, normal), up])
+
+
+def _flat(polygon: np.ndarray, centre: np.ndarray, axes: np.ndarray) -> np.ndarray:
+    """The polygon's corners (P, 3) in face coordinates (P, 2)."""
+    return (polygon - centre) @ axes.T
+
+
+def _edge_lines(flat: np.ndarray) -> np.ndarray:
+    """Inward edge lines (P, 3) ``(n_u, n_v, c)`` of a counter-clockwise polygon (P, 2)."""
+    step = np.roll(flat, -1, axis=0) - flat
+    inward = np.stack([-step[:, 1], step[:, 0]], axis=1) / np.linalg.norm(step, axis=1)[:, None]
+    return np.column_stack([inward, (inward * flat).sum(axis=1)])
+
+
+def _inradius(flat: np.ndarray) -> float:
+    """Radius of the largest circle about the face's origin inside the polygon."""
+    return float(-_edge_lines(flat)[:, 2].max())
+
+
+def _texts(die: Die) -> list[str]:
+    """The printed text of each face: the label, or label - 1 on the d10 (digits 0-9)."""
+    shift = 1 if die.name == "d10" else 0
+    return [str(label - shift) for label in die.labels]
+
+
+def _underlined(text: str, texts: list[str]) -> bool:
+    """6 and 9, and any text that reads as another of ``texts`` upside down."""
+    turned = "".join(UPSIDE_DOWN.get(digit, "?") for digit in reversed(text))
+    return text in ("6", "9") or (turned != text and turned in texts)
+
+
+def _corner_placements(die: Die, texts: list[str], polygon: np.ndarray,
+                       flat: np.ndarray) -> list[tuple[str, np.ndarray, np.ndarray, float]]:
+    """A d4's face: near each corner, upright towards it, the text read with that corner up.
+
+    ``polygon`` (P, 3) the corners in the body frame, ``flat`` (P, 2) in face coordinates.
+    """
+    placed = []
+    for corner, spot in zip(polygon, flat, strict=True):
+        label = int(np.argmax(die.reading @ _unit(corner)))
+        reach = float(np.linalg.norm(spot))
+        placed.append((texts[label], D4_PLACE * spot, spot / reach, D4_HEIGHT * reach))
+    return placed
+
+
+def _text_radius(text: str, texts: list[str]) -> float:
+    """Half the diagonal of ``text``'s box (strokes and underline included), glyph units."""
+    width = ADVANCE * (len(text) - 1) + 0.6 + 2 * STROKE
+    height = 1 + 2 * STROKE - (UNDERLINE if _underlined(text, texts) else 0.0)
+    return math.hypot(width, height) / 2
+
+
+def _numeral_face(centre: np.ndarray, axes: np.ndarray, flat: np.ndarray,
+                  placed: list[tuple[str, np.ndarray, np.ndarray, float]],
+                  texts: list[str]) -> _FaceArt:
+    """A face with numerals: ``placed`` (text, centre, up, height) in face coordinates."""
+    strokes, widths = [], []
+    for text, middle, up, height in placed:
+        glyph = _text_strokes(text, _underlined(text, texts))
+        turn = np.array([[up[1], -up[0]], [up[0], up[1]]])  # glyph x, y to face u, v
+        strokes.append(middle + height * glyph @ turn)
+        widths.append(np.full(len(glyph), STROKE * height))
+    strokes, widths = np.concatenate(strokes), np.concatenate(widths)
+    reach = float(np.linalg.norm(strokes, axis=-1).max() + widths.max())
+    return _FaceArt(centre, axes, _edge_lines(flat), np.zeros((0, 2)), 0.0, strokes, widths,
+                    reach)
+
+
+@lru_cache(maxsize=256)
+def _text_strokes(text: str, underline: bool) -> np.ndarray:
+    """Segments (S, 2, 2) of ``text`` in glyph units, its box centred on the origin."""
+    lines = [line + np.array([ADVANCE * i, 0.0])
+             for i, digit in enumerate(text) for line in GLYPHS[digit]]
+    width = ADVANCE * (len(text) - 1) + 0.6
+    if underline:
+        lines.append(np.array([(0.0, UNDERLINE), (width, UNDERLINE)]))
+    segments = np.concatenate([np.stack([line[:-1], line[1:]], axis=1) for line in lines])
+    low = UNDERLINE if underline else 0.0
+    return segments - (width / 2, (1 + low) / 2)
+
+
+# --- input and figures --------------------------------------------------------------------
+
+def _check_view(position: np.ndarray, orientation: np.ndarray, size: tuple[int, int],
+                elevation: float, azimuth: float,
+                view_edges: float) -> tuple[np.ndarray, np.ndarray]:
+    """``position`` (3,) and ``orientation`` (3, 3) as float arrays; the view checked."""
+    position = np.asarray(position, dtype=np.float64)
+    orientation = np.asarray(orientation, dtype=np.float64)
+    for name, value, shape in (("position", position, (3,)),
+                               ("orientation", orientation, (3, 3))):
+        if value.shape != shape:
+            raise ValueError(f"{name} must have shape {shape}, got {value.shape}")
+        check_finite(name, value)
+    if (not isinstance(size, (tuple, list)) or len(size) != 2 or not all(
+            isinstance(n, (int, np.integer)) and not isinstance(n, bool) and n >= 1
+            for n in size)):
+        raise ValueError(f"size must be (height, width), two ints >= 1, got {size!r}")
+    check_range("elevation", elevation, 0.0, 90.0)
+    if elevation == 0:
+        raise ValueError("elevation must be in (0, 90] degrees, got 0")
+    check_range("azimuth", azimuth, -360.0, 360.0)
+    check_positive("view_edges", view_edges)
+    return position, orientation
+
+
+def resting(die: Die, label: int, at: tuple[float, float] = (0.0, 0.0),
+            turn: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+    """Centre of mass and orientation of ``die`` at rest on a level floor through the origin.
+
+    ``label`` read (its reading direction straight up), at ``at`` (x, y) (m), turned by
+    ``turn`` (rad) about the vertical.
+    """
+    if (isinstance(label, bool) or not isinstance(label, (int, np.integer))
+            or not 1 <= label <= die.n_faces):
+        raise ValueError(f"label must be an int in [1, {die.n_faces}], got {label!r}")
+    reading = die.reading[label - 1]
+    axis = np.cross(reading, [0.0, 0.0, 1.0])
+    if np.linalg.norm(axis) > 1e-12:
+        tilt = axis_angle(axis, math.acos(np.clip(reading[2], -1.0, 1.0)))
+    else:  # already vertical: upright, or half a turn about x
+        flip = float(np.sign(reading[2]))
+        tilt = np.diag([1.0, flip, flip])
+    orientation = axis_angle([0.0, 0.0, 1.0], turn) @ tilt
+    return np.array([*at, die.resting_heights[label - 1]]), orientation
+
+
+def _figure_d20() -> np.ndarray:
+    """A d20 at rest on the default table showing 20, seen close."""
+    scene = Scene(die=Die.standard("d20"))
+    position, orientation = resting(scene.die, 20, turn=0.3 + math.pi)
+    return render_die(scene, position, orientation, size=(360, 480), elevation=40.0,
+                      view_edges=2.6)
+
+
+def _figure_tray() -> np.ndarray:
+    """The default d6 at rest in the dice tray, the whole tray in view."""
+    scene = Scene(walls=walls("tray"))
+    position, orientation = resting(scene.die, 5, at=(-0.01, 0.01), turn=0.4)
+    return render_die(scene, position, orientation, size=(480, 640), elevation=50.0,
+                      view_edges=25.0)
+
+
+# The README's pictures: ``python -m dice_env.envs.render NAME --out PATH``. Placed by
+# construction (no simulation), so they are made at once.
+FIGURES = {"die-d20": _figure_d20, "tray": _figure_tray}
 
 
 def has_display() -> bool:
@@ -168,3 +612,18 @@ class Viewer:
 
             plt.close(self._figure)
             self._figure = None
+
+
+def main(argv: list[str] | None = None) -> None:
+    """Write one of :data:`FIGURES` as a PNG."""
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("name", choices=sorted(FIGURES))
+    parser.add_argument("--out", required=True, help="PNG file to write")
+    args = parser.parse_args(argv)
+    import matplotlib.pyplot as plt
+
+    plt.imsave(args.out, FIGURES[args.name]())
+
+
+if __name__ == "__main__":
+    main()
