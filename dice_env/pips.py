@@ -209,8 +209,9 @@ def drill(die: Die, pips: Pips) -> Die:
     (``offset size/2 + radius + depth > size/2``; this also keeps cavities on neighbouring
     faces apart), or when the paint alone would outweigh ``mass``.
     """
-    if die.name != "d6":
-        raise ValueError(f"pips are modelled on the d6 only, got a {die.name}")
+    if die.name != "d6" or die != type(die).standard("d6", die.size, die.mass):
+        raise ValueError(f"die must be a uniform d6 (Die.standard(\"d6\", size, mass)), "
+                         f"got {die!r}")
     half = die.size / 2
     _check_fit(pips, half)
     volume, below, axial, transverse = cap_properties(pips.radius, pips.depth)

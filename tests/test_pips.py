@@ -169,6 +169,9 @@ def test_drill_keeps_the_geometry():
     drilled = drill(plain, DRILLED)
     assert drilled.vertices == plain.vertices and drilled.faces == plain.faces
     assert drilled.mass == plain.mass
+    for other in (Die.loaded(), drilled, Die.standard("d8")):
+        with pytest.raises(ValueError, match="die must be a uniform d6"):
+            drill(other, DRILLED)
 
 
 @pytest.mark.parametrize(("kwargs", "match"), [
