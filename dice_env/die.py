@@ -26,13 +26,16 @@ import itertools
 import math
 from dataclasses import dataclass
 from functools import cache, cached_property, lru_cache
-from typing import NamedTuple
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 
 from dice_env import polyhedra
 from dice_env.table import DIE_EDGE, DIE_MASS
 from dice_env.validation import check_finite, check_positive, check_range
+
+if TYPE_CHECKING:
+    from dice_env.pips import Pips
 
 # Corner signs in the order of the paper's cube.m (node k = row k).
 CORNER_SIGNS = np.array(
@@ -129,12 +132,16 @@ class Die:
 
     @classmethod
     def standard(cls, name: str = "d6", size: float | None = None,
-                 mass: float | None = None) -> Die:
-        """A uniform standard die: "d4", "d6", "d8", "d10", "d12" or "d20".
+                 mass: float | None = None, *, pips: Pips | str | None = None) -> Die:
+        """A standard die: "d4", "d6", "d8", "d10", "d12" or "d20", uniform unless ``pips``.
 
         ``size`` (m) as the field (default :data:`STANDARD_SIZES`); ``mass`` (kg) defaults to
-        :data:`DENSITY` times the volume. Numbering (Wikipedia, "Dice" and "Pentagonal
-        trapezohedron"): opposite faces sum to ``n + 1`` on the d6, d8, d12 and d20.
+        :data:`DENSITY` times the volume. ``pips`` (d6 only): None for the uniform solid, a
+        :class:`~dice_env.pips.Pips` or a preset name of :data:`dice_env.pips.PRESETS`
+        (which also supplies the size and mass left None): the cube minus its drilled pips,
+        ``mass`` being the die's actual mass as weighed (:func:`dice_env.pips.drill`).
+        Numbering (Wikipedia, "Dice" and "Pentagonal trapezohedron"): opposite faces sum to
+        ``n + 1`` on the d6, d8, d12 and d20.
 
         - d4: regular tetrahedron with corners ``(1, 1, 1), (1, -1, -1), (-1, 1, -1),
           (-1, -1, 1)`` (scaled); face ``k`` lies opposite corner ``k``. Read by the face down,
@@ -156,6 +163,10 @@ class Die:
         if name not in STANDARD_SIZES:
             raise ValueError(f"name must be one of {', '.join(map(repr, STANDARD_SIZES))}, "
                              f"got {name!r}")
+        if pips is not None:
+            from dice_env import pips as drilled  # only when asked (python -m dice_env.pips)
+
+            pips, size, mass = drilled.with_defaults(name, pips, size, mass)
         size = STANDARD_SIZES[name] if size is None else size
         check_positive("size", size)
         _check_mass(mass)
@@ -163,8 +174,9 @@ class Die:
         vertices = shape.vertices * size
         volume = size * size * size if name == "d6" else polyhedra.mass_properties(
             vertices, shape.faces)[0]
-        return cls._make(name, vertices, shape.faces, size, _mass(mass, volume),
-                         shape.reads_down)
+        die = cls._make(name, vertices, shape.faces, size, _mass(mass, volume),
+                        shape.reads_down)
+        return die if pips is None else drilled.drill(die, pips)
 
     @classmethod
     def cuboid(cls, sides: tuple[float, float, float], mass: float | None = None) -> Die:

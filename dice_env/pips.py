@@ -1,0 +1,381 @@
+"""Drilled pips on the d6: spherical-cap cavities, empty or filled flush with paint.
+
+A real die has its pips drilled into the faces: 1 to 6 cavities, 21 in all, so the face with
+six pips is lighter than the face with one and the centre of mass moves toward the one.
+:class:`Pips` describes the cavities; ``Die.standard("d6", pips=...)`` takes a :class:`Pips`
+or a preset name from :data:`PRESETS` and returns the die with the exact mass properties of
+the solid cube minus the cavities (plus the paint, for "casino" dice whose pips are filled
+flush). The geometry (vertices, faces) stays the cube's.
+
+**Layout** (:func:`layout`): pip centres on each face at 0 or ``±offset`` times the face's
+half-width along the face's two axes: 1 in the centre; 2 and 3 on a diagonal; 4 at the
+corners; 5 at the corners and the centre; 6 in two rows of three. Handedness: the die is
+right-handed (faces 1, 2, 3 counter-clockwise about their corner, :mod:`dice_env.die`); with
+the 1 up, the 2 on the left and the 3 on the right, the 3's diagonal runs up from the left and
+the 2's diagonal down from the left, as described for casino dice by dice-play.com ("Casino
+Dice"): both diagonals end at the 2-3-6 corner, none touches the 1-2-3 corner. The rows of the
+6 run along x (from the 5's edge to the 2's edge); this one is our choice, no source found. In
+body coordinates (units of the half-width, ``f = offset``):
+
+====  ==========================================================================
+face  pip centres
+====  ==========================================================================
+1     (0, 0, 1)
+2     (1, -f, f), (1, f, -f)
+3     (f, 1, -f), (0, 1, 0), (-f, 1, f)
+4     (±f, -1, ±f)
+5     (-1, ±f, ±f), (-1, 0, 0)
+6     (x, ±f, -1) for x in -f, 0, f
+====  ==========================================================================
+
+The pip pattern is centrally symmetric on every face, so the pips of a face shift the centre
+of mass only along that face's normal: by ``(6 - 1) : (5 - 2) : (4 - 3)`` = 5 : 3 : 1 along
+z, x, y, i.e. toward the 1-2-3 corner, whatever the sizes. The handedness and the rows of the
+6 change only the products and the split of the moments of inertia.
+
+**Mass** (:func:`drill`): ``mass`` is the die's actual mass as weighed, pips included. With
+``n = 21`` cavities of volume ``V_c``, outer volume ``V = s^3`` and paint density ``rho_p``
+(0 for empty pips), the body's density is ``rho = (mass - rho_p n V_c) / (V - n V_c)``; each
+cavity adds a signed mass ``(rho_p - rho) V_c`` at its centroid and its own inertia; the
+parallel-axis theorem moves everything to the centre of mass. A paint as dense as the body
+leaves the uniform die, exactly.
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING, NamedTuple
+
+import numpy as np
+
+from dice_env.validation import check_nonnegative, check_positive, check_range
+
+if TYPE_CHECKING:
+    from dice_env.die import Die
+
+SHAPES = ("spherical cap",)
+# Cellulose acetate, the body of casino dice (kg/m^3): AZoM, "Cellulose Acetate" (Plascams
+# typical value); handbooks give 1270-1340 (Cardarelli, Materials Handbook, 2018).
+CELLULOSE_ACETATE = 1280.0
+# The smallest casino die edge (m): 0.750 in (gaming regulations allow 0.750-0.775 in).
+CASINO_EDGE = 0.750 * 0.0254
+# A paint density within this fraction of the body's leaves the uniform die (rounding).
+SAME_DENSITY = 1e-12
+
+
+@dataclass(frozen=True)
+class Pips:
+    """The pips of a d6: identical spherical-cap cavities in the standard layout.
+
+    ``radius`` (m): the opening radius at the face; ``depth`` (m): the cap's depth, in
+    ``(0, radius]`` (at most a hemisphere, the cut of a ball-end drill); ``offset``: the
+    off-centre pips' distance from the face centre along each face axis, as a fraction of the
+    face's half-width, in (0, 1) (default 0.5, see :data:`PRESETS`); ``paint_density``
+    (kg/m^3): None for empty (drilled) pips, else the density of a paint filling them flush
+    ("casino" dice; 0 is the same as None); ``shape``: "spherical cap", the only one.
+    """
+
+    radius: float
+    depth: float
+    offset: float = 0.5
+    paint_density: float | None = None
+    shape: str = "spherical cap"
+
+    def __post_init__(self) -> None:
+        check_positive("radius", self.radius)
+        check_range("depth", self.depth, 0.0, self.radius)
+        if self.depth == 0:
+            raise ValueError(f"depth must be > 0, got {self.depth!r}")
+        check_range("offset", self.offset, 0.0, 1.0, high_open=True)
+        if self.offset == 0:
+            raise ValueError(f"offset must be in (0, 1), got {self.offset!r}")
+        if self.paint_density is not None:
+            check_nonnegative("paint_density", self.paint_density)
+        if self.shape not in SHAPES:
+            raise ValueError(f"shape must be one of {SHAPES}, got {self.shape!r}")
+
+
+class Preset(NamedTuple):
+    """A real die with pips: its :class:`Pips`, its size and density, and the sources.
+
+    ``size`` (m) None means the default d6's; ``density`` (kg/m^3) is the die's mass over its
+    outer volume ``size^3`` (None: the default d6's, 4.5 g at 16 mm).
+    """
+
+    pips: Pips
+    size: float | None
+    density: float | None
+    source: str
+
+
+PRESETS = {
+    "drilled16": Preset(
+        Pips(radius=1.5e-3, depth=1.0e-3),
+        None, None,
+        "The default die (16 mm, 4.5 g) with drilled pips of 3 mm opening and 1 mm depth. "
+        "These sizes are our estimate of common game dice, not a measured sample; they agree "
+        "with common CAD models of a 16 mm die (e.g. Thingiverse thing 3493901, dice-v4.scad: "
+        "pip spheres of radius 0.094 x edge = 1.5 mm, pips at a quarter of the edge from the "
+        "centre = offset 0.5, depth 0.6 mm)."),
+    "casino19": Preset(
+        Pips(radius=2.25e-3, depth=1.0e-3, offset=0.55, paint_density=CELLULOSE_ACETATE),
+        CASINO_EDGE, CELLULOSE_ACETATE,
+        "A casino (craps) die: a cube of 0.750-0.775 in, transparent cellulose, spots drilled "
+        "and filled flush 'with a compound equal in weight to the weight of the cellulose "
+        "drilled out' (Michigan Admin. Code R 432.1814; Maryland COMAR 36.05.02.12, which "
+        "also asks every spot to reach the same depth within 0.0004 in). Edge 0.750 in, body "
+        "and paint of cellulose acetate (1.28 g/cm3, AZoM); the spot diameter 4.5 mm, depth "
+        "1 mm and offset 0.55 are our estimates (the regulations give none)."),
+}
+
+
+def cap_properties(radius: float, depth: float) -> tuple[float, float, float, float]:
+    """Volume and second moments of a spherical cap of opening ``radius`` a and ``depth`` h.
+
+    The cap is the part of a sphere of radius ``R = (a^2 + h^2) / (2h)`` cut off by the face.
+    With ``s`` the height above the cap's deepest point (0 … h), the disk at ``s`` has radius
+    squared ``r^2 = 2Rs - s^2``; integrating disks (per unit density):
+
+    - volume ``V = pi ∫ r^2 ds = pi h^2 (3R - h) / 3``;
+    - centroid height ``s_c = pi ∫ s r^2 ds / V = h (8R - 3h) / (4 (3R - h))``;
+    - moment about the axis ``I_a = (pi/2) ∫ r^4 ds = (pi/2) (4R^2 h^3/3 - R h^4 + h^5/5)``;
+    - about a transverse axis through the deepest point ``I_0 = ∫ (r^2/4 + s^2) pi r^2 ds
+      = I_a / 2 + pi (R h^4 / 2 - h^5 / 5)``, through the centroid ``I_t = I_0 - V s_c^2``.
+
+    (Hemisphere, a = h = R: ``2 pi R^3/3``, centroid ``3R/8`` below the face, ``I_a = 2/5``
+    and ``I_t = 83/320`` of ``V R^2``.) Returns ``V``, the centroid's depth below the face
+    ``h - s_c``, ``I_a`` and ``I_t``; multiply the moments by a density for an inertia.
+    """
+    a, h = radius, depth
+    r = (a * a + h * h) / (2 * h)
+    volume = math.pi * h * h * (3 * r - h) / 3
+    height = h * (8 * r - 3 * h) / (4 * (3 * r - h))
+    axial = math.pi / 2 * (4 * r * r * h**3 / 3 - r * h**4 + h**5 / 5)
+    transverse = axial / 2 + math.pi * (r * h**4 / 2 - h**5 / 5) - volume * height * height
+    return volume, h - height, axial, transverse
+
+
+def layout(offset: float = 0.5) -> dict[int, np.ndarray]:
+    """Pip centres of each face label 1-6, (k, 3), body frame, in units of the half-width.
+
+    The centres lie on the face planes (one coordinate is ±1, the face's outward normal);
+    see the module's table for the layout and its handedness.
+    """
+    f = offset
+    corners = [(u, v) for u in (f, -f) for v in (f, -f)]
+    faces = {
+        1: [(0, 0, 1)],
+        2: [(1, -f, f), (1, f, -f)],
+        3: [(f, 1, -f), (0, 1, 0), (-f, 1, f)],
+        4: [(u, -1, v) for u, v in corners],
+        5: [(-1, u, v) for u, v in corners] + [(-1, 0, 0)],
+        6: [(x, y, -1) for x in (-f, 0, f) for y in (-f, f)],
+    }
+    return {label: np.array(points, dtype=np.float64) for label, points in faces.items()}
+
+
+def with_defaults(name: str, pips: Pips | str, size: float | None, mass: float | None
+                  ) -> tuple[Pips, float | None, float | None]:
+    """The :class:`Pips` of ``pips`` (a preset name or a :class:`Pips`), with size and mass.
+
+    A preset supplies the size when ``size`` is None and the mass (its density times
+    ``size^3``) when ``mass`` is None. Raises ValueError for a die other than the d6.
+    """
+    if name != "d6":
+        raise ValueError(f"pips are modelled on the d6 only, got name={name!r}")
+    if isinstance(pips, Pips):
+        return pips, size, mass
+    if not isinstance(pips, str):
+        raise TypeError(f"pips must be None, a Pips or a preset name, got {pips!r}")
+    if pips not in PRESETS:
+        raise ValueError(f"pips must be one of {', '.join(map(repr, PRESETS))} or a Pips, "
+                         f"got {pips!r}")
+    preset = PRESETS[pips]
+    size = preset.size if size is None else size
+    if mass is None and preset.density is not None and size is not None:
+        check_positive("size", size)
+        mass = preset.density * size**3
+    return preset.pips, size, mass
+
+
+def drill(die: Die, pips: Pips) -> Die:
+    """The d6 ``die`` (uniform, its ``mass`` as weighed) with ``pips``: exact com and inertia.
+
+    Raises ValueError when the pips overlap each other (``2 radius > offset size/2``, the
+    spacing of the 6's rows) or come nearer the face's edge than their depth
+    (``offset size/2 + radius + depth > size/2``; this also keeps cavities on neighbouring
+    faces apart), or when the paint alone would outweigh ``mass``.
+    """
+    if die.name != "d6" or die != type(die).standard("d6", die.size, die.mass):
+        raise ValueError(f"die must be a uniform d6 (Die.standard(\"d6\", size, mass)), "
+                         f"got {die!r}")
+    half = die.size / 2
+    _check_fit(pips, half)
+    volume, below, axial, transverse = cap_properties(pips.radius, pips.depth)
+    centres = np.concatenate(list(layout(pips.offset).values()))
+    normals = np.where(np.abs(centres) == 1.0, centres, 0.0)  # offset < 1: one coordinate ±1
+    centroids = centres * half - below * normals
+    n = len(centroids)
+    outer = die.size**3
+    paint = pips.paint_density or 0.0
+    density = (die.mass - paint * n * volume) / (outer - n * volume)
+    if density <= 0:
+        raise ValueError(f"paint_density {paint} kg/m^3 fills the pips with more than the die's "
+                         f"mass {die.mass} kg; the paint must weigh less than the die")
+    change = paint - density
+    if abs(change) <= SAME_DENSITY * density:
+        return die
+    com = change * volume * centroids.sum(axis=0) / die.mass
+    along = np.einsum("ki,kj->ij", normals, normals)
+    about_centre = (density * outer * die.size**2 / 6 * np.eye(3)
+                    + change * (volume * sum(_shift(c) for c in centroids)
+                                + transverse * (n * np.eye(3) - along) + axial * along))
+    return die._with_mass(die.mass, com, about_centre - die.mass * _shift(com))
+
+
+def _check_fit(pips: Pips, half: float) -> None:
+    spacing = pips.offset * half
+    if 2 * pips.radius > spacing:
+        raise ValueError(f"pips overlap: 2 radius ({2e3 * pips.radius:g} mm) must be <= "
+                         f"offset x size/2 ({1e3 * spacing:g} mm), the spacing of the 6's rows")
+    if spacing + pips.radius + pips.depth > half:
+        raise ValueError(f"pips reach the face's edge: offset x size/2 + radius + depth "
+                         f"({1e3 * (spacing + pips.radius + pips.depth):g} mm) must be <= "
+                         f"size/2 ({1e3 * half:g} mm)")
+
+
+def _shift(r: np.ndarray) -> np.ndarray:
+    """Inertia of a unit point mass at ``r`` about the origin: ``|r|^2 I - r r^T``."""
+    return r @ r * np.eye(3) - np.outer(r, r)
+
+
+# --- the page -----------------------------------------------------------------------------
+
+PAGE = Path(__file__).resolve().parents[1] / "docs" / "pips.md"
+SOURCES = (
+    "dice-play.com, \"Casino Dice\": http://dice-play.com/DiceCasino.htm (the 2 and 3 "
+    "diagonals)",
+    "Michigan Admin. Code R 432.1814, Dice specifications: "
+    "https://www.law.cornell.edu/regulations/michigan/Mich-Admin-Code-R-432-1814",
+    "Maryland COMAR 36.05.02.12, Dice: https://casetext.com/regulation/maryland-administrative-"
+    "code/title-36-maryland-state-lottery-and-gaming-control-agency/subtitle-05-table-games/"
+    "chapter-360502-table-game-equipment/section-36050212-dice",
+    "AZoM, \"Cellulose Acetate\" (Plascams): https://www.azom.com/article.aspx?ArticleID=383",
+    "Thingiverse thing 3493901, dice-v4.scad (as archived in github.com/uwplse/szalinski, "
+    "inputs/thingiverse/thing-3493901/files/dice-v4.scad)",
+    "irasohn.blogspot.com, \"Initial die calculation results\" (2010): "
+    "http://irasohn.blogspot.com/2010/04/initial-die-calculation-results.html",
+)
+
+
+def main(argv: list[str] | None = None) -> None:
+    """``python -m dice_env.pips [PATH]``: write the pips page (default ``docs/pips.md``)."""
+    argv = sys.argv[1:] if argv is None else argv
+    path = Path(argv[0]) if argv else PAGE
+    text = _page()
+    path.write_text(text)
+    print(text)
+
+
+def _rows() -> list[tuple[str, Die, Pips]]:
+    """The presets, then the casino die with its spots left empty and with paint 10 % light."""
+    from dice_env.die import Die
+
+    rows = [(f"`{name}`", Die.standard("d6", pips=name), preset.pips)
+            for name, preset in PRESETS.items()]
+    casino = PRESETS["casino19"]
+    for label, paint in (("empty spots", None), ("paint 10 % lighter", 0.9 * casino.density)):
+        pips = Pips(casino.pips.radius, casino.pips.depth, casino.pips.offset, paint)
+        die = Die.standard("d6", casino.size, casino.density * casino.size**3, pips=pips)
+        rows.append((f"`casino19`, {label}", die, pips))
+    return rows
+
+
+def _page() -> str:
+    lines = [
+        "# Dice with drilled pips",
+        "",
+        "Generated by `python -m dice_env.pips` (module `dice_env/pips.py`); the model, its "
+        "formulas and the layout's handedness are in that module's docstrings. "
+        "`Die.standard(\"d6\", pips=...)` takes a `Pips` or a preset name.",
+        "",
+        "## Model",
+        "",
+        "- Each pip is a spherical-cap cavity of opening radius a and depth h <= a (sphere "
+        "radius R = (a² + h²) / 2h), the 21 pips in the standard layout at 0 or ±offset times "
+        "the face's half-width. Right-handed die (1, 2, 3 counter-clockwise about their "
+        "corner); with the 1 up, the 2 left and the 3 right, the 3's diagonal runs up from the "
+        "left and the 2's down from the left (casino dice, dice-play.com \"Casino Dice\"); the "
+        "6's rows run along x (our choice).",
+        "- Cap volume π h² (3R − h) / 3, centroid h (8R − 3h) / (4 (3R − h)) above its "
+        "deepest point, moments by integrating disks (`cap_properties`); the cube minus the "
+        "cavities (plus the paint) with the parallel-axis theorem (`drill`). `mass` is the "
+        "die's mass as weighed: the body's density is what is left after the cavities and "
+        "the paint. The vertices and faces stay the cube's.",
+        "- Every face's pattern is centrally symmetric, so each face moves the centre of mass "
+        "along its normal only, in proportion to its pip count: the com moves toward the "
+        "1-2-3 corner, x : y : z = (5 − 2) : (4 − 3) : (6 − 1) = 3 : 1 : 5 (the z axis holds "
+        f"{5 / math.sqrt(35):.3f} of it; {math.degrees(math.atan(math.sqrt(10) / 5)):.1f}° "
+        "off the z axis). A solid-model computation of a 0.5 in die found the same ratios "
+        "(0.00065, 0.00039, 0.00013 in toward the 1, 2, 3; irasohn.blogspot.com, \"Initial "
+        "die calculation results\", 2010).",
+        "- Tested against 2 million scrambled-Sobol points (`tests/test_pips.py`).",
+        "",
+        "## Presets",
+        "",
+        "| preset | edge (mm) | mass (g) | pip opening (mm) | depth (mm) | offset | paint "
+        "(g/cm³) | source |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    rows = _rows()
+    for (name, preset), (_, die, pips) in zip(PRESETS.items(), rows, strict=False):
+        paint = "empty" if pips.paint_density is None else f"{pips.paint_density / 1e3:g}"
+        lines.append(f"| `{name}` | {die.size * 1e3:.2f} | {die.mass * 1e3:.3f} | "
+                     f"{2e3 * pips.radius:g} | {1e3 * pips.depth:g} | {pips.offset:g} | "
+                     f"{paint} | {preset.source} |")
+    lines += [
+        "",
+        "## Mass properties",
+        "",
+        "Centre of mass from the geometric centre; principal moments of inertia about it "
+        "against the uniform cube of the same mass and edge, m s² / 6.",
+        "",
+        "| die | cavities (% of the cube) | com x, y, z (µm) | \\|com\\| (µm) | \\|com\\| / edge "
+        "| principal moments / (m s²/6) − 1 (10⁻³) | products yz, xz, xy / (m s²/6) (10⁻³) |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for label, die, pips in rows:
+        volume = cap_properties(pips.radius, pips.depth)[0]
+        com = np.asarray(die.com)
+        inertia = die.inertia_body / (die.mass * die.size**2 / 6)
+        moments = np.linalg.eigvalsh(inertia) - 1
+        products = inertia[[1, 0, 0], [2, 2, 1]]
+        lines.append(
+            f"| {label} | {100 * 21 * volume / die.size**3:.2f} | "
+            f"{', '.join(f'{1e6 * c:.2f}' for c in com)} | {1e6 * np.linalg.norm(com):.2f} | "
+            f"{np.linalg.norm(com) / die.size:.2e} | "
+            f"{', '.join(f'{1e3 * m:+.3f}' for m in moments)} | "
+            f"{', '.join(f'{1e3 * m:+.3f}' for m in products)} |")
+    lines += [
+        "",
+        "The casino die is the uniform cube exactly when its paint weighs what the cellulose "
+        "it replaces weighs, as the regulations ask; its com then moves in proportion to the "
+        "paint's shortfall, (1 − ρ_paint / ρ) times the empty-spot offset. The products of "
+        "inertia come from the diagonals of the 2 (yz) and the 3 (xz): the other handedness of "
+        "those diagonals flips the sign of their share (all but the com's small part, as in xy).",
+        "",
+        "## Sources",
+        "",
+        *(f"- {source}" for source in SOURCES),
+        "",
+    ]
+    return "\n".join(lines)
+
+
+if __name__ == "__main__":
+    from dice_env.pips import main as package_main  # the module Die.standard uses
+
+    package_main()
