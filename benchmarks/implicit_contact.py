@@ -42,12 +42,13 @@ import time
 import numpy as np
 from numba import njit
 
+from dice_env.calibration import measured_restitution
 from dice_env.die import face_up
 from dice_env.kernel import _rotate
 from dice_env.scene import Scene
 from dice_env.simulate import State, simulate
 from dice_env.studies.convergence import RELEASES, T_THROW
-from dice_env.table import measured_restitution, rebound
+from dice_env.table import rebound
 
 FACTORS = (0.15, 0.3, 0.6, 1.2, 2.4, 4.8)
 # (theta, onset): backward Euler and trapezoid as briefed, then each with the onset impulse
@@ -296,7 +297,7 @@ def run_throws(scene: Scene, state: State, dt: float, theta: float, onset: bool 
 
 def drop_restitution(scene: Scene, dt: float, theta: float, onset: bool = False,
                      speed: float = 1.0) -> float:
-    """Restitution of a flat, spin-free landing at ``speed``, as ``table.measured_restitution``.
+    """Restitution of a flat, spin-free landing at ``speed``, as ``measured_restitution``.
 
     The die starts 1 mm (at most) above the plane, falling so that it meets it at ``speed``;
     the result is the upward speed when the face crosses the plane again (gravity since

@@ -50,6 +50,7 @@ import numba
 import numpy as np
 
 from dice_env import Scene, State, simulate, vector_kernel
+from dice_env.calibration import table_scene
 from dice_env.die import STANDARD_SIZES, Die, face_up
 from dice_env.paper import paper_scene
 from dice_env.rotations import quaternion_to_matrix, random_rotations
@@ -452,12 +453,8 @@ def per_shape(quick: bool) -> dict:
 
 
 def scenes() -> dict[str, Scene]:
-    """The default scene, and the realistic table of ``dice_env.table`` if it differs."""
+    """The default scene, and the realistic table of ``dice_env.calibration`` if it differs."""
     out = {"Scene()": Scene()}
-    try:
-        from dice_env.table import table_scene
-    except ImportError:
-        return out
     if table_scene() != out["Scene()"]:
         out["table_scene()"] = table_scene()
     return out

@@ -31,8 +31,9 @@ import numpy as np
 from physics import ROOT, best_time, hand_throws, mujoco_model, mujoco_to_rest, timed
 
 from dice_env import Scene, State, simulate
+from dice_env.calibration import measured_restitution
 from dice_env.studies.convergence import RELEASES, face_agreement
-from dice_env.table import RESTITUTION, damping_ratio, measured_restitution, rebound
+from dice_env.table import RESTITUTION, damping_ratio, rebound
 
 SAFETIES = (0.15, 0.3, 0.45, 0.6, 0.9)
 DROP_SPEEDS = (0.3, 1.0)
