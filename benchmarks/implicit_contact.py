@@ -44,7 +44,7 @@ from numba import njit
 
 from dice_env.calibration import measured_restitution
 from dice_env.die import face_up
-from dice_env.kernel import _rotate
+from dice_env.kernel import rotate
 from dice_env.scene import Scene
 from dice_env.simulate import State, simulate
 from dice_env.studies.convergence import RELEASES, T_THROW
@@ -234,7 +234,7 @@ def _advance(x, u, q, w, body, mass, inertia, stiff, damp, mu, kt, ct, g, dt, th
             _solve_spd6(amat, force)
         for i in range(3):
             x[i] += dt * (u[i] + theta * force[i])
-        _rotate(q, w[0] + theta * force[3], w[1] + theta * force[4], w[2] + theta * force[5],
+        rotate(q, w[0] + theta * force[3], w[1] + theta * force[4], w[2] + theta * force[5],
                 dt)
         for i in range(3):
             u[i] += force[i]
