@@ -43,7 +43,6 @@ import numpy as np
 from numba import njit
 
 from dice_env.calibration import measured_restitution
-from dice_env.die import face_up
 from dice_env.kernel import rotate
 from dice_env.scene import Scene
 from dice_env.simulate import State, simulate
@@ -266,7 +265,7 @@ def _constants(scene: Scene) -> tuple:
     die, ground = scene.die, scene.ground
     if not die.is_fair or ground.normal != (0.0, 0.0, 1.0):
         raise ValueError("the prototype handles a fair die on a horizontal table only")
-    return (np.ascontiguousarray(die.corners_body), die.mass, float(die.inertia_body[0, 0]),
+    return (np.ascontiguousarray(die.vertices_body), die.mass, float(die.inertia_body[0, 0]),
             ground.stiffness, ground.damping, ground.friction,
             ground.tangential * ground.stiffness, ground.tangential * ground.damping,
             scene.gravity)
@@ -276,7 +275,7 @@ def run_throws(scene: Scene, state: State, dt: float, theta: float, onset: bool 
                t_max: float = T_THROW) -> dict[str, np.ndarray | float]:
     """Throw every die of ``state`` to rest (or ``t_max``) with the implicit step.
 
-    Returns ``face`` (1-6, ``die.face_up`` convention), ``steps``, ``contact_steps``,
+    Returns ``face`` (the label :meth:`Die.face_read` reads), ``steps``, ``contact_steps``,
     ``finite``, ``settled`` per throw, and ``cpu_s`` (process CPU time of the whole batch).
     """
     b = state.batch_size
@@ -291,7 +290,7 @@ def run_throws(scene: Scene, state: State, dt: float, theta: float, onset: bool 
                math.ceil(scene.rest.hold / dt), out["steps"], out["contact_steps"],
                out["finite"], out["settled"])
     out["cpu_s"] = time.process_time() - start
-    out["face"] = face_up(orient, np.array([0.0, 0.0, 1.0]))
+    out["face"] = scene.die.face_read(orient, np.array([0.0, 0.0, 1.0]))
     return out
 
 
@@ -304,7 +303,7 @@ def drop_restitution(scene: Scene, dt: float, theta: float, onset: bool = False,
     leaving undone) over ``speed``; NaN if it does not leave within the span.
     """
     die, g = scene.die, scene.gravity
-    height = die.half_edge
+    height = float(die.resting_heights[0])  # lying on face 6, showing 1
     gap = min(1e-3, 0.25 * speed**2 / g)
     start = math.sqrt(speed**2 - 2.0 * g * gap)
     span = 10.0 * math.pi * math.sqrt(die.mass / (4.0 * scene.ground.stiffness))

@@ -85,7 +85,7 @@ def test_corners_sink_at_most_about_three_percent_of_the_edge():
                           rng.normal(0, 30 / math.sqrt(3), (n, 3)), random_rotations(rng, n))
     res = simulate(scene, start)
     assert res.settled.all()
-    assert res.max_penetration.max() < 0.035 * scene.die.edge
+    assert res.max_penetration.max() < 0.035 * scene.die.size
     assert np.median(res.rest_time) < 1.5  # a few bounces, not the paper's 20-30 s
 
 

@@ -102,7 +102,7 @@ def drop_height(scene: Scene, state: State) -> np.ndarray:
     spin = np.einsum("bij,bj->bi", inv, state.angular_momentum)
     kinetic = 0.5 * die.mass * (state.velocity**2).sum(1) + 0.5 * np.einsum(
         "bi,bi->b", state.angular_momentum, spin)
-    return kinetic / (die.mass * scene.gravity) + state.position[:, 2] - die.half_edge
+    return kinetic / (die.mass * scene.gravity) + state.position[:, 2] - die.resting_heights.min()
 
 
 def timed(scene: Scene, state: State, **kwargs: object) -> tuple[Result, float]:
@@ -424,7 +424,7 @@ def write_report(out: Path, numbers: dict[str, object], quick: bool) -> dict[str
     ratio = _ratio_at_equal_error(curves[LISTING], curves[DEFAULT], at_default)
     orders = {name: observed_order(c["dt"][-4:], c["position"][-4:]) for name, c in
               curves.items()}
-    pen = agreement["default"]["penetration"] / scene.die.edge
+    pen = agreement["default"]["penetration"] / scene.die.size
     verdicts = {
         label: {"gentle": float(gentle[DEFAULT if label == "default" else label]
                                 ["step"].mean()),
@@ -444,7 +444,7 @@ def write_report(out: Path, numbers: dict[str, object], quick: bool) -> dict[str
         "",
         "| quantity | value | source |",
         "|---|---|---|",
-        f"| die | {1e3 * scene.die.edge:.0f} mm, {1e3 * scene.die.mass:.1f} g, uniform | the "
+        f"| die | {1e3 * scene.die.size:.0f} mm, {1e3 * scene.die.mass:.1f} g, uniform | the "
         "common game die; a 16 mm PMMA cube (1.18 g/cm³) is 4.8 g before the pips are "
         "drilled |",
         f"| restitution (normal, flat landing) | {RESTITUTION} (target) | dice on wooden "
