@@ -20,7 +20,8 @@ from pathlib import Path
 import numpy as np
 
 from agents.baselines import HandThrower, Thrower
-from agents.evaluate import Batch, clustered, wilson
+from agents.episodes import Batch, PolicyThrower
+from agents.evaluate import clustered, wilson
 from agents.oracle import CEM, score, score_noise, search
 from dice_env.envs.task import ThrowTask, make_task
 
@@ -157,8 +158,6 @@ def main(argv: list[str] | None = None) -> None:
     ppo = None
     if args.run is not None:
         from stable_baselines3 import PPO
-
-        from agents.evaluate import PolicyThrower
 
         ppo = PolicyThrower(PPO.load(args.run / "model.zip", device="cpu"))
     try:

@@ -16,7 +16,6 @@ import json
 import math
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -24,14 +23,14 @@ import numpy as np
 
 from agents.baselines import HandThrower, RandomThrower, Thrower, decode, n_faces
 from agents.config import Config, field_docs
+from agents.episodes import Batch, PolicyThrower, make_eval_task
 from agents.oracle import CEM, score, score_noise, search
 from agents.progress import announce_compile, bar
-from dice_env.envs.task import ThrowTask, make_task
+from agents.report import headline_table, verdict, write_report
+from dice_env.envs.task import ThrowTask
 
 Z95 = 1.959964  # two-sided 95% normal quantile
-EPISODE_KEYWORDS = ("target_face", "orientation_mode")
 ORACLE_SCORE_SAMPLES = 16  # fresh noise draws per oracle observation
-CHUNK = 256  # throws per kernel call when the evaluation shows its progress
 ROBUSTNESS = {  # keyword: multiples of the trained value (1: as trained)
     "hand_noise": [0.0, 0.5, 1.0, 2.0, 4.0],
     "friction": [0.5, 1.0, 2.0],
@@ -40,52 +39,6 @@ ROBUSTNESS = {  # keyword: multiples of the trained value (1: as trained)
 }
 # How far the target face must turn: its angle from the table normal in the hand (degrees).
 TURN_CLASSES = {"already up": (0.0, 45.0), "on a side": (45.0, 135.0), "down": (135.0, 180.0)}
-
-
-class PolicyThrower:
-    """A trained SB3 policy as a thrower (deterministic actions)."""
-
-    def __init__(self, model: Any) -> None:
-        self.model = model
-
-    def __call__(self, observations: np.ndarray) -> np.ndarray:
-        """The policy's mean action for each observation."""
-        return self.model.predict(np.asarray(observations, np.float32), deterministic=True)[0]
-
-
-@dataclass
-class Batch:
-    """``n`` episodes: targets (n,), hands (n, 3, 3), observations (n, size), noise (n, d)."""
-
-    targets: np.ndarray
-    hands: np.ndarray
-    observations: np.ndarray
-    noise: np.ndarray
-
-    @classmethod
-    def sample(cls, task: ThrowTask, n: int, rng: np.random.Generator,
-               **episode: Any) -> Batch:
-        """Draw ``n`` episodes as the env does (``target_face``, ``orientation_mode``)."""
-        pairs = [task.sample_hand(rng, episode.get("target_face"),
-                                  episode.get("orientation_mode", "uniform")) for _ in range(n)]
-        targets = np.array([t for t, _ in pairs])
-        hands = np.stack([h for _, h in pairs])
-        return cls(targets, hands, task.observe(targets, hands), task.sample_noise(rng, n))
-
-    def throw(self, task: ThrowTask, thrower: Thrower,
-              progress: Callable[[int], None] | None = None) -> dict[str, np.ndarray]:
-        """The thrower's actions and the throws' info arrays (in chunks when ``progress``)."""
-        actions = np.asarray(thrower(self.observations), np.float64)
-        step = CHUNK if progress is not None else len(actions)
-        parts = []
-        for i in range(0, len(actions), step):
-            part = slice(i, i + step)
-            parts.append(task.throw(actions[part], self.targets[part], self.hands[part],
-                                    self.noise[part]).info)
-            if progress is not None:
-                progress(len(actions[part]))
-        info = {key: np.concatenate([p[key] for p in parts]) for key in parts[0]}
-        return {"action": actions, **info}
 
 
 def wilson(successes: float, n: float) -> tuple[float, float]:
@@ -148,15 +101,6 @@ def paired_difference(a: np.ndarray, b: np.ndarray) -> dict[str, Any]:
     half = Z95 * float(rows.std(ddof=1)) / math.sqrt(len(rows)) if len(rows) > 1 else 1.0
     return {"diff": mean, "ci": (mean - half, mean + half),
             "same": bool(np.all(d == 0))}
-
-
-def make_eval_task(config: Config, **overrides: Any) -> tuple[ThrowTask, dict[str, Any]]:
-    """The run's evaluation task (its ``--env`` keywords, no training shaping) and episode keys."""
-    kwargs = {**config.env_kwargs(), **config.num_threads_kwargs(), **overrides}
-    episode = {k: kwargs.pop(k) for k in EPISODE_KEYWORDS if k in kwargs}
-    for key in ("render_mode", "render_width", "render_height"):
-        kwargs.pop(key, None)
-    return make_task(**kwargs), episode
 
 
 def compare(
@@ -312,32 +256,6 @@ def learning_curve(run: Path) -> dict[str, Any]:
     return curve
 
 
-def verdict(evaluation: dict[str, Any]) -> list[str]:
-    """The report's headline: PPO against the rule and the oracle, on the same throws."""
-    lines = []
-    diffs = evaluation.get("differences", {})
-    for other, where in (("hand-written", "the hand-written rule"), ("oracle", "the oracle")):
-        d = diffs.get(other)
-        if d is None:
-            continue
-        lo, hi = d["ci"]
-        if d["same"]:
-            word = f"PPO throws exactly as well as {where} on these throws"
-        elif d["diff"] < 0:
-            word = (f"**PPO is below {where}**" + (" (significantly)" if hi < 0
-                                                    else " (within noise)"))
-        elif d["diff"] > 0:
-            word = f"PPO is above {where}" + (" (significantly)" if lo > 0 else " (within noise)")
-        else:
-            word = f"PPO is level with {where}"
-        lines.append(f"- {word}: difference {d['diff']:+.3f} [{lo:+.3f}, {hi:+.3f}] "
-                     f"on {d['where']}.")
-    for name in evaluation.get("above_oracle", []):
-        lines.append(f"- **The oracle is not a ceiling here: {name} scores above it** on the "
-                     "oracle's throws.")
-    return lines
-
-
 def evaluate_run(
     run: Path, log: Callable[[str], None] = print, progress: bool = False,
     **overrides: int | None,
@@ -426,31 +344,11 @@ def evaluate_run(
         "seconds": time.perf_counter() - start,
     }
     (run / "evaluation.json").write_text(json.dumps(evaluation, indent=2) + "\n")
-    from agents.report import write_report
-
     write_report(run, config, evaluation, figures, gifs)
     log(f"wrote {run / 'report.md'}")
     log("\n".join(verdict(evaluation)))
     log(headline_table(evaluation.get("common") or evaluation["summary"]))
     return evaluation
-
-
-def fmt(s: dict[str, Any]) -> str:
-    """``0.712 [0.684, 0.739]``."""
-    return f"{s['rate']:.3f} [{s['ci'][0]:.3f}, {s['ci'][1]:.3f}]"
-
-
-def headline_table(summaries: dict[str, dict[str, Any]]) -> str:
-    """The Markdown table of success per thrower, overall and per target."""
-    faces = sorted({f for s in summaries.values() for f in s["per_target"]})
-    lines = ["| thrower | throws | success [95% CI] | " + " | ".join(
-        f"target {f}" for f in faces) + " |", "|---|---|---|" + "---|" * len(faces)]
-    for name, s in summaries.items():
-        n = f"{s['n']}" + (f" ({s['observations']} obs)" if "observations" in s else "")
-        per = " | ".join(f"{s['per_target'][f]['rate']:.2f}" if f in s["per_target"] else "–"
-                         for f in faces)
-        lines.append(f"| {name} | {n} | {fmt(s)} | {per} |")
-    return "\n".join(lines)
 
 
 def main(argv: list[str] | None = None) -> None:

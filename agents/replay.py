@@ -16,6 +16,9 @@ from typing import Any
 
 import numpy as np
 
+from agents.baselines import HandThrower, RandomThrower
+from agents.config import Config
+from agents.episodes import Batch, PolicyThrower, make_eval_task
 from dice_env.envs.task import ThrowTask
 
 FPS = 30  # frames per second of the GIFs (the env's render_fps)
@@ -58,11 +61,11 @@ def pick_throws(success: np.ndarray, count: int) -> list[int]:
     return [int(i) for i in picked[:count]]
 
 
-def save_throws(run: Path, task: ThrowTask, batch: Any, throws: dict[str, np.ndarray],
+def save_throws(run: Path, task: ThrowTask, batch: Batch, throws: dict[str, np.ndarray],
                 thrower: str, count: int) -> list[Path]:
     """GIFs of ``count`` of the evaluation's throws by ``thrower``, failures first.
 
-    ``throws``: that thrower's actions and info from :meth:`agents.evaluate.Batch.throw`; each
+    ``throws``: that thrower's actions and info from :meth:`agents.episodes.Batch.throw`; each
     throw is replayed exactly (its hand, target and noise).
     """
     from dice_env.envs.video import save_video
@@ -80,9 +83,6 @@ def replay(run: Path, throws: int, seed: int, target: int | None, thrower: str,
     """Throw ``throws`` fresh episodes with the run's model (or a baseline); write GIFs."""
     from stable_baselines3 import PPO
 
-    from agents.baselines import HandThrower, RandomThrower
-    from agents.config import Config
-    from agents.evaluate import Batch, PolicyThrower, make_eval_task
     from dice_env.envs.video import save_video
 
     config = Config.load(run / "config.json")
@@ -130,9 +130,6 @@ def main(argv: list[str] | None = None) -> None:
     if args.seed < 0:
         parser.error(f"argument --seed: must be an integer >= 0, got {args.seed}")
     if args.target is not None:
-        from agents.config import Config
-        from agents.evaluate import make_eval_task
-
         faces = make_eval_task(Config.load(args.run / "config.json"))[0].n_faces
         if not 1 <= args.target <= faces:
             parser.error(f"argument --target: must be a face of the run's die, in [1, {faces}], "

@@ -19,8 +19,50 @@ def training_summary(run: Path) -> tuple[int, float]:
             sum(s["seconds"] for s in sessions))
 
 
-def _rate(s: dict[str, Any] | None) -> str:
-    return "–" if s is None else f"{s['rate']:.2f} [{s['ci'][0]:.2f}, {s['ci'][1]:.2f}]"
+def _rate(s: dict[str, Any] | None, digits: int = 2) -> str:
+    """``0.71 [0.68, 0.74]`` (``digits`` decimals), ``–`` for no score."""
+    if s is None:
+        return "–"
+    return f"{s['rate']:.{digits}f} [{s['ci'][0]:.{digits}f}, {s['ci'][1]:.{digits}f}]"
+
+
+def headline_table(summaries: dict[str, dict[str, Any]]) -> str:
+    """The Markdown table of success per thrower, overall and per target."""
+    faces = sorted({f for s in summaries.values() for f in s["per_target"]})
+    lines = ["| thrower | throws | success [95% CI] | " + " | ".join(
+        f"target {f}" for f in faces) + " |", "|---|---|---|" + "---|" * len(faces)]
+    for name, s in summaries.items():
+        n = f"{s['n']}" + (f" ({s['observations']} obs)" if "observations" in s else "")
+        per = " | ".join(f"{s['per_target'][f]['rate']:.2f}" if f in s["per_target"] else "–"
+                         for f in faces)
+        lines.append(f"| {name} | {n} | {_rate(s, 3)} | {per} |")
+    return "\n".join(lines)
+
+
+def verdict(evaluation: dict[str, Any]) -> list[str]:
+    """The report's headline: PPO against the rule and the oracle, on the same throws."""
+    lines = []
+    diffs = evaluation.get("differences", {})
+    for other, where in (("hand-written", "the hand-written rule"), ("oracle", "the oracle")):
+        d = diffs.get(other)
+        if d is None:
+            continue
+        lo, hi = d["ci"]
+        if d["same"]:
+            word = f"PPO throws exactly as well as {where} on these throws"
+        elif d["diff"] < 0:
+            word = (f"**PPO is below {where}**" + (" (significantly)" if hi < 0
+                                                    else " (within noise)"))
+        elif d["diff"] > 0:
+            word = f"PPO is above {where}" + (" (significantly)" if lo > 0 else " (within noise)")
+        else:
+            word = f"PPO is level with {where}"
+        lines.append(f"- {word}: difference {d['diff']:+.3f} [{lo:+.3f}, {hi:+.3f}] "
+                     f"on {d['where']}.")
+    for name in evaluation.get("above_oracle", []):
+        lines.append(f"- **The oracle is not a ceiling here: {name} scores above it** on the "
+                     "oracle's throws.")
+    return lines
 
 
 def _rates_line(evaluation: dict[str, Any]) -> str:
@@ -36,8 +78,6 @@ def _rates_line(evaluation: dict[str, Any]) -> str:
 
 
 def _section_success(evaluation: dict[str, Any]) -> list[str]:
-    from agents.evaluate import headline_table
-
     lines = []
     common = evaluation.get("common")
     if common:
@@ -118,8 +158,6 @@ def _section_strategy(evaluation: dict[str, Any], figure: Path) -> list[str]:
 def write_report(run: Path, config: Config, evaluation: dict[str, Any],
                  figures: dict[str, Path], gifs: list[Path]) -> Path:
     """Write ``run/report.md`` from the evaluation and its figures."""
-    from agents.evaluate import verdict
-
     throws, seconds = training_summary(run)
     params = config.hyperparams()
     start = evaluation["learning"].get("start") or {}

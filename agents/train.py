@@ -130,7 +130,7 @@ def imitate(model: PPO, config: Config, throws: int, steps: int, batch: int = 25
     import torch
 
     from agents.baselines import HandThrower
-    from agents.evaluate import Batch, make_eval_task
+    from agents.episodes import Batch, make_eval_task
 
     task, episode = make_eval_task(config)
     data = Batch.sample(task, throws, np.random.default_rng(config.seed + 3 * 10**6), **episode)

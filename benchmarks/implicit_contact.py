@@ -42,12 +42,12 @@ import time
 import numpy as np
 from numba import njit
 
-from dice_env.die import face_up
-from dice_env.kernel import _rotate
+from dice_env.calibration import measured_restitution
+from dice_env.kernel import rotate
 from dice_env.scene import Scene
 from dice_env.simulate import State, simulate
 from dice_env.studies.convergence import RELEASES, T_THROW
-from dice_env.table import measured_restitution, rebound
+from dice_env.table import rebound
 
 FACTORS = (0.15, 0.3, 0.6, 1.2, 2.4, 4.8)
 # (theta, onset): backward Euler and trapezoid as briefed, then each with the onset impulse
@@ -233,7 +233,7 @@ def _advance(x, u, q, w, body, mass, inertia, stiff, damp, mu, kt, ct, g, dt, th
             _solve_spd6(amat, force)
         for i in range(3):
             x[i] += dt * (u[i] + theta * force[i])
-        _rotate(q, w[0] + theta * force[3], w[1] + theta * force[4], w[2] + theta * force[5],
+        rotate(q, w[0] + theta * force[3], w[1] + theta * force[4], w[2] + theta * force[5],
                 dt)
         for i in range(3):
             u[i] += force[i]
@@ -265,7 +265,7 @@ def _constants(scene: Scene) -> tuple:
     die, ground = scene.die, scene.ground
     if not die.is_fair or ground.normal != (0.0, 0.0, 1.0):
         raise ValueError("the prototype handles a fair die on a horizontal table only")
-    return (np.ascontiguousarray(die.corners_body), die.mass, float(die.inertia_body[0, 0]),
+    return (np.ascontiguousarray(die.vertices_body), die.mass, float(die.inertia_body[0, 0]),
             ground.stiffness, ground.damping, ground.friction,
             ground.tangential * ground.stiffness, ground.tangential * ground.damping,
             scene.gravity)
@@ -275,7 +275,7 @@ def run_throws(scene: Scene, state: State, dt: float, theta: float, onset: bool 
                t_max: float = T_THROW) -> dict[str, np.ndarray | float]:
     """Throw every die of ``state`` to rest (or ``t_max``) with the implicit step.
 
-    Returns ``face`` (1-6, ``die.face_up`` convention), ``steps``, ``contact_steps``,
+    Returns ``face`` (the label :meth:`Die.face_read` reads), ``steps``, ``contact_steps``,
     ``finite``, ``settled`` per throw, and ``cpu_s`` (process CPU time of the whole batch).
     """
     b = state.batch_size
@@ -290,20 +290,20 @@ def run_throws(scene: Scene, state: State, dt: float, theta: float, onset: bool 
                math.ceil(scene.rest.hold / dt), out["steps"], out["contact_steps"],
                out["finite"], out["settled"])
     out["cpu_s"] = time.process_time() - start
-    out["face"] = face_up(orient, np.array([0.0, 0.0, 1.0]))
+    out["face"] = scene.die.face_read(orient, np.array([0.0, 0.0, 1.0]))
     return out
 
 
 def drop_restitution(scene: Scene, dt: float, theta: float, onset: bool = False,
                      speed: float = 1.0) -> float:
-    """Restitution of a flat, spin-free landing at ``speed``, as ``table.measured_restitution``.
+    """Restitution of a flat, spin-free landing at ``speed``, as ``measured_restitution``.
 
     The die starts 1 mm (at most) above the plane, falling so that it meets it at ``speed``;
     the result is the upward speed when the face crosses the plane again (gravity since
     leaving undone) over ``speed``; NaN if it does not leave within the span.
     """
     die, g = scene.die, scene.gravity
-    height = die.half_edge
+    height = float(die.resting_heights[0])  # lying on face 6, showing 1
     gap = min(1e-3, 0.25 * speed**2 / g)
     start = math.sqrt(speed**2 - 2.0 * g * gap)
     span = 10.0 * math.pi * math.sqrt(die.mass / (4.0 * scene.ground.stiffness))

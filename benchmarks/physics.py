@@ -50,7 +50,8 @@ import numba
 import numpy as np
 
 from dice_env import Scene, State, simulate, vector_kernel
-from dice_env.die import STANDARD_SIZES, Die, face_up
+from dice_env.calibration import table_scene
+from dice_env.die import STANDARD_SIZES, Die
 from dice_env.paper import paper_scene
 from dice_env.rotations import quaternion_to_matrix, random_rotations
 from dice_env.simulate import lock_energy
@@ -187,7 +188,7 @@ def throws_to_rest(scene: Scene, quick: bool) -> tuple[dict, State]:
     start = hand_throws(scene, n, seed=1)
     simulate(scene, subset(start, slice(0, 2)), t_max=1e-3, num_threads=2)  # load the kernels
     simulate(scene, subset(start, slice(0, 1)), t_max=1e-3)
-    out = {"scene": {"edge_m": scene.die.edge, "mass_kg": scene.die.mass,
+    out = {"scene": {"edge_m": scene.die.size, "mass_kg": scene.die.mass,
                      "stiffness": scene.ground.stiffness, "damping": scene.ground.damping,
                      "friction": scene.ground.friction, "dt_s": scene.step,
                      "t_max_s": scene.t_max, "rest_speed": scene.rest.speed,
@@ -245,7 +246,7 @@ def mujoco_model(scene: Scene, dt: float = 0.002, contact: str = ""):
     import mujoco
 
     die = scene.die
-    xml = _MJCF.format(dt=dt, g=scene.gravity, mu=scene.ground.friction, h=die.half_edge,
+    xml = _MJCF.format(dt=dt, g=scene.gravity, mu=scene.ground.friction, h=die.size / 2,
                        m=die.mass, i=die.inertia_body[0, 0])
     return mujoco.MjModel.from_xml_string(xml.replace("<geom ", f"<geom {contact} "))
 
@@ -292,7 +293,7 @@ def mujoco_to_rest(scene: Scene, start: State, horizon: float, model=None) -> di
         states, _ = rollout.rollout(model, data, initial[rows], nstep=n_steps)
         vel, w_body = states[..., 8:11], states[..., 11:14]
         rot = quaternion_to_matrix(states[..., 4:8])
-        corners = np.einsum("btij,cj->btci", rot, die.corners_body)
+        corners = np.einsum("btij,cj->btci", rot, die.vertices_body)
         omega = np.einsum("btij,btj->bti", rot, w_body)
         speed = np.linalg.norm(vel[:, :, None] + np.cross(omega[:, :, None], corners),
                                axis=-1).max(axis=-1)
@@ -308,13 +309,13 @@ def mujoco_to_rest(scene: Scene, start: State, horizon: float, model=None) -> di
                     break
         up = np.array([0.0, 0.0, 1.0])
         last = rot[np.arange(quiet.shape[0]), rest_steps[rows] - 1]
-        face[rows] = face_up(last, up)
+        face[rows] = die.face_read(last, up)
         # the same decision rule as ours, on MuJoCo's kinetic and potential energy
         energy = kinetic + die.mass * scene.gravity * states[..., 3]
-        below = energy < lock[face_up(rot, up) - 1]
+        below = energy < lock[die.face_read(rot, up) - 1]
         first = np.where(below.any(axis=1), below.argmax(axis=1) + 1, n_steps)
         decided_steps[rows] = first
-        decided_face[rows] = face_up(rot[np.arange(quiet.shape[0]), first - 1], up)
+        decided_face[rows] = die.face_read(rot[np.arange(quiet.shape[0]), first - 1], up)
     settled = rest_steps < n_steps
 
     def cpu_time(steps: np.ndarray) -> float:
@@ -362,7 +363,7 @@ def step_budget(scene: Scene, start: State, quick: bool, vector_rate: float) -> 
         batch = subset(start, slice(chunk, chunk + 4))
         res = simulate(scene, batch, t_max=t_max, record_every=1, record=("orientations",),
                        free_flight=False, num_threads=2)
-        corners = np.einsum("btij,cj->btci", res.orientations, scene.die.corners_body)
+        corners = np.einsum("btij,cj->btci", res.orientations, scene.die.vertices_body)
         height = (res.x_cm[:, :, None, :] + corners) @ np.asarray(scene.ground.normal)
         for k in range(batch.batch_size):
             rest = round(res.rest_time[k] / scene.step)
@@ -370,7 +371,7 @@ def step_budget(scene: Scene, start: State, quick: bool, vector_rate: float) -> 
             flight.append(free)
             contact.append(rest - free)
             hold.append(res.steps[k] - rest)
-    resting = State.release(scene, [0, 0, scene.die.half_edge], [0, 0, 0])
+    resting = State.release(scene, [0, 0, scene.die.resting_heights[0]], [0, 0, 0])
     resting = subset(resting, np.zeros(64, int))
     steps = round(0.2 / scene.step)
     elapsed = best_time(lambda: simulate(scene, resting, t_max=0.2, stop_at_rest=False,
@@ -452,12 +453,8 @@ def per_shape(quick: bool) -> dict:
 
 
 def scenes() -> dict[str, Scene]:
-    """The default scene, and the realistic table of ``dice_env.table`` if it differs."""
+    """The default scene, and the realistic table of ``dice_env.calibration`` if it differs."""
     out = {"Scene()": Scene()}
-    try:
-        from dice_env.table import table_scene
-    except ImportError:
-        return out
     if table_scene() != out["Scene()"]:
         out["table_scene()"] = table_scene()
     return out

@@ -31,8 +31,9 @@ import numpy as np
 from physics import ROOT, best_time, hand_throws, mujoco_model, mujoco_to_rest, timed
 
 from dice_env import Scene, State, simulate
+from dice_env.calibration import measured_restitution
 from dice_env.studies.convergence import RELEASES, face_agreement
-from dice_env.table import RESTITUTION, damping_ratio, measured_restitution, rebound
+from dice_env.table import RESTITUTION, damping_ratio, rebound
 
 SAFETIES = (0.15, 0.3, 0.45, 0.6, 0.9)
 DROP_SPEEDS = (0.3, 1.0)
@@ -40,10 +41,10 @@ DROP_SPEEDS = (0.3, 1.0)
 
 def our_landing(scene: Scene, speed: float) -> dict:
     """Restitution and deepest corner sink (fraction of the edge) of a flat landing."""
-    h = scene.die.half_edge
+    h = scene.die.resting_heights[0]  # lying on face 6, showing 1
     state = State.release(scene, [0.0, 0.0, h + 1e-4], [0.0, 0.0, -speed])
     sink = simulate(scene, state, t_max=0.01, stop_at_rest=False).max_penetration[0]
-    return {"restitution": measured_restitution(scene, speed), "sink": sink / scene.die.edge}
+    return {"restitution": measured_restitution(scene, speed), "sink": sink / scene.die.size}
 
 
 def step_sweep(quick: bool) -> list[dict]:
@@ -63,7 +64,7 @@ def step_sweep(quick: bool) -> list[dict]:
             "gentle_agreement_se": float(agree["step"].std() / math.sqrt(gentle.batch_size)),
             "chaos_floor": float(agree["floor"].mean()),
             "restitution_1mps": measured_restitution(at, 1.0),
-            "deepest_sink_of_edge": float(result.max_penetration.max() / scene.die.edge),
+            "deepest_sink_of_edge": float(result.max_penetration.max() / scene.die.size),
             "throws_per_s_2threads": throws.batch_size / timing,
             "mean_steps": float(result.steps.mean()),
             "unstable_fraction": float(result.unstable.mean()),
@@ -78,7 +79,7 @@ def mujoco_landing(model, scene: Scene, speed: float) -> dict:
     import mujoco
 
     data = mujoco.MjData(model)
-    h, g = scene.die.half_edge, scene.gravity
+    h, g = scene.die.resting_heights[0], scene.gravity
     data.qpos[:] = [0.0, 0.0, h + 1e-4, 1.0, 0.0, 0.0, 0.0]
     data.qvel[:] = [0.0, 0.0, -math.sqrt(speed**2 + 2 * g * 1e-4), 0.0, 0.0, 0.0]
     z, vz = [], []
@@ -88,7 +89,7 @@ def mujoco_landing(model, scene: Scene, speed: float) -> dict:
         vz.append(data.qvel[2])
     z = np.array(z)
     e = rebound(z, np.array(vz), h, g, speed)
-    return {"restitution": 0.0 if e is None else e, "sink": float((h - z.min()) / scene.die.edge)}
+    return {"restitution": 0.0 if e is None else e, "sink": float((h - z.min()) / scene.die.size)}
 
 
 def contact_comparison(quick: bool) -> dict | None:

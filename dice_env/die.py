@@ -25,7 +25,7 @@ from __future__ import annotations
 import itertools
 import math
 from dataclasses import dataclass
-from functools import cache, cached_property, lru_cache
+from functools import cache, cached_property
 from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
@@ -37,21 +37,16 @@ from dice_env.validation import check_finite, check_positive, check_range
 if TYPE_CHECKING:
     from dice_env.pips import Pips
 
-# Corner signs in the order of the paper's cube.m (node k = row k).
-CORNER_SIGNS = np.array(
+# The d6's corner signs in the order of the paper's cube.m (node k = row k).
+_CORNER_SIGNS = np.array(
     [
         [1, 1, 1], [1, -1, 1], [-1, -1, 1], [-1, 1, 1],
         [1, 1, -1], [1, -1, -1], [-1, -1, -1], [-1, 1, -1],
     ],
     dtype=np.float64,
 )
-# The 12 edges as node-index pairs (cube.m's links, 0-based), for drawing.
-EDGES = np.array(
-    [[0, 1], [1, 2], [2, 3], [3, 0], [4, 5], [5, 6], [6, 7], [7, 4],
-     [0, 4], [1, 5], [2, 6], [3, 7]],
-)
-# Outward body-frame normal of face k+1.
-FACE_NORMALS = np.array(
+# The d6's outward body-frame normal of face k+1.
+_CUBE_NORMALS = np.array(
     [[0, 0, 1], [1, 0, 0], [0, 1, 0], [0, -1, 0], [-1, 0, 0], [0, 0, -1]], dtype=np.float64
 )
 
@@ -400,26 +395,6 @@ class Die:
                     self.name, np.array(self.vertices), self.faces, self.size,
                     self.mass).tolist()))
 
-    # --- the cube's names, kept until the kernel reads the fields above -------------------
-
-    @property
-    def edge(self) -> float:
-        """Edge length (m) of the cubic die (d6 only): its :attr:`size`."""
-        if self.name != "d6":
-            raise AttributeError(f"edge is defined for the d6 only (this die is a {self.name}); "
-                                 "use size")
-        return self.size
-
-    @property
-    def half_edge(self) -> float:
-        """Half the edge length (m) of the cubic die (d6 only)."""
-        return self.edge / 2
-
-    @property
-    def corners_body(self) -> np.ndarray:
-        """Same as :attr:`vertices_body`."""
-        return self.vertices_body
-
     # --- internals ------------------------------------------------------------------------
 
     def __repr__(self) -> str:
@@ -474,11 +449,11 @@ def _unit_shape(name: str) -> _Shape:
     """The standard die ``name`` at size 1 (its least height on a face)."""
     raw, upper = {
         "d4": (polyhedra.tetrahedron, None),
-        "d6": (lambda: CORNER_SIGNS, None),
+        "d6": (lambda: _CORNER_SIGNS, None),
         "d8": (polyhedra.octahedron, [1, 3, 5, 7]),
         "d10": (polyhedra.pentagonal_trapezohedron, [1, 5, 7, 3, 9]),
-        "d12": (lambda: _face_up(polyhedra.dodecahedron()), range(1, 7)),
-        "d20": (lambda: _face_up(polyhedra.icosahedron()), range(1, 11)),
+        "d12": (lambda: _face_along_z(polyhedra.dodecahedron()), range(1, 7)),
+        "d20": (lambda: _face_along_z(polyhedra.icosahedron()), range(1, 11)),
     }[name]
     raw = raw()
     faces = polyhedra.convex_faces(raw)
@@ -486,7 +461,7 @@ def _unit_shape(name: str) -> _Shape:
     if name == "d4":  # face k opposite corner k
         labels = _nearest_labels(normals, -raw / math.sqrt(3.0))
     elif name == "d6":
-        labels = _nearest_labels(normals, FACE_NORMALS)
+        labels = _nearest_labels(normals, _CUBE_NORMALS)
     else:
         labels = _labels_by_azimuth(normals, upper)
     faces = _in_label_order(faces, labels)
@@ -517,7 +492,7 @@ def _labels_by_azimuth(normals: np.ndarray, upper: object) -> np.ndarray:
     return labels
 
 
-def _face_up(points: np.ndarray) -> np.ndarray:
+def _face_along_z(points: np.ndarray) -> np.ndarray:
     """``points`` turned so that the face normal nearest +z (then +x) points along +z."""
     normals = polyhedra.face_normals(points, polyhedra.convex_faces(points))
     top = normals[np.lexsort((np.round(normals[:, 0], 9), np.round(normals[:, 2], 9)))[-1]]
@@ -643,13 +618,3 @@ def _frozen(array: np.ndarray) -> np.ndarray:
     array = np.array(array)
     array.flags.writeable = False
     return array
-
-
-@lru_cache(maxsize=1)
-def _default_die() -> Die:
-    return Die()
-
-
-def face_up(orientation: np.ndarray, normal: np.ndarray) -> np.ndarray:
-    """Number (1–6) of the default d6's face up: ``Die().face_read(orientation, normal)``."""
-    return _default_die().face_read(orientation, normal)

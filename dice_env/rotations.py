@@ -1,4 +1,4 @@
-"""Rotation matrices: uniform random draws, axis-angle, and a check of orthonormality."""
+"""Rotation matrices: uniform random draws, axis-angle, one turning a direction up, a check."""
 
 from __future__ import annotations
 
@@ -38,6 +38,22 @@ def axis_angle(axis: np.ndarray, angle: float) -> np.ndarray:
     k = k / np.linalg.norm(k)
     cross = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
     return np.eye(3) + np.sin(angle) * cross + (1 - np.cos(angle)) * cross @ cross
+
+
+def up_rotation(direction: np.ndarray) -> np.ndarray:
+    """A rotation (body to world, 3x3) taking the unit body ``direction`` (3,) to world +z.
+
+    Rows: the body axes that map to world x, y, z; the x row is the direction's absolute value
+    rolled by one, made orthogonal to it (for an axis direction a permuted, flipped frame; for
+    +z the identity).
+    """
+    z = np.asarray(direction, dtype=np.float64)
+    x = np.roll(np.abs(z), 1)
+    x = x - (x @ z) * z
+    if np.linalg.norm(x) < 1e-6:  # |direction| with equal components: roll maps it to itself
+        x = np.cross(z, [1.0, 0.0, 0.0] if abs(z[0]) < 0.9 else [0.0, 1.0, 0.0])
+    x = x / np.linalg.norm(x)
+    return np.stack([x, np.cross(z, x), z])
 
 
 def orthonormality_error(rot: np.ndarray) -> np.ndarray:

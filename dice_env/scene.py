@@ -87,7 +87,7 @@ class Plane:
     for discrete elements since Silbert et al. 2001; the same fraction for both keeps the
     damping proportional to the stiffness, so the stable step stays exact). The defaults
     are the wooden table of :mod:`dice_env.table` for the default 4.5 g die (restitution
-    0.45); :func:`dice_env.table.table_scene` recomputes D for another die.
+    0.45); :func:`dice_env.calibration.table_scene` recomputes D for another die.
     """
 
     stiffness: float = table.STIFFNESS

@@ -20,21 +20,19 @@ Without the clip at zero its restitution is the classical
 ``e = exp(-pi zeta / sqrt(1 - zeta^2))``. With the clip, the corner leaves the table when the
 force reaches zero, before the spring is relaxed, so ``e`` is higher; :func:`restitution`
 gives that exact value (Schwager & Pöschel 2007) and :func:`damping_for_restitution` inverts
-it, so the default damping gives the target restitution. :func:`measured_restitution`
-measures what the simulator actually produces.
+it, so the default damping gives the target restitution;
+:func:`dice_env.calibration.measured_restitution` measures what the simulator actually produces.
+This module is the package's bottom layer: it imports nothing from the rest of it but
+:mod:`dice_env.validation`.
 """
 
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING
 
 import numpy as np
 
 from dice_env.validation import check_positive, check_range
-
-if TYPE_CHECKING:  # the scene takes its defaults from here, so import it lazily
-    from dice_env.scene import Scene
 
 # A common 16 mm game die (m, kg).
 DIE_EDGE = 0.016
@@ -105,58 +103,6 @@ def damping_for_restitution(
 
 # Per-corner damping (N s/m) of the default table for the default die.
 DAMPING = damping_for_restitution(RESTITUTION, STIFFNESS, DIE_MASS)
-
-
-def table_scene(
-    *,
-    edge: float = DIE_EDGE,
-    mass: float = DIE_MASS,
-    restitution: float = RESTITUTION,
-    friction: float = FRICTION,
-    stiffness: float = STIFFNESS,
-    **scene_options: object,
-) -> Scene:
-    """A uniform die of ``edge`` and ``mass`` on a table of the given restitution and friction.
-
-    The damping is recomputed for the die's mass; ``scene_options`` go to :class:`Scene`
-    (``dt``, ``safety``, ``t_max``, ...). ``Scene()`` equals ``table_scene()``.
-    """
-    from dice_env.die import Die
-    from dice_env.scene import Ground, Scene
-
-    ground = Ground(stiffness=stiffness, friction=friction,
-                    damping=damping_for_restitution(restitution, stiffness, mass))
-    return Scene(die=Die(edge=edge, mass=mass), ground=ground, **scene_options)
-
-
-def measured_restitution(scene: Scene, speed: float = 1.0) -> float:
-    """Restitution the simulator produces for a flat, spin-free landing at ``speed`` (m/s).
-
-    The die starts up to 1 mm above the plane (``normal`` along z), falling so that it meets the
-    plane at ``speed`` (starting on the plane would put the contact onset exactly on a step
-    and add a first-order error of its own); the result is the upward speed when the face
-    crosses the plane again (the gravity between leaving and crossing is undone exactly) over
-    ``speed``.
-    """
-    from dice_env.simulate import State, simulate
-
-    check_positive("speed", speed)
-    if scene.ground.normal != (0.0, 0.0, 1.0):
-        raise ValueError(f"scene.ground.normal must be (0, 0, 1), got {scene.ground.normal}")
-    die, g = scene.die, scene.gravity
-    height = die.half_edge + die.com[2]
-    gap = min(1e-3, 0.25 * speed**2 / g) if g > 0 else 1e-3
-    start = math.sqrt(speed**2 - 2.0 * g * gap)
-    state = State.release(scene, np.array([0.0, 0.0, height + gap]), np.array([0.0, 0.0, -start]))
-    # contact lasts about pi sqrt(m / 4 S); simulate ten times that, plus the fall
-    span = 10.0 * math.pi * math.sqrt(die.mass / (4.0 * scene.ground.stiffness))
-    span += (speed - start) / g if g > 0 else gap / speed
-    result = simulate(scene, state, t_max=span, stop_at_rest=False, record_every=1, record=())
-    z = result.x_cm[0, :, 2]
-    e = rebound(z, np.diff(z, prepend=height + gap) / scene.step, height, g, speed)
-    if e is None:
-        raise ValueError(f"the die did not leave the table within {span:.3g} s at speed {speed}")
-    return e
 
 
 def rebound(z: np.ndarray, vz: np.ndarray, height: float, gravity: float,

@@ -87,7 +87,7 @@ def covers(scene: object, batch: int, flight: bool, records: bool) -> bool:
     """
     return (_enabled and scene.ground.contact_law.name == "PAPER"
             and scene.friction_law.name == "REGULARIZED" and scene.scheme.name == "PAPER"
-            and scene.rotation and scene.die.is_isotropic and len(scene.die.corners_body) == 8
+            and scene.rotation and scene.die.is_isotropic and len(scene.die.vertices) == 8
             and batch >= TILE and not flight and not records)
 
 
@@ -246,7 +246,7 @@ def _step(t: np.ndarray, body: Body, contact: Contact, options: Options, stops: 
         end = RUNNING
         quiet, rest_t = t[QUIET * TILE + i], t[REST_T * TILE + i]
         if ends:
-            # the decided face (the lock of the face up, in the order of die.FACE_NORMALS)
+            # the decided face (the lock of the face up; the d6's faces in label order)
             up_x = q[0] * n0 + q[3] * n1 + q[6] * n2  # n in the body frame, Q^T n
             up_y = q[1] * n0 + q[4] * n1 + q[7] * n2
             up_z = q[2] * n0 + q[5] * n1 + q[8] * n2

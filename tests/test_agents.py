@@ -7,7 +7,6 @@ from agents.config import Config, OptionError, parse_config
 from agents.evaluate import clustered, paired_difference, summary, turn_class, wilson
 from agents.oracle import CEM, score, score_noise, search
 from agents.replay import pick_throws
-from dice_env.die import FACE_NORMALS
 from dice_env.envs import make_task
 from dice_env.rotations import random_rotations
 
@@ -50,7 +49,7 @@ def test_hand_thrower_spins_the_target_toward_up():
     assert np.array_equal(t, targets) and np.allclose(h, hands, atol=1e-6)
     actions = HandThrower(task)(obs)
     assert actions.shape == (50, 6) and np.all(np.abs(actions) <= 1)
-    normal = np.einsum("nij,nj->ni", hands, FACE_NORMALS[targets - 1])
+    normal = np.einsum("nij,nj->ni", hands, task.scene.die.face_normals[targets - 1])
     # d n / dt = w x n points up (toward z) for every target not already up
     assert np.all(np.cross(actions[:, 3:], normal)[:, 2] >= -1e-9)
     assert RandomThrower(0)(obs).shape == (50, 6)

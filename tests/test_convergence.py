@@ -17,9 +17,9 @@ def test_release_sampling_and_energy():
     assert np.std(start.position[:, 2]) == pytest.approx(gentle.sigma_position, rel=0.05)
     assert np.std(start.angular_velocity) == pytest.approx(gentle.sigma_spin, rel=0.05)
     # a still die resting flat has no throw energy; dropped from 5 cm it has 5 cm
-    still = State.release(scene, [0, 0, scene.die.half_edge + 0.05], [0, 0, 0])
+    still = State.release(scene, [0, 0, scene.die.size / 2 + 0.05], [0, 0, 0])
     assert cv.drop_height(scene, still)[0] == pytest.approx(0.05)
-    spinning = State.release(scene, [0, 0, scene.die.half_edge], [1.0, 0, 0], [0, 0, 10.0])
+    spinning = State.release(scene, [0, 0, scene.die.size / 2], [1.0, 0, 0], [0, 0, 10.0])
     inertia = scene.die.inertia_body[2, 2]
     expected = (0.5 * scene.die.mass + 0.5 * inertia * 100 / 1.0) / (scene.die.mass * 9.81)
     assert cv.drop_height(scene, spinning)[0] == pytest.approx(expected)
@@ -42,7 +42,7 @@ def test_trajectory_error_falls_with_the_step():
     curve = cv.trajectory_errors(scene, start, cv.HORIZON, (0.4, 0.2, 0.1), reference)
     assert np.all(np.diff(curve["position"]) < 0)
     assert cv.observed_order(curve["dt"], curve["position"]) > 0.5  # about 1 with more throws
-    assert curve["position"][-1] < 0.25 * scene.die.edge
+    assert curve["position"][-1] < 0.25 * scene.die.size
 
 
 def test_midpoint_scheme_is_second_order_with_smooth_friction():

@@ -4,7 +4,6 @@ import numpy as np
 import pytest
 
 from dice_env import ContactLaw, Die, FrictionLaw, Ground, Scene, Scheme, State, simulate
-from dice_env.die import FACE_NORMALS, face_up
 from dice_env.rotations import axis_angle, random_rotations
 
 
@@ -18,16 +17,17 @@ def random_throws(scene: Scene, n: int, seed: int = 0, height: float = 0.1) -> S
 # --- faces -----------------------------------------------------------------------------------
 
 def test_standard_die_faces():
-    normals = {face: FACE_NORMALS[face - 1] for face in range(1, 7)}
+    die = Die()
+    normals = {face: die.face_normals[face - 1] for face in range(1, 7)}
     for face in range(1, 7):
         np.testing.assert_array_equal(normals[face], -normals[7 - face])
     # right-handed die: 1, 2, 3 counter-clockwise around their shared corner seen from outside
     assert np.dot(np.cross(normals[1], normals[2]), normals[3]) > 0
     up = np.array([0.0, 0.0, 1.0])
-    assert face_up(np.eye(3), up) == 1
-    assert face_up(axis_angle([0, 1, 0], -np.pi / 2), up) == 2  # +x turned to +z
-    assert face_up(axis_angle([1, 0, 0], np.pi / 2), up) == 3  # +y turned to +z
-    assert face_up(axis_angle([1, 0, 0], np.pi), up) == 6
+    assert die.face_read(np.eye(3), up) == 1
+    assert die.face_read(axis_angle([0, 1, 0], -np.pi / 2), up) == 2  # +x turned to +z
+    assert die.face_read(axis_angle([1, 0, 0], np.pi / 2), up) == 3  # +y turned to +z
+    assert die.face_read(axis_angle([1, 0, 0], np.pi), up) == 6
 
 
 # --- flight --------------------------------------------------------------------------------
@@ -79,7 +79,7 @@ def test_corner_distances_stay_rigid():
     res = simulate(scene, random_throws(scene, 4), t_max=0.5, record_every=50, record=("nodes",))
     nodes = res.nodes
     dists = np.linalg.norm(nodes[:, :, :, None] - nodes[:, :, None, :], axis=-1)
-    reference = np.linalg.norm(scene.die.corners_body[:, None] - scene.die.corners_body[None],
+    reference = np.linalg.norm(scene.die.vertices_body[:, None] - scene.die.vertices_body[None],
                                axis=-1)
     np.testing.assert_allclose(dists, np.broadcast_to(reference, dists.shape), atol=1e-12)
 
@@ -87,19 +87,19 @@ def test_corner_distances_stay_rigid():
 # --- ground ------------------------------------------------------------------------------
 
 @pytest.mark.parametrize("angle", [0.0, 15.0])
-def test_resting_height_is_half_edge_minus_weight_over_stiffness(angle):
+def test_resting_height_is_half_the_size_less_the_static_sink(angle):
     ground = Ground.tilted(angle)
     scene = Scene(ground=ground)
     normal = np.array(ground.normal)
     # released flat on the table, a hair above it, no spin
     tilt = axis_angle([0, 1, 0], np.radians(angle))
-    start = State.release(scene, normal * (scene.die.half_edge + 1e-4), [0, 0, 0],
+    start = State.release(scene, normal * (scene.die.size / 2 + 1e-4), [0, 0, 0],
                           orientation=tilt)
     res = simulate(scene, start, t_max=2.0)
     assert res.settled[0] and res.face[0] == 1
     sink = scene.die.mass * scene.gravity * np.cos(np.radians(angle)) / (4 * ground.stiffness)
     height = res.final.position[0] @ normal
-    assert height == pytest.approx(scene.die.half_edge - sink, abs=1e-3 * sink)
+    assert height == pytest.approx(scene.die.size / 2 - sink, abs=1e-3 * sink)
 
 
 def _flat_on(angle: float, scene: Scene) -> State:
@@ -107,7 +107,7 @@ def _flat_on(angle: float, scene: Scene) -> State:
     normal = np.array(scene.ground.normal)
     sink = scene.die.mass * scene.gravity * np.cos(np.radians(angle)) / (
         4 * scene.ground.stiffness)
-    return State.release(scene, normal * (scene.die.half_edge - sink), [0, 0, 0],
+    return State.release(scene, normal * (scene.die.size / 2 - sink), [0, 0, 0],
                          orientation=axis_angle([0, 1, 0], np.radians(angle)))
 
 
@@ -136,17 +136,17 @@ def test_a_die_pausing_on_an_edge_is_not_at_rest():
     # balanced on an edge (centre straight above it) a die is quiet for a while, then falls
     scene = Scene()
     tilt = axis_angle([1, 0, 0], np.pi / 4)
-    start = State.release(scene, [0, 0, scene.die.half_edge * np.sqrt(2) - 2e-6], [0, 0, 0],
+    start = State.release(scene, [0, 0, scene.die.size / 2 * np.sqrt(2) - 2e-6], [0, 0, 0],
                           orientation=tilt, angular_velocity=[1e-3, 0, 0])
     res = simulate(scene, start, t_max=3.0)
     assert res.settled[0]
-    assert res.final.position[0, 2] == pytest.approx(scene.die.half_edge, abs=1e-4)
+    assert res.final.position[0, 2] == pytest.approx(scene.die.size / 2, abs=1e-4)
     assert res.rest_time[0] > 0.1
 
 
 def test_frictionless_die_keeps_sliding():
     scene = Scene(ground=Ground(friction=0.0), rotation=False)
-    start = State.release(scene, [0, 0, scene.die.half_edge + 0.01], [0.7, -0.2, 0])
+    start = State.release(scene, [0, 0, scene.die.size / 2 + 0.01], [0.7, -0.2, 0])
     res = simulate(scene, start, t_max=3.0)
     np.testing.assert_array_equal(res.final.velocity[0, :2], [0.7, -0.2])
     assert not res.settled[0]
@@ -154,11 +154,11 @@ def test_frictionless_die_keeps_sliding():
 
 def test_undamped_ground_never_settles():
     scene = Scene(ground=Ground(damping=0.0), rotation=False)
-    start = State.release(scene, [0, 0, scene.die.half_edge + 0.01], [0.0, 0, 0])
+    start = State.release(scene, [0, 0, scene.die.size / 2 + 0.01], [0.0, 0, 0])
     res = simulate(scene, start, t_max=3.0, record_every=100)
     assert not res.settled[0]
     # it keeps bouncing back to (nearly) its release height
-    assert res.x_cm[0, -len(res.t) // 3:, 2].max() > scene.die.half_edge + 0.009
+    assert res.x_cm[0, -len(res.t) // 3:, 2].max() > scene.die.size / 2 + 0.009
 
 
 def test_energy_never_rises_beyond_tolerance_at_the_automatic_step():
@@ -208,7 +208,7 @@ def test_critical_step_by_experiment(factor, blows_up, scheme):
     base = Scene(rotation=False, ground=Ground(friction=0.0, damping=0.4), scheme=scheme)
     scene = base.with_(dt=factor * base.critical_dt, allow_unstable=True)
     sink = scene.die.mass * scene.gravity / (4 * scene.ground.stiffness)
-    start = State.release(scene, [0, 0, scene.die.half_edge - 1.5 * sink], [0, 0, 0])
+    start = State.release(scene, [0, 0, scene.die.size / 2 - 1.5 * sink], [0, 0, 0])
     res = simulate(scene, start, t_max=0.2, stop_at_rest=False)
     assert bool(res.unstable[0]) is blows_up
     assert bool(res.max_penetration[0] > 100 * sink) is blows_up
@@ -225,7 +225,7 @@ def test_step_above_critical_needs_opt_in():
 
 def test_loaded_die_mass_distribution():
     die = Die.loaded(face=6, fraction=0.2, depth=0.8)
-    assert die.com[2] == pytest.approx(-0.2 * 0.8 * die.half_edge)
+    assert die.com[2] == pytest.approx(-0.2 * 0.8 * die.size / 2)
     assert not die.is_fair
     inertia = die.inertia_body
     assert inertia[0, 0] == pytest.approx(inertia[1, 1]) and inertia[2, 2] < inertia[0, 0] * 1.01
@@ -267,7 +267,7 @@ def test_outcome_record():
     assert (res.impacts >= 1).all()
     assert np.all(res.rest_time[res.settled] < 3.0) and np.all(res.rest_time >= 0)
     assert np.isfinite(res.final.position).all()
-    assert np.all(res.max_penetration < 0.03 * scene.die.edge * 3)
+    assert np.all(res.max_penetration < 0.03 * scene.die.size * 3)
 
 
 # --- bad input -----------------------------------------------------------------------------

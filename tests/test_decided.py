@@ -58,18 +58,18 @@ def test_decided_face_is_the_face_at_rest(name):
 def test_margin_zero_is_the_tie_energy_and_the_fair_die_tips_over_an_edge():
     scene = Scene()
     die, weight = scene.die, scene.die.mass * scene.gravity
-    np.testing.assert_allclose(die.tipping_heights, math.sqrt(2) * die.half_edge, rtol=1e-3)
-    assert (die.tipping_heights <= math.sqrt(2) * die.half_edge).all()
-    np.testing.assert_allclose(die.resting_heights, die.half_edge)
-    tie = weight * math.sqrt(2) * die.half_edge - weight**2 / (2 * scene.ground.stiffness)
+    np.testing.assert_allclose(die.tipping_heights, math.sqrt(2) * die.size / 2, rtol=1e-3)
+    assert (die.tipping_heights <= math.sqrt(2) * die.size / 2).all()
+    np.testing.assert_allclose(die.resting_heights, die.size / 2)
+    tie = weight * math.sqrt(2) * die.size / 2 - weight**2 / (2 * scene.ground.stiffness)
     np.testing.assert_allclose(lock_energy(scene, margin=0.0), tie, rtol=1e-3)
-    np.testing.assert_allclose(lock_energy(scene, margin=1.0), weight * die.half_edge
+    np.testing.assert_allclose(lock_energy(scene, margin=1.0), weight * die.size / 2
                                - weight**2 / (2 * scene.ground.stiffness))
 
 
 def test_a_die_balanced_on_an_edge_is_not_decided_and_one_lying_flat_is():
     scene = Scene()
-    h = scene.die.half_edge
+    h = scene.die.size / 2
     on_edge = State.release(scene, [0, 0, math.sqrt(2) * h], [0, 0, 0],
                             orientation=_about_x(math.pi / 4))
     flat = State.release(scene, [0, 0, h + 1e-4], [0.05, 0, 0])
@@ -82,7 +82,7 @@ def test_a_die_balanced_on_an_edge_is_not_decided_and_one_lying_flat_is():
 def test_a_loaded_die_holds_its_heavy_face_down_harder():
     loaded = Die.loaded(face=6, fraction=0.3)  # the mass moves toward face 6: 1 up lies low
     rest, tip = loaded.resting_heights, loaded.tipping_heights
-    assert rest[0] < Die().half_edge < rest[5]
+    assert rest[0] < Die().size / 2 < rest[5]
     # the barrier out of "6 down, 1 up" is higher than out of "1 down, 6 up"
     assert tip[5] - rest[5] < tip[0] - rest[0]
 
@@ -113,7 +113,7 @@ def test_decided_face_is_the_face_at_rest_in_thousands_of_throws(name):
     die, weight = scene.die, scene.die.mass * scene.gravity
     kinetic = 0.5 * die.mass * (start.velocity**2).sum(1) + 0.5 * (
         start.angular_momentum * start.angular_velocity).sum(1)
-    scale = weight * die.edge + kinetic + weight * np.maximum(0.0, start.position[:, 2])
+    scale = weight * die.size + kinetic + weight * np.maximum(0.0, start.position[:, 2])
     rise = again.energy_rise * scene.energy_tol * scale
     barrier = weight * (die.tipping_heights - die.resting_heights).min()
     print(f"\n{name}: {agree[rest.settled].mean():.5f} of {rest.settled.sum()} settled throws "

@@ -5,15 +5,23 @@ import math
 import numpy as np
 import pytest
 
+import dice_env
+from dice_env import die as die_module
 from dice_env import polyhedra
-from dice_env.die import CORNER_SIGNS, FACE_NORMALS, STANDARD_SIZES, Die, face_up
+from dice_env.die import STANDARD_SIZES, Die
 from dice_env.rotations import axis_angle, random_rotations
 
 PHI = (1 + math.sqrt(5)) / 2
+# The d6 as stated in dice_env/die.py: corner signs in the order of the paper's cube.m, outward
+# normals of faces 1-6 (opposite faces sum to 7, 1-2-3 counter-clockwise).
+CUBE_CORNERS = np.array([[1, 1, 1], [1, -1, 1], [-1, -1, 1], [-1, 1, 1],
+                         [1, 1, -1], [1, -1, -1], [-1, -1, -1], [-1, 1, -1]], dtype=np.float64)
+CUBE_NORMALS = np.array([[0, 0, 1], [1, 0, 0], [0, 1, 0], [0, -1, 0], [-1, 0, 0], [0, 0, -1]],
+                        dtype=np.float64)
 # Platonic solids: generator, volume / a^3, isotropic moment I / (m a^2) (a: the edge)
 PLATONIC = {
     "d4": (polyhedra.tetrahedron, 1 / (6 * math.sqrt(2)), 1 / 20),
-    "d6": (lambda: CORNER_SIGNS, 1.0, 1 / 6),
+    "d6": (lambda: CUBE_CORNERS, 1.0, 1 / 6),
     "d8": (polyhedra.octahedron, math.sqrt(2) / 3, 1 / 10),
     "d12": (polyhedra.dodecahedron, (15 + 7 * math.sqrt(5)) / 4, (95 + 39 * math.sqrt(5)) / 300),
     "d20": (polyhedra.icosahedron, 5 * (3 + math.sqrt(5)) / 12, (3 + math.sqrt(5)) / 20),
@@ -91,8 +99,8 @@ def test_cuboid_mass_properties_match_the_closed_form():
     np.testing.assert_allclose(die.inertia_body, expected, rtol=1e-12, atol=0)
     assert die.volume == pytest.approx(x * y * z, rel=1e-12)
     assert die.size == x and die.name == "cuboid" and not die.is_fair
-    np.testing.assert_array_equal(die.face_normals, FACE_NORMALS)  # numbered like the d6
-    np.testing.assert_array_equal(die.vertices, CORNER_SIGNS * [x / 2, y / 2, z / 2])
+    np.testing.assert_array_equal(die.face_normals, CUBE_NORMALS)  # numbered like the d6
+    np.testing.assert_array_equal(die.vertices, CUBE_CORNERS * [x / 2, y / 2, z / 2])
     np.testing.assert_allclose(die.resting_heights, [z / 2, x / 2, y / 2, y / 2, x / 2, z / 2])
     assert Die.cuboid((x, y, z)).mass == pytest.approx(Die().mass * x * y * z / 0.016**3)
 
@@ -116,11 +124,11 @@ def test_standard_d6_is_the_default_die_bit_for_bit():
     assert Die.standard("d6", size=0.02, mass=0.01) == Die(edge=0.02, mass=0.01)
     assert Die.cuboid((0.02, 0.02, 0.02), mass=0.01) == Die(edge=0.02, mass=0.01)
     die = Die()
-    np.testing.assert_array_equal(die.vertices_body, CORNER_SIGNS * 0.008)
-    np.testing.assert_array_equal(die.face_normals, FACE_NORMALS)
+    np.testing.assert_array_equal(die.vertices_body, CUBE_CORNERS * 0.008)
+    np.testing.assert_array_equal(die.face_normals, CUBE_NORMALS)
     np.testing.assert_array_equal(die.inertia_body, np.eye(3) * (0.0045 * 0.016 * 0.016 / 6.0))
     assert die.labels.tolist() == [1, 2, 3, 4, 5, 6] and not die.reads_down
-    assert die.edge == die.size == 0.016 and die.half_edge == 0.008
+    assert die.size == 0.016 and die.resting_heights.tolist() == [0.008] * 6
 
 
 @pytest.mark.parametrize("case", CUBE_TIPPING)
@@ -188,12 +196,11 @@ def test_d4_reads_the_corner_up():
     assert die.face_read(orientations, up).tolist() == [1, 2, 3, 4]
 
 
-def test_face_up_is_the_default_die_reading():
+def test_the_d6_reads_the_face_most_along_up():
     q = random_rotations(np.random.default_rng(4), 500)
     up = np.array([0.1, -0.2, 1.0]) / np.linalg.norm([0.1, -0.2, 1.0])
-    np.testing.assert_array_equal(face_up(q, up), Die().face_read(q, up))
-    expected = np.argmax(np.einsum("nij,fj,i->nf", q, FACE_NORMALS, up), axis=1) + 1
-    np.testing.assert_array_equal(face_up(q, up), expected)
+    expected = np.argmax(np.einsum("nij,fj,i->nf", q, CUBE_NORMALS, up), axis=1) + 1
+    np.testing.assert_array_equal(Die().face_read(q, up), expected)
 
 
 # --- resting and tipping ----------------------------------------------------------------
@@ -259,7 +266,7 @@ def test_loading_matches_a_point_weight_added_to_the_solid():
 
 def test_from_vertices_builds_the_hull_and_centres_it():
     rng = np.random.default_rng(5)
-    cube = CORNER_SIGNS * 0.008
+    cube = CUBE_CORNERS * 0.008
     die = Die.from_vertices(cube[rng.permutation(8)] + [0.01, 0.0, -0.02])
     assert die.n_faces == 6 and die.size == pytest.approx(0.016)
     np.testing.assert_allclose(np.array(die.vertices).mean(axis=0), 0, atol=1e-17)
@@ -299,14 +306,20 @@ def test_dice_are_hashable_and_frozen():
     assert Die.standard("d20") != Die.standard("d20", mass=0.001)
     with pytest.raises(AttributeError):
         Die().mass = 1.0
-    with pytest.raises(AttributeError, match="edge is defined for the d6 only"):
-        _ = Die.standard("d8").edge
     assert repr(Die()) == "Die('d6', size=0.016, mass=0.0045)"
+
+
+def test_no_cube_only_names():
+    # every die is data: its size, vertices, edges, normals and reading, no d6-only aliases
+    for name in ("edge", "half_edge", "corners_body"):
+        assert not hasattr(Die(), name)
+    for name in ("FACE_NORMALS", "CORNER_SIGNS", "EDGES", "face_up"):
+        assert not hasattr(die_module, name) and not hasattr(dice_env, name)
 
 
 # --- bad input ----------------------------------------------------------------------------
 
-CUBE = CORNER_SIGNS.tolist()
+CUBE = CUBE_CORNERS.tolist()
 
 
 @pytest.mark.parametrize(("make", "match"), [

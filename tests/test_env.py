@@ -175,7 +175,7 @@ def test_keywords_reach_the_scene():
     task = make(stiffness=2e5, friction=0.3, edge=0.02, tilt_deg=10.0,
                 release_height=0.03).unwrapped.task
     assert task.scene.ground.stiffness == 2e5 and task.scene.ground.friction == 0.3
-    assert task.scene.die.edge == 0.02 and task.scene.ground.normal[0] > 0
+    assert task.scene.die.size == 0.02 and task.scene.ground.normal[0] > 0
     assert make_task().scene.die == Scene().die  # defaults flow from Scene()
     assert make_task(load_fraction=0.2).scene.die.com[2] < 0  # toward face 6 (-z)
 
@@ -222,7 +222,7 @@ def count_pips(image):
 
 def test_render_top_face_shows_its_number():
     scene = Scene()
-    position = np.array([0.0, 0.0, scene.die.half_edge])
+    position = np.array([0.0, 0.0, scene.die.size / 2])
     for k in range(6):
         image = render_die(scene, position, face_up_rotation(scene.die, k + 1), size=(96, 96),
                            elevation=90.0)

@@ -9,7 +9,7 @@ from gymnasium.utils.env_checker import check_env
 import dice_env  # noqa: F401
 from agents.baselines import HandThrower, RandomThrower
 from agents.config import Config
-from agents.evaluate import Batch
+from agents.episodes import Batch
 from agents.policy import TargetNormal
 from dice_env import Die, Scene
 from dice_env.envs import DiceThrowVectorEnv

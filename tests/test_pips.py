@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 from scipy.stats import qmc
 
+from dice_env import studies
 from dice_env.die import Die
 from dice_env.pips import PRESETS, Pips, cap_properties, drill, layout
-from dice_env.pips import main as write_page
 
 DRILLED = Pips(radius=1.5e-3, depth=1.0e-3)
 SHALLOW = Pips(radius=2.0e-3, depth=0.4e-3, offset=0.6)
@@ -204,9 +204,9 @@ def test_bad_pips_fields_are_refused(kwargs, match):
 
 
 def test_page_is_written(tmp_path):
-    path = tmp_path / "pips.md"
-    write_page([str(path)])
-    text = path.read_text()
-    assert "python -m dice_env.pips" in text
+    numbers = studies.run("pips", tmp_path)
+    text = (tmp_path / "pips.md").read_text()
+    assert "python -m dice_env.studies pips" in text
+    assert 2e-3 < numbers["drilled16_com_over_edge"] < 4e-3
     for name in PRESETS:
         assert name in text

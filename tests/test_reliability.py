@@ -156,7 +156,7 @@ def test_a_resting_die_may_start_slightly_in_the_table():
 def test_impossible_sinks_are_flagged(scene, velocity):
     result = run(scene, drop(scene, velocity=velocity), t_max=0.5)
     assert result.sunk[0]
-    assert result.max_penetration[0] > scene.sink_limit * scene.die.edge
+    assert result.max_penetration[0] > scene.sink_limit * scene.die.size
 
 
 def test_realistic_throws_never_sink():

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from dice_env import Scene, face_up
+from dice_env import Die, Scene
 from dice_env.studies import fairness as fz
 
 
@@ -14,10 +14,11 @@ def test_wilson_interval_known_value():
     assert lo == pytest.approx(0.0, abs=1e-12) and 0 < hi < 0.02
 
 
-def test_face_down_is_opposite_face_up():
+def test_face_down_is_opposite_the_face_read():
     q = fz.random_orientations(np.random.default_rng(0), 500)
     normal = np.array([0.0, 0.0, 1.0])
-    np.testing.assert_array_equal(fz.face_down(q, normal), 7 - face_up(q, normal))
+    die = Die()
+    np.testing.assert_array_equal(fz.face_down(die, q, normal), 7 - die.face_read(q, normal))
 
 
 def test_energy_throws_carry_the_requested_energy():
@@ -25,11 +26,11 @@ def test_energy_throws_carry_the_requested_energy():
     rng = np.random.default_rng(1)
     excess = np.array([0.0, 0.1, 1.0, 10.0, 100.0])
     state = fz.energy_throws(scene, excess, rng)
-    base = fz.touching_height(scene, state.orientation) - scene.die.half_edge
-    expected = excess + base / scene.die.edge
+    base = fz.touching_height(scene, state.orientation) - scene.die.size / 2
+    expected = excess + base / scene.die.size
     np.testing.assert_allclose(fz.throw_energy(scene, state), expected, rtol=1e-9, atol=1e-12)
     # lowest corner exactly on the plane for the gentle release
-    corners = state.position[0][:, None] + state.orientation[0] @ scene.die.corners_body.T
+    corners = state.position[0][:, None] + state.orientation[0] @ scene.die.vertices_body.T
     assert corners[2].min() == pytest.approx(0.0, abs=1e-12)
     assert np.all(state.velocity[:, 2] <= 0)
 
@@ -37,7 +38,7 @@ def test_energy_throws_carry_the_requested_energy():
 def test_vigorous_throws_respect_their_ranges():
     scene = Scene()
     state = fz.vigorous_throws(scene, 400, np.random.default_rng(2))
-    a = scene.die.edge
+    a = scene.die.size
     speed = np.linalg.norm(state.velocity, axis=1) / a
     assert speed.min() >= 30 - 1e-9 and speed.max() <= 150 + 1e-9
     assert np.all(state.velocity[:, 2] <= 0)

@@ -27,7 +27,7 @@ from functools import lru_cache
 
 import numpy as np
 
-from dice_env.die import FACE_NORMALS, Die
+from dice_env.die import Die
 from dice_env.rotations import axis_angle
 from dice_env.scene import Scene
 from dice_env.surroundings import walls
@@ -35,7 +35,8 @@ from dice_env.validation import check_finite, check_positive, check_range
 
 # In-face axes (u, v) of the d6's pip faces, body frame, so that u x v is the outward normal.
 FACE_U = np.array([[1, 0, 0], [0, 1, 0], [0, 0, 1], [0, 0, 1], [0, 0, 1], [0, 1, 0]], float)
-FACE_V = np.cross(FACE_NORMALS, FACE_U)
+_D6_NORMALS = Die().face_normals
+FACE_V = np.cross(_D6_NORMALS, FACE_U)
 # Pip centres in face coordinates (u, v in [-1, 1], units of half the face's shorter side).
 PIPS = (
     ((0, 0),),
@@ -380,7 +381,7 @@ def _face_offsets(die: Die) -> np.ndarray:
 def has_pips(die: Die) -> bool:
     """True for a die drawn with pips: six faces numbered like the d6 (the d6, the cuboids)."""
     return (die.n_faces == 6 and not die.reads_down
-            and bool(np.allclose(die.face_normals, FACE_NORMALS, atol=1e-9)))
+            and bool(np.allclose(die.face_normals, _D6_NORMALS, atol=1e-9)))
 
 
 @lru_cache(maxsize=64)

@@ -24,7 +24,12 @@ import numpy as np
 
 from dice_env.die import Die
 from dice_env.envs.keywords import build_scene, check_face, check_scene
-from dice_env.rotations import orthonormality_error, quaternion_to_matrix, uniform_rotations
+from dice_env.rotations import (
+    orthonormality_error,
+    quaternion_to_matrix,
+    uniform_rotations,
+    up_rotation,
+)
 from dice_env.scene import Scene
 from dice_env.simulate import Result, State, lock_energy, simulate
 from dice_env.validation import check_nonnegative, check_positive
@@ -387,14 +392,7 @@ def _z_turn(angle: float) -> np.ndarray:
 def face_up_rotation(die: Die, face: int) -> np.ndarray:
     """An orientation (body to world, 3x3) in which ``die`` reads ``face`` (a label).
 
-    The face's reading direction (:attr:`Die.reading`) points to world +z. Rows: the body axes
-    that map to world x, y, z; the x row is the direction's absolute value rolled by one, made
-    orthogonal to it (for the cube's axis normals a permuted, flipped frame).
+    The face's reading direction (:attr:`Die.reading`) points to world +z
+    (:func:`dice_env.rotations.up_rotation`).
     """
-    z = die.reading[check_face("face", face, die.n_faces) - 1]
-    x = np.roll(np.abs(z), 1)
-    x = x - (x @ z) * z
-    if np.linalg.norm(x) < 1e-6:  # |direction| with equal components: roll maps it to itself
-        x = np.cross(z, [1.0, 0.0, 0.0] if abs(z[0]) < 0.9 else [0.0, 1.0, 0.0])
-    x = x / np.linalg.norm(x)
-    return np.stack([x, np.cross(z, x), z])
+    return up_rotation(die.reading[check_face("face", face, die.n_faces) - 1])

@@ -17,6 +17,7 @@ STUDIES = {
     "error": "dice_env.studies.convergence",
     "shapes": "dice_env.studies.shapes",
     "cuboids": "dice_env.studies.cuboids",
+    "pips": "dice_env.studies.pips",
 }
 SIZED = ("shapes", "cuboids")
 

@@ -21,10 +21,11 @@ from pathlib import Path
 
 import numpy as np
 
+from dice_env.calibration import measured_restitution
 from dice_env.rotations import quaternion_to_matrix, random_rotations
 from dice_env.scene import FrictionLaw, Scene, Scheme
 from dice_env.simulate import Result, State, simulate
-from dice_env.table import DAMPING, FRICTION, RESTITUTION, STIFFNESS, measured_restitution
+from dice_env.table import DAMPING, FRICTION, RESTITUTION, STIFFNESS
 
 # Throws whose faces are compared are simulated for at most this long (s); all settle sooner.
 T_THROW = 4.0
@@ -101,7 +102,7 @@ def drop_height(scene: Scene, state: State) -> np.ndarray:
     spin = np.einsum("bij,bj->bi", inv, state.angular_momentum)
     kinetic = 0.5 * die.mass * (state.velocity**2).sum(1) + 0.5 * np.einsum(
         "bi,bi->b", state.angular_momentum, spin)
-    return kinetic / (die.mass * scene.gravity) + state.position[:, 2] - die.half_edge
+    return kinetic / (die.mass * scene.gravity) + state.position[:, 2] - die.resting_heights.min()
 
 
 def timed(scene: Scene, state: State, **kwargs: object) -> tuple[Result, float]:
@@ -423,7 +424,7 @@ def write_report(out: Path, numbers: dict[str, object], quick: bool) -> dict[str
     ratio = _ratio_at_equal_error(curves[LISTING], curves[DEFAULT], at_default)
     orders = {name: observed_order(c["dt"][-4:], c["position"][-4:]) for name, c in
               curves.items()}
-    pen = agreement["default"]["penetration"] / scene.die.edge
+    pen = agreement["default"]["penetration"] / scene.die.size
     verdicts = {
         label: {"gentle": float(gentle[DEFAULT if label == "default" else label]
                                 ["step"].mean()),
@@ -443,7 +444,7 @@ def write_report(out: Path, numbers: dict[str, object], quick: bool) -> dict[str
         "",
         "| quantity | value | source |",
         "|---|---|---|",
-        f"| die | {1e3 * scene.die.edge:.0f} mm, {1e3 * scene.die.mass:.1f} g, uniform | the "
+        f"| die | {1e3 * scene.die.size:.0f} mm, {1e3 * scene.die.mass:.1f} g, uniform | the "
         "common game die; a 16 mm PMMA cube (1.18 g/cm³) is 4.8 g before the pips are "
         "drilled |",
         f"| restitution (normal, flat landing) | {RESTITUTION} (target) | dice on wooden "
@@ -469,7 +470,7 @@ def write_report(out: Path, numbers: dict[str, object], quick: bool) -> dict[str
         "clipped relation: ζ = 0.301 for e = 0.45 (the classical relation would give "
         "ζ = 0.246, which with the clip yields e ≈ 0.51).",
         "",
-        "**Restitution actually obtained** (`dice_env.table.measured_restitution`: a flat, "
+        "**Restitution actually obtained** (`dice_env.calibration.measured_restitution`: a flat, "
         "spin-free landing; upward speed when the face recrosses the plane, over the impact "
         "speed; gravity on):",
         "",
@@ -623,7 +624,7 @@ def write_report(out: Path, numbers: dict[str, object], quick: bool) -> dict[str
         "",
         "The exact numbers of [1–4] were not re-read for this page (the full texts were not "
         "at hand): 0.45 and 0.4 are mid-range values for a plastic die on a wooden table, "
-        "and `dice_env.table.table_scene(restitution=..., friction=...)` changes them.",
+        "and `dice_env.calibration.table_scene(restitution=..., friction=...)` changes them.",
     ]
     (out / "error-vs-runtime.md").write_text("\n".join(lines) + "\n")
     return {"cpu_ratio_at_equal_error": ratio, "order_default": orders[DEFAULT],

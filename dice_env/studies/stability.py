@@ -95,7 +95,7 @@ def extreme_cases(quick: bool) -> list[Case]:
     d_crit = 2 * np.sqrt(g.stiffness * base.effective_mass)
     cases = [Case("baseline", "default scene", base)]
     for v in (10.0, 100.0):
-        cases.append(Case("speed", f"{v:g} edges/s ({v * die.edge:.2g} m/s)", base,
+        cases.append(Case("speed", f"{v:g} edges/s ({v * die.size:.2g} m/s)", base,
                           Vigour(MODERATE.clearance, (v, v), MODERATE.spin)))
     for w in (100.0, 1000.0):
         cases.append(Case("spin", f"{w:g} rad/s", base,
@@ -110,7 +110,7 @@ def extreme_cases(quick: bool) -> list[Case]:
                                friction=g.friction)
         cases.append(Case("tilt", f"{angle:g} deg", base.with_(ground=tilted)))
     for mass in (1e-3, 1.0, 1e3):
-        cases.append(Case("mass", f"{mass:g} kg", base.with_(die=Die(edge=die.edge, mass=mass))))
+        cases.append(Case("mass", f"{mass:g} kg", base.with_(die=Die(edge=die.size, mass=mass))))
     for s in (1e6, 1e7) if quick else (1e6, 1e7, 1e8, 1e9, 1e10):
         cases.append(Case("stiffness", f"S = {s:g}", base.with_(ground=_ground(g, stiffness=s))))
     return cases
@@ -136,7 +136,7 @@ def run_case(case: Case, throws: int, rng: np.random.Generator) -> dict[str, flo
     settled = result.settled
     return {
         "settled": float(settled.mean()),
-        "max_penetration": float(result.max_penetration.max() / scene.die.edge),
+        "max_penetration": float(result.max_penetration.max() / scene.die.size),
         "energy_drift": float(result.energy_rise.max() * scene.energy_tol),
         "unstable": float(result.unstable.mean()),
         "rest_time": float(np.median(result.rest_time[settled])) if settled.any() else np.nan,
@@ -309,7 +309,7 @@ limit.
 
 ## Extreme cases (default scene, automatic step)
 
-Default scene: die {base.die.edge * 1e3:g} mm, {base.die.mass * 1e3:g} g; table
+Default scene: die {base.die.size * 1e3:g} mm, {base.die.mass * 1e3:g} g; table
 S = {g.stiffness:g} N/m, D = {g.damping:.4g} N s/m, mu = {g.friction:g},
 {g.contact_law.name.lower()} law; automatic step = {base.safety:g} x critical =
 {base.step:.3g} s; up to {base.t_max:g} s per throw. Each row: {throws} random throws
@@ -379,7 +379,7 @@ def _sweep_sentence(cases: list[Case], sweep: np.ndarray) -> str:
 
 def _static_sink(scene: Scene) -> float:
     """Sink of a die resting flat, ``m g / (4 S)``, in edges."""
-    return scene.die.mass * scene.gravity / (4 * scene.ground.stiffness) / scene.die.edge
+    return scene.die.mass * scene.gravity / (4 * scene.ground.stiffness) / scene.die.size
 
 
 def _indent(text: str) -> str:

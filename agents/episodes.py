@@ -1,0 +1,75 @@
+"""The evaluation's throws: the run's evaluation task, batches of episodes, a policy as a thrower.
+
+Every thrower of an evaluation faces the same :class:`Batch` (the same targets, hands,
+observations and hand noise: common random numbers).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from agents.baselines import Thrower
+from agents.config import Config
+from dice_env.envs.task import ThrowTask, make_task
+
+EPISODE_KEYWORDS = ("target_face", "orientation_mode")
+CHUNK = 256  # throws per kernel call when the evaluation shows its progress
+
+
+class PolicyThrower:
+    """A trained SB3 policy as a thrower (deterministic actions)."""
+
+    def __init__(self, model: Any) -> None:
+        self.model = model
+
+    def __call__(self, observations: np.ndarray) -> np.ndarray:
+        """The policy's mean action for each observation."""
+        return self.model.predict(np.asarray(observations, np.float32), deterministic=True)[0]
+
+
+@dataclass
+class Batch:
+    """``n`` episodes: targets (n,), hands (n, 3, 3), observations (n, size), noise (n, d)."""
+
+    targets: np.ndarray
+    hands: np.ndarray
+    observations: np.ndarray
+    noise: np.ndarray
+
+    @classmethod
+    def sample(cls, task: ThrowTask, n: int, rng: np.random.Generator,
+               **episode: Any) -> Batch:
+        """Draw ``n`` episodes as the env does (``target_face``, ``orientation_mode``)."""
+        pairs = [task.sample_hand(rng, episode.get("target_face"),
+                                  episode.get("orientation_mode", "uniform")) for _ in range(n)]
+        targets = np.array([t for t, _ in pairs])
+        hands = np.stack([h for _, h in pairs])
+        return cls(targets, hands, task.observe(targets, hands), task.sample_noise(rng, n))
+
+    def throw(self, task: ThrowTask, thrower: Thrower,
+              progress: Callable[[int], None] | None = None) -> dict[str, np.ndarray]:
+        """The thrower's actions and the throws' info arrays (in chunks when ``progress``)."""
+        actions = np.asarray(thrower(self.observations), np.float64)
+        step = CHUNK if progress is not None else len(actions)
+        parts = []
+        for i in range(0, len(actions), step):
+            part = slice(i, i + step)
+            parts.append(task.throw(actions[part], self.targets[part], self.hands[part],
+                                    self.noise[part]).info)
+            if progress is not None:
+                progress(len(actions[part]))
+        info = {key: np.concatenate([p[key] for p in parts]) for key in parts[0]}
+        return {"action": actions, **info}
+
+
+def make_eval_task(config: Config, **overrides: Any) -> tuple[ThrowTask, dict[str, Any]]:
+    """The run's evaluation task (its ``--env`` keywords, no training shaping) and episode keys."""
+    kwargs = {**config.env_kwargs(), **config.num_threads_kwargs(), **overrides}
+    episode = {k: kwargs.pop(k) for k in EPISODE_KEYWORDS if k in kwargs}
+    for key in ("render_mode", "render_width", "render_height"):
+        kwargs.pop(key, None)
+    return make_task(**kwargs), episode

@@ -1,0 +1,79 @@
+"""Calibration against the simulator: the table scene for any die, the restitution it produces.
+
+Above :func:`dice_env.simulate.simulate`; the measured values and the restitution formulas are
+in :mod:`dice_env.table`.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from dice_env.die import Die
+from dice_env.rotations import up_rotation
+from dice_env.scene import Ground, Scene
+from dice_env.simulate import State, simulate
+from dice_env.table import (
+    DIE_EDGE,
+    DIE_MASS,
+    FRICTION,
+    RESTITUTION,
+    STIFFNESS,
+    damping_for_restitution,
+    rebound,
+)
+from dice_env.validation import check_positive
+
+
+def table_scene(
+    *,
+    edge: float = DIE_EDGE,
+    mass: float = DIE_MASS,
+    restitution: float = RESTITUTION,
+    friction: float = FRICTION,
+    stiffness: float = STIFFNESS,
+    **scene_options: object,
+) -> Scene:
+    """A uniform d6 of ``edge`` and ``mass`` on a table of the given restitution and friction.
+
+    The damping is recomputed for the die's mass; ``scene_options`` go to :class:`Scene`
+    (``dt``, ``safety``, ``t_max``, ...). ``Scene()`` equals ``table_scene()``.
+    """
+    ground = Ground(stiffness=stiffness, friction=friction,
+                    damping=damping_for_restitution(restitution, stiffness, mass))
+    return Scene(die=Die(edge=edge, mass=mass), ground=ground, **scene_options)
+
+
+def measured_restitution(scene: Scene, speed: float = 1.0) -> float:
+    """Restitution the simulator produces for a flat, spin-free landing at ``speed`` (m/s).
+
+    The die lands on the face where its centre of mass rests lowest (the least of
+    :attr:`Die.resting_heights`; the uniform d6 on face 6, showing 1), turned so that it reads
+    that face (:func:`dice_env.rotations.up_rotation`): flat for every die whose faces come in
+    parallel pairs, and for the d4. It starts up to 1 mm above the plane (``normal`` along z),
+    falling so that it meets the plane at ``speed`` (starting on the plane would put the
+    contact onset exactly on a step and add a first-order error of its own); the result is
+    the upward speed when the face crosses the plane again (the gravity between leaving and
+    crossing is undone exactly) over ``speed``.
+    """
+    check_positive("speed", speed)
+    if scene.ground.normal != (0.0, 0.0, 1.0):
+        raise ValueError(f"scene.ground.normal must be (0, 0, 1), got {scene.ground.normal}")
+    die, g = scene.die, scene.gravity
+    heights = die.resting_heights
+    face = int(np.argmin(heights))
+    height = float(heights[face])
+    gap = min(1e-3, 0.25 * speed**2 / g) if g > 0 else 1e-3
+    start = math.sqrt(speed**2 - 2.0 * g * gap)
+    state = State.release(scene, np.array([0.0, 0.0, height + gap]), np.array([0.0, 0.0, -start]),
+                          orientation=up_rotation(die.reading[face]))
+    # contact lasts about pi sqrt(m / 4 S); simulate ten times that, plus the fall
+    span = 10.0 * math.pi * math.sqrt(die.mass / (4.0 * scene.ground.stiffness))
+    span += (speed - start) / g if g > 0 else gap / speed
+    result = simulate(scene, state, t_max=span, stop_at_rest=False, record_every=1, record=())
+    z = result.x_cm[0, :, 2]
+    e = rebound(z, np.diff(z, prepend=height + gap) / scene.step, height, g, speed)
+    if e is None:
+        raise ValueError(f"the die did not leave the table within {span:.3g} s at speed {speed}")
+    return e
