@@ -30,7 +30,7 @@ felt      0.30   0.30   2e4      e: estimate: the fibre layer is what dice trays
                                 cloth slide at 0.15-0.4, typically 0.2 (Alciatore, pool
                                 physics data); a die's edges plough the looser felt nap,
                                 so 0.3 (estimate). S: a corner sinks about 1 mm into a
-                                2-3 mm felt in a vigorous landing (0.3 mm on wood)
+                                2-3 mm felt in a vigorous landing (0.5 mm on wood)
 craps    0.40   0.20   1e4      a cloth layout over a padded bed (Haltom, "Table
                                 conditions"); e: estimate: the rubber or foam padding
                                 returns much of the indentation, and synthetic layouts are

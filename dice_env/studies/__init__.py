@@ -17,8 +17,9 @@ STUDIES = {
     "error": "dice_env.studies.convergence",
     "shapes": "dice_env.studies.shapes",
     "cuboids": "dice_env.studies.cuboids",
+    "materials": "dice_env.studies.materials",
 }
-SIZED = ("shapes", "cuboids")
+SIZED = ("shapes", "cuboids", "materials")
 
 
 def run(name: str, out: Path, quick: bool = False,
