@@ -298,10 +298,10 @@ which correlates their outcomes and narrows their true differences' spread).
 
 ## Against Kapitaniak et al. (2012)
 
-Kapitaniak, quoted on that paper, says that with a smooth, low-friction or soft table the die
-bounces fewer times, and that its outcome is easier to predict on a soft surface than on a
-bouncy table. Here, computed from the tables above, with the materials ordered by their
-restitution:
+Kapitaniak, quoted in press reports of the paper (ANI, 2012), says that with a smooth,
+low-friction or soft table the die bounces fewer times, and that its outcome is easier to
+predict on a soft surface than on a bouncy table. Here, computed from the tables above, with
+the materials ordered by their restitution:
 
 {_kapitaniak(results, restitution)}
 
