@@ -18,8 +18,9 @@ STUDIES = {
     "shapes": "dice_env.studies.shapes",
     "cuboids": "dice_env.studies.cuboids",
     "pips": "dice_env.studies.pips",
+    "materials": "dice_env.studies.materials",
 }
-SIZED = ("shapes", "cuboids")
+SIZED = ("shapes", "cuboids", "materials")
 
 
 def run(name: str, out: Path, quick: bool = False,

@@ -1,0 +1,311 @@
+"""Table materials: how felt, wood, glass and a craps table change the throw's outcome.
+
+``run(out, quick, throws)`` writes ``out/materials.md`` and ``out/figures/materials.png``.
+The default die is thrown on each preset of :mod:`dice_env.materials` with the fairness
+study's vigorous hand throws and the cuboid study's gentle ones, the same releases on every
+material (so the materials' differences are not sampling noise of the releases), each throw
+until its face is decided. Reported per material: the restitution the simulator produces,
+the faces with a chi-square test of uniformity, the impacts and time to the decision, the
+deepest corner sink, and the memory of the release orientation: how often the die ends on
+the face that was down (or up) at release.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, fields
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt
+import numba
+import numpy as np
+from scipy import stats
+
+from dice_env import materials
+from dice_env.simulate import UP, State, simulate
+from dice_env.studies.cuboids import GENTLE
+from dice_env.studies.fairness import VIGOROUS, Vigour, throw_energy, vigorous_throws, wilson
+from dice_env.studies.paper_figures import DOCS, progress, save_figure
+from dice_env.studies.shapes import BATCH, Faces
+
+# Throws per material: (vigorous, gentle) in the full and the quick run.
+FULL, QUICK = (10_000, 5_000), (60, 40)
+# Simulated time limit per throw (s): a throw not decided by then is not counted.
+T_MAX = 20.0
+# (label, hand) of the two kinds of throw.
+KINDS = (("vigorous", VIGOROUS), ("gentle", GENTLE))
+SEED = 2026
+# p-value below which the materials' memories count as different.
+SIGNIFICANT = 0.01
+HEADER = ("| throws | preset | counted | not decided | faces 1–6 | chi2 | p | mean impacts | "
+          "time to decision, mean / median (s) | sink (mm) |")
+
+
+@dataclass
+class Outcome:
+    """One material's throws of one kind.
+
+    ``faces``: the faces read; ``impacts`` and ``time`` (s, to the decision) per counted
+    throw; ``down``/``up``: counted throws resting on the face that was down/up at release;
+    ``sink``: deepest corner sink of each throw (m).
+    """
+
+    faces: Faces
+    impacts: np.ndarray
+    time: np.ndarray
+    down: int
+    up: int
+    sink: np.ndarray
+
+    def memory(self, which: str) -> tuple[float, np.ndarray]:
+        """P(resting on the release-``which`` face) and its 95% Wilson interval."""
+        hits = self.down if which == "down" else self.up
+        return hits / self.faces.ended, wilson(hits, self.faces.ended)
+
+
+def throw(scene: object, state: State, bar: object = None) -> Outcome:
+    """Throw ``state`` on ``scene`` until each face is decided, in batches of ``BATCH``."""
+    die = scene.die
+    parts = []
+    for start in range(0, state.batch_size, BATCH):
+        chunk = State(*(getattr(state, f.name)[start:start + BATCH] for f in fields(State)))
+        res = simulate(scene, chunk, t_max=T_MAX, stop_when_decided=True)
+        ok = (res.decided | res.settled) & ~res.unstable & ~res.sunk
+        rests_on = die.face_read(res.final.orientation, -UP)
+        down = rests_on == die.face_read(chunk.orientation, -UP)
+        up = rests_on == die.face_read(chunk.orientation, UP)
+        parts.append((ok, res.face, res.impacts, res.rest_time, down, up, res.max_penetration))
+        if bar is not None:
+            bar.update(chunk.batch_size)
+    ok, face, impacts, when, down, up, sink = (np.concatenate(p) for p in zip(*parts,
+                                                                               strict=True))
+    counts = np.bincount(face[ok], minlength=die.n_faces + 1)[1:]
+    chi2, p = stats.chisquare(counts)
+    faces = Faces(counts, int(ok.sum()), int((~ok).sum()), float(chi2), float(p))
+    return Outcome(faces, impacts[ok], when[ok], int(down[ok].sum()), int(up[ok].sum()), sink)
+
+
+def run(out: Path = DOCS, quick: bool = False, throws: int | None = None,
+        seed: int = SEED) -> dict[str, float]:
+    """Regenerate ``materials.md`` and its figure under ``out``; return the headline numbers.
+
+    ``throws``: vigorous throws per material (the gentle ones are half as many).
+    """
+    if throws is not None and (not isinstance(throws, int) or isinstance(throws, bool)
+                               or throws < 2):
+        raise ValueError(f"throws must be an int >= 2, got {throws!r}")
+    sizes = (throws, throws // 2) if throws is not None else QUICK if quick else FULL
+    start = time.perf_counter()
+    rng = np.random.default_rng(seed)
+    base = materials.scene("wood")
+    releases = {label: vigorous_throws(base, n, rng, hand)
+                for (label, hand), n in zip(KINDS, sizes, strict=True)}
+    restitution = {name: materials.measured(name) for name in materials.PRESETS}
+    bar = progress(len(materials.PRESETS) * sum(sizes), "material throws")
+    bar.unit = "throw"
+    results = {name: {label: throw(materials.scene(name, t_max=T_MAX), state, bar)
+                      for label, state in releases.items()}
+               for name in materials.PRESETS}
+    bar.close()
+    seconds = time.perf_counter() - start
+    energy = {label: float(np.median(throw_energy(base, state)))
+              for label, state in releases.items()}
+    _plot(results, out / "figures" / "materials.png")
+    (out / "materials.md").write_text(_markdown(results, restitution, energy, sizes, seconds,
+                                                seed))
+    numbers = {"seconds": seconds}
+    for name, kinds in results.items():
+        numbers[f"{name}_restitution"] = restitution[name]
+        for label, result in kinds.items():
+            numbers[f"{name}_{label}_p"] = result.faces.p_value
+            numbers[f"{name}_{label}_down"] = result.memory("down")[0]
+            numbers[f"{name}_{label}_impacts"] = float(result.impacts.mean())
+    return numbers
+
+
+def memory_differs(results: dict, label: str, which: str = "down") -> float:
+    """p-value of the test that P(release-``which`` face) is one on every material.
+
+    Chi-square on the ``label`` throws; conservative, as the materials share their releases.
+    """
+    hits = np.array([getattr(kinds[label], which) for kinds in results.values()])
+    ended = np.array([kinds[label].faces.ended for kinds in results.values()])
+    return float(stats.chi2_contingency(np.stack([hits, ended - hits]))[1])
+
+
+def _plot(results: dict, path: Path) -> None:
+    names = list(results)
+    x = np.arange(len(names))
+    fig, axes = plt.subplots(1, 3, figsize=(14, 4), layout="constrained")
+    for k, (label, _) in enumerate(KINDS):
+        shift = (k - 0.5) * 0.3
+        impacts = [results[n][label].impacts for n in names]
+        axes[0].bar(x + shift, [i.mean() for i in impacts], 0.3, label=label)
+        for which, marker in (("down", "o"), ("up", "s")):
+            p, ci = zip(*(results[n][label].memory(which) for n in names), strict=True)
+            p, ci = np.array(p), np.array(ci)
+            axes[1].errorbar(x + shift, p, yerr=np.clip([p - ci[:, 0], ci[:, 1] - p], 0, None),
+                             fmt=marker, capsize=3, color=f"C{k}",
+                             label=f"{label}: rests on release-{which} face")
+    for k, name in enumerate(names):
+        faces = results[name]["vigorous"].faces
+        axes[2].errorbar(np.arange(1, 7) + (k - 1.5) * 0.15, faces.shares,
+                         yerr=np.clip([faces.shares - faces.intervals[:, 0],
+                                       faces.intervals[:, 1] - faces.shares], 0, None),
+                         fmt="o", capsize=2, label=name)
+    axes[0].set_ylabel("mean impacts to the decision")
+    axes[1].set_ylabel("probability (95% interval)")
+    axes[1].axhline(1 / 6, color="k", ls=":", lw=1)
+    for ax in axes[:2]:
+        ax.set_xticks(x, names)
+        ax.legend(fontsize=8)
+    axes[2].axhline(1 / 6, color="k", ls=":", lw=1)
+    axes[2].set_xlabel("face up (vigorous throws)")
+    axes[2].set_ylabel("share (95% interval)")
+    axes[2].legend(fontsize=8)
+    save_figure(fig, path)
+
+
+def _hand(v: Vigour) -> str:
+    return (f"released {v.clearance[0]:g}–{v.clearance[1]:g} edges above touching, "
+            f"{v.speed[0]:g}–{v.speed[1]:g} edges/s toward the table, {v.spin[0]:g}–"
+            f"{v.spin[1]:g} rad/s about a uniform axis, orientation uniform")
+
+
+def _share(p: float, ci: np.ndarray) -> str:
+    return f"{p:.3f} [{ci[0]:.3f}, {ci[1]:.3f}]"
+
+
+def _kapitaniak(results: dict, restitution: dict) -> str:
+    """Whether the bouncier tables give more impacts and less memory, as a sentence."""
+    order = sorted(results, key=restitution.get)
+    lines = []
+    for label, _ in KINDS:
+        impacts = [results[n][label].impacts.mean() for n in order]
+        down = [results[n][label].memory("down")[0] for n in order]
+        extremes = int(np.argmax(down)) == 0 and int(np.argmin(down)) == len(down) - 1
+        p = memory_differs(results, label)
+        memory = (f"the least bouncy keeps {'the most' if extremes else 'not the most'} "
+                  f"memory and the most bouncy {'the least' if extremes else 'not the least'}"
+                  if p < SIGNIFICANT else
+                  f"the materials' memories do not differ at the {SIGNIFICANT:.0%} level, "
+                  f"p = {p:.3g}")
+        lines.append(f"- {label} throws, materials from the least to the most bouncy "
+                     f"({', '.join(order)}): mean impacts "
+                     f"{', '.join(f'{i:.1f}' for i in impacts)} "
+                     f"({_monotonic(impacts, 'rising')}); P(release-down) "
+                     f"{', '.join(f'{d:.3f}' for d in down)} "
+                     f"({_monotonic(-np.array(down), 'falling')}; {memory}).")
+    return "\n".join(lines)
+
+
+def _monotonic(values: list[float] | np.ndarray, word: str) -> str:
+    """``word`` + " throughout" if ``values`` rise strictly, else which steps break it."""
+    steps = np.diff(values)
+    if np.all(steps > 0):
+        return f"{word} throughout"
+    return f"{word} in {int(np.sum(steps > 0))} of {len(steps)} steps"
+
+
+def _markdown(results: dict, restitution: dict, energy: dict, sizes: tuple, seconds: float,
+              seed: int) -> str:
+    preset_rows = "\n".join(
+        f"| {name} | {m.restitution:.2f} | {restitution[name]:.4f} | {m.friction:.2f} | "
+        f"{m.stiffness:.0e} | {materials.ground(name).damping:.4g} | "
+        f"{materials.scene(name).step * 1e6:.1f} | {m.source} |"
+        for name, m in materials.PRESETS.items())
+    rows = []
+    for label, _ in KINDS:
+        for name, kinds in results.items():
+            r = kinds[label]
+            f = r.faces
+            rows.append(
+                f"| {label} | {name} | {f.ended} | {f.undecided} | "
+                f"{' '.join(f'{s:.3f}' for s in f.shares)} | {f.chi2:.2f} | {f.p_value:.3g} | "
+                f"{r.impacts.mean():.2f} | {r.time.mean():.3f} / {np.median(r.time):.3f} | "
+                f"{np.quantile(r.sink, 0.99) * 1e3:.2f} / {r.sink.max() * 1e3:.2f} |")
+    memory_rows = "\n".join(
+        f"| {label} | {name} | {_share(*kinds[label].memory('down'))} | "
+        f"{_share(*kinds[label].memory('up'))} |"
+        for label, _ in KINDS for name, kinds in results.items())
+    die = materials.scene("wood").die
+    return f"""# Table materials
+
+Generated by `python -m dice_env.studies materials` (module `dice_env/studies/materials.py`,
+seed {seed}); the presets are in `dice_env/materials.py` (`materials.ground("felt")`,
+`materials.scene("glass")`). The run took **{seconds:.0f} s** on {numba.get_num_threads()}
+thread(s) ({sizes[0]} vigorous and {sizes[1]} gentle throws per material).
+
+## The presets
+
+Restitution e (normal, flat landing) and sliding friction mu of a plastic die on each surface,
+with their sources; "estimate" marks a value no measurement gives directly, and the reason.
+The damping D gives the target e for the default die ({die.mass * 1e3:g} g), from the
+clipped spring-dashpot relation of `dice_env.table`; e measured is what the simulator
+produces (`materials.measured`: the die dropped flat at 1 m/s, rebound speed over impact
+speed, `tests/test_materials.py` holds it within 0.01 of the target). The step is the
+scene's automatic one (it grows as S falls).
+
+| preset | e target | e measured | mu | S (N/m) | D (N s/m) | step (µs) | source |
+|---|---|---|---|---|---|---|---|
+{preset_rows}
+
+Sources: dice on wooden tables, Kapitaniak, Strzalko, Grabski & Kapitaniak, Chaos 22, 047504
+(2012) and Strzalko et al., Physics Reports 469, 59 (2008); plastics on wood, Murase,
+J. Fac. Agr. Kyushu Univ. 28, 147 (1984) and Blau, Tribology International 34, 585 (2001);
+cellulose acetate spheres e = 0.87, Foerster, Louge, Chang & Allia, Physics of Fluids 6, 1108
+(1994); steel–Plexiglas 0.4–0.5 dry, the Roloff/Matek friction table as reproduced in Autodesk
+Inventor's help; ball–cloth sliding friction 0.15–0.4 (typically 0.2), D. G. Alciatore's pool
+physics data (billiards.colostate.edu); craps tables as a cloth layout over a padded bed,
+S. Haltom, "Table conditions" (dicecoach.com), and synthetic layouts "very bouncy",
+F. Scoblete, "Get yourself a table" (goldentouchcraps.com). The stiffness S stays at the
+default 1e5 N/m on the hard surfaces (the die's own corner compliance dominates there); on
+felt and the craps layout it is lowered so that a corner sinks about 1 mm and 1.5 mm in a
+vigorous landing (the deepest sinks below), the depth of a felt and of a padded layout.
+
+## Outcomes
+
+The same releases on every material: **vigorous**, the fairness study's hand throws
+({_hand(VIGOROUS)}; median energy {energy['vigorous']:.1f} m g a), and **gentle**, the cuboid
+study's ({_hand(GENTLE)}; median {energy['gentle']:.2f} m g a); edges of the default
+{die.size * 1e3:g} mm die. Each throw runs until its face is decided (`stop_when_decided`:
+too little energy left to change face) or {T_MAX:g} s; impacts and time are counted up to the
+decision. Faces: shares of faces 1–6 among the counted throws, chi-square test of
+uniformity (5 degrees of freedom). Sink: the deepest corner below the table surface, 99th
+percentile / maximum.
+
+![materials](figures/materials.png)
+
+{HEADER}
+|---|---|---|---|---|---|---|---|---|---|
+{chr(10).join(rows)}
+
+## Memory of the release orientation
+
+P(the die rests on the face that was down at release) and P(it rests on the face that was up
+at release, i.e. lands upside down), as `docs/fairness.md` measures them, with 95% Wilson
+intervals; 1/6 = 0.167 is no memory. Chi-square test that the release-down probability is the
+same on all four materials: vigorous p = {memory_differs(results, 'vigorous'):.3g}, gentle
+p = {memory_differs(results, 'gentle'):.3g} (conservative: the materials share their releases,
+which correlates their outcomes and narrows their true differences' spread).
+
+| throws | preset | P(release-down face) | P(release-up face) |
+|---|---|---|---|
+{memory_rows}
+
+## Against Kapitaniak et al. (2012)
+
+Kapitaniak, quoted in press reports of the paper (ANI, 2012), says that with a smooth,
+low-friction or soft table the die bounces fewer times, and that its outcome is easier to
+predict on a soft surface than on a bouncy table. Here, computed from the tables above, with
+the materials ordered by their restitution:
+
+{_kapitaniak(results, restitution)}
+
+Caveats: most values are estimates (see the presets); the model has no air, no rounded edges
+and a flat, infinite table; the stiffness of a soft surface is a linear spring per corner,
+not a felt's nonlinear, rate-dependent compression.
+"""
