@@ -310,11 +310,8 @@ class Scene:
         return min(self._critical_dt(plane) for plane in self.planes)
 
     def _critical_dt(self, plane: Plane) -> float:
-        s, d, m = plane.stiffness, plane.damping, self.effective_mass_on(plane)
-        # the roots rationalised, with no cancellation when D^2 >> S m_eff
-        if self.scheme == Scheme.MIDPOINT:
-            return 2.0 * m / (math.sqrt(d * d + s * m) + d)
-        return 4.0 * m / (math.sqrt(d * d + 4.0 * s * m) + d)
+        return critical_step(plane.stiffness, plane.damping, self.effective_mass_on(plane),
+                             self.scheme)
 
     @property
     def step(self) -> float:
@@ -351,6 +348,18 @@ class Scene:
     def with_(self, **changes: object) -> Scene:
         """A copy with some fields changed (validated again)."""
         return replace(self, **changes)
+
+
+def critical_step(stiffness: float, damping: float, mass: float, scheme: Scheme) -> float:
+    """Largest stable step of ``scheme`` for ``mass x'' = -stiffness x - damping x'``.
+
+    See :attr:`Scene.critical_dt`; the roots rationalised, with no cancellation when
+    ``D^2 >> S m``.
+    """
+    s, d, m = stiffness, damping, mass
+    if scheme == Scheme.MIDPOINT:
+        return 2.0 * m / (math.sqrt(d * d + s * m) + d)
+    return 4.0 * m / (math.sqrt(d * d + 4.0 * s * m) + d)
 
 
 @functools.lru_cache(maxsize=256)

@@ -200,7 +200,7 @@ def simulate(
     if not isinstance(record_every, (int, np.integer)) or isinstance(record_every, bool) \
             or record_every < 0:
         raise ValueError(f"record_every must be an int >= 0, got {record_every!r}")
-    threads = _thread_count(num_threads)
+    threads = thread_count(num_threads)
     for name, flag in (("stop_at_rest", stop_at_rest), ("free_flight", free_flight),
                        ("early_rest", early_rest), ("stop_when_decided", stop_when_decided)):
         if not isinstance(flag, (bool, np.bool_)):
@@ -226,12 +226,11 @@ def simulate(
         status=np.zeros(b, np.int8), unstable=np.zeros(b, np.bool_), rest_time=np.zeros(b),
         impacts=np.zeros(b, np.int64), max_pen=np.maximum(start_sink, 0.0),
         energy_rise=np.zeros(b), steps=np.zeros(b, np.int64), abort=np.zeros(1, np.int64))
-    serial = b == 1 or threads == 1 or _after_fork
     chosen = vector_kernel if vector_kernel.covers(
         scene, b, options.flight, records.stride <= n_steps) else kernel
-    run = chosen.simulate_serial if serial else chosen.simulate_batch
-    _run_interruptibly(run, (dice, body, contact, options, stops, records, outcome),
-                       outcome.abort, threads, long=b * n_steps > _LONG_RUN)
+    run_kernel(chosen.simulate_batch, chosen.simulate_serial,
+               (dice, body, contact, options, stops, records, outcome), outcome.abort,
+               batch=b, threads=threads, work=b * n_steps)
     energy_rise, unstable, status = outcome.energy_rise, outcome.unstable, outcome.status
     energy_rise /= scene.energy_tol
     unstable |= energy_rise > 1.0
@@ -351,7 +350,7 @@ def _record_names(record: object) -> tuple[str, ...]:
     return tuple(names)
 
 
-def _thread_count(num_threads: int | None) -> int:
+def thread_count(num_threads: int | None) -> int:
     """The threads for a run: ``num_threads`` in 1..NUMBA_NUM_THREADS, None for all of them."""
     most = numba.config.NUMBA_NUM_THREADS
     if num_threads is None:
@@ -361,6 +360,19 @@ def _thread_count(num_threads: int | None) -> int:
         raise ValueError(f"num_threads must be an int in [1, {most}] (NUMBA_NUM_THREADS) or "
                          f"None, got {num_threads!r}")
     return int(num_threads)
+
+
+def run_kernel(parallel: Callable, serial: Callable, args: tuple, abort: np.ndarray, *,
+               batch: int, threads: int, work: int) -> None:
+    """Run a compiled kernel ``parallel(*args)`` or ``serial(*args)`` over a batch.
+
+    On the calling thread for a batch of one, one thread, or in a process forked after its
+    parent ran threads (:func:`_forked`); in parallel otherwise. A run of more than
+    ``_LONG_RUN`` die-steps of ``work`` can be interrupted (:func:`_run_interruptibly`).
+    """
+    serial_run = batch == 1 or threads == 1 or _after_fork
+    _run_interruptibly(serial if serial_run else parallel, args, abort, threads,
+                       long=work > _LONG_RUN)
 
 
 def _run_interruptibly(run: Callable, args: tuple, abort: np.ndarray, threads: int, *,

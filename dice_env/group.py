@@ -1,0 +1,363 @@
+"""Several dice in one throw, colliding: the group's state, the die–die material, the run.
+
+    dice = (Die(), Die.standard("d20"))
+    state = GroupState.of([State.release(scene.with_(die=d), ...) for d in dice])
+    result = simulate_group(scene, dice, state, stop_when_decided=True)
+    result.face      # (B, N): each die's face; 0 for a die not read (leaning on another)
+
+The scene gives the planes, gravity, the scheme and the rest test; its ``die`` is not used (the
+dice are given). Dice touch each other through :class:`DieContact` (penalty springs, damping
+and regularised Coulomb friction, :mod:`dice_env.group_kernel`). A die that ends touching
+another die with fewer than three corners on the planes leans on it (a "cocked" die) and is
+not read: its ``face`` is 0 and ``read`` False.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from dice_env import group_kernel, kernel
+from dice_env.die import Die
+from dice_env.rotations import orthonormality_error
+from dice_env.scene import MAX_STEPS, Scene, critical_step
+from dice_env.simulate import (
+    ROTATION_TOL,
+    UP,
+    State,
+    lock_energy,
+    pack_run,
+    pack_scene,
+    run_kernel,
+    thread_count,
+)
+from dice_env.table import DIE_MASS, STIFFNESS, damping_for_restitution
+from dice_env.validation import check_finite, check_nonnegative, check_positive
+
+# Die against die: plastic on plastic. Estimates: no measurement of dice striking dice is
+# known to us. Restitution 0.5, about the die's on a hard table; friction 0.4, within the
+# 0.3-0.5 usual for a rigid polymer on itself.
+DIE_RESTITUTION = 0.5
+DIE_FRICTION = 0.4
+MAX_DICE = 64  # dice in one throw: every pair is tested each step
+TOUCH = 1e-3  # dice released closer than this fraction of the smaller's size touch, not overlap
+
+
+@dataclass(frozen=True)
+class DieContact:
+    """The die–die material: stiffness, damping and friction of a contact.
+
+    ``stiffness`` S (N/m per contact), ``damping`` D (N s/m), ``friction`` mu (regularised
+    Coulomb, at the scene's ``friction_vmin``).
+    D defaults to the restitution :data:`DIE_RESTITUTION` of the default die's mass on the
+    table's stiffness (:func:`dice_env.table.damping_for_restitution`).
+    """
+
+    stiffness: float = STIFFNESS
+    damping: float = damping_for_restitution(DIE_RESTITUTION, STIFFNESS, DIE_MASS)
+    friction: float = DIE_FRICTION
+
+    def __post_init__(self) -> None:
+        check_positive("stiffness", self.stiffness)
+        check_nonnegative("damping", self.damping)
+        check_nonnegative("friction", self.friction)
+
+
+@dataclass
+class GroupState:
+    """State of B throws of N dice: :class:`dice_env.State`'s arrays with a die axis.
+
+    ``position``, ``velocity``, ``angular_momentum``, ``angular_velocity`` (B, N, 3) and
+    ``orientation`` (B, N, 3, 3). Checked when built as :class:`State` is.
+    """
+
+    position: np.ndarray
+    velocity: np.ndarray
+    angular_momentum: np.ndarray
+    orientation: np.ndarray
+    angular_velocity: np.ndarray
+
+    def __post_init__(self) -> None:
+        for name in ("position", "velocity", "angular_momentum", "angular_velocity",
+                     "orientation"):
+            tail = (3, 3) if name == "orientation" else (3,)
+            array = np.asarray(getattr(self, name), dtype=np.float64)
+            if array.ndim != len(tail) + 2 or array.shape[2:] != tail:
+                raise ValueError(f"GroupState.{name} must have shape (B, N, "
+                                 f"{', '.join(map(str, tail))}), got {array.shape}")
+            check_finite(f"GroupState.{name}", array)
+            object.__setattr__(self, name, np.ascontiguousarray(array))
+        shapes = {a.shape[:2] for a in self._arrays()}
+        if len(shapes) > 1:
+            raise ValueError(f"GroupState arrays must share one (B, N), got {sorted(shapes)}")
+        if min(self.position.shape[:2]) == 0:
+            raise ValueError(f"GroupState must hold at least one throw of one die, got (B, N) "
+                             f"= {self.position.shape[:2]}")
+        error = orthonormality_error(self.orientation).max()
+        if error > ROTATION_TOL:
+            raise ValueError(f"GroupState.orientation must be rotation matrices (to "
+                             f"{ROTATION_TOL:g}), got an error of {error:.3g}")
+
+    @classmethod
+    def of(cls, states: Sequence[State]) -> GroupState:
+        """The group whose die ``i`` is ``states[i]``.
+
+        Each a batch of B, e.g. from :meth:`State.release` with that die's scene.
+        """
+        if not states or not all(isinstance(s, State) for s in states):
+            raise TypeError("states must be a non-empty sequence of State")
+        sizes = {s.batch_size for s in states}
+        if len(sizes) > 1:
+            raise ValueError(f"states must share one batch size B, got {sorted(sizes)}")
+        return cls(*(np.stack(arrays, axis=1) for arrays in zip(
+            *(s._arrays() for s in states), strict=True)))
+
+    def die(self, i: int) -> State:
+        """Die ``i`` of every throw, as a :class:`State`."""
+        return State(*(np.array(a[:, i]) for a in self._arrays()))
+
+    @property
+    def batch_size(self) -> int:
+        """Number of throws B."""
+        return self.position.shape[0]
+
+    @property
+    def n_dice(self) -> int:
+        """Dice per throw N."""
+        return self.position.shape[1]
+
+    def copy(self) -> GroupState:
+        """An independent copy."""
+        return GroupState(*(np.array(a) for a in self._arrays()))
+
+    def _arrays(self) -> tuple[np.ndarray, ...]:
+        return (self.position, self.velocity, self.angular_momentum, self.orientation,
+                self.angular_velocity)
+
+
+@dataclass
+class GroupResult:
+    """Outcome of B throws of N dice.
+
+    Per die (B, N): ``face`` (the label read, 0 where not read), ``read`` (False for a die
+    leaning on another at the end), ``impacts``, ``max_penetration`` (deepest corner in a
+    plane, m), ``sunk``. Per throw (B,): ``settled`` (every die at rest), ``decided`` (no
+    face can change any more), ``rest_time``, ``unstable`` (energy gain beyond the scene's
+    tolerance, or a non-finite state), ``energy_rise``, ``overlap`` (deepest die–die contact,
+    m), ``steps``; ``final`` the state at the end. With recording: ``t`` (n,), ``x_cm``
+    (B, n, N, 3), ``orientations`` (B, n, N, 3, 3).
+    """
+
+    face: np.ndarray
+    read: np.ndarray
+    settled: np.ndarray
+    decided: np.ndarray
+    rest_time: np.ndarray
+    impacts: np.ndarray
+    unstable: np.ndarray
+    energy_rise: np.ndarray
+    max_penetration: np.ndarray
+    overlap: np.ndarray
+    sunk: np.ndarray
+    steps: np.ndarray
+    final: GroupState
+    t: np.ndarray | None = None
+    x_cm: np.ndarray | None = None
+    orientations: np.ndarray | None = None
+
+
+def group_step(scene: Scene, dice: Sequence[Die], contact: DieContact = DieContact()) -> float:
+    """The step of a throw of ``dice``.
+
+    ``scene.dt``, or ``scene.safety`` times the least critical step of every die on every
+    plane and of every pair of dice against each other. A pair's contact moves the reduced
+    mass of the two dice's effective masses (:meth:`Scene.effective_mass_on`, the floor's).
+    """
+    scenes = [scene.with_(die=die) for die in _dice(dice)]
+    masses = [s.effective_mass for s in scenes]
+    critical = min(s.critical_dt for s in scenes)
+    for i, m_i in enumerate(masses):
+        for m_j in masses[i + 1:]:
+            critical = min(critical, critical_step(contact.stiffness, contact.damping,
+                                                   m_i * m_j / (m_i + m_j), scene.scheme))
+    if scene.dt is None:
+        return scene.safety * critical
+    if scene.dt > critical and not scene.allow_unstable:
+        raise ValueError(f"scene.dt must be <= the dice's critical step {critical:.6g} s "
+                         f"(die against die included), got {scene.dt:g}; pass "
+                         "allow_unstable=True to run it anyway")
+    return scene.dt
+
+
+def simulate_group(
+    scene: Scene,
+    dice: Sequence[Die],
+    state: GroupState,
+    *,
+    contact: DieContact = DieContact(),
+    t_max: float | None = None,
+    stop_at_rest: bool = True,
+    stop_when_decided: bool = False,
+    record_every: int = 0,
+    orientations: bool = False,
+    num_threads: int | None = None,
+) -> GroupResult:
+    """Run B throws of the N ``dice`` together; ``state`` is not modified.
+
+    Keywords as :func:`dice_env.simulate` (each die's contact-free steps are stepped one by
+    one). ``stop_when_decided`` ends a throw when no energy left in it can change any die's
+    face (see :mod:`dice_env.group_kernel`); ``stop_at_rest`` when every die is at rest.
+    ``record_every`` > 0 records the centres (and with ``orientations`` the orientations).
+    Refused: dice that overlap at the start, more than :data:`MAX_DICE` dice, a step count
+    above :data:`dice_env.scene.MAX_STEPS`.
+    """
+    dice = _dice(dice)
+    if not isinstance(scene, Scene):
+        raise TypeError(f"scene must be a Scene, got {type(scene).__name__}")
+    if not isinstance(state, GroupState):
+        raise TypeError(f"state must be a GroupState, got {type(state).__name__}")
+    if not isinstance(contact, DieContact):
+        raise TypeError(f"contact must be a DieContact, got {type(contact).__name__}")
+    if state.n_dice != len(dice):
+        raise ValueError(f"state holds {state.n_dice} dice per throw, dice {len(dice)}")
+    if not isinstance(record_every, (int, np.integer)) or isinstance(record_every, bool) \
+            or record_every < 0:
+        raise ValueError(f"record_every must be an int >= 0, got {record_every!r}")
+    threads = thread_count(num_threads)
+    dt = group_step(scene, dice, contact)
+    t_max = scene.t_max if t_max is None else t_max
+    check_positive("t_max", t_max)
+    if t_max / dt > MAX_STEPS:
+        raise ValueError(f"t_max / step must be <= {MAX_STEPS:.0e} steps, got {t_max / dt:.3g}")
+    n_steps = max(1, round(t_max / dt))
+    out = state.copy()
+    b, n = out.batch_size, out.n_dice
+    _check_apart(dice, out)
+    scenes = [scene.with_(die=die, dt=dt, allow_unstable=True) for die in dice]
+    sinks = np.stack([s.sink(out.position[:, i], out.orientation[:, i])
+                      for i, s in enumerate(scenes)], axis=1)
+    if sinks.max() > scene.sink_limit * min(d.size for d in dice):
+        throw, die = np.unravel_index(int(sinks.argmax()), sinks.shape)
+        raise ValueError(f"state.position: die {die} of throw {throw} starts with a corner "
+                         f"{sinks[throw, die]:.3g} m inside a plane")
+    _, contact_planes = pack_scene(scenes[0])
+    options, _ = pack_run(scenes[0], n_steps=n_steps, free_flight=False)
+    stops = group_kernel.GroupStops(
+        n_steps=n_steps, at_rest=bool(stop_at_rest), v_rest=float(scene.rest.speed),
+        hold_steps=math.ceil(scene.rest.hold / dt), decide=bool(stop_when_decided),
+        energy_scale=float(sum(d.mass * scene.gravity * d.size for d in dice)))
+    bodies = _bodies(scenes, stop_when_decided)
+    pair = group_kernel.Pair(float(contact.stiffness), float(contact.damping),
+                             float(contact.friction), float(scene.friction_vmin))
+    n_rec = n_steps // record_every if record_every else 0
+    records = group_kernel.GroupRecords(
+        stride=max(1, record_every) if record_every else n_steps + 1,
+        x=np.zeros((b, n_rec, n, 3)),
+        orientation=np.zeros((b, n_rec if orientations else 0, n, 3, 3)))
+    outcome = group_kernel.GroupOutcome(
+        status=np.zeros(b, np.int8), unstable=np.zeros(b, np.bool_), rest_time=np.zeros(b),
+        energy_rise=np.zeros(b), steps=np.zeros(b, np.int64), overlap=np.zeros(b),
+        impacts=np.zeros((b, n), np.int64), max_pen=np.maximum(sinks, 0.0),
+        contacts=np.zeros((b, n), np.int64), touching=np.zeros((b, n), np.bool_),
+        abort=np.zeros(1, np.int64))
+    group = group_kernel.GroupDice(out.position, out.velocity, out.angular_momentum,
+                                   out.orientation, out.angular_velocity)
+    run_kernel(group_kernel.simulate_groups, group_kernel.simulate_groups_serial,
+               (group, bodies, pair, contact_planes, options, stops, records, outcome),
+               outcome.abort, batch=b, threads=threads, work=b * n * n_steps)
+    energy_rise = outcome.energy_rise / scene.energy_tol
+    read = ~(outcome.touching & (outcome.contacts < 3))
+    face = np.stack([die.face_read(out.orientation[:, i], UP) for i, die in enumerate(dice)],
+                    axis=1)
+    limit = scene.sink_limit * min(d.size for d in dice)
+    recorded = {}
+    if record_every:
+        recorded = {"t": np.arange(1, n_rec + 1) * (records.stride * dt), "x_cm": records.x,
+                    "orientations": records.orientation if orientations else None}
+    return GroupResult(
+        face=np.where(read, face, 0), read=read, settled=outcome.status == kernel.SETTLED,
+        decided=outcome.status == kernel.DECIDED, rest_time=outcome.rest_time,
+        impacts=outcome.impacts, unstable=outcome.unstable | (energy_rise > 1.0),
+        energy_rise=energy_rise, max_penetration=outcome.max_pen, overlap=outcome.overlap,
+        sunk=(outcome.max_pen > limit) | (outcome.overlap[:, None] > limit),
+        steps=outcome.steps, final=out, **recorded)
+
+
+def _dice(dice: Sequence[Die]) -> tuple[Die, ...]:
+    """``dice`` as a tuple of 1 to :data:`MAX_DICE` dice."""
+    if isinstance(dice, Die) or not all(isinstance(d, Die) for d in dice):
+        raise TypeError("dice must be a sequence of Die")
+    if not 1 <= len(dice) <= MAX_DICE:
+        raise ValueError(f"dice must hold 1 to {MAX_DICE} dice, got {len(dice)}")
+    return tuple(dice)
+
+
+def _bodies(scenes: list[Scene], decide: bool) -> group_kernel.Bodies:
+    """The kernel's :class:`~dice_env.group_kernel.Bodies`, one scene per die."""
+    dice = [s.die for s in scenes]
+    n = len(dice)
+    n_v = max(len(d.vertices) for d in dice)
+    n_f = max(d.n_faces for d in dice)
+    n_e = max(len(d.edges) for d in dice)
+    vertices, faces = np.zeros((n, n_v, 3)), np.zeros((n, n_f, 3))
+    offsets, edges = np.zeros((n, n_f)), np.zeros((n, n_e, 2), np.int64)
+    lock = np.full((n, n_f), -math.inf)
+    floor = np.zeros(n)
+    for i, (scene, die) in enumerate(zip(scenes, dice, strict=True)):
+        body, _ = pack_scene(scene)
+        vertices[i, :len(die.vertices)] = body.vertices
+        faces[i, :die.n_faces] = die.face_normals
+        offsets[i, :die.n_faces] = [body.vertices[face[0]] @ normal
+                                    for face, normal in zip(die.faces, die.face_normals,
+                                                            strict=True)]
+        edges[i, :len(die.edges)] = die.edges
+        if decide:
+            lock[i, :die.n_faces] = lock_energy(scene)
+        weight = die.mass * scene.gravity
+        floor[i] = weight * float(die.resting_heights.min()) - weight**2 / (
+            2.0 * scene.ground.stiffness)
+    packed = [pack_scene(s)[0] for s in scenes]
+    return group_kernel.Bodies(
+        vertices=vertices, n_vertices=np.array([len(d.vertices) for d in dice]),
+        faces=faces, offsets=offsets, n_faces=np.array([d.n_faces for d in dice]),
+        edges=edges, n_edges=np.array([len(d.edges) for d in dice]),
+        mass=np.array([p.mass for p in packed]),
+        inv_inertia=np.stack([p.inv_inertia for p in packed]),
+        inv_iso=np.array([p.inv_iso for p in packed]), r_max=np.array([p.r_max for p in packed]),
+        reads_down=np.array([p.reads_down for p in packed]), lock=lock, floor=floor)
+
+
+def _check_apart(dice: tuple[Die, ...], state: GroupState) -> None:
+    """Refuse dice that start inside each other.
+
+    Two convex dice are apart when some axis separates them (separating axes: the face
+    normals of both and the cross products of their edges); touching, within
+    :data:`TOUCH` of the smaller die's size, counts as apart.
+    """
+    corners = [state.position[:, i, None, :] + np.einsum(
+        "bij,kj->bki", state.orientation[:, i], die.vertices_body) for i, die in enumerate(dice)]
+    normals = [np.einsum("bij,fj->bfi", state.orientation[:, i], die.face_normals)
+               for i, die in enumerate(dice)]
+    edges = [c[:, die.edges[:, 1]] - c[:, die.edges[:, 0]]
+             for c, die in zip(corners, dice, strict=True)]
+    b = state.batch_size
+    for i in range(len(dice)):
+        for j in range(i + 1, len(dice)):
+            crossed = np.cross(edges[i][:, :, None], edges[j][:, None, :]).reshape(b, -1, 3)
+            length = np.linalg.norm(crossed, axis=-1, keepdims=True)
+            crossed = crossed / np.where(length > 0, length, 1.0)  # parallel edges: no axis
+            axes = np.concatenate([normals[i], normals[j], crossed], axis=1)  # (B, A, 3)
+            on_i = np.einsum("bai,bki->bak", axes, corners[i])
+            on_j = np.einsum("bai,bki->bak", axes, corners[j])
+            overlap = np.minimum(on_i.max(-1) - on_j.min(-1), on_j.max(-1) - on_i.min(-1))
+            faces = normals[i].shape[1] + normals[j].shape[1]
+            real = np.concatenate([np.ones((b, faces), bool), length[..., 0] > 0], axis=1)
+            touch = TOUCH * min(dice[i].size, dice[j].size)
+            inside = ((overlap > touch) | ~real).all(axis=1)
+            if inside.any():
+                throw = int(np.flatnonzero(inside)[0])
+                raise ValueError(f"state.position: dice {i} and {j} of throw {throw} overlap "
+                                 "at the start (no plane separates them)")

@@ -1,0 +1,656 @@
+"""Several dice in one throw: die–die contact and the group's step (numba only).
+
+A throw of N dice is a group. Every die feels the planes exactly as a single die does
+(:func:`dice_env.kernel.vertex_on_plane`, the same stick-slip springs) and every other die
+through penalty contacts:
+
+- the contact normal is the axis along which the two overlap least (:func:`least_overlap`,
+  separating axes: the face normals of both and the cross products of their edges);
+- along a face normal, every corner of one die inside the other is pushed out by its depth
+  beyond the other die's extent along it;
+- along an edge axis (edge across edge: two cubes meeting edge on edge at a right angle have
+  no corner inside the other), one contact at the middle of the two edges' closest points,
+  as deep as the overlap.
+
+A contact's force is ``fn = S d - D vn`` (pushing only) along its normal plus the regularised
+Coulomb friction ``-mu fn vt / (|vt| + vmin)`` (:func:`contact_force`); it acts on one die at
+the contact point and, reversed, on the other at the same point, so a contact conserves the
+pair's linear and angular momentum exactly. Its spring stores energy and its damper and
+friction dissipate it; only a jump of the contact's normal or depth between steps (a new
+axis of least overlap) can add some, which the group's energy check flags. A bounding-sphere
+test leaves out pairs that are apart.
+
+The parallel unit is the throw: one group per thread, its dice stepped together with the
+single die's scheme (velocity, then position; angular momentum, then the rotation), one step at
+a time. The throw ends when every die is at rest (three corners on the planes, every corner
+slow, for the hold) or, with a decision rule, when no energy left in the group can change any
+die's face: for every die ``i``, its own energy plus all that the others could give it (their
+energy above their least, ``Bodies.floor``) is below the lock of the face it reads. This module
+imports nothing from the package but :mod:`dice_env.kernel`.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+from numba import njit, prange
+
+from dice_env.kernel import (
+    ABORT_EVERY,
+    ABORTED,
+    CT,
+    DAMP,
+    DECIDED,
+    KT,
+    MU,
+    NONFINITE,
+    NX,
+    NY,
+    NZ,
+    OFFSET,
+    RUNNING,
+    SETTLED,
+    STIFF,
+    Contact,
+    Options,
+    angular_velocity,
+    face_read,
+    relative_rise,
+    torque_free,
+    vertex_on_plane,
+)
+
+# Edges closer to parallel than this (|e_a x e_b|^2 over |e_a|^2 |e_b|^2) have no edge contact:
+# their overlap shows as vertices inside the other die.
+PARALLEL = 1e-8
+# Axes whose overlaps differ by less than this fraction tie (a face axis wins a tie).
+TIE = 1e-6
+# A corner bears on another die's face when inside it to this fraction of that die's reach
+# (corners exactly on a side plane, as in an aligned stack, must bear).
+LATERAL = 1e-3
+
+
+class Bodies(NamedTuple):
+    """The N dice of a throw (the same for every throw), body frames about the centre of mass.
+
+    Arrays over the dice, padded to the largest die: ``vertices`` (N, V, 3) and ``n_vertices``;
+    ``faces`` (N, F, 3) outward unit normals in label order, ``offsets`` (N, F) their planes
+    ``n . r = offset``, ``n_faces``; ``edges`` (N, E, 2) vertex pairs and ``n_edges``;
+    ``mass``, ``inv_inertia`` (N, 3, 3), ``inv_iso`` (``1/I`` for an isotropic die, else 0),
+    ``r_max`` (the farthest vertex), ``reads_down`` (the d4); ``lock`` (N, F): the energy below
+    which a die alone keeps the face it reads (``-inf``: no decision rule); ``floor`` (N,): a
+    lower bound of each die's energy (potential and spring energy on the floor at rest).
+    """
+
+    vertices: np.ndarray
+    n_vertices: np.ndarray
+    faces: np.ndarray
+    offsets: np.ndarray
+    n_faces: np.ndarray
+    edges: np.ndarray
+    n_edges: np.ndarray
+    mass: np.ndarray
+    inv_inertia: np.ndarray
+    inv_iso: np.ndarray
+    r_max: np.ndarray
+    reads_down: np.ndarray
+    lock: np.ndarray
+    floor: np.ndarray
+
+
+class Pair(NamedTuple):
+    """The die–die material: ``stiffness`` S, ``damping`` D, ``friction`` mu, and ``vmin``."""
+
+    stiffness: float
+    damping: float
+    friction: float
+    vmin: float
+
+
+class GroupStops(NamedTuple):
+    """When a throw ends.
+
+    After ``n_steps``; with ``at_rest`` when every die has been quiet for ``hold_steps``
+    (three contacts with the planes, every corner slower than ``v_rest``); with ``decide``
+    when no die's face can change. ``energy_scale`` is added to the start's kinetic and
+    potential energy to measure a gain in.
+    """
+
+    n_steps: int
+    at_rest: bool
+    v_rest: float
+    hold_steps: int
+    decide: bool
+    energy_scale: float
+
+
+class GroupDice(NamedTuple):
+    """The state of G throws of N dice, updated in place.
+
+    ``x``, ``u``, ``ang``, ``w`` (G, N, 3) and ``q`` (G, N, 3, 3), as
+    :class:`dice_env.kernel.Dice`.
+    """
+
+    x: np.ndarray
+    u: np.ndarray
+    ang: np.ndarray
+    q: np.ndarray
+    w: np.ndarray
+
+
+class GroupRecords(NamedTuple):
+    """Every ``stride`` steps: ``x`` (G, n, N, 3) and ``orientation`` (G, n or 0, N, 3, 3)."""
+
+    stride: int
+    x: np.ndarray
+    orientation: np.ndarray
+
+
+class GroupOutcome(NamedTuple):
+    """What each throw gives, and the abort flag.
+
+    Per throw (G,) ``status``, ``unstable``, ``rest_time``, ``energy_rise``, ``steps``,
+    ``overlap`` (the deepest die–die contact); per die (G, N) ``impacts``, ``max_pen``
+    (deepest sink into a plane), ``contacts`` (vertices on the planes at the end) and
+    ``touching`` (in contact with another die at the end); ``abort`` (1,).
+    """
+
+    status: np.ndarray
+    unstable: np.ndarray
+    rest_time: np.ndarray
+    energy_rise: np.ndarray
+    steps: np.ndarray
+    overlap: np.ndarray
+    impacts: np.ndarray
+    max_pen: np.ndarray
+    contacts: np.ndarray
+    touching: np.ndarray
+    abort: np.ndarray
+
+
+@njit(cache=True, inline="always")
+def closest_on_segments(a0: tuple, a1: tuple, b0: tuple, b1: tuple) -> tuple:
+    """The closest points of the segments ``a0 a1`` and ``b0 b1`` (Ericson 2005, 5.1.9)."""
+    d10, d11, d12 = a1[0] - a0[0], a1[1] - a0[1], a1[2] - a0[2]
+    d20, d21, d22 = b1[0] - b0[0], b1[1] - b0[1], b1[2] - b0[2]
+    r0, r1, r2 = a0[0] - b0[0], a0[1] - b0[1], a0[2] - b0[2]
+    aa = d10 * d10 + d11 * d11 + d12 * d12
+    ee = d20 * d20 + d21 * d21 + d22 * d22
+    ff = d20 * r0 + d21 * r1 + d22 * r2
+    c = d10 * r0 + d11 * r1 + d12 * r2
+    bb = d10 * d20 + d11 * d21 + d12 * d22
+    denom = aa * ee - bb * bb
+    s = min(1.0, max(0.0, (bb * ff - c * ee) / denom)) if denom > 0.0 else 0.0
+    t = (bb * s + ff) / ee
+    if t < 0.0:
+        t, s = 0.0, min(1.0, max(0.0, -c / aa))
+    elif t > 1.0:
+        t, s = 1.0, min(1.0, max(0.0, (bb - c) / aa))
+    return ((a0[0] + s * d10, a0[1] + s * d11, a0[2] + s * d12),
+            (b0[0] + t * d20, b0[1] + t * d21, b0[2] + t * d22))
+
+
+@njit(cache=True, inline="always")
+def contact_force(depth: float, n: tuple, v: tuple, pair: Pair) -> tuple:
+    """Force on the die the normal ``n`` points into, at a contact ``depth`` deep.
+
+    ``v``: that die's velocity at the point relative to the other's. Returns the force (3)
+    and the spring's energy ``S d^2 / 2``.
+    """
+    n0, n1, n2 = n
+    v0, v1, v2 = v
+    vn = n0 * v0 + n1 * v1 + n2 * v2
+    fn = pair.stiffness * depth - pair.damping * vn
+    spring = 0.5 * pair.stiffness * depth * depth
+    if fn <= 0.0:
+        return 0.0, 0.0, 0.0, spring
+    t0, t1, t2 = v0 - vn * n0, v1 - vn * n1, v2 - vn * n2
+    scale = pair.friction * fn / (math.sqrt(t0 * t0 + t1 * t1 + t2 * t2) + pair.vmin)
+    return fn * n0 - scale * t0, fn * n1 - scale * t1, fn * n2 - scale * t2, spring
+
+
+@njit(cache=True, inline="always")
+def _push(a: int, b: int, point: tuple, depth: float, n: tuple, x: np.ndarray,
+          cu: np.ndarray, cw: np.ndarray, pair: Pair, force: np.ndarray,
+          torque: np.ndarray) -> float:
+    """Apply a contact pushing die ``a`` along ``n`` and die ``b`` against it, at ``point``.
+
+    ``cu``, ``cw`` (N, 3): the velocities the forces use. Returns the spring's energy.
+    """
+    ra0, ra1, ra2 = point[0] - x[a, 0], point[1] - x[a, 1], point[2] - x[a, 2]
+    rb0, rb1, rb2 = point[0] - x[b, 0], point[1] - x[b, 1], point[2] - x[b, 2]
+    va0 = cu[a, 0] + cw[a, 1] * ra2 - cw[a, 2] * ra1
+    va1 = cu[a, 1] + cw[a, 2] * ra0 - cw[a, 0] * ra2
+    va2 = cu[a, 2] + cw[a, 0] * ra1 - cw[a, 1] * ra0
+    vb0 = cu[b, 0] + cw[b, 1] * rb2 - cw[b, 2] * rb1
+    vb1 = cu[b, 1] + cw[b, 2] * rb0 - cw[b, 0] * rb2
+    vb2 = cu[b, 2] + cw[b, 0] * rb1 - cw[b, 1] * rb0
+    f0, f1, f2, spring = contact_force(depth, n, (va0 - vb0, va1 - vb1, va2 - vb2), pair)
+    force[a, 0] += f0
+    force[a, 1] += f1
+    force[a, 2] += f2
+    force[b, 0] -= f0
+    force[b, 1] -= f1
+    force[b, 2] -= f2
+    torque[a, 0] += ra1 * f2 - ra2 * f1
+    torque[a, 1] += ra2 * f0 - ra0 * f2
+    torque[a, 2] += ra0 * f1 - ra1 * f0
+    torque[b, 0] -= rb1 * f2 - rb2 * f1
+    torque[b, 1] -= rb2 * f0 - rb0 * f2
+    torque[b, 2] -= rb0 * f1 - rb1 * f0
+    return spring
+
+
+@njit(cache=True, inline="always")
+def _extent(die: int, n0: float, n1: float, n2: float, world: np.ndarray,
+            bodies: Bodies) -> tuple:
+    """The least and the largest projection of die ``die``'s corners on ``n``."""
+    low, high = np.inf, -np.inf
+    for k in range(bodies.n_vertices[die]):
+        along = n0 * world[die, k, 0] + n1 * world[die, k, 1] + n2 * world[die, k, 2]
+        low, high = min(low, along), max(high, along)
+    return low, high
+
+
+@njit(cache=True, inline="always")
+def least_overlap(a: int, b: int, world: np.ndarray, x: np.ndarray, q: np.ndarray,
+                  bodies: Bodies) -> tuple:
+    """The axis along which dice ``a`` and ``b`` overlap least (separating axes).
+
+    The candidates are the face normals of both dice and the cross products of their edges.
+    Returns ``(overlap, n, i, j)``: ``overlap`` <= 0 when an axis separates them; ``n`` the
+    unit axis pointing from ``b`` toward ``a``; for an edge axis the edges ``i`` of ``a`` and
+    ``j`` of ``b`` that meet (the closest pair among the parallel ones), else ``i = -1``.
+    A face axis wins a tie: an aligned stack rests face on face.
+    """
+    best, n = np.inf, (0.0, 0.0, 0.0)
+    for die in (a, b):
+        for f in range(bodies.n_faces[die]):
+            g0, g1, g2 = bodies.faces[die, f, 0], bodies.faces[die, f, 1], bodies.faces[die, f, 2]
+            n0 = q[die, 0, 0] * g0 + q[die, 0, 1] * g1 + q[die, 0, 2] * g2
+            n1 = q[die, 1, 0] * g0 + q[die, 1, 1] * g1 + q[die, 1, 2] * g2
+            n2 = q[die, 2, 0] * g0 + q[die, 2, 1] * g1 + q[die, 2, 2] * g2
+            overlap, axis = _axis_overlap(a, b, n0, n1, n2, world, x, bodies)
+            if overlap <= 0.0:
+                return overlap, axis, -1, -1
+            if overlap < best:
+                best, n = overlap, axis
+    edge, edge_n, best_i, best_j, gap = np.inf, (0.0, 0.0, 0.0), -1, -1, np.inf
+    edges = bodies.edges
+    for i in range(bodies.n_edges[a]):
+        a0, a1 = edges[a, i, 0], edges[a, i, 1]
+        e0, e1, e2 = world[a, a1, 0] - world[a, a0, 0], world[a, a1, 1] - world[a, a0, 1], \
+            world[a, a1, 2] - world[a, a0, 2]
+        for j in range(bodies.n_edges[b]):
+            b0, b1 = edges[b, j, 0], edges[b, j, 1]
+            h0, h1, h2 = world[b, b1, 0] - world[b, b0, 0], world[b, b1, 1] - world[b, b0, 1], \
+                world[b, b1, 2] - world[b, b0, 2]
+            c0, c1, c2 = e1 * h2 - e2 * h1, e2 * h0 - e0 * h2, e0 * h1 - e1 * h0
+            size2 = c0 * c0 + c1 * c1 + c2 * c2
+            if size2 <= PARALLEL * (e0 * e0 + e1 * e1 + e2 * e2) * (h0 * h0 + h1 * h1 + h2 * h2):
+                continue
+            size = math.sqrt(size2)
+            overlap, axis = _axis_overlap(a, b, c0 / size, c1 / size, c2 / size, world, x,
+                                          bodies)
+            if overlap <= 0.0:
+                return overlap, axis, -1, -1
+            if overlap > edge * (1.0 + TIE):
+                continue
+            # parallel edges share the axis: the pair that meets is the closest one
+            pa, pb = closest_on_segments(
+                (world[a, a0, 0], world[a, a0, 1], world[a, a0, 2]),
+                (world[a, a1, 0], world[a, a1, 1], world[a, a1, 2]),
+                (world[b, b0, 0], world[b, b0, 1], world[b, b0, 2]),
+                (world[b, b1, 0], world[b, b1, 1], world[b, b1, 2]))
+            d0, d1, d2 = pa[0] - pb[0], pa[1] - pb[1], pa[2] - pb[2]
+            distance = d0 * d0 + d1 * d1 + d2 * d2
+            if overlap < edge * (1.0 - TIE) or distance < gap:
+                edge, edge_n, best_i, best_j, gap = min(edge, overlap), axis, i, j, distance
+    if edge < best * (1.0 - TIE):
+        return edge, edge_n, best_i, best_j
+    return best, n, -1, -1
+
+
+@njit(cache=True, inline="always")
+def _axis_overlap(a: int, b: int, n0: float, n1: float, n2: float, world: np.ndarray,
+                  x: np.ndarray, bodies: Bodies) -> tuple:
+    """The overlap of dice ``a`` and ``b`` along the unit axis ``n``.
+
+    Returns it and ``n`` turned to point from ``b`` toward ``a``.
+    """
+    low_a, high_a = _extent(a, n0, n1, n2, world, bodies)
+    low_b, high_b = _extent(b, n0, n1, n2, world, bodies)
+    if n0 * (x[a, 0] - x[b, 0]) + n1 * (x[a, 1] - x[b, 1]) + n2 * (x[a, 2] - x[b, 2]) >= 0.0:
+        return high_b - low_a, (n0, n1, n2)
+    return high_a - low_b, (-n0, -n1, -n2)
+
+
+@njit(cache=True, inline="always")
+def within(p: tuple, die: int, x: np.ndarray, q: np.ndarray, bodies: Bodies,
+           tol: float) -> bool:
+    """Whether the point ``p`` lies inside die ``die``, its faces moved out by ``tol``."""
+    d0, d1, d2 = p[0] - x[die, 0], p[1] - x[die, 1], p[2] - x[die, 2]
+    b0 = q[die, 0, 0] * d0 + q[die, 1, 0] * d1 + q[die, 2, 0] * d2
+    b1 = q[die, 0, 1] * d0 + q[die, 1, 1] * d1 + q[die, 2, 1] * d2
+    b2 = q[die, 0, 2] * d0 + q[die, 1, 2] * d1 + q[die, 2, 2] * d2
+    for f in range(bodies.n_faces[die]):
+        if bodies.faces[die, f, 0] * b0 + bodies.faces[die, f, 1] * b1 \
+                + bodies.faces[die, f, 2] * b2 - bodies.offsets[die, f] > tol:
+            return False
+    return True
+
+
+@njit(cache=True, inline="always")
+def pair_contacts(a: int, b: int, world: np.ndarray, x: np.ndarray, q: np.ndarray,
+                  cu: np.ndarray, cw: np.ndarray, bodies: Bodies, pair: Pair,
+                  force: np.ndarray, torque: np.ndarray) -> tuple:
+    """Every contact of dice ``a`` and ``b``, their forces applied.
+
+    The contact normal is the axis of least overlap (:func:`least_overlap`). A face axis:
+    every corner of one die inside the other (to :data:`LATERAL` of its reach, so that
+    corners exactly on a side plane, as in an aligned stack, still bear) is pushed along it
+    by its depth beyond the other die's extent along it. An edge axis (edge across edge: two
+    cubes meeting edge on edge at a right angle have no corner inside the other): one contact
+    at the middle of the two edges' closest points, as deep as the overlap. Returns the
+    springs' energy, the deepest contact, and whether they touch.
+    """
+    overlap, n, i, j = least_overlap(a, b, world, x, q, bodies)
+    if overlap <= 0.0:
+        return 0.0, 0.0, False
+    if i >= 0:
+        edges = bodies.edges
+        a0, a1, b0, b1 = edges[a, i, 0], edges[a, i, 1], edges[b, j, 0], edges[b, j, 1]
+        pa, pb = closest_on_segments(
+            (world[a, a0, 0], world[a, a0, 1], world[a, a0, 2]),
+            (world[a, a1, 0], world[a, a1, 1], world[a, a1, 2]),
+            (world[b, b0, 0], world[b, b0, 1], world[b, b0, 2]),
+            (world[b, b1, 0], world[b, b1, 1], world[b, b1, 2]))
+        point = (0.5 * (pa[0] + pb[0]), 0.5 * (pa[1] + pb[1]), 0.5 * (pa[2] + pb[2]))
+        return _push(a, b, point, overlap, n, x, cu, cw, pair, force, torque), overlap, True
+    n0, n1, n2 = n
+    low_a = _extent(a, n0, n1, n2, world, bodies)[0]
+    high_b = _extent(b, n0, n1, n2, world, bodies)[1]
+    spring, deepest, found = 0.0, 0.0, False
+    for first, other in ((a, b), (b, a)):
+        tol = LATERAL * bodies.r_max[other]
+        for k in range(bodies.n_vertices[first]):
+            p = (world[first, k, 0], world[first, k, 1], world[first, k, 2])
+            along = n0 * p[0] + n1 * p[1] + n2 * p[2]
+            depth = high_b - along if first == a else along - low_a
+            if depth <= 0.0 or not within(p, other, x, q, bodies, tol):
+                continue
+            found = True
+            deepest = max(deepest, depth)
+            spring += _push(a, b, p, depth, n, x, cu, cw, pair, force, torque)
+    return spring, deepest, found
+
+
+@njit(cache=True)
+def simulate_group(g: int, dice: GroupDice, bodies: Bodies, pair: Pair, contact: Contact,
+                   options: Options, stops: GroupStops, records: GroupRecords,
+                   out: GroupOutcome) -> None:
+    """Advance throw ``g`` (its N dice) in place; see :func:`simulate_groups`."""
+    n_dice, n_planes = dice.x.shape[1], contact.planes.shape[0]
+    planes, gated, stick, vmin = contact.planes, contact.gated, contact.stick, contact.vmin
+    vertices, n_vertices, mass = bodies.vertices, bodies.n_vertices, bodies.mass
+    inv_inertia, inv_iso, r_max = bodies.inv_inertia, bodies.inv_iso, bodies.r_max
+    n0, n1, n2, floor = planes[0, NX], planes[0, NY], planes[0, NZ], planes[0, OFFSET]
+    rotation, midpoint, dt, g_acc = options.rotation, options.midpoint, options.dt, options.gravity
+    x, u, ang, q = dice.x[g].copy(), dice.u[g].copy(), dice.ang[g].copy(), dice.q[g].copy()
+    w = dice.w[g].copy() if rotation else np.zeros((n_dice, 3))
+    pu, pw = u.copy(), w.copy()  # velocities one step back, for the midpoint forces
+    cu, cw = np.empty((n_dice, 3)), np.empty((n_dice, 3))
+    n_v = vertices.shape[1]
+    world = np.empty((n_dice, n_v, 3))
+    heights = np.full((n_dice, n_v, n_planes), -1.0)  # vertex heights entering the last step
+    anchors = np.zeros((n_dice, n_v, n_planes, 3))  # stick-slip: where each spring is tied
+    tied = np.zeros((n_dice, n_v, n_planes), np.bool_)
+    force, torque = np.empty((n_dice, 3)), np.empty((n_dice, 3))
+    kinetic, own = np.empty(n_dice), np.empty(n_dice)
+    touching = np.zeros(n_dice, np.int64)
+    near, was = np.zeros(n_dice, np.bool_), np.ones(n_dice, np.bool_)
+    fastest, approach = np.zeros(n_dice), np.zeros(n_dice)
+    die_touch = np.zeros(n_dice, np.bool_)
+    floor_total = 0.0
+    for a in range(n_dice):
+        floor_total += bodies.floor[a]
+    up = (0.0, 0.0, 1.0)
+    n_steps, stride, n_rec = stops.n_steps, records.stride, records.x.shape[1]
+    e_start, e_tol, e_max = 0.0, 1.0, -np.inf
+    quiet, step, passes, next_record, end = 0, 0, 0, stride, RUNNING
+    overlap = out.overlap[g]
+    while step < n_steps:
+        passes += 1
+        if passes & (ABORT_EVERY - 1) == 0 and out.abort[0] != 0:
+            end = ABORTED
+            break
+        step += 1
+        checked, tangential = 0.0, 0.0
+        for a in range(n_dice):
+            u0, u1, u2, w0, w1, w2 = u[a, 0], u[a, 1], u[a, 2], w[a, 0], w[a, 1], w[a, 2]
+            cu0, cu1, cu2, cw0, cw1, cw2 = u0, u1, u2, w0, w1, w2
+            if midpoint:
+                cu0, cu1, cu2 = 1.5 * u0 - 0.5 * pu[a, 0], 1.5 * u1 - 0.5 * pu[a, 1], \
+                    1.5 * u2 - 0.5 * pu[a, 2]
+                cw0, cw1, cw2 = 1.5 * w0 - 0.5 * pw[a, 0], 1.5 * w1 - 0.5 * pw[a, 1], \
+                    1.5 * w2 - 0.5 * pw[a, 2]
+            cu[a, 0], cu[a, 1], cu[a, 2], cw[a, 0], cw[a, 1], cw[a, 2] = cu0, cu1, cu2, cw0, cw1, \
+                cw2
+            l0, l1, l2 = ang[a, 0], ang[a, 1], ang[a, 2]
+            wl0, wl1, wl2 = angular_velocity(q[a], inv_inertia[a], inv_iso[a], l0, l1, l2)
+            m = mass[a]
+            kinetic[a] = 0.5 * m * (u0 * u0 + u1 * u1 + u2 * u2) + 0.5 * (
+                l0 * wl0 + l1 * wl1 + l2 * wl2)
+            near[a] = stops.at_rest and kinetic[a] < 0.5 * m * stops.v_rest * stops.v_rest
+            f0, f1, f2 = 0.0, 0.0, -m * g_acc
+            t0, t1, t2 = 0.0, 0.0, 0.0
+            spring, spring_t, touch, fast, hit = 0.0, 0.0, 0, 0.0, 0.0
+            dt_m = dt / m
+            x0, x1, x2 = x[a, 0], x[a, 1], x[a, 2]
+            for k in range(n_vertices[a]):
+                b0, b1, b2 = vertices[a, k, 0], vertices[a, k, 1], vertices[a, k, 2]
+                rk0 = q[a, 0, 0] * b0 + q[a, 0, 1] * b1 + q[a, 0, 2] * b2
+                rk1 = q[a, 1, 0] * b0 + q[a, 1, 1] * b1 + q[a, 1, 2] * b2
+                rk2 = q[a, 2, 0] * b0 + q[a, 2, 1] * b1 + q[a, 2, 2] * b2
+                velocity = (u0 + w1 * rk2 - w2 * rk1, u1 + w2 * rk0 - w0 * rk2,
+                            u2 + w0 * rk1 - w1 * rk0)
+                if near[a]:
+                    fast = max(fast, velocity[0] * velocity[0] + velocity[1] * velocity[1]
+                               + velocity[2] * velocity[2])
+                position = (x0 + rk0, x1 + rk1, x2 + rk2)
+                world[a, k, 0], world[a, k, 1], world[a, k, 2] = position
+                for p in range(n_planes):
+                    height = (planes[p, NX] * position[0] + planes[p, NY] * position[1]
+                              + planes[p, NZ] * position[2]) - planes[p, OFFSET]
+                    before = heights[a, k, p]
+                    heights[a, k, p] = height
+                    if height >= 0.0:
+                        tied[a, k, p] = False
+                        if gated:
+                            continue
+                    middle = velocity
+                    if midpoint:
+                        middle = (cu0 + cw1 * rk2 - cw2 * rk1, cu1 + cw2 * rk0 - cw0 * rk2,
+                                  cu2 + cw0 * rk1 - cw1 * rk0)
+                    plane = (planes[p, NX], planes[p, NY], planes[p, NZ], planes[p, OFFSET],
+                             planes[p, STIFF], planes[p, DAMP], planes[p, MU], planes[p, KT],
+                             planes[p, CT])
+                    anchor, tie = (0.0, 0.0, 0.0), False
+                    if stick:
+                        anchor = (anchors[a, k, p, 0], anchors[a, k, p, 1], anchors[a, k, p, 2])
+                        tie = tied[a, k, p]
+                    fk0, fk1, fk2, spring_k, stored, below, dg, approach_k, anchor, tie = (
+                        vertex_on_plane(plane, stick, vmin, height, before, position, velocity,
+                                        middle, midpoint, dt, dt_m, anchor, tie))
+                    if stick:
+                        anchors[a, k, p, 0], anchors[a, k, p, 1], anchors[a, k, p, 2] = anchor
+                        tied[a, k, p] = tie
+                    if below:
+                        touch += 1
+                        spring += spring_k
+                        out.max_pen[g, a] = max(out.max_pen[g, a], dg)
+                        hit = max(hit, approach_k)
+                    spring_t += stored
+                    f0 += fk0
+                    f1 += fk1
+                    f2 += fk2
+                    if rotation:
+                        t0 += rk1 * fk2 - rk2 * fk1
+                        t1 += rk2 * fk0 - rk0 * fk2
+                        t2 += rk0 * fk1 - rk1 * fk0
+            force[a, 0], force[a, 1], force[a, 2] = f0, f1, f2
+            torque[a, 0], torque[a, 1], torque[a, 2] = t0, t1, t2
+            touching[a], fastest[a], approach[a] = touch, fast, hit
+            own[a] = kinetic[a] + m * g_acc * x2 + spring + spring_t
+            checked += kinetic[a] + m * g_acc * x2 + spring
+            tangential += spring_t
+        # die against die
+        for a in range(n_dice):
+            die_touch[a] = False
+        for a in range(n_dice):
+            for b in range(a + 1, n_dice):
+                d0, d1, d2 = x[a, 0] - x[b, 0], x[a, 1] - x[b, 1], x[a, 2] - x[b, 2]
+                reach = r_max[a] + r_max[b]
+                if d0 * d0 + d1 * d1 + d2 * d2 >= reach * reach:
+                    continue
+                spring, deepest, touch_ab = pair_contacts(a, b, world, x, q, cu, cw, bodies,
+                                                          pair, force, torque)
+                checked += spring
+                overlap = max(overlap, deepest)
+                if touch_ab:
+                    die_touch[a] = True
+                    die_touch[b] = True
+        energy = checked + tangential
+        if step == 1:
+            e_start = checked
+            e_tol = stops.energy_scale
+            for a in range(n_dice):
+                e_tol += kinetic[a]
+                e_tol += mass[a] * g_acc * max(0.0, (n0 * x[a, 0] + n1 * x[a, 1]
+                                                     + n2 * x[a, 2]) - floor)
+        else:
+            e_max = max(e_max, checked)
+        for a in range(n_dice):
+            now = touching[a] > 0 or die_touch[a]
+            if now and not was[a] and approach[a] > stops.v_rest:
+                out.impacts[g, a] += 1
+            was[a] = now
+        if stops.decide and _decided(bodies, q, energy, floor_total, up):
+            end = DECIDED
+            step -= 1
+            break
+        if stops.at_rest:
+            quiet_now = True
+            for a in range(n_dice):
+                if not (touching[a] >= 3 and near[a]
+                        and fastest[a] < stops.v_rest * stops.v_rest):
+                    quiet_now = False
+                    break
+            if quiet_now:
+                quiet += 1
+                if quiet > stops.hold_steps:
+                    out.rest_time[g] = (step - quiet) * dt
+                    end = SETTLED
+                    step -= 1
+                    break
+            else:
+                quiet = 0
+        finite = True
+        for a in range(n_dice):
+            dt_m = dt / mass[a]
+            dv0, dv1, dv2 = force[a, 0] * dt_m, force[a, 1] * dt_m, force[a, 2] * dt_m
+            nu0, nu1, nu2 = u[a, 0] + dv0, u[a, 1] + dv1, u[a, 2] + dv2
+            nx0, nx1, nx2 = x[a, 0] + dt * nu0, x[a, 1] + dt * nu1, x[a, 2] + dt * nu2
+            nl0, nl1, nl2 = ang[a, 0], ang[a, 1], ang[a, 2]
+            if rotation:
+                nl0, nl1, nl2 = nl0 + dt * torque[a, 0], nl1 + dt * torque[a, 1], \
+                    nl2 + dt * torque[a, 2]
+            if not math.isfinite(nu0 + nu1 + nu2 + nx0 + nx1 + nx2 + nl0 + nl1 + nl2):
+                finite = False
+                break
+            if midpoint:
+                pu[a, 0], pu[a, 1], pu[a, 2] = nu0 - dv0, nu1 - dv1, nu2 - dv2
+                pw[a, 0], pw[a, 1], pw[a, 2] = w[a, 0], w[a, 1], w[a, 2]
+            u[a, 0], u[a, 1], u[a, 2], x[a, 0], x[a, 1], x[a, 2] = nu0, nu1, nu2, nx0, nx1, nx2
+            ang[a, 0], ang[a, 1], ang[a, 2] = nl0, nl1, nl2
+            if rotation:
+                w[a, 0], w[a, 1], w[a, 2] = torque_free(q[a], inv_inertia[a], inv_iso[a], nl0,
+                                                        nl1, nl2, dt, 1)
+        if not finite:
+            end = NONFINITE
+            step -= 1
+            break
+        if step >= next_record:
+            if step % stride == 0 and step // stride <= n_rec:
+                _record(records, step // stride - 1, g, x, q)
+            next_record = (step // stride + 1) * stride
+    for j in range(step // stride, n_rec):  # dice that stopped early stay where they are
+        _record(records, j, g, x, q)
+    dice.x[g] = x
+    dice.u[g] = u
+    dice.ang[g] = ang
+    dice.q[g] = q
+    if rotation:
+        dice.w[g] = w
+    for a in range(n_dice):
+        out.contacts[g, a] = touching[a]
+        out.touching[g, a] = die_touch[a]
+    out.status[g] = end
+    out.unstable[g] = end == NONFINITE
+    if end != SETTLED:
+        out.rest_time[g] = step * dt
+    out.steps[g] = step
+    out.overlap[g] = overlap
+    out.energy_rise[g] = max(out.energy_rise[g], relative_rise(e_max, e_start, e_tol))
+
+
+@njit(cache=True, inline="always")
+def _decided(bodies: Bodies, q: np.ndarray, energy: float, floor_total: float,
+             up: tuple) -> bool:
+    """Whether no die's face can change: each die's lock exceeds all the group could give it.
+
+    A die holds at least its ``floor`` energy, so die ``i`` can at most hold ``energy``
+    minus the others' floors.
+    """
+    for a in range(q.shape[0]):
+        most = energy - (floor_total - bodies.floor[a])
+        lock = bodies.lock[a]
+        if most >= lock.max():
+            return False
+        read = face_read(q[a], bodies.faces[a, :bodies.n_faces[a]], bodies.reads_down[a],
+                         up[0], up[1], up[2])
+        if most >= lock[read]:
+            return False
+    return True
+
+
+@njit(cache=True, inline="always")
+def _record(records: GroupRecords, j: int, g: int, x: np.ndarray, q: np.ndarray) -> None:
+    """Store the dice's centres and orientations after a step."""
+    records.x[g, j] = x
+    if records.orientation.shape[1] > 0:
+        records.orientation[g, j] = q
+
+
+@njit(cache=True, parallel=True, nogil=True)
+def simulate_groups(dice: GroupDice, bodies: Bodies, pair: Pair, contact: Contact,
+                    options: Options, stops: GroupStops, records: GroupRecords,
+                    out: GroupOutcome) -> None:
+    """Advance G throws of N dice in place, in parallel over throws.
+
+    Throws are independent: the results do not depend on the batch or the threads. The kernel
+    releases the GIL, so another thread can set ``out.abort``.
+    """
+    for g in prange(dice.x.shape[0]):
+        simulate_group(g, dice, bodies, pair, contact, options, stops, records, out)
+
+
+@njit(cache=True, nogil=True)
+def simulate_groups_serial(dice: GroupDice, bodies: Bodies, pair: Pair, contact: Contact,
+                           options: Options, stops: GroupStops, records: GroupRecords,
+                           out: GroupOutcome) -> None:
+    """:func:`simulate_groups` on the calling thread, with the same results."""
+    for g in range(dice.x.shape[0]):
+        simulate_group(g, dice, bodies, pair, contact, options, stops, records, out)

@@ -1,0 +1,144 @@
+"""Several dice in one throw: die–die contact conserves momentum, edges meet edges, stacks hold."""
+
+import numpy as np
+import pytest
+
+from dice_env import Die, Scene, State, simulate
+from dice_env.group import DieContact, GroupState, group_step, simulate_group
+from dice_env.rotations import axis_angle, random_rotations
+from dice_env.surroundings import tray
+
+DIE = Die()
+EDGE = DIE.size
+
+
+def hand(n, seed, height=0.08):
+    rng = np.random.default_rng(seed)
+    return State.release(Scene(), [0.0, 0.0, height], rng.normal(0, 0.4, (n, 3)),
+                         rng.normal(0, 20, (n, 3)), random_rotations(rng, n))
+
+
+@pytest.mark.parametrize("decided", [False, True])
+def test_a_group_of_one_die_is_the_single_die_bit_for_bit(decided):
+    scene = Scene(t_max=1.5)
+    start = hand(6, 0)
+    alone = simulate(scene, start, free_flight=False, stop_when_decided=decided)
+    group = simulate_group(scene, (DIE,), GroupState.of([start]), stop_when_decided=decided)
+    np.testing.assert_array_equal(group.face[:, 0], alone.face)
+    np.testing.assert_array_equal(group.steps, alone.steps)
+    np.testing.assert_array_equal(group.settled, alone.settled)
+    np.testing.assert_array_equal(group.decided, alone.decided)
+    np.testing.assert_array_equal(group.rest_time, alone.rest_time)
+    np.testing.assert_array_equal(group.impacts[:, 0], alone.impacts)
+    np.testing.assert_array_equal(group.final.position[:, 0], alone.final.position)
+    np.testing.assert_array_equal(group.final.orientation[:, 0], alone.final.orientation)
+
+
+def free_pair(offset, velocity, spin=(0.0, 0.0, 0.0), rot_a=None, rot_b=None):
+    """Two dice high above the floor with no gravity, die 1 at ``offset`` from die 0."""
+    scene = Scene(gravity=0.0, t_max=0.03)
+    base = np.array([0.0, 0.0, 1.0])
+    a = State.release(scene, base, velocity, spin, rot_a)
+    b = State.release(scene, base + np.asarray(offset), -np.asarray(velocity),
+                      -np.asarray(spin), rot_b)
+    return scene, GroupState.of([a, b])
+
+
+def momenta(state):
+    p = state.velocity * DIE.mass
+    linear = p.sum(axis=1)
+    angular = (np.cross(state.position, p) + state.angular_momentum).sum(axis=1)
+    return linear, angular
+
+
+def energy(state):
+    kinetic = 0.5 * DIE.mass * (state.velocity**2).sum(axis=(1, 2))
+    return kinetic + 0.5 * np.einsum("bni,bni->b", state.angular_momentum,
+                                     state.angular_velocity)
+
+
+def test_a_collision_in_free_space_keeps_momentum_and_never_gains_energy():
+    scene, start = free_pair([EDGE * 1.05, 0.003, 0.002], [0.6, 0.05, 0.0], spin=[3.0, -5.0, 8.0])
+    result = simulate_group(scene, (DIE, DIE), start, stop_at_rest=False)
+    assert result.overlap[0] > 0  # they met
+    linear0, angular0 = momenta(start)
+    linear1, angular1 = momenta(result.final)
+    scale = DIE.mass * 0.6
+    np.testing.assert_allclose(linear1, linear0, atol=1e-12 * scale)
+    np.testing.assert_allclose(angular1, angular0, atol=1e-12 * scale * EDGE)
+    assert energy(result.final)[0] <= energy(start)[0] * (1 + 1e-9)
+    assert result.final.velocity[0, 0, 0] < 0.3  # die 0 was stopped or thrown back
+
+
+def test_edge_on_edge_at_a_right_angle_bounces():
+    # Die 0 turned 45 degrees about x has an edge along x at its bottom; die 1 below, turned
+    # about y, an edge along y at its top: they meet edge across edge, no corner inside.
+    half_diagonal = EDGE / np.sqrt(2)
+    scene, start = free_pair([0.0, 0.0, -2 * half_diagonal - 1e-4], [0.0, 0.0, -0.3],
+                             rot_a=axis_angle([1, 0, 0], np.pi / 4),
+                             rot_b=axis_angle([0, 1, 0], np.pi / 4))
+    result = simulate_group(scene, (DIE, DIE), start, stop_at_rest=False)
+    assert result.overlap[0] > 0
+    assert result.final.velocity[0, 0, 2] > 0 > result.final.velocity[0, 1, 2]  # bounced
+    assert result.final.position[0, 0, 2] > result.final.position[0, 1, 2] + EDGE  # not through
+
+
+def test_a_die_stacked_on_another_holds_and_is_not_read():
+    scene = Scene(t_max=0.3)
+    bottom = State.release(scene, [0, 0, EDGE / 2], [0, 0, 0])
+    top = State.release(scene, [0.002, 0, 1.5 * EDGE + 1e-5], [0, 0, 0])
+    result = simulate_group(scene, (DIE, DIE), GroupState.of([bottom, top]))
+    assert np.isfinite(result.final.position).all() and not result.unstable.any()
+    assert result.final.position[0, 1, 2] > result.final.position[0, 0, 2] + 0.9 * EDGE
+    assert result.read.tolist() == [[True, False]] and result.face[0, 1] == 0
+    assert result.face[0, 0] == 1 and not result.settled[0]  # a die on a die is not at rest
+
+
+def test_dice_released_inside_each_other_are_refused():
+    scene = Scene()
+    a = State.release(scene, [0, 0, 0.05], [0, 0, 0])
+    for offset, rot in (([0.5 * EDGE, 0, 0.05], None),  # aligned: corners on faces
+                        ([1.05 * EDGE, 0, 0.05], axis_angle([0, 0, 1], np.pi / 4))):
+        b = State.release(scene, offset, [0, 0, 0], None, rot)
+        with pytest.raises(ValueError, match="dice 0 and 1 of throw 0 overlap"):
+            simulate_group(scene, (DIE, DIE), GroupState.of([a, b]))
+    touching = State.release(scene, [EDGE, 0, 0.05], [0, 0, 0])  # face to face
+    simulate_group(scene.with_(t_max=0.01), (DIE, DIE), GroupState.of([a, touching]))
+
+
+def test_the_pair_contact_sets_the_step():
+    scene = Scene()
+    soft, stiff = DieContact(stiffness=1e3, damping=0.1), DieContact(stiffness=1e8)
+    assert group_step(scene, (DIE,)) == scene.step
+    assert group_step(scene, (DIE, DIE), soft) == scene.step
+    assert group_step(scene, (DIE, DIE), stiff) < scene.step / 10
+
+
+def test_two_dice_and_a_d20_thrown_into_a_tray_land_and_are_read():
+    scene = Scene(walls=tray(), t_max=4.0)
+    dice = (DIE, DIE, Die.standard("d20"))
+    rng = np.random.default_rng(3)
+    n = 8
+    states = [State.release(scene.with_(die=d), [0.0, 0.03 * (i - 1), 0.1],
+                            np.array([0.4, -0.2 * (i - 1), 0.0]) + rng.normal(0, 0.1, (n, 3)),
+                            rng.normal(0, 20, (n, 3)), random_rotations(rng, n))
+              for i, d in enumerate(dice)]
+    result = simulate_group(scene, dice, GroupState.of(states), stop_when_decided=True)
+    assert np.isfinite(result.final.position).all() and not result.unstable.any()
+    assert result.decided.mean() >= 0.75
+    read = result.face[result.decided]
+    assert ((read[:, :2] >= 0) & (read[:, :2] <= 6)).all() and (read[:, 2] <= 20).all()
+    assert (np.abs(result.final.position[..., 0]) < 0.15).all()  # inside the tray
+
+
+def test_bad_arguments_are_refused():
+    scene = Scene()
+    state = GroupState.of([hand(2, 0)])
+    with pytest.raises(ValueError, match="state holds 1 dice per throw, dice 2"):
+        simulate_group(scene, (DIE, DIE), state)
+    with pytest.raises(TypeError, match="dice must be a sequence of Die"):
+        simulate_group(scene, DIE, state)
+    with pytest.raises(ValueError, match=r"GroupState.position must have shape \(B, N, 3\)"):
+        GroupState(*(np.zeros((2, 3)),) * 3, np.eye(3)[None], np.zeros((2, 3)))
+    with pytest.raises(ValueError, match="stiffness"):
+        DieContact(stiffness=0.0)
