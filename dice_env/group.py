@@ -17,16 +17,16 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
 
 from dice_env import group_kernel, kernel
 from dice_env.die import Die
-from dice_env.rotations import orthonormality_error
 from dice_env.scene import MAX_STEPS, Scene, critical_step
 from dice_env.simulate import (
-    ROTATION_TOL,
     UP,
+    DiceArrays,
     State,
     lock_energy,
     pack_run,
@@ -35,7 +35,7 @@ from dice_env.simulate import (
     thread_count,
 )
 from dice_env.table import DIE_MASS, STIFFNESS, damping_for_restitution
-from dice_env.validation import check_finite, check_nonnegative, check_positive
+from dice_env.validation import check_nonnegative, check_positive
 
 # Die against die: plastic on plastic. Estimates: no measurement of dice striking dice is
 # known to us. Restitution 0.5, about the die's on a hard table; friction 0.4, within the
@@ -67,39 +67,14 @@ class DieContact:
 
 
 @dataclass
-class GroupState:
+class GroupState(DiceArrays):
     """State of B throws of N dice: :class:`dice_env.State`'s arrays with a die axis.
 
     ``position``, ``velocity``, ``angular_momentum``, ``angular_velocity`` (B, N, 3) and
-    ``orientation`` (B, N, 3, 3). Checked when built as :class:`State` is.
+    ``orientation`` (B, N, 3, 3); checked when built (:class:`dice_env.simulate.DiceArrays`).
     """
 
-    position: np.ndarray
-    velocity: np.ndarray
-    angular_momentum: np.ndarray
-    orientation: np.ndarray
-    angular_velocity: np.ndarray
-
-    def __post_init__(self) -> None:
-        for name in ("position", "velocity", "angular_momentum", "angular_velocity",
-                     "orientation"):
-            tail = (3, 3) if name == "orientation" else (3,)
-            array = np.asarray(getattr(self, name), dtype=np.float64)
-            if array.ndim != len(tail) + 2 or array.shape[2:] != tail:
-                raise ValueError(f"GroupState.{name} must have shape (B, N, "
-                                 f"{', '.join(map(str, tail))}), got {array.shape}")
-            check_finite(f"GroupState.{name}", array)
-            object.__setattr__(self, name, np.ascontiguousarray(array))
-        shapes = {a.shape[:2] for a in self._arrays()}
-        if len(shapes) > 1:
-            raise ValueError(f"GroupState arrays must share one (B, N), got {sorted(shapes)}")
-        if min(self.position.shape[:2]) == 0:
-            raise ValueError(f"GroupState must hold at least one throw of one die, got (B, N) "
-                             f"= {self.position.shape[:2]}")
-        error = orthonormality_error(self.orientation).max()
-        if error > ROTATION_TOL:
-            raise ValueError(f"GroupState.orientation must be rotation matrices (to "
-                             f"{ROTATION_TOL:g}), got an error of {error:.3g}")
+    LEAD: ClassVar[tuple[str, ...]] = ("B", "N")
 
     @classmethod
     def of(cls, states: Sequence[State]) -> GroupState:
@@ -120,22 +95,9 @@ class GroupState:
         return State(*(np.array(a[:, i]) for a in self._arrays()))
 
     @property
-    def batch_size(self) -> int:
-        """Number of throws B."""
-        return self.position.shape[0]
-
-    @property
     def n_dice(self) -> int:
         """Dice per throw N."""
         return self.position.shape[1]
-
-    def copy(self) -> GroupState:
-        """An independent copy."""
-        return GroupState(*(np.array(a) for a in self._arrays()))
-
-    def _arrays(self) -> tuple[np.ndarray, ...]:
-        return (self.position, self.velocity, self.angular_momentum, self.orientation,
-                self.angular_velocity)
 
 
 @dataclass

@@ -8,6 +8,7 @@ import os
 import threading
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import ClassVar, Self
 
 import numba
 import numpy as np
@@ -19,17 +20,17 @@ from dice_env.validation import as_batch, check_finite, check_range
 
 
 @dataclass
-class State:
-    """State of a batch of B dice (world frame, SI units in the default scene).
+class DiceArrays:
+    """The five state arrays of dice, with :attr:`LEAD` leading axes (B for :class:`State`).
 
-    ``position`` (B, 3) centre of mass; ``velocity`` (B, 3) its velocity; ``angular_momentum``
-    (B, 3) about it; ``orientation`` (B, 3, 3) body-to-world rotation; ``angular_velocity``
-    (B, 3), the ω used for corner velocities (``I_world^-1 L`` except where a paper script starts
-    its corners without spin).
-
-    Checked when built: every array is converted to float64, has one batch size B >= 1 and
-    the shape above, is finite, and ``orientation`` holds rotations (to 1e-6).
+    ``position`` centre of mass; ``velocity`` its velocity; ``angular_momentum`` about it;
+    ``orientation`` body-to-world rotations (lead, 3, 3); ``angular_velocity`` the ω used for
+    corner velocities. Checked when built: every array is converted to float64, has the
+    shape (lead, 3) (or (lead, 3, 3)) with one lead shape, at least one die, finite values,
+    and ``orientation`` holds rotations (to :data:`ROTATION_TOL`).
     """
+
+    LEAD: ClassVar[tuple[str, ...]] = ("B",)
 
     position: np.ndarray
     velocity: np.ndarray
@@ -38,24 +39,53 @@ class State:
     angular_velocity: np.ndarray
 
     def __post_init__(self) -> None:
+        owner, lead = type(self).__name__, len(self.LEAD)
+        axes = ", ".join(self.LEAD)
         for name in ("position", "velocity", "angular_momentum", "angular_velocity",
                      "orientation"):
             tail = (3, 3) if name == "orientation" else (3,)
             array = np.asarray(getattr(self, name), dtype=np.float64)
-            if array.ndim != len(tail) + 1 or array.shape[1:] != tail:
-                raise ValueError(f"State.{name} must have shape (B, {', '.join(map(str, tail))})"
-                                 f", got {array.shape}")
-            check_finite(f"State.{name}", array)
+            if array.ndim != len(tail) + lead or array.shape[lead:] != tail:
+                raise ValueError(f"{owner}.{name} must have shape ({axes}, "
+                                 f"{', '.join(map(str, tail))}), got {array.shape}")
+            check_finite(f"{owner}.{name}", array)
             object.__setattr__(self, name, array)
-        sizes = {a.shape[0] for a in self._arrays()}
-        if len(sizes) > 1:
-            raise ValueError(f"State arrays must share one batch size B, got {sorted(sizes)}")
-        if self.batch_size == 0:
-            raise ValueError("State must hold at least one die (B >= 1), got B = 0")
+        shapes = sorted({a.shape[:lead] for a in self._arrays()})
+        if len(shapes) > 1:
+            what = "batch size B" if lead == 1 else f"shape ({axes})"
+            raise ValueError(f"{owner} arrays must share one {what}, got {shapes}")
+        if min(self.position.shape[:lead]) == 0:
+            got = " = ".join(f"{axis} >= 1" for axis in self.LEAD)
+            raise ValueError(f"{owner} must hold at least one die ({got}), got "
+                             f"({axes}) = {self.position.shape[:lead]}")
         error = orthonormality_error(self.orientation).max()
         if error > ROTATION_TOL:
-            raise ValueError(f"State.orientation must be rotation matrices (R R^T = I, "
+            raise ValueError(f"{owner}.orientation must be rotation matrices (R R^T = I, "
                              f"det R = +1, to {ROTATION_TOL:g}), got an error of {error:.3g}")
+
+    @property
+    def batch_size(self) -> int:
+        """Number of throws B."""
+        return self.position.shape[0]
+
+    def copy(self) -> Self:
+        """An independent copy (checked again, so changes made to this one are caught)."""
+        return type(self)(*(np.array(a) for a in self._arrays()))
+
+    def _arrays(self) -> tuple[np.ndarray, ...]:
+        return (self.position, self.velocity, self.angular_momentum, self.orientation,
+                self.angular_velocity)
+
+
+@dataclass
+class State(DiceArrays):
+    """State of a batch of B dice (world frame, SI units in the default scene).
+
+    The arrays of :class:`DiceArrays` with one leading axis B: ``position`` (B, 3),
+    ``velocity`` (B, 3), ``angular_momentum`` (B, 3), ``orientation`` (B, 3, 3),
+    ``angular_velocity`` (B, 3) (``I_world^-1 L`` except where a paper script starts its
+    corners without spin).
+    """
 
     @classmethod
     def release(
@@ -100,19 +130,6 @@ class State:
         world_inertia = rot @ scene.die.inertia_body @ rot.transpose(0, 2, 1)
         momentum = np.einsum("bij,bj->bi", world_inertia, spin)
         return cls(*(np.array(a) for a in (position, velocity, momentum, rot, spin)))
-
-    @property
-    def batch_size(self) -> int:
-        """Number of dice B."""
-        return self.position.shape[0]
-
-    def copy(self) -> State:
-        """An independent copy (checked again, so changes made to this one are caught)."""
-        return State(*(np.array(a) for a in self._arrays()))
-
-    def _arrays(self) -> tuple[np.ndarray, ...]:
-        return (self.position, self.velocity, self.angular_momentum, self.orientation,
-                self.angular_velocity)
 
 
 @dataclass
