@@ -131,6 +131,17 @@ class GroupResult:
     orientations: np.ndarray | None = None
 
 
+def pair_mass(scene: Scene, dice: Sequence[Die]) -> float:
+    """The smallest reduced effective mass of a pair of ``dice`` (kg; inf for one die).
+
+    Each die's effective mass is its smallest per contact vertex on the floor
+    (:meth:`Scene.effective_mass_on`).
+    """
+    masses = [scene.with_(die=die).effective_mass for die in _dice(dice)]
+    return min((m_i * m_j / (m_i + m_j) for i, m_i in enumerate(masses)
+                for m_j in masses[i + 1:]), default=math.inf)
+
+
 def group_step(scene: Scene, dice: Sequence[Die], contact: DieContact = DieContact()) -> float:
     """The step of a throw of ``dice``.
 
@@ -138,13 +149,10 @@ def group_step(scene: Scene, dice: Sequence[Die], contact: DieContact = DieConta
     plane and of every pair of dice against each other. A pair's contact moves the reduced
     mass of the two dice's effective masses (:meth:`Scene.effective_mass_on`, the floor's).
     """
-    scenes = [scene.with_(die=die) for die in _dice(dice)]
-    masses = [s.effective_mass for s in scenes]
-    critical = min(s.critical_dt for s in scenes)
-    for i, m_i in enumerate(masses):
-        for m_j in masses[i + 1:]:
-            critical = min(critical, critical_step(contact.stiffness, contact.damping,
-                                                   m_i * m_j / (m_i + m_j), scene.scheme))
+    critical = min(scene.with_(die=die).critical_dt for die in _dice(dice))
+    if len(dice) > 1:
+        critical = min(critical, critical_step(contact.stiffness, contact.damping,
+                                               pair_mass(scene, dice), scene.scheme))
     if scene.dt is None:
         return scene.safety * critical
     if scene.dt > critical and not scene.allow_unstable:
@@ -213,7 +221,8 @@ def simulate_group(
         energy_scale=float(sum(d.mass * scene.gravity * d.size for d in dice)))
     bodies = _bodies(scenes, stop_when_decided)
     pair = group_kernel.Pair(float(contact.stiffness), float(contact.damping),
-                             float(contact.friction), float(scene.friction_vmin))
+                             float(contact.friction), float(scene.friction_vmin),
+                             float(group_kernel.GRIP * pair_mass(scene, dice) / dt))
     n_rec = n_steps // record_every if record_every else 0
     records = group_kernel.GroupRecords(
         stride=max(1, record_every) if record_every else n_steps + 1,

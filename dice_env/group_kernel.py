@@ -13,7 +13,8 @@ through penalty contacts:
   as deep as the overlap.
 
 A contact's force is ``fn = S d - D vn`` (pushing only) along its normal plus the regularised
-Coulomb friction ``-mu fn vt / (|vt| + vmin)`` (:func:`contact_force`); it acts on one die at
+Coulomb friction ``-mu fn vt / (|vt| + vmin)``, capped where it would reverse the slip within
+a step (:func:`contact_force`, :class:`Pair`); it acts on one die at
 the contact point and, reversed, on the other at the same point, so a contact conserves the
 pair's linear and angular momentum exactly. Its spring stores energy and its damper and
 friction dissipate it; only a jump of the contact's normal or depth between steps (a new
@@ -69,6 +70,8 @@ from dice_env.kernel import (
 # Edges closer to parallel than this (|e_a x e_b|^2 over |e_a|^2 |e_b|^2) have no edge contact:
 # their overlap shows as vertices inside the other die.
 PARALLEL = 1e-8
+# A slip is stopped by friction over at least 1 / GRIP steps (see Pair).
+GRIP = 0.25
 # Axes whose overlaps differ by less than this fraction tie (a face axis wins a tie).
 TIE = 1e-6
 # A corner bears on another die's face when inside it to this fraction of that die's reach
@@ -105,12 +108,21 @@ class Bodies(NamedTuple):
 
 
 class Pair(NamedTuple):
-    """The die–die material: ``stiffness`` S, ``damping`` D, ``friction`` mu, and ``vmin``."""
+    """The die–die contact's law.
+
+    ``stiffness`` S, ``damping`` D, ``friction`` mu, ``vmin``, and ``grip``: the largest
+    friction per unit slip speed (N s/m) the step can take. Coulomb's law at a contact that
+    sticks asks for a force that ends the slip within a fraction of a step; the explicit step
+    then overshoots and the slip flips every step. The friction is capped at ``grip |vt|``:
+    ``grip`` is :data:`GRIP` of the smallest effective mass of a pair over the step, so
+    several contacts together stop a slip within a few steps.
+    """
 
     stiffness: float
     damping: float
     friction: float
     vmin: float
+    grip: float
 
 
 class GroupStops(NamedTuple):
@@ -211,7 +223,8 @@ def contact_force(depth: float, n: tuple, v: tuple, pair: Pair) -> tuple:
     if fn <= 0.0:
         return 0.0, 0.0, 0.0, spring
     t0, t1, t2 = v0 - vn * n0, v1 - vn * n1, v2 - vn * n2
-    scale = pair.friction * fn / (math.sqrt(t0 * t0 + t1 * t1 + t2 * t2) + pair.vmin)
+    scale = min(pair.friction * fn / (math.sqrt(t0 * t0 + t1 * t1 + t2 * t2) + pair.vmin),
+                pair.grip)
     return fn * n0 - scale * t0, fn * n1 - scale * t1, fn * n2 - scale * t2, spring
 
 

@@ -142,3 +142,59 @@ def test_bad_arguments_are_refused():
         GroupState(*(np.zeros((2, 3)),) * 3, np.eye(3)[None], np.zeros((2, 3)))
     with pytest.raises(ValueError, match="stiffness"):
         DieContact(stiffness=0.0)
+
+
+def test_a_throw_alone_equals_the_same_throw_inside_a_batch():
+    scene = Scene(walls=tray(), t_max=1.5)
+    rng = np.random.default_rng(5)
+    n = 4
+    states = [State.release(scene, [0.0, 0.025 * (2 * i - 1), 0.06],
+                            np.array([0.5, -0.3 * (2 * i - 1), 0.0]) + rng.normal(0, 0.1, (n, 3)),
+                            rng.normal(0, 20, (n, 3)), random_rotations(rng, n))
+              for i in range(2)]
+    batch = simulate_group(scene, (DIE, DIE), GroupState.of(states), stop_when_decided=True)
+    alone = simulate_group(scene, (DIE, DIE), _one(GroupState.of(states), 2),
+                           stop_when_decided=True)
+    for field in ("face", "steps", "decided", "overlap"):
+        np.testing.assert_array_equal(getattr(alone, field)[0], getattr(batch, field)[2])
+    np.testing.assert_array_equal(alone.final.position[0], batch.final.position[2])
+
+
+def _one(state, i):
+    """Throw ``i`` of a batch as a batch of one."""
+    return GroupState(*(a[i:i + 1] for a in state._arrays()))
+
+
+def test_mirrored_throws_land_mirrored():
+    # Two dice thrown at each other mirror-symmetrically about the plane y = 0, turned and
+    # spinning about y (so that the faces that meet stay across the mirror): each state stays
+    # the mirror image of the other's through the collision (in the air: a landing's chaos
+    # would grow the round-off of summing the corners in another order).
+    scene = Scene(t_max=0.06)
+    mirror = np.diag([1.0, -1.0, 1.0])
+    rot = axis_angle([0, 1, 0], 0.4)  # its own mirror image: M R M = R
+    spin = np.array([0.0, 7.0, 0.0])  # a pseudovector: mirrored, -M w = w
+    a = State.release(scene, [0.0, 0.02, 0.1], [0.2, -0.5, 0.0], spin, rot)
+    b = State.release(scene, [0.0, -0.02, 0.1], [0.2, 0.5, 0.0], -mirror @ spin,
+                      mirror @ rot @ mirror)
+    result = simulate_group(scene, (DIE, DIE), GroupState.of([a, b]), stop_at_rest=False)
+    assert result.overlap[0] > 0  # they met
+    end = result.final
+    np.testing.assert_allclose(end.position[0, 1], mirror @ end.position[0, 0], atol=1e-9)
+    np.testing.assert_allclose(end.orientation[0, 1], mirror @ end.orientation[0, 0] @ mirror,
+                               atol=1e-7)
+    assert end.velocity[0, 0, 1] > 0 > end.velocity[0, 1, 1]  # bounced apart
+
+
+@pytest.mark.parametrize("speed", [5.0, 20.0])
+def test_fast_dice_do_not_pass_through_each_other(speed):
+    # Head on, corner first and edge across edge, at up to 20 m/s each (a throw is ~1 m/s).
+    for rot_a, rot_b in ((None, axis_angle([1, 1, 0], 0.6)),
+                         (axis_angle([1, 0, 0], np.pi / 4), axis_angle([0, 1, 0], np.pi / 4))):
+        scene, start = free_pair([0.0, 0.0, -1.5 * EDGE], [0.0, 0.0, -speed],
+                                 rot_a=rot_a, rot_b=rot_b)
+        result = simulate_group(scene.with_(t_max=0.005), (DIE, DIE), start,
+                                stop_at_rest=False)
+        assert np.isfinite(result.final.position).all()
+        assert result.final.position[0, 0, 2] > result.final.position[0, 1, 2]
+        assert result.final.velocity[0, 0, 2] > 0 > result.final.velocity[0, 1, 2]
