@@ -29,13 +29,13 @@ def _rate(s: dict[str, Any] | None, digits: int = 2) -> str:
 def headline_table(summaries: dict[str, dict[str, Any]]) -> str:
     """The Markdown table of success per thrower, overall and per target."""
     faces = sorted({f for s in summaries.values() for f in s["per_target"]})
-    lines = ["| thrower | throws | success [95% CI] | " + " | ".join(
-        f"target {f}" for f in faces) + " |", "|---|---|---|" + "---|" * len(faces)]
+    header = ["thrower", "throws", "success [95% CI]", *(f"target {f}" for f in faces)]
+    lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
     for name, s in summaries.items():
         n = f"{s['n']}" + (f" ({s['observations']} obs)" if "observations" in s else "")
-        per = " | ".join(f"{s['per_target'][f]['rate']:.2f}" if f in s["per_target"] else "–"
-                         for f in faces)
-        lines.append(f"| {name} | {n} | {_rate(s, 3)} | {per} |")
+        per = [f"{s['per_target'][f]['rate']:.2f}" if f in s["per_target"] else "–"
+               for f in faces]
+        lines.append("| " + " | ".join([name, n, _rate(s, 3), *per]) + " |")
     return "\n".join(lines)
 
 
@@ -171,9 +171,10 @@ def write_report(run: Path, config: Config, evaluation: dict[str, Any],
         "", "## Headline", "", _rates_line(evaluation), "", *verdict(evaluation), "",
         *_section_success(evaluation),
         *_section_learning(run, evaluation, figures["learning"]),
-        *_section_turn(evaluation, figures["turn"]),
-        *_section_strategy(evaluation, figures["strategy"]),
-        "## Outcomes", "", f"![confusion]({figures['confusion'].name})", "",
+        *(_section_turn(evaluation, figures["turn"]) if "turn" in figures else []),
+        *(_section_strategy(evaluation, figures["strategy"]) if "strategy" in figures else []),
+        "## Outcomes", "",
+        *([f"![confusion]({figures['confusion'].name})", ""] if "confusion" in figures else []),
         f"![outcomes]({figures['outcomes'].name})", "",
         "| thrower | median impacts | median rest time (s) | void throws |", "|---|---|---|---|",
         *[f"| {n} | {o['impacts_median']:.0f} | {o['rest_time_median']:.2f} | {o['void']:.3f} |"

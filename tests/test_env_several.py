@@ -287,3 +287,58 @@ def test_bad_actions_and_options_are_refused():
     obs, _ = env.reset(options={"orientation": np.stack([np.eye(3)] * 2), "target_sum": 12})
     assert obs[10] == 1.0
     assert isinstance(make_task(num_dice=2), GroupThrowTask)
+
+
+# --- agents --------------------------------------------------------------------------------
+
+def test_agents_size_themselves_from_a_task_of_two_dice():
+    from agents.episodes import Batch
+    from agents.evaluate import summary, target_values
+    from agents.oracle import CEM, score, score_noise, search
+    from agents.replay import gif_name
+
+    task = make_task(num_dice=2, **FAST)
+    rng = np.random.default_rng(0)
+    batch = Batch.sample(task, 3, rng, target_sum=7)
+    assert batch.observations.shape == (3, 29) and batch.noise.shape == (3, 18)
+    np.testing.assert_array_equal(batch.targets, 7)
+    actions = rng.uniform(-1, 1, (3, 6))
+    info = batch.throw(task, lambda obs: actions)
+    assert info["face"].shape == (3, 2)
+    assert summary(info["is_success"], batch.targets, target_values(task))["per_target"].keys() \
+        <= {7}
+    tiny = CEM(global_candidates=1, restarts=1, iterations=1, population=2, noise_samples=1,
+               finalists=1, validation_samples=1)
+    found = search(task, batch.observations[:1], rng, tiny, starts={"random": actions[:1]})
+    assert found.shape == (1, 6)
+    assert score(task, batch.observations[:1], found, score_noise(task, rng, 1, 2)).shape == (1, 2)
+    with pytest.raises(ValueError, match="starts"):
+        search(task, batch.observations[:1], rng, tiny)
+    one = {k: v[0] for k, v in info.items()}
+    assert gif_name("throw", 0, "PPO", one).startswith("throw_0_PPO_sum7_landed")
+    faces = make_task(num_dice=2, target="faces", **FAST)
+    assert target_values(faces) == []
+    one = {"is_success": True, "target_face": np.array([3, 5]), "face": np.array([3, 5])}
+    assert gif_name("throw", 1, "PPO", one) == "throw_1_PPO_target3-5_landed3-5_success.gif"
+
+
+def test_one_die_presets_are_refused_for_several_dice():
+    from agents.config import parse_config
+
+    with pytest.raises(SystemExit):
+        parse_config(["--env", "num_dice=2", "--preset", "quick"])
+    assert parse_config(["--env", "num_dice=2", "--preset", "scratch"]).env_kwargs() == {
+        "num_dice": 2}
+
+
+@pytest.mark.slow
+def test_train_runs_end_to_end_with_two_dice(tmp_path):
+    """About 10 minutes on two shared cores, most of it the oracle's search."""
+    from agents.train import main
+
+    main(["--env", "num_dice=2", "--total-timesteps", "2048", "--eval-throws", "64",
+          "--oracle-observations", "2", "--robustness-throws", "0", "--gifs", "1",
+          "--preset", "scratch", "--runs", str(tmp_path), "--no-progress"])
+    run = next(tmp_path.iterdir())
+    report = (run / "report.md").read_text()
+    assert "oracle" in report and len(list(run.glob("throw_*.gif"))) == 1
