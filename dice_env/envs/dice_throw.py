@@ -196,6 +196,11 @@ class DiceThrowEnv(gym.Env):
     | | | it names, the rest of the scene (t_max, die, table, ...) is kept |
     | ``num_threads`` | None | numba threads, 1 to NUMBA_NUM_THREADS (None: all cores) |
     | ``until`` | "rest" | "rest", or "decided": end a throw when its face is decided |
+    | ``num_dice`` | 1 | dice per throw, 1 … 12 (``die`` may also be a tuple, one per die) |
+    | ``target`` | None | "faces" (one die; a face per die) or "sum" (a total: several dice's |
+    | | | default) |
+    | ``target_sum`` | None | fix the total (``target="sum"``) |
+    | ``set_dice`` | False | several dice: the action also sets each die in the hand |
     | ``render_mode`` | None | "rgb_array", "rgb_array_list" or "human" |
     | ``render_width``, ``render_height`` | 320, 240 | frame size (pixels) |
 
@@ -214,6 +219,8 @@ class DiceThrowEnv(gym.Env):
     * v0: keywords ``die``, ``size`` and ``walls`` (any standard die, a tray or a craps table);
       the observation's one-hot has one entry per face. The default (a d6, no walls) is
       unchanged.
+    * v0: several dice in one throw (``num_dice``, a ``die`` tuple, ``target``, ``target_sum``,
+      ``set_dice``; docs/environment.md). One die, the default, is unchanged.
     """
 
     metadata: ClassVar[dict[str, Any]] = {"render_modes": list(RENDER_MODES),
