@@ -87,8 +87,9 @@ def _section_success(evaluation: dict[str, Any]) -> list[str]:
                   "throws each)", "", headline_table(common), "",
                   "Every thrower and the oracle are scored on the same throws (the same "
                   "observations and the same hand noise). The oracle searches each observation "
-                  "under the env's own noise: it screens every other thrower's action (hand-"
-                  f"written, PPO, random) and {cem['global_candidates']} uniform actions, runs "
+                  "under the env's own noise: it screens every other thrower's action ("
+                  f"{', '.join(n for n in common if n != 'oracle')}) and "
+                  f"{cem['global_candidates']} uniform actions, runs "
                   f"{cem['restarts']} cross-entropy searches ({cem['iterations']} rounds × "
                   f"{cem['population']} candidates × {cem['noise_samples']} noise draws) from "
                   "the best of them, and keeps the best finalist (every start included) on "
@@ -96,7 +97,7 @@ def _section_success(evaluation: dict[str, Any]) -> list[str]:
                   "draws. Intervals (95 %): Wilson on the pooled throws, their number divided "
                   "by the design effect of the observations (throws of one observation are not "
                   "independent).", ""]
-    lines += [f"## Success on {evaluation['throws']} throws per thrower, by target face", "",
+    lines += [f"## Success on {evaluation['throws']} throws per thrower, by target", "",
               headline_table(evaluation["summary"]), "",
               "The same observations and hand noise for every thrower; 95 % Wilson intervals.",
               ""]
