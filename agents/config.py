@@ -301,9 +301,23 @@ def check_env(config: Config, setting: dict[str, Any] | None = None) -> None:
     kwargs = {**config.env_kwargs(), **(setting or {}), **config.num_threads_kwargs()}
     for extra in ({}, config.hyperparams()["train_env"]):
         try:
-            gym.make(config.env_id, **{**kwargs, **extra}).close()
+            env = gym.make(config.env_id, **{**kwargs, **extra})
         except (ValueError, TypeError) as error:
             raise OptionError(option, str(error)) from None
+        dice = env.unwrapped.task.n_dice
+        env.close()
+        _check_one_die_preset(config, option, dice)
+
+
+def _check_one_die_preset(config: Config, option: str, dice: int) -> None:
+    """Refuse a preset built on one-die constructs for a throw of several dice."""
+    params = config.hyperparams()
+    extractor = params["ppo"].get("policy_kwargs", {}).get("features_extractor_class")
+    if dice > 1 and (params["imitation_steps"] or extractor is not None):
+        raise OptionError(option, f"num_dice={dice}: preset {config.preset!r} warm-starts from "
+                          "the hand-written thrower and gives the policy the target face's "
+                          "direction (TargetNormal), both built for one die; use --preset "
+                          "scratch (plain MlpPolicy PPO) for several dice")
 
 
 def _check_name(config: Config) -> None:

@@ -16,7 +16,7 @@ from agents.baselines import Thrower
 from agents.config import Config
 from dice_env.envs.task import ThrowTask, make_task
 
-EPISODE_KEYWORDS = ("target_face", "orientation_mode")
+EPISODE_KEYWORDS = ("target_face", "target_sum", "orientation_mode")
 CHUNK = 256  # throws per kernel call when the evaluation shows its progress
 
 
@@ -33,7 +33,11 @@ class PolicyThrower:
 
 @dataclass
 class Batch:
-    """``n`` episodes: targets (n,), hands (n, 3, 3), observations (n, size), noise (n, d)."""
+    """``n`` episodes: targets, hands, observations (n, size), noise (n, d).
+
+    One die: targets (n,), hands (n, 3, 3); N dice: targets (n, N) faces or (n,) totals,
+    hands (n, N, 3, 3).
+    """
 
     targets: np.ndarray
     hands: np.ndarray
@@ -43,9 +47,10 @@ class Batch:
     @classmethod
     def sample(cls, task: ThrowTask, n: int, rng: np.random.Generator,
                **episode: Any) -> Batch:
-        """Draw ``n`` episodes as the env does (``target_face``, ``orientation_mode``)."""
-        pairs = [task.sample_hand(rng, episode.get("target_face"),
-                                  episode.get("orientation_mode", "uniform")) for _ in range(n)]
+        """Draw ``n`` episodes as the env does (:data:`EPISODE_KEYWORDS`)."""
+        fixed = task.fixed_target(episode.get("target_face"), episode.get("target_sum"))
+        pairs = [task.sample_hand(rng, fixed, episode.get("orientation_mode", "uniform"))
+                 for _ in range(n)]
         targets = np.array([t for t, _ in pairs])
         hands = np.stack([h for _, h in pairs])
         return cls(targets, hands, task.observe(targets, hands), task.sample_noise(rng, n))
@@ -73,3 +78,9 @@ def make_eval_task(config: Config, **overrides: Any) -> tuple[ThrowTask, dict[st
     for key in ("render_mode", "render_width", "render_height"):
         kwargs.pop(key, None)
     return make_task(**kwargs), episode
+
+
+def throw_impacts(throws: dict[str, np.ndarray]) -> np.ndarray:
+    """Impacts per throw (n,): the die's, or the sum over the dice of several."""
+    impacts = np.asarray(throws["impacts"])
+    return impacts.reshape(len(impacts), -1).sum(axis=1)

@@ -15,15 +15,15 @@ import argparse
 import json
 import math
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from agents.baselines import HandThrower, RandomThrower, Thrower, decode, n_faces
+from agents.baselines import HandThrower, RandomThrower, Thrower, decode
 from agents.config import Config, field_docs
-from agents.episodes import Batch, PolicyThrower, make_eval_task
+from agents.episodes import Batch, PolicyThrower, make_eval_task, throw_impacts
 from agents.oracle import CEM, score, score_noise, search
 from agents.progress import announce_compile, bar
 from agents.report import headline_table, verdict, write_report
@@ -75,9 +75,11 @@ def clustered(success: np.ndarray) -> tuple[float, float]:
     return wilson(p * size, size)
 
 
-def summary(success: np.ndarray, targets: np.ndarray, faces: int) -> dict[str, Any]:
+def summary(success: np.ndarray, targets: np.ndarray,
+            faces: int | Sequence[int]) -> dict[str, Any]:
     """Success rate with its interval, overall and per target. ``success`` (n,) or (n, k).
 
+    ``faces``: the target values to split by (an int n: 1 … n; :func:`target_values`).
     With (n, k) (k throws per observation) the interval is :func:`clustered`.
     """
     def one(s: np.ndarray) -> dict[str, Any]:
@@ -86,8 +88,19 @@ def summary(success: np.ndarray, targets: np.ndarray, faces: int) -> dict[str, A
                     "observations": len(s)}
         return {"rate": float(s.mean()), "ci": wilson(int(s.sum()), s.size), "n": int(s.size)}
 
+    values = range(1, faces + 1) if isinstance(faces, int) else faces
     return {**one(success), "per_target": {
-        f: one(success[targets == f]) for f in range(1, faces + 1) if np.any(targets == f)}}
+        f: one(success[targets == f]) for f in values if np.any(targets == f)}}
+
+
+def target_values(task: ThrowTask) -> list[int]:
+    """The targets a summary splits by: one die's faces, the totals of "sum".
+
+    None for the faces of several dice (one per combination would be too many).
+    """
+    if task.n_dice == 1:
+        return list(range(1, task.n_faces + 1))
+    return list(task.totals) if task.target == "sum" else []
 
 
 def paired_difference(a: np.ndarray, b: np.ndarray) -> dict[str, Any]:
@@ -117,7 +130,7 @@ def compare(
     cem = CEM() if cem is None else cem
     rng = np.random.default_rng(seed)
     batch = Batch.sample(task, throws, rng, **(episode or {}))
-    faces = n_faces(batch.observations.shape[1])
+    faces = target_values(task)
     out: dict[str, Any] = {"throws": {}, "summary": {}, "batch": batch}
     with bar(throws * len(throwers), "evaluation", "throw", progress) as b:
         for name, thrower in throwers.items():
@@ -278,9 +291,14 @@ def evaluate_run(
     throws, oracle_observations = config.eval_throws, config.oracle_observations
     task, episode = make_eval_task(config)
     model = PPO.load(run / "model.zip", device="cpu")
-    throwers: dict[str, Thrower] = {
-        "PPO": PolicyThrower(model), "hand-written": HandThrower(task),
-        "random": RandomThrower(config.seed, model.action_space.shape[0])}
+    one_die = task.n_dice == 1  # the hand-written rule and the turn/strategy views are one die's
+    throwers: dict[str, Thrower] = {"PPO": PolicyThrower(model)}
+    if one_die:
+        throwers["hand-written"] = HandThrower(task)
+    else:
+        log(f"{task.n_dice} dice: no hand-written thrower (a one-die rule), no turn, strategy "
+            "or confusion views")
+    throwers["random"] = RandomThrower(config.seed, model.action_space.shape[0])
     seed = config.seed + 2 * 10**6
     start = time.perf_counter()
     log(f"evaluating {run}: {throws} throws per thrower")
@@ -288,40 +306,44 @@ def evaluate_run(
     result = compare(task, throwers, throws, oracle_observations, seed, episode=episode,
                      progress=progress, log=log)
     batch, raw = result["batch"], result["throws"]
-    angle = tilt(batch.observations, task)[0]
-    turn = {name: by_turn(r["is_success"], angle) for name, r in raw.items()}
-    differences = {"hand-written": {
-        **paired_difference(raw["PPO"]["is_success"], raw["hand-written"]["is_success"]),
-        "where": f"the same {throws} throws"}}
+    turn: dict[str, Any] = {}
+    differences: dict[str, Any] = {}
+    if one_die:
+        angle = tilt(batch.observations, task)[0]
+        turn = {name: by_turn(r["is_success"], angle) for name, r in raw.items()}
+        differences["hand-written"] = {
+            **paired_difference(raw["PPO"]["is_success"], raw["hand-written"]["is_success"]),
+            "where": f"the same {throws} throws"}
     above_oracle = []
     if "common" in result:
         common = result["common_success"]
         m = len(common["oracle"])
-        turn["oracle"] = by_turn(common["oracle"], angle[:m])
+        if one_die:
+            turn["oracle"] = by_turn(common["oracle"], angle[:m])
         differences["oracle"] = {**paired_difference(common["PPO"], common["oracle"]),
                                  "where": f"the oracle's {m} observations × "
                                           f"{ORACLE_SCORE_SAMPLES} throws"}
         above_oracle = [n for n in throwers
                         if common[n].mean() > common["oracle"].mean()]
     strategies = {name: strategy(batch, raw[name]["action"], task)
-                  for name in ("PPO", "hand-written")}
+                  for name in ("PPO", "hand-written") if one_die}
     log("robustness sweeps")
     sweeps = robustness(config, throwers, config.robustness_throws, seed + 1, progress)
     curve = learning_curve(run)
-    faces = n_faces(batch.observations.shape[1])
     levels = {n: s["rate"] for n, s in result["summary"].items() if n != "PPO"}
     if "common" in result:
         levels["oracle"] = result["common"]["oracle"]["rate"]
     figures = {
         "learning": plots.learning(run / "learning.png", {"PPO": [curve]}, levels),
-        "turn": plots.by_turn(run / "turn.png", turn),
-        "strategy": plots.strategy(run / "strategy.png", strategies,
-                                   {n: raw[n]["is_success"] for n in strategies}),
-        "confusion": plots.confusion(run / "confusion.png", batch.targets,
-                                     {n: raw[n]["face"] for n in ("PPO", "hand-written")},
-                                     faces),
         "outcomes": plots.outcomes(run / "outcomes.png", raw),
     }
+    if one_die:
+        figures["turn"] = plots.by_turn(run / "turn.png", turn)
+        figures["strategy"] = plots.strategy(run / "strategy.png", strategies,
+                                             {n: raw[n]["is_success"] for n in strategies})
+        figures["confusion"] = plots.confusion(
+            run / "confusion.png", batch.targets,
+            {n: raw[n]["face"] for n in ("PPO", "hand-written")}, task.n_faces)
     if sweeps:
         figures["robustness"] = plots.robustness(run / "robustness.png", sweeps,
                                                  trained_values(task))
@@ -335,7 +357,7 @@ def evaluate_run(
         "oracle_seconds": result.get("oracle_seconds"), "turn": turn,
         "learning": curve,
         "strategy": {n: strategy_table(s) for n, s in strategies.items()},
-        "outcomes": {n: {"impacts_median": float(np.median(r["impacts"])),
+        "outcomes": {n: {"impacts_median": float(np.median(throw_impacts(r))),
                          "rest_time_median": float(np.median(r["rest_time"])),
                          "void": float(np.mean(r["void_reason"] != ""))}
                      for n, r in raw.items()},

@@ -30,7 +30,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from agents.baselines import HandThrower, decode
+from agents.baselines import HandThrower
 from dice_env.envs.task import ThrowTask
 
 SHAPING_TIE_BREAK = 0.1  # weight of the alignment term when ranking candidates (not in scores)
@@ -91,11 +91,15 @@ def search(
     """The oracle's action for each observation; ``progress(k)`` after k more observations.
 
     ``starts``: other throwers' actions (n, action size) for the same observations; the
-    hand-written thrower's are always added.
+    hand-written thrower's are always added for one die (a one-die rule).
     """
     cem = CEM() if cem is None else cem
     observations = np.atleast_2d(np.asarray(observations, dtype=np.float64))
-    given = {"hand-written": HandThrower(task)(observations), **(starts or {})}
+    given = {"hand-written": HandThrower(task)(observations)} if task.n_dice == 1 else {}
+    given.update(starts or {})
+    if not given:
+        raise ValueError("starts must hold at least one thrower's actions for several dice "
+                         "(the hand-written thrower is a one-die rule)")
     start_actions = np.stack([np.asarray(a, np.float64) for a in given.values()], axis=1)
     ranked = search_task(task)
     actions = np.empty((len(observations), start_actions.shape[2]))
@@ -128,9 +132,9 @@ def score(
     Give every thrower the same ``noise`` (:func:`score_noise`) to compare them on the same
     throws.
     """
-    targets, hands = decode(observations)
+    targets, hands = task.decode(observations)
     n, k = noise.shape[:2]
-    throw = task.throw(np.repeat(actions, k, axis=0), np.repeat(targets, k),
+    throw = task.throw(np.repeat(actions, k, axis=0), np.repeat(targets, k, axis=0),
                        np.repeat(hands, k, axis=0), noise.reshape(n * k, -1))
     return throw.info["is_success"].reshape(n, k)
 
@@ -185,10 +189,10 @@ def _evaluate(
 ) -> np.ndarray:
     """Mean reward (n, c) of candidates (n, c, a), all sharing ``samples`` noise draws per obs."""
     n, c = candidates.shape[:2]
-    targets, hands = decode(observations)
+    targets, hands = task.decode(observations)
     noise = task.sample_noise(rng, n * samples).reshape(n, 1, samples, -1)
     noise = np.broadcast_to(noise, (n, c, samples, noise.shape[-1])).reshape(n * c * samples, -1)
     throw = task.throw(np.repeat(candidates.reshape(n * c, -1), samples, axis=0),
-                       np.repeat(targets, c * samples),
+                       np.repeat(targets, c * samples, axis=0),
                        np.repeat(hands, c * samples, axis=0), noise)
     return throw.reward.reshape(n, c, samples).mean(axis=2)

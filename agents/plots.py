@@ -12,6 +12,8 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
 
+from agents.episodes import throw_impacts
+
 COLOURS = {"PPO": "tab:blue", "hand-written": "tab:orange", "random": "tab:gray",
            "oracle": "tab:green"}
 TILT_BINS = np.linspace(0.0, 180.0, 13)  # degrees, 15° wide
@@ -150,10 +152,11 @@ def confusion(path: Path, targets: np.ndarray, landed: dict[str, np.ndarray],
 def outcomes(path: Path, throws: dict[str, dict[str, np.ndarray]]) -> Path:
     """Histograms of the number of impacts and of the rest time per thrower."""
     fig, axes = plt.subplots(1, 2, figsize=(10, 3.6))
-    impacts = np.concatenate([t["impacts"] for t in throws.values()])
+    per_throw = {name: throw_impacts(t) for name, t in throws.items()}
+    impacts = np.concatenate(list(per_throw.values()))
     rest = np.concatenate([t["rest_time"] for t in throws.values()])
     for name, t in throws.items():
-        axes[0].hist(t["impacts"], bins=np.linspace(0, max(1, np.percentile(impacts, 99)), 40),
+        axes[0].hist(per_throw[name], bins=np.linspace(0, max(1, np.percentile(impacts, 99)), 40),
                      alpha=0.5, color=COLOURS.get(name), label=name)
         axes[1].hist(t["rest_time"], bins=np.linspace(0, max(1e-3, np.percentile(rest, 99)), 40),
                      alpha=0.5, color=COLOURS.get(name), label=name)

@@ -25,28 +25,40 @@ FPS = 30  # frames per second of the GIFs (the env's render_fps)
 HOLD = 0.6  # seconds the landed die is shown at the end
 
 
-def record_throw(task: ThrowTask, action: np.ndarray, target: int, hand: np.ndarray,
+def record_throw(task: ThrowTask, action: np.ndarray, target: Any, hand: np.ndarray,
                  noise: np.ndarray, size: tuple[int, int] = (240, 320)) -> tuple[list, dict]:
-    """The frames of one throw (the same throw as ``task.throw`` with this noise) and its info."""
-    from dice_env.envs.render import render_die
+    """The frames of one throw (the same throw as ``task.throw`` with this noise) and its info.
+
+    One die or several (``target`` and ``hand`` as one row of :class:`Batch`'s).
+    """
+    from dice_env.envs.render import render_task
 
     every = max(1, round(1.0 / (FPS * task.scene.step)))
-    throw = task.throw(np.asarray(action)[None], [target], np.asarray(hand)[None],
-                       np.asarray(noise)[None], record_every=every)
+    throw = task.throw(np.asarray(action)[None], np.asarray(target)[None],
+                       np.asarray(hand)[None], np.asarray(noise)[None], record_every=every)
     result = throw.result
     shown = int(result.steps[0]) // every
-    poses = [(task.release_position, hand),
+    start = task.release_position if task.n_dice == 1 else task.release_positions
+    poses = [(start, hand),
              *zip(result.x_cm[0, :shown], result.orientations[0, :shown], strict=True)]
     poses += [(result.final.position[0], result.final.orientation[0])] * round(HOLD * FPS)
-    frames = [render_die(task.scene, p, q, size=size) for p, q in poses]
+    frames = [render_task(task, p, q, size=size) for p, q in poses]
     return frames, {key: value[0] for key, value in throw.info.items()}
 
 
 def gif_name(prefix: str, index: int, thrower: str, info: dict[str, Any]) -> str:
-    """``throw_0_PPO_target3_landed5_failure.gif``."""
+    """``throw_0_PPO_target3_landed5_failure.gif``.
+
+    Several dice: ``target3-5_landed2-5``, or for a total ``sum7_landed2-4``.
+    """
     outcome = "success" if info["is_success"] else "failure"
-    return (f"{prefix}_{index}_{thrower.replace(' ', '-')}_target{int(info['target_face'])}_"
-            f"landed{int(info['face'])}_{outcome}.gif")
+    if "target_sum" in info:
+        target = f"sum{int(info['target_sum'])}"
+    else:
+        target = "target" + "-".join(str(int(f)) for f in np.ravel(info["target_face"]))
+    landed = "-".join(str(int(f)) for f in np.ravel(info["face"]))
+    return (f"{prefix}_{index}_{thrower.replace(' ', '-')}_{target}_landed{landed}_"
+            f"{outcome}.gif")
 
 
 def pick_throws(success: np.ndarray, count: int) -> list[int]:
@@ -104,7 +116,8 @@ def replay(run: Path, throws: int, seed: int, target: int | None, thrower: str,
         frames, info = record_throw(task, actions[i], batch.targets[i], batch.hands[i],
                                     batch.noise[i])
         path = save_video(frames, out / gif_name(f"replay_s{seed}", i, thrower, info), fps=FPS)
-        print(f"throw {i}: target {int(info['target_face'])}, landed {int(info['face'])} "
+        target = info.get("target_sum", info.get("target_face"))
+        print(f"throw {i}: target {target}, landed {info['face']} "
               f"({'success' if info['is_success'] else 'failure'}) -> {path}")
         paths.append(path)
     return paths
@@ -130,7 +143,11 @@ def main(argv: list[str] | None = None) -> None:
     if args.seed < 0:
         parser.error(f"argument --seed: must be an integer >= 0, got {args.seed}")
     if args.target is not None:
-        faces = make_eval_task(Config.load(args.run / "config.json"))[0].n_faces
+        task = make_eval_task(Config.load(args.run / "config.json"))[0]
+        if task.n_dice > 1:
+            parser.error("argument --target: fixes one die's face; the run throws "
+                         f"{task.n_dice} dice (fix theirs with --env target_sum or target_face)")
+        faces = task.n_faces
         if not 1 <= args.target <= faces:
             parser.error(f"argument --target: must be a face of the run's die, in [1, {faces}], "
                          f"got {args.target}")

@@ -29,13 +29,13 @@ def _rate(s: dict[str, Any] | None, digits: int = 2) -> str:
 def headline_table(summaries: dict[str, dict[str, Any]]) -> str:
     """The Markdown table of success per thrower, overall and per target."""
     faces = sorted({f for s in summaries.values() for f in s["per_target"]})
-    lines = ["| thrower | throws | success [95% CI] | " + " | ".join(
-        f"target {f}" for f in faces) + " |", "|---|---|---|" + "---|" * len(faces)]
+    header = ["thrower", "throws", "success [95% CI]", *(f"target {f}" for f in faces)]
+    lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
     for name, s in summaries.items():
         n = f"{s['n']}" + (f" ({s['observations']} obs)" if "observations" in s else "")
-        per = " | ".join(f"{s['per_target'][f]['rate']:.2f}" if f in s["per_target"] else "–"
-                         for f in faces)
-        lines.append(f"| {name} | {n} | {_rate(s, 3)} | {per} |")
+        per = [f"{s['per_target'][f]['rate']:.2f}" if f in s["per_target"] else "–"
+               for f in faces]
+        lines.append("| " + " | ".join([name, n, _rate(s, 3), *per]) + " |")
     return "\n".join(lines)
 
 
@@ -87,8 +87,9 @@ def _section_success(evaluation: dict[str, Any]) -> list[str]:
                   "throws each)", "", headline_table(common), "",
                   "Every thrower and the oracle are scored on the same throws (the same "
                   "observations and the same hand noise). The oracle searches each observation "
-                  "under the env's own noise: it screens every other thrower's action (hand-"
-                  f"written, PPO, random) and {cem['global_candidates']} uniform actions, runs "
+                  "under the env's own noise: it screens every other thrower's action ("
+                  f"{', '.join(n for n in common if n != 'oracle')}) and "
+                  f"{cem['global_candidates']} uniform actions, runs "
                   f"{cem['restarts']} cross-entropy searches ({cem['iterations']} rounds × "
                   f"{cem['population']} candidates × {cem['noise_samples']} noise draws) from "
                   "the best of them, and keeps the best finalist (every start included) on "
@@ -96,7 +97,7 @@ def _section_success(evaluation: dict[str, Any]) -> list[str]:
                   "draws. Intervals (95 %): Wilson on the pooled throws, their number divided "
                   "by the design effect of the observations (throws of one observation are not "
                   "independent).", ""]
-    lines += [f"## Success on {evaluation['throws']} throws per thrower, by target face", "",
+    lines += [f"## Success on {evaluation['throws']} throws per thrower, by target", "",
               headline_table(evaluation["summary"]), "",
               "The same observations and hand noise for every thrower; 95 % Wilson intervals.",
               ""]
@@ -171,9 +172,10 @@ def write_report(run: Path, config: Config, evaluation: dict[str, Any],
         "", "## Headline", "", _rates_line(evaluation), "", *verdict(evaluation), "",
         *_section_success(evaluation),
         *_section_learning(run, evaluation, figures["learning"]),
-        *_section_turn(evaluation, figures["turn"]),
-        *_section_strategy(evaluation, figures["strategy"]),
-        "## Outcomes", "", f"![confusion]({figures['confusion'].name})", "",
+        *(_section_turn(evaluation, figures["turn"]) if "turn" in figures else []),
+        *(_section_strategy(evaluation, figures["strategy"]) if "strategy" in figures else []),
+        "## Outcomes", "",
+        *([f"![confusion]({figures['confusion'].name})", ""] if "confusion" in figures else []),
         f"![outcomes]({figures['outcomes'].name})", "",
         "| thrower | median impacts | median rest time (s) | void throws |", "|---|---|---|---|",
         *[f"| {n} | {o['impacts_median']:.0f} | {o['rest_time_median']:.2f} | {o['void']:.3f} |"

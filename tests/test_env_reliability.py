@@ -198,6 +198,8 @@ CHOICES = {
     "until": ["rest", "decided"],
     "die": ["d4", "d6", "d8", "d10", "d12", "d20"],
     "walls": ["none", "tray", "craps"],
+    "target": ["faces", "sum"],
+    "set_dice": [False, True],
 }
 RANGES = {  # name: (low, high, log scale)
     "release_height": (0.0145, 0.1, True), "max_speed": (0.1, 5.0, True),
@@ -212,7 +214,7 @@ RANGES = {  # name: (low, high, log scale)
     "rest_hold": (0.0, 0.5, False), "energy_tol": (0.01, 1.0, True),
     "friction_vmin": (1e-6, 0.1, True),
 }
-INTEGERS = {"target_face": (1, 6), "load_face": (1, 6),
+INTEGERS = {"target_face": (1, 6), "load_face": (1, 6), "num_dice": (1, 3),
             "num_threads": (1, numba.config.NUMBA_NUM_THREADS)}
 
 
@@ -228,12 +230,13 @@ def random_value(rng, name):
     return float(np.exp(rng.uniform(np.log(low), np.log(high))) if log else rng.uniform(low, high))
 
 
-def random_action(rng):
-    """Mostly a valid action (in and out of [-1, 1]), sometimes a bad one."""
-    bad = [np.full(6, np.nan), np.zeros(5), np.zeros((2, 6)), ["a"] * 6, np.full(6, np.inf)]
+def random_action(rng, dim=6):
+    """Mostly a valid action of ``dim`` (in and out of [-1, 1]), sometimes a bad one."""
+    bad = [np.full(dim, np.nan), np.zeros(dim - 1), np.zeros((2, dim)), ["a"] * dim,
+           np.full(dim, np.inf)]
     if rng.random() < 0.1:
         return bad[rng.integers(len(bad))], True
-    return rng.uniform(-2.0, 2.0, 6), False
+    return rng.uniform(-2.0, 2.0, dim), False
 
 
 def names_a_keyword(error, keywords):
@@ -266,7 +269,7 @@ def fuzz(rng, budget_s=math.inf, iterations=None):
             raise AssertionError(f"gym.make(**{keywords}) raised {error!r}") from error
         outcomes["made"] += 1
         env.reset(seed=int(rng.integers(1000)))
-        action, bad = random_action(rng)
+        action, bad = random_action(rng, env.action_space.shape[0])
         began = time.perf_counter()
         try:
             obs, reward, *_, info = env.step(action)

@@ -14,7 +14,6 @@ from dice_env.envs.task import (
     ORIENTATION_DIM,
     ThrowTask,
     check_actions,
-    check_face,
     check_orientation_mode,
     check_rotation,
     check_task_keywords,
@@ -27,22 +26,19 @@ MAX_FRAME_BYTES = 2**30  # the frames one throw may keep in "rgb_array_list" mod
 
 
 def observation_space(task: ThrowTask) -> spaces.Box:
-    """One-hot target in [0, 1] (``n_faces``), then the orientation's entries in [-1, 1] (9)."""
-    low = np.r_[np.zeros(task.n_faces), -np.ones(ORIENTATION_DIM)].astype(np.float32)
+    """The target's encoding in [0, 1], then each die's orientation in [-1, 1] (9 per die)."""
+    low = np.r_[np.zeros(task.target_dim),
+                -np.ones(ORIENTATION_DIM * task.n_dice)].astype(np.float32)
     return spaces.Box(low, np.ones(task.obs_dim, np.float32), dtype=np.float32)
 
 
-def action_space() -> spaces.Box:
-    """Release velocity (3) and angular velocity (3), scaled to ±max_speed, ±max_spin."""
-    return spaces.Box(-1.0, 1.0, (ACTION_DIM,), np.float32)
+def action_space(task: ThrowTask | None = None) -> spaces.Box:
+    """Release velocity (3) and angular velocity (3), scaled to ±max_speed, ±max_spin.
 
-
-def check_episode_keywords(task: ThrowTask, target_face: int | None,
-                           orientation_mode: str) -> None:
-    """Validate the per-episode keywords shared by the single and the vector env."""
-    if target_face is not None:
-        check_face("target_face", target_face, task.n_faces)
-    check_orientation_mode(orientation_mode)
+    With ``set_dice`` also a rotation vector per die (``task.action_dim``; None: one die's 6).
+    """
+    return spaces.Box(-1.0, 1.0, (ACTION_DIM if task is None else task.action_dim,),
+                      np.float32)
 
 
 def check_render(render_mode: str | None, modes: tuple[str, ...], width: int, height: int) -> None:
@@ -68,8 +64,9 @@ def check_frame_memory(render_mode: str | None, t_max: float, width: int, height
 
 
 def configure(
-    env: Any, modes: tuple[str, ...], render_mode: str | None, target_face: int | None,
-    orientation_mode: str, width: int, height: int, task_keywords: dict[str, Any],
+    env: Any, modes: tuple[str, ...], render_mode: str | None, target_face: Any,
+    target_sum: int | None, orientation_mode: str, width: int, height: int,
+    task_keywords: dict[str, Any],
 ) -> ThrowTask:
     """Validate the keywords shared by the single and the vector env, set them on ``env``.
 
@@ -77,30 +74,45 @@ def configure(
     """
     check_render(render_mode, modes, width, height)
     task = make_task(**check_task_keywords(task_keywords))
-    check_episode_keywords(task, target_face, orientation_mode)
+    task.fixed_target(target_face, target_sum)
+    check_orientation_mode(orientation_mode)
     env.target_face = target_face
+    env.target_sum = target_sum
     env.orientation_mode = orientation_mode
     env.render_mode = render_mode
     env.render_size = (height, width)
     return task
 
 
-RESET_OPTIONS = ("target_face", "orientation", "orientation_mode")
+RESET_OPTIONS = ("target_face", "target_sum", "orientation", "orientation_mode")
 
 
 def episode_hand(
     env: Any, rng: np.random.Generator, options: dict[str, Any] | None
-) -> tuple[int, np.ndarray]:
-    """One episode's target and hand orientation for ``env``, ``reset`` options applied."""
+) -> tuple[Any, np.ndarray]:
+    """One episode's target and hand orientation(s) for ``env``, ``reset`` options applied."""
     options = {} if options is None else options
     if not isinstance(options, dict) or set(options) - set(RESET_OPTIONS):
         raise ValueError(f"options must be None or a dict with keys among {RESET_OPTIONS}, "
                          f"got {options!r}")
-    target, hand = env.task.sample_hand(rng, options.get("target_face", env.target_face),
+    fixed = env.task.fixed_target(options.get("target_face", env.target_face),
+                                  options.get("target_sum", env.target_sum))
+    target, hand = env.task.sample_hand(rng, fixed,
                                         options.get("orientation_mode", env.orientation_mode))
     if "orientation" in options:
-        hand = check_rotation("options['orientation']", options["orientation"])
+        hand = check_hands(env.task, "options['orientation']", options["orientation"])
     return target, hand
+
+
+def check_hands(task: ThrowTask, name: str, value: object) -> np.ndarray:
+    """``value`` as the hand's orientation: (3, 3) for one die, (N, 3, 3) for N dice."""
+    if task.n_dice == 1:
+        return check_rotation(name, value)
+    hands = np.asarray(value, dtype=np.float64)
+    if hands.shape != (task.n_dice, 3, 3):
+        raise ValueError(f"{name} must be {task.n_dice} rotation matrices, shape "
+                         f"({task.n_dice}, 3, 3), got {hands.shape}")
+    return np.stack([check_rotation(f"{name}[{i}]", h) for i, h in enumerate(hands)])
 
 
 class DiceThrowEnv(gym.Env):
@@ -184,6 +196,11 @@ class DiceThrowEnv(gym.Env):
     | | | it names, the rest of the scene (t_max, die, table, ...) is kept |
     | ``num_threads`` | None | numba threads, 1 to NUMBA_NUM_THREADS (None: all cores) |
     | ``until`` | "rest" | "rest", or "decided": end a throw when its face is decided |
+    | ``num_dice`` | 1 | dice per throw, 1 … 12 (``die`` may also be a tuple, one per die) |
+    | ``target`` | None | "faces" (one die; a face per die) or "sum" (a total: several dice's |
+    | | | default) |
+    | ``target_sum`` | None | fix the total (``target="sum"``) |
+    | ``set_dice`` | False | several dice: the action also sets each die in the hand |
     | ``render_mode`` | None | "rgb_array", "rgb_array_list" or "human" |
     | ``render_width``, ``render_height`` | 320, 240 | frame size (pixels) |
 
@@ -202,6 +219,8 @@ class DiceThrowEnv(gym.Env):
     * v0: keywords ``die``, ``size`` and ``walls`` (any standard die, a tray or a craps table);
       the observation's one-hot has one entry per face. The default (a d6, no walls) is
       unchanged.
+    * v0: several dice in one throw (``num_dice``, a ``die`` tuple, ``target``, ``target_sum``,
+      ``set_dice``; docs/environment.md). One die, the default, is unchanged.
     """
 
     metadata: ClassVar[dict[str, Any]] = {"render_modes": list(RENDER_MODES),
@@ -211,21 +230,23 @@ class DiceThrowEnv(gym.Env):
         self,
         render_mode: str | None = None,
         *,
-        target_face: int | None = None,
+        target_face: Any = None,
+        target_sum: int | None = None,
         orientation_mode: str = "uniform",
         render_width: int = 320,
         render_height: int = 240,
         **task_keywords: Any,
     ) -> None:
         self.task: ThrowTask = configure(self, RENDER_MODES, render_mode, target_face,
-                                         orientation_mode, render_width, render_height,
-                                         task_keywords)
+                                         target_sum, orientation_mode, render_width,
+                                         render_height, task_keywords)
         check_frame_memory(render_mode, self.task.scene.t_max, render_width, render_height)
         self.observation_space = observation_space(self.task)
-        self.action_space = action_space()
-        self._target = 1
-        self._hand = np.eye(3)
-        self._pose = (self.task.release_position, self._hand)
+        self.action_space = action_space(self.task)
+        # Placeholders until reset: the dice in the hand, unturned.
+        self._target, self._hand = self.task.sample_hand(np.random.default_rng(0),
+                                                         orientation_mode="identity")
+        self._pose = (self._release_position(), self._hand)
         self._frames: list[np.ndarray] = []
         self._viewer: Any = None
 
@@ -235,17 +256,18 @@ class DiceThrowEnv(gym.Env):
         """Put the die in the hand and draw the target; options override one episode."""
         super().reset(seed=seed)
         self._target, self._hand = episode_hand(self, self.np_random, options)
-        self._pose = (self.task.release_position, self._hand)
+        self._pose = (self._release_position(), self._hand)
         self._frames = []
         self._draw([self._pose])
         return self.task.observe(self._target, self._hand)[0], {}
 
     def step(self, action: np.ndarray) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
         """Throw once and simulate to rest."""
-        checked = check_actions(action)
-        if np.shape(action) != (ACTION_DIM,):
-            raise ValueError(f"action must have shape (6,) (one throw; DiceThrowVectorEnv takes "
-                             f"(n, 6)), got {np.shape(action)}")
+        dim = self.task.action_dim
+        checked = check_actions(action, dim)
+        if np.shape(action) != (dim,):
+            raise ValueError(f"action must have shape ({dim},) (one throw; DiceThrowVectorEnv "
+                             f"takes (n, {dim})), got {np.shape(action)}")
         noise = self.task.sample_noise(self.np_random)
         throw = self.task.throw(checked, [self._target], self._hand[None], noise,
                                 record_every=self._record_every())
@@ -278,10 +300,15 @@ class DiceThrowEnv(gym.Env):
             return 0
         return max(1, round(1.0 / (RENDER_FPS * self.task.scene.step)))
 
-    def _frame(self, position: np.ndarray, orientation: np.ndarray) -> np.ndarray:
-        from dice_env.envs.render import render_die
+    def _release_position(self) -> np.ndarray:
+        """The centre of each die in the hand: (3,) for one die, (N, 3) for N."""
+        task = self.task
+        return task.release_position if task.n_dice == 1 else task.release_positions
 
-        return render_die(self.task.scene, position, orientation, size=self.render_size)
+    def _frame(self, position: np.ndarray, orientation: np.ndarray) -> np.ndarray:
+        from dice_env.envs.render import render_task
+
+        return render_task(self.task, position, orientation, size=self.render_size)
 
     def _draw(self, poses: list[tuple[np.ndarray, np.ndarray]]) -> None:
         """Keep ("rgb_array_list") or show ("human") the frames of these poses."""

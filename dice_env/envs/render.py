@@ -22,12 +22,14 @@ import argparse
 import math
 import os
 import sys
+from collections.abc import Iterator
 from dataclasses import dataclass
 from functools import lru_cache
 
 import numpy as np
 
 from dice_env.die import Die
+from dice_env.envs.task import ThrowTask
 from dice_env.rotations import axis_angle
 from dice_env.scene import Scene
 from dice_env.surroundings import walls
@@ -138,18 +140,76 @@ def render_die(
     position, orientation = _check_view(position, orientation, size, elevation, azimuth,
                                         view_edges)
     die = scene.die
+    centre = position - orientation @ np.asarray(die.com)  # geometric centre, camera target
+    return _render(scene, _Dice((die,), np.zeros((1, 3)), orientation[None]), centre,
+                   view_edges * die.size, size, elevation, azimuth)
+
+
+def render_dice(
+    scene: Scene,
+    dice: tuple[Die, ...],
+    positions: np.ndarray,
+    orientations: np.ndarray,
+    *,
+    size: tuple[int, int] = (240, 320),
+    elevation: float = 55.0,
+    azimuth: float = -60.0,
+    view_edges: float = 5.0,
+) -> np.ndarray:
+    """An RGB image (height, width, 3) uint8 of several dice in the scene, as :func:`render_die`.
+
+    ``positions`` (N, 3) centres of mass, ``orientations`` (N, 3, 3). The camera looks at the
+    middle of the dice's bounding box; the image is ``view_edges`` sizes of the largest die
+    wide, or the dice's spread plus that, whichever is wider. Each pixel shows the nearest die
+    it sees; the floor's grid is one largest die's size.
+    """
+    positions = np.asarray(positions, dtype=np.float64)
+    orientations = np.asarray(orientations, dtype=np.float64)
+    if positions.ndim != 2 or len(positions) != len(dice) or len(orientations) != len(dice):
+        raise ValueError(f"positions and orientations must hold one row per die ({len(dice)}), "
+                         f"got {positions.shape} and {orientations.shape}")
+    for p, q in zip(positions, orientations, strict=True):
+        _check_view(p, q, size, elevation, azimuth, view_edges)
+    centres = positions - np.einsum("nij,nj->ni", orientations, [d.com for d in dice])
+    centre = (centres.min(axis=0) + centres.max(axis=0)) / 2
+    largest = max(d.size for d in dice)
+    spread = float(np.ptp(centres, axis=0).max()) + 2 * largest
+    return _render(scene, _Dice(tuple(dice), centres - centre, orientations), centre,
+                   max(view_edges * largest, spread), size, elevation, azimuth)
+
+
+@dataclass(frozen=True)
+class _Dice:
+    """The dice to draw: their geometric centres relative to the camera's target, (N, 3)."""
+
+    dice: tuple[Die, ...]
+    offsets: np.ndarray
+    orientations: np.ndarray
+
+    @property
+    def unit(self) -> float:
+        """The floor grid's cell: the largest die's size (m)."""
+        return max(d.size for d in self.dice)
+
+    def __iter__(self) -> Iterator[tuple[Die, np.ndarray, np.ndarray]]:
+        """Each die with its offset and orientation."""
+        return iter(zip(self.dice, self.offsets, self.orientations, strict=True))
+
+
+def _render(scene: Scene, dice: _Dice, centre: np.ndarray, view: float,
+            size: tuple[int, int], elevation: float, azimuth: float) -> np.ndarray:
+    """The image of ``dice`` about ``centre`` (the camera's target), ``view`` m wide."""
     height, width = size
     normal = np.asarray(scene.ground.normal)
     forward, right, up = _camera(normal, math.radians(elevation), math.radians(azimuth))
-    scale = view_edges * die.size / width  # metres per pixel
-    centre = position - orientation @ np.asarray(die.com)  # geometric centre, camera target
+    scale = view / width  # metres per pixel
     xs = (np.arange(width) - (width - 1) / 2) * scale
     ys = ((height - 1) / 2 - np.arange(height)) * scale
     camera = _Lines(np.zeros(3), forward, right, up)
     light = _unit(normal + 0.4 * right + 0.3 * up)
 
     floor = _floor_lines(scene, centre, camera)
-    image = _floor(scene, centre, floor, orientation, xs, ys, scale)
+    image = _floor(scene, centre, floor, dice, xs, ys, scale)
     depth = np.full((height, width), np.inf)
     for planes in _boards(scene, centre):
         if not _in_view(planes, floor, xs, ys):
@@ -159,8 +219,22 @@ def render_die(
         depth[near] = t[near]
         shade = 0.45 + 0.55 * np.maximum(0.0, planes[:, :3] @ light)
         image[near] = WALL_COLOUR * shade[face[near], None]
-    _draw_die(image, depth, die, centre, orientation, camera, xs, ys, scale, light)
+    nearest = np.full((height, width), np.inf)  # the nearest die drawn so far
+    for die, offset, orientation in dice:
+        _draw_die(image, depth, nearest, die, offset, orientation, camera, xs, ys, scale, light)
     return np.clip(image, 0, 255).astype(np.uint8)
+
+
+def render_task(task: ThrowTask, position: np.ndarray, orientation: np.ndarray,
+                **view: object) -> np.ndarray:
+    """The frame of a task's die or dice, ``view`` as :func:`render_die`'s keywords.
+
+    :func:`render_die` for one die ((3,), (3, 3)), :func:`render_dice` for several ((N, 3),
+    (N, 3, 3)).
+    """
+    if task.n_dice == 1:
+        return render_die(task.scene, position, orientation, **view)
+    return render_dice(task.scene, task.dice, position, orientation, **view)
 
 
 # --- geometry -----------------------------------------------------------------------------
@@ -225,10 +299,13 @@ def _unit(v: np.ndarray) -> np.ndarray:
     return v / np.linalg.norm(v)
 
 
-def _die_planes(die: Die, orientation: np.ndarray) -> np.ndarray:
-    """The die's face half-spaces (F, 4) rows (n, c), world normals, about its centre."""
+def _die_planes(die: Die, orientation: np.ndarray, offset: np.ndarray) -> np.ndarray:
+    """The die's face half-spaces (F, 4) rows (n, c), world normals, about the camera's target.
+
+    ``offset``: the die's geometric centre from that target.
+    """
     normals = die.face_normals @ orientation.T
-    return np.column_stack([normals, _face_offsets(die)])
+    return np.column_stack([normals, _face_offsets(die) + normals @ offset])
 
 
 def _boards(scene: Scene, centre: np.ndarray) -> list[np.ndarray]:
@@ -278,10 +355,10 @@ def _floor_lines(scene: Scene, centre: np.ndarray, camera: _Lines) -> _Lines:
     return _Lines(base, normal, along(camera.dx), along(camera.dy))
 
 
-def _floor(scene: Scene, centre: np.ndarray, floor: _Lines, orientation: np.ndarray,
+def _floor(scene: Scene, centre: np.ndarray, floor: _Lines, dice: _Dice,
            xs: np.ndarray, ys: np.ndarray, scale: float) -> np.ndarray:
-    """Floor colour per pixel: felt inside the walls, a grid of one die size, the shadow."""
-    size = scene.die.size
+    """Floor colour per pixel: felt inside the walls, a grid of one die size, the shadows."""
+    size = dice.unit
     width = max(0.02, 0.6 * scale / size)  # grid line half-width, in sizes
     grid = np.zeros((len(ys), len(xs)), dtype=bool)
     for axis in _plane_axes(floor.direction):
@@ -293,16 +370,21 @@ def _floor(scene: Scene, centre: np.ndarray, floor: _Lines, orientation: np.ndar
         beyond |= floor.at(row[:3], xs, ys, row[3]) < 0
     colour = np.where(beyond[..., None], BEYOND_COLOUR, TABLE_COLOUR)
     image = np.where(grid[..., None], colour * 1.25, colour)
-    rows, cols = _box(_shadow_corners(scene, centre, orientation), floor, xs, ys)
-    t, _ = _clip(_die_planes(scene.die, orientation), floor, xs[cols], ys[rows])
-    image[rows, cols] *= np.where(np.isfinite(t), 0.55, 1.0)[..., None]
+    shadow = np.zeros_like(grid)
+    for die, offset, orientation in dice:
+        rows, cols = _box(_shadow_corners(scene, centre, die, offset, orientation), floor, xs,
+                          ys)
+        t, _ = _clip(_die_planes(die, orientation, offset), floor, xs[cols], ys[rows])
+        shadow[rows, cols] |= np.isfinite(t)
+    image *= np.where(shadow, 0.55, 1.0)[..., None]
     return image
 
 
-def _shadow_corners(scene: Scene, centre: np.ndarray, orientation: np.ndarray) -> np.ndarray:
+def _shadow_corners(scene: Scene, centre: np.ndarray, die: Die, offset: np.ndarray,
+                    orientation: np.ndarray) -> np.ndarray:
     """The die's corners dropped onto the floor, about ``centre`` (N, 3)."""
     normal = np.asarray(scene.ground.normal)
-    corners = np.asarray(scene.die.vertices) @ orientation.T
+    corners = np.asarray(die.vertices) @ orientation.T + offset
     return corners - np.outer(corners @ normal + normal @ centre - scene.ground.offset, normal)
 
 
@@ -319,20 +401,26 @@ def _box(points: np.ndarray, lines: _Lines, xs: np.ndarray,
 
 # --- the die ------------------------------------------------------------------------------
 
-def _draw_die(image: np.ndarray, depth: np.ndarray, die: Die, centre: np.ndarray,
-              orientation: np.ndarray, camera: _Lines, xs: np.ndarray, ys: np.ndarray,
-              scale: float, light: np.ndarray) -> None:
-    """Draw the die into ``image`` in place; a nearer board stays in front, translucent."""
-    rows, cols = _box(np.asarray(die.vertices) @ orientation.T, camera, xs, ys)
-    planes = _die_planes(die, orientation)
+def _draw_die(image: np.ndarray, depth: np.ndarray, nearest: np.ndarray, die: Die,
+              offset: np.ndarray, orientation: np.ndarray, camera: _Lines, xs: np.ndarray,
+              ys: np.ndarray, scale: float, light: np.ndarray) -> None:
+    """Draw the die into ``image`` in place; a nearer board stays in front, translucent.
+
+    Drawn only where it is nearer than the dice in ``nearest`` (their depths, updated).
+    """
+    rows, cols = _box(np.asarray(die.vertices) @ orientation.T + offset, camera, xs, ys)
+    planes = _die_planes(die, orientation, offset)
     t, entry = _clip(planes, camera, xs[cols], ys[rows])
-    crop, behind = image[rows, cols], depth[rows, cols]
+    crop, behind, front = image[rows, cols], depth[rows, cols], nearest[rows, cols]
+    t = np.where(t < front, t, np.inf)  # behind a die drawn before: hidden
+    np.minimum(front, t, out=front)
     px, py = np.meshgrid(xs[cols], ys[rows])
     for k, art in enumerate(_face_art(die)):
         hit = np.isfinite(t) & (entry == k)
         if not hit.any():
             continue
-        axes, origin = art.axes @ orientation.T, orientation @ art.centre  # world frame
+        axes = art.axes @ orientation.T  # world frame
+        origin = orientation @ art.centre + offset
         screen = np.array([camera.dx, camera.dy])
         uv = np.linalg.solve(screen @ axes.T, np.stack([px[hit], py[hit]]) -
                              (screen @ origin)[:, None]).T
@@ -341,6 +429,7 @@ def _draw_die(image: np.ndarray, depth: np.ndarray, die: Die, centre: np.ndarray
         ahead = (t[hit] < behind[hit])[:, None]
         crop[hit] = np.where(ahead, colour, WALL_ALPHA * crop[hit] + (1 - WALL_ALPHA) * colour)
     image[rows, cols] = crop
+    nearest[rows, cols] = front
 
 
 def _face_colour(art: _FaceArt, uv: np.ndarray, shade: float, rim: float,

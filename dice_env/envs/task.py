@@ -17,13 +17,15 @@ import inspect
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
+from functools import cached_property
 from typing import Any
 
 import numba
 import numpy as np
 
 from dice_env.die import Die
-from dice_env.envs.keywords import build_scene, check_face, check_scene
+from dice_env.envs.keywords import MAX_STEPS, build_scene, check_face, check_scene
+from dice_env.group import GroupResult, GroupState, group_step, simulate_group
 from dice_env.rotations import (
     orthonormality_error,
     quaternion_to_matrix,
@@ -32,7 +34,7 @@ from dice_env.rotations import (
 )
 from dice_env.scene import Scene
 from dice_env.simulate import Result, State, lock_energy, simulate
-from dice_env.validation import check_nonnegative, check_positive
+from dice_env.validation import check_nonnegative, check_positive, check_range
 
 ORIENTATION_DIM = 9  # the observation's orientation, row-major 3x3, after the target's one-hot
 ACTION_DIM = 6  # release velocity (3) + angular velocity (3), world frame, in [-1, 1]
@@ -45,6 +47,12 @@ UNTIL = {"rest": "not_settled", "decided": "not_decided"}
 # further is released higher by default, with the same gap.
 RELEASE_HEIGHT = 0.015
 RELEASE_GAP = RELEASE_HEIGHT - math.sqrt(3.0) * 0.008
+# Several dice: how many, what the target names, how the hand holds them.
+MAX_NUM_DICE = 12
+TARGETS = ("faces", "sum")
+HAND_ROW = 4  # dice per row in the hand
+HAND_GAP = 0.002  # m: the least gap between neighbours in the hand, in any orientations
+SET_ANGLE = math.pi  # rad: a dice-setting action of 1 turns its die by this much
 
 
 @dataclass(frozen=True)
@@ -82,7 +90,7 @@ class ThrowTask:
     def __post_init__(self) -> None:
         if not isinstance(self.scene, Scene):
             raise ValueError(f"scene must be a Scene, got {type(self.scene).__name__}")
-        clearance = float(np.linalg.norm(self.scene.die.vertices_body, axis=1).max())
+        clearance = max(_reach(die) for die in self.dice)
         if self.release_height is None:
             object.__setattr__(self, "release_height",
                                max(RELEASE_HEIGHT, round(clearance + RELEASE_GAP, 4),
@@ -104,11 +112,65 @@ class ThrowTask:
         check_nonnegative("shaping", self.shaping)
         if not isinstance(self.until, str) or self.until not in UNTIL:
             raise ValueError(f"until must be one of {list(UNTIL)}, got {self.until!r}")
-        if self.until == "decided" and not np.isfinite(lock_energy(self.scene)).all():
+        if self.until == "decided" and not all(np.isfinite(lock_energy(s)).all()
+                                               for s in self.die_scenes):
             raise ValueError("until='decided' needs a horizontal table with gravity (no energy "
                              "bound decides the face on a slope); use until='rest'")
         check_num_threads(self.num_threads)
-        check_scene(self.scene, self.release_height)
+        for scene in self.die_scenes:
+            check_scene(scene, self.release_height)
+        self._check_walls()
+
+    @property
+    def dice(self) -> tuple[Die, ...]:
+        """The dice in the hand: the scene's die."""
+        return (self.scene.die,)
+
+    @property
+    def die_scenes(self) -> tuple[Scene, ...]:
+        """The scene with each die of :attr:`dice`."""
+        return (self.scene,)
+
+    @property
+    def release_positions(self) -> np.ndarray:
+        """Each die's centre at release, (N, 3) m: the release point."""
+        return self.release_position[None]
+
+    def _check_walls(self) -> None:
+        """Every die in the hand must clear every wall by its reach."""
+        for i, (centre, die) in enumerate(zip(self.release_positions, self.dice, strict=True)):
+            for wall in self.scene.walls:
+                gap = float(np.asarray(wall.normal) @ centre - wall.offset)
+                if gap <= _reach(die):
+                    raise ValueError(
+                        f"die {i} in the hand (centre {centre.round(4)} m) would reach through "
+                        f"a wall (walls) by {_reach(die) - gap:.3g} m; use fewer or smaller "
+                        "dice (num_dice, size) or other walls")
+
+    @property
+    def n_dice(self) -> int:
+        """Dice per throw: 1."""
+        return 1
+
+    @property
+    def target(self) -> str:
+        """What the target names: "faces", the face to land up."""
+        return "faces"
+
+    @property
+    def target_dim(self) -> int:
+        """Length of the target's encoding at the start of the observation: ``n_faces``."""
+        return self.n_faces
+
+    @property
+    def action_dim(self) -> int:
+        """Action size: :data:`ACTION_DIM`."""
+        return ACTION_DIM
+
+    @property
+    def noise_dim(self) -> int:
+        """Hand noise per throw: :data:`NOISE_DIM` standard normals."""
+        return NOISE_DIM
 
     @property
     def n_faces(self) -> int:
@@ -117,8 +179,8 @@ class ThrowTask:
 
     @property
     def obs_dim(self) -> int:
-        """Observation size: the target's one-hot (``n_faces``) and the orientation (9)."""
-        return self.n_faces + ORIENTATION_DIM
+        """Observation size: the target's encoding and each die's orientation (9 per die)."""
+        return self.target_dim + ORIENTATION_DIM * self.n_dice
 
     @property
     def release_position(self) -> np.ndarray:
@@ -160,22 +222,47 @@ class ThrowTask:
         for i, rng in enumerate(rngs):
             if target_face is None:
                 targets[i] = rng.integers(1, self.n_faces + 1)
-            if orientation_mode == "uniform":
-                draws[i] = rng.random(3)
-            elif orientation_mode == "flat":
-                draws[i, 0] = rng.integers(0, self.n_faces)
-                draws[i, 1] = rng.uniform(0, 2 * np.pi)
-        if orientation_mode == "uniform":
-            return targets, uniform_rotations(draws.T)
-        if orientation_mode == "flat":
-            return targets, np.stack([_z_turn(turn) @ face_up_rotation(self.scene.die, int(f) + 1)
-                                      for f, turn, _ in draws])
-        return targets, np.tile(np.eye(3), (len(rngs), 1, 1))
+            draws[i] = _orientation_draw(rng, orientation_mode, self.n_faces)
+        return targets, _orientations(orientation_mode, draws, self.scene.die)
 
-    @staticmethod
-    def sample_noise(rng: np.random.Generator, n: int = 1) -> np.ndarray:
-        """Hand noise for ``n`` throws: standard normals (n, 9), scaled by :meth:`release`."""
-        return rng.standard_normal((n, NOISE_DIM))
+    def fixed_target(self, target_face: object = None, target_sum: object = None) -> Any:
+        """The episode keywords ``target_face``/``target_sum`` as a fixed target (None: drawn).
+
+        One die: ``target_face`` (1 … ``n_faces``); ``target_sum`` is refused.
+        """
+        if target_sum is not None:
+            raise ValueError(f"target_sum fixes the total of several dice (num_dice >= 2, "
+                             f"target='sum'); this throw has one die, got {target_sum!r}")
+        return None if target_face is None else check_face("target_face", target_face,
+                                                           self.n_faces)
+
+    def sample_noise(self, rng: np.random.Generator, n: int = 1) -> np.ndarray:
+        """Hand noise for ``n`` throws: standard normals (n, :attr:`noise_dim`).
+
+        Scaled by :meth:`release`.
+        """
+        return rng.standard_normal((n, self.noise_dim))
+
+    def decode(self, observations: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Targets and hands from observations (n, :attr:`obs_dim`), as :meth:`observe` took.
+
+        The float32 matrices are projected back onto rotations (nearest in Frobenius norm), so
+        they can be thrown again with :meth:`throw`.
+        """
+        observations = np.atleast_2d(np.asarray(observations, dtype=np.float64))
+        if observations.shape[1] != self.obs_dim:
+            raise ValueError(f"observations must have {self.obs_dim} columns, got "
+                             f"{observations.shape[1]}")
+        u, _, vt = np.linalg.svd(observations[:, self.target_dim:].reshape(-1, 3, 3))
+        hands = (u @ vt).reshape(len(observations), *self._hand_shape)
+        return self._decode_target(observations[:, :self.target_dim]), hands
+
+    @property
+    def _hand_shape(self) -> tuple[int, ...]:
+        return (3, 3)
+
+    def _decode_target(self, encoding: np.ndarray) -> np.ndarray:
+        return encoding.argmax(axis=1) + 1
 
     def observe(self, targets: np.ndarray, orientations: np.ndarray) -> np.ndarray:
         """Observations (n, :attr:`obs_dim`) float32: one-hot target, orientation row-major."""
@@ -193,7 +280,7 @@ class ThrowTask:
         Actions are checked (finite, shape) and clipped to [-1, 1]; returns the batch State and a
         bool (n,) saying which actions were clipped.
         """
-        actions = check_actions(actions)
+        actions = check_actions(actions, self.action_dim)
         clipped = np.any(np.abs(actions) > 1.0, axis=1)
         noisy = np.clip(actions, -1.0, 1.0) + self.hand_noise * noise[:, :6]
         tilt = quaternion_to_matrix(_rotation_vector_quaternion(
@@ -277,21 +364,341 @@ class Throw:
 
     reward: np.ndarray
     info: dict[str, np.ndarray]
-    result: Result
+    result: Result | GroupResult
     observation: np.ndarray
 
 
-def check_actions(actions: np.ndarray) -> np.ndarray:
-    """Actions as a float64 (n, 6) array; NaN/inf or a wrong shape raise ``ValueError``."""
+@dataclass(frozen=True)
+class GroupThrowTask(ThrowTask):
+    """A throw of several dice from one hand: they fly, collide and land together.
+
+    ``dice``: 2 … :data:`MAX_NUM_DICE` dice, mixed shapes allowed, simulated together with
+    :func:`dice_env.group.simulate_group` (die against die, the planes of ``scene``; the
+    scene's own die is not used). Every other field as :class:`ThrowTask`; ``release_height``
+    must clear the reach of every die.
+
+    **The hand** holds the dice in rows of up to :data:`HAND_ROW` along the table's y axis, the
+    rows one behind the other along its x axis, die ``i`` in row ``i // 4``; neighbours' centres
+    are :attr:`hand_spacing` apart (the largest die's diameter across corners plus
+    :data:`HAND_GAP`), each row centred on y = 0 and the rows on x = 0, so the hand's centre is
+    the release point, all at ``release_height`` (:attr:`hand_offsets`). The hand is rigid:
+    one action gives the hand's velocity ``v`` and spin ``w``, and die ``i`` leaves it with
+    velocity ``v + w x r_i`` and spin ``w`` (``r_i`` its offset); each die has its own hand noise
+    (9 standard normals per die, as one die's, added to the action before that product) and
+    its own orientation in the hand, drawn per die.
+
+    **Targets.** ``target="sum"`` (the default): a total N … sum of the faces is drawn uniformly
+    and the throw succeeds when the faces read add up to it ("roll a seven" with two d6); the
+    observation starts with one one-hot over the totals. Games with several dice score their
+    total (craps, backgammon's moves aside, most board games), so it is the task people throw
+    for; the dense shaping term is 0 (no single face needs to be up). ``target="faces"``: a face
+    per die, each drawn uniformly, success when every die shows its own; the observation starts
+    with one one-hot per die, and the shaping term is the mean over dice of each target's
+    alignment with the table normal. Then every die's orientation (9 numbers per die).
+
+    **Void throws** as one die's (foul: a die released slower than ``min_speed`` or
+    ``min_spin``; unstable; sunk: any die; not settled or not decided), then "leaning": a die
+    ended leaning on another die (not read).
+
+    ``set_dice``: the agent also sets each die in the hand, as craps "dice setters" do: the
+    action grows by 3 per die, a rotation vector ``SET_ANGLE * a`` (rad, world frame) applied
+    to that die's drawn orientation before the orientation noise.
+    """
+
+    dice: tuple[Die, ...] = ()
+    target: str = "sum"
+    set_dice: bool = False
+
+    def __post_init__(self) -> None:
+        if not (isinstance(self.dice, tuple) and all(isinstance(d, Die) for d in self.dice)
+                and 2 <= len(self.dice) <= MAX_NUM_DICE):
+            raise ValueError(f"dice must be a tuple of 2 to {MAX_NUM_DICE} Die, "
+                             f"got {self.dice!r}")
+        if not (isinstance(self.target, str) and self.target in TARGETS):
+            raise ValueError(f"target must be one of {TARGETS}, got {self.target!r}")
+        if not isinstance(self.set_dice, bool):
+            raise ValueError(f"set_dice must be True or False, got {self.set_dice!r}")
+        super().__post_init__()
+        step = group_step(self.scene, self.dice)
+        if self.scene.t_max / step > MAX_STEPS:
+            raise ValueError(
+                f"t_max must be at most {MAX_STEPS:.0e} steps: t_max={self.scene.t_max:g} s over "
+                f"the {self.n_dice} dice's step of {step:.3g} s (die against die included) is "
+                f"{self.scene.t_max / step:.3g} steps; lower t_max or num_dice")
+
+    @cached_property
+    def die_scenes(self) -> tuple[Scene, ...]:
+        """The scene with each die of :attr:`dice`."""
+        return tuple(self.scene.with_(die=die) for die in self.dice)
+
+    @property
+    def n_dice(self) -> int:
+        """Dice per throw."""
+        return len(self.dice)
+
+    @property
+    def n_faces(self) -> int:
+        """Refused: several dice have :attr:`faces`, one count per die."""
+        raise ValueError("n_faces is one die's; a throw of several dice has faces (one count "
+                         "per die)")
+
+    @property
+    def faces(self) -> tuple[int, ...]:
+        """Faces of each die."""
+        return tuple(die.n_faces for die in self.dice)
+
+    @property
+    def totals(self) -> range:
+        """The totals the faces can add up to: N … the sum of the faces."""
+        return range(self.n_dice, sum(self.faces) + 1)
+
+    @property
+    def target_dim(self) -> int:
+        """One one-hot per die ("faces") or one over :attr:`totals` ("sum")."""
+        return sum(self.faces) if self.target == "faces" else len(self.totals)
+
+    @property
+    def action_dim(self) -> int:
+        """The hand's velocity and spin (6), and 3 per die with ``set_dice``."""
+        return ACTION_DIM + (3 * self.n_dice if self.set_dice else 0)
+
+    @property
+    def noise_dim(self) -> int:
+        """Hand noise per throw: :data:`NOISE_DIM` standard normals per die."""
+        return NOISE_DIM * self.n_dice
+
+    @property
+    def hand_spacing(self) -> float:
+        """Distance (m) between neighbours' centres in the hand.
+
+        The largest die's diameter across corners plus :data:`HAND_GAP`.
+        """
+        return 2.0 * max(_reach(die) for die in self.dice) + HAND_GAP
+
+    @property
+    def hand_offsets(self) -> np.ndarray:
+        """Each die's centre in the hand relative to :attr:`release_position`, (N, 3) m."""
+        normal = np.asarray(self.scene.ground.normal)
+        x_axis = np.cross([0.0, 1.0, 0.0], normal)
+        x_axis /= np.linalg.norm(x_axis)
+        y_axis = np.cross(normal, x_axis)
+        n, rows = self.n_dice, -(-self.n_dice // HAND_ROW)
+        offsets = np.zeros((n, 3))
+        for i in range(n):
+            row, column = divmod(i, HAND_ROW)
+            in_row = min(HAND_ROW, n - row * HAND_ROW)
+            offsets[i] = self.hand_spacing * ((row - (rows - 1) / 2) * x_axis
+                                              + (column - (in_row - 1) / 2) * y_axis)
+        return offsets
+
+    @property
+    def release_positions(self) -> np.ndarray:
+        """Each die's centre at release, (N, 3) m."""
+        return self.release_position + self.hand_offsets
+
+    def fixed_target(self, target_face: object = None, target_sum: object = None) -> Any:
+        """The episode keywords as a fixed target (None: drawn).
+
+        "faces": ``target_face``, one face per die (a sequence of N labels); "sum":
+        ``target_sum``, an int in :attr:`totals`. The other is refused.
+        """
+        if self.target == "faces":
+            if target_sum is not None:
+                raise ValueError(f"target_sum fixes the total with target='sum'; target is "
+                                 f"'faces' (fix each die's face with target_face), got "
+                                 f"{target_sum!r}")
+            return None if target_face is None else self._check_faces(target_face)
+        if target_face is not None:
+            raise ValueError(f"target_face fixes each die's face with target='faces'; target "
+                             f"is 'sum' (fix the total with target_sum), got {target_face!r}")
+        if target_sum is None:
+            return None
+        if isinstance(target_sum, bool) or not isinstance(target_sum, (int, np.integer)):
+            raise ValueError(f"target_sum must be an int in [{self.totals[0]}, "
+                             f"{self.totals[-1]}], got {target_sum!r}")
+        check_range("target_sum", int(target_sum), self.totals[0], self.totals[-1])
+        return int(target_sum)
+
+    def _check_faces(self, value: object) -> tuple[int, ...]:
+        if isinstance(value, (str, bytes)) or not isinstance(value, Sequence | np.ndarray) \
+                or len(value) != self.n_dice:
+            raise ValueError(f"target_face must be a sequence of {self.n_dice} faces, one per "
+                             f"die (faces {self.faces}), got {value!r}")
+        return tuple(check_face("target_face", f, n) for f, n in zip(value, self.faces,
+                                                                       strict=True))
+
+    def sample_hand(
+        self,
+        rng: np.random.Generator,
+        target: Any = None,
+        orientation_mode: str = "uniform",
+    ) -> tuple[Any, np.ndarray]:
+        """One episode's context: the target (N faces, or a total) and the hands (N, 3, 3)."""
+        targets, hands = self.sample_hands([rng], target, orientation_mode)
+        return targets[0], hands[0]
+
+    def sample_hands(
+        self,
+        rngs: Sequence[np.random.Generator],
+        target: Any = None,
+        orientation_mode: str = "uniform",
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """One context per generator: targets ((n, N) faces or (n,) totals), hands (n, N, 3, 3).
+
+        ``target``: a fixed target as :meth:`fixed_target` returns it (None: drawn uniformly:
+        each die's face, or the total over :attr:`totals`). Each generator draws the target,
+        then each die's orientation in turn, as one die's.
+        """
+        check_orientation_mode(orientation_mode)
+        n, faces = len(rngs), np.array(self.faces)
+        by_face = self.target == "faces"
+        targets = np.zeros((n, self.n_dice) if by_face else n, np.int64)
+        draws = np.zeros((self.n_dice, n, 3))
+        for i, rng in enumerate(rngs):
+            if target is not None:
+                targets[i] = target
+            elif by_face:
+                targets[i] = rng.integers(1, faces + 1)
+            else:
+                targets[i] = rng.integers(self.totals[0], self.totals[-1] + 1)
+            for j in range(self.n_dice):
+                draws[j, i] = _orientation_draw(rng, orientation_mode, self.faces[j])
+        hands = np.stack([_orientations(orientation_mode, draws[j], die)
+                          for j, die in enumerate(self.dice)], axis=1)
+        return targets, hands
+
+    def observe(self, targets: np.ndarray, orientations: np.ndarray) -> np.ndarray:
+        """Observations (n, :attr:`obs_dim`) float32: the target's one-hot(s), orientations."""
+        orientations = np.asarray(orientations).reshape(-1, ORIENTATION_DIM * self.n_dice)
+        n = len(orientations)
+        obs = np.zeros((n, self.obs_dim), np.float32)
+        if self.target == "faces":
+            starts = np.cumsum([0, *self.faces[:-1]])
+            obs[np.arange(n)[:, None], starts + np.asarray(targets).reshape(n, -1) - 1] = 1.0
+        else:
+            obs[np.arange(n), np.asarray(targets).reshape(n) - self.totals[0]] = 1.0
+        obs[:, self.target_dim:] = np.clip(orientations, -1.0, 1.0)
+        return obs
+
+    @property
+    def _hand_shape(self) -> tuple[int, ...]:
+        return (self.n_dice, 3, 3)
+
+    def _decode_target(self, encoding: np.ndarray) -> np.ndarray:
+        if self.target == "sum":
+            return encoding.argmax(axis=1) + self.totals[0]
+        ends = np.cumsum(self.faces)
+        return np.stack([encoding[:, end - f:end].argmax(axis=1) + 1
+                         for f, end in zip(self.faces, ends, strict=True)], axis=1)
+
+    def release(
+        self, actions: np.ndarray, hands: np.ndarray, noise: np.ndarray
+    ) -> tuple[GroupState, np.ndarray]:
+        """Releases for ``actions`` (n, :attr:`action_dim`), ``hands`` (n, N, 3, 3), ``noise``.
+
+        ``noise`` (n, 9 N). Returns the group's state and which actions were clipped (n,).
+        """
+        actions = check_actions(actions, self.action_dim)
+        clipped = np.any(np.abs(actions) > 1.0, axis=1)
+        actions = np.clip(actions, -1.0, 1.0)
+        n, dice = len(actions), self.n_dice
+        noise = np.asarray(noise, dtype=np.float64).reshape(n, dice, NOISE_DIM)
+        noisy = actions[:, None, :ACTION_DIM] + self.hand_noise * noise[..., :ACTION_DIM]
+        spin = noisy[..., 3:] * self.max_spin
+        velocity = noisy[..., :3] * self.max_speed + np.cross(spin, self.hand_offsets)
+        hands = np.asarray(hands, dtype=np.float64).reshape(n, dice, 3, 3)
+        if self.set_dice:
+            hands = _rotation_matrices(SET_ANGLE * actions[:, ACTION_DIM:].reshape(n, dice, 3)) \
+                @ hands
+        orientation = _rotation_matrices(self.orientation_noise * noise[..., 6:]) @ hands
+        positions = self.release_positions
+        return GroupState.of([
+            State.release(scene, positions[i], velocity[:, i], spin[:, i], orientation[:, i])
+            for i, scene in enumerate(self.die_scenes)]), clipped
+
+    def throw(
+        self,
+        actions: np.ndarray,
+        targets: np.ndarray,
+        hands: np.ndarray,
+        noise: np.ndarray,
+        *,
+        record_every: int = 0,
+    ) -> Throw:
+        """Simulate ``n`` throws of the dice in one kernel call and score them.
+
+        ``targets``: (n, N) faces or (n,) totals; ``hands`` (n, N, 3, 3); ``noise`` (n, 9 N).
+        Info as one die's, per throw, except per die (n, N): ``face`` (0: not read),
+        ``leaning``, ``impacts``, ``release_velocity`` (n, N, 3), ``release_spin`` (n, N, 3),
+        ``release_orientation`` (n, N, 3, 3); ``total`` (n,) the faces' sum; ``target_face``
+        (n, N) or ``target_sum`` (n,).
+        """
+        by_face = self.target == "faces"
+        targets = np.array(targets, dtype=np.int64).reshape((-1, self.n_dice) if by_face
+                                                             else (-1,))
+        state, clipped = self.release(actions, hands, noise)
+        decided = self.until == "decided"
+        result = simulate_group(self.scene, self.dice, state, stop_when_decided=decided,
+                                record_every=record_every, orientations=bool(record_every),
+                                num_threads=self.num_threads)
+        speed = np.linalg.norm(state.velocity, axis=2)
+        spin = np.linalg.norm(state.angular_velocity, axis=2)
+        fair = np.all((speed >= self.min_speed) & (spin >= self.min_spin), axis=1)
+        ended = result.decided if decided else result.settled
+        leaning = ~result.read
+        void = np.where(~fair, "foul", np.where(
+            result.unstable, "unstable", np.where(
+                result.sunk.any(axis=1), "sunk", np.where(
+                    ~ended, UNTIL[self.until], np.where(leaning.any(axis=1), "leaning", "")))))
+        counts = void == ""
+        total = result.face.sum(axis=1)
+        if by_face:
+            hit = np.all(result.face == targets, axis=1)
+            normal = np.asarray(self.scene.ground.normal)
+            alignment = np.mean([np.einsum("bij,bj,i->b", result.final.orientation[:, i],
+                                           die.reading[targets[:, i] - 1], normal)
+                                 for i, die in enumerate(self.dice)], axis=0)
+        else:
+            hit, alignment = total == targets, np.zeros(len(targets))
+        success = counts & hit
+        shaping = np.where(counts, self.shaping * alignment, 0.0)
+        reward_success = success.astype(np.float64)
+        info = {
+            "is_success": success,
+            "target_face" if by_face else "target_sum": targets,
+            "face": result.face,
+            "total": total,
+            "leaning": leaning,
+            "settled": result.settled,
+            "unstable": result.unstable,
+            "sunk": result.sunk.any(axis=1),
+            "max_sink": result.max_penetration.max(axis=1),
+            "fair": fair,
+            "void_reason": void,
+            "rest_time": result.rest_time,
+            "impacts": result.impacts,
+            "reward_success": reward_success,
+            "reward_shaping": shaping,
+            "release_velocity": state.velocity,
+            "release_spin": state.angular_velocity,
+            "release_orientation": state.orientation,
+            "action_clipped": clipped,
+        }
+        return Throw(reward=reward_success + shaping, info=info, result=result,
+                     observation=self.observe(targets, result.final.orientation))
+
+
+def check_actions(actions: np.ndarray, dim: int = ACTION_DIM) -> np.ndarray:
+    """Actions as a float64 (n, dim) array; NaN/inf or a wrong shape raise ``ValueError``."""
     try:
         array = np.asarray(actions, dtype=np.float64)
     except (TypeError, ValueError) as error:
-        raise ValueError(f"action must be an array of numbers, shape (6,) or (n, 6), got "
-                         f"{actions!r}") from error
-    if array.shape == (ACTION_DIM,):
+        raise ValueError(f"action must be an array of numbers, shape ({dim},) or (n, {dim}), "
+                         f"got {actions!r}") from error
+    if array.shape == (dim,):
         array = array[None]
-    if array.ndim != 2 or array.shape[1] != ACTION_DIM:
-        raise ValueError(f"action must have shape (6,) or (n, 6), got {array.shape}")
+    if array.ndim != 2 or array.shape[1] != dim:
+        raise ValueError(f"action must have shape ({dim},) or (n, {dim}), got {array.shape}")
     if not np.all(np.isfinite(array)):
         raise ValueError(f"action must be finite (no NaN or inf), got {actions!r}")
     return array
@@ -323,6 +730,9 @@ def make_task(
     shaping: float = 0.0,
     num_threads: int | None = None,
     until: str = "rest",
+    num_dice: int | None = None,
+    target: str | None = None,
+    set_dice: bool = False,
     scene: Scene | None = None,
     **physics: Any,
 ) -> ThrowTask:
@@ -331,11 +741,46 @@ def make_task(
     ``physics`` are :func:`~dice_env.envs.keywords.build_scene`'s keywords (``t_max``, ``mass``,
     ``stiffness``, ...): each one given modifies ``scene`` (default: ``Scene()`` with ``t_max``
     5 s), whose other fields are kept, so changes to the default scene flow through.
+
+    Several dice (:class:`GroupThrowTask`): ``num_dice`` (1 … :data:`MAX_NUM_DICE`; None: 1, or
+    the length of a ``die`` tuple) repeats the die; ``die`` may also be a tuple of names or
+    :class:`Die`, one per die (the die keywords ``size``, ``mass``, ``load_*`` apply to each).
+    ``target`` "sum" (the default for several dice) or "faces" (one die's only target);
+    ``set_dice`` lets the agent set the dice in the hand. One die is today's :class:`ThrowTask`.
     """
     check_task_keywords(physics)
-    return ThrowTask(build_scene(scene, **physics), release_height, max_speed, max_spin,
-                     hand_noise, orientation_noise, min_speed, min_spin, shaping, num_threads,
-                     until)
+    dice = check_num_dice(num_dice, physics.pop("die", None))
+    common = (release_height, max_speed, max_spin, hand_noise, orientation_noise, min_speed,
+              min_spin, shaping, num_threads, until)
+    if len(dice) == 1:
+        if target not in (None, "faces"):
+            raise ValueError(f"target must be 'faces' for one die (target='sum' needs "
+                             f"num_dice >= 2), got {target!r}")
+        if set_dice is not False:
+            raise ValueError(f"set_dice needs num_dice >= 2, got set_dice={set_dice!r}")
+        return ThrowTask(build_scene(scene, die=dice[0], **physics), *common)
+    scenes = [build_scene(scene, die=die, **physics) for die in dice]
+    return GroupThrowTask(scenes[0], *common, dice=tuple(s.die for s in scenes),
+                          target="sum" if target is None else target, set_dice=set_dice)
+
+
+def check_num_dice(num_dice: object, die: object) -> tuple[Any, ...]:
+    """The ``die`` keyword per die: ``num_dice`` copies of it, or its entries if a tuple.
+
+    ``ValueError`` naming ``num_dice`` or ``die`` for a count outside 1 … :data:`MAX_NUM_DICE`
+    or a tuple whose length is not ``num_dice``.
+    """
+    if num_dice is not None and (isinstance(num_dice, bool) or not isinstance(
+            num_dice, (int, np.integer)) or not 1 <= num_dice <= MAX_NUM_DICE):
+        raise ValueError(f"num_dice must be an int in [1, {MAX_NUM_DICE}], got {num_dice!r}")
+    if not isinstance(die, (tuple, list)):
+        return (die,) * (1 if num_dice is None else int(num_dice))
+    if not 1 <= len(die) <= MAX_NUM_DICE:
+        raise ValueError(f"die must be a name, a Die, or a tuple of 1 to {MAX_NUM_DICE} of "
+                         f"them, got {len(die)} entries")
+    if num_dice is not None and len(die) != num_dice:
+        raise ValueError(f"die must hold num_dice={num_dice} dice, got {len(die)}: {die!r}")
+    return tuple(die)
 
 
 def check_num_threads(value: object) -> None:
@@ -377,11 +822,44 @@ def _held_within_t_max(result: Result, scene: Scene) -> Result:
                    rest_time=np.where(late, n_steps * dt, result.rest_time))
 
 
+def _rotation_matrices(vectors: np.ndarray) -> np.ndarray:
+    """Rotation matrices (..., 3, 3) of rotation vectors (..., 3)."""
+    shape = np.shape(vectors)[:-1]
+    quaternions = _rotation_vector_quaternion(np.reshape(vectors, (-1, 3)))
+    return quaternion_to_matrix(quaternions).reshape(*shape, 3, 3)
+
+
 def _rotation_vector_quaternion(vectors: np.ndarray) -> np.ndarray:
     """Unit quaternions (n, 4), (w, x, y, z), of rotations by rotation vectors (n, 3)."""
     angle = np.linalg.norm(vectors, axis=1, keepdims=True)
     safe = np.where(angle > 0, angle, 1.0)
     return np.hstack([np.cos(angle / 2), np.sin(angle / 2) * vectors / safe])
+
+
+def _orientation_draw(rng: np.random.Generator, mode: str, n_faces: int) -> np.ndarray:
+    """The draws (3,) of one hand orientation: three uniforms, a face and a turn, or none."""
+    draw = np.zeros(3)
+    if mode == "uniform":
+        draw[:] = rng.random(3)
+    elif mode == "flat":
+        draw[0] = rng.integers(0, n_faces)
+        draw[1] = rng.uniform(0, 2 * np.pi)
+    return draw
+
+
+def _orientations(mode: str, draws: np.ndarray, die: Die) -> np.ndarray:
+    """Hand orientations (n, 3, 3) of ``die`` from :func:`_orientation_draw`'s draws (n, 3)."""
+    if mode == "uniform":
+        return uniform_rotations(draws.T)
+    if mode == "flat":
+        return np.stack([_z_turn(turn) @ face_up_rotation(die, int(f) + 1)
+                         for f, turn, _ in draws])
+    return np.tile(np.eye(3), (len(draws), 1, 1))
+
+
+def _reach(die: Die) -> float:
+    """Distance (m) of the die's farthest corner from its centre of mass."""
+    return float(np.linalg.norm(die.vertices_body, axis=1).max())
 
 
 def _z_turn(angle: float) -> np.ndarray:

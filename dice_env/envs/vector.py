@@ -44,7 +44,8 @@ class DiceThrowVectorEnv(VectorEnv):
         num_envs: int = 1,
         render_mode: str | None = None,
         *,
-        target_face: int | None = None,
+        target_face: Any = None,
+        target_sum: int | None = None,
         orientation_mode: str = "uniform",
         render_width: int = 320,
         render_height: int = 240,
@@ -54,16 +55,17 @@ class DiceThrowVectorEnv(VectorEnv):
                 1 <= num_envs <= MAX_NUM_ENVS):
             raise ValueError(f"num_envs must be an int in [1, {MAX_NUM_ENVS}], got {num_envs!r}")
         self.task: ThrowTask = configure(self, ("rgb_array",), render_mode, target_face,
-                                         orientation_mode, render_width, render_height,
-                                         task_keywords)
+                                         target_sum, orientation_mode, render_width,
+                                         render_height, task_keywords)
         self.num_envs = int(num_envs)
         self.single_observation_space = observation_space(self.task)
-        self.single_action_space = action_space()
+        self.single_action_space = action_space(self.task)
         self.observation_space = batch_space(self.single_observation_space, self.num_envs)
         self.action_space = batch_space(self.single_action_space, self.num_envs)
         self._rngs: list[np.random.Generator] = []
-        self._targets = np.ones(self.num_envs, np.int64)
-        self._hands = np.tile(np.eye(3), (self.num_envs, 1, 1))
+        # Placeholders until reset: the dice in the hand, unturned.
+        self._targets, self._hands = self.task.sample_hands(
+            [np.random.default_rng(0)] * self.num_envs, orientation_mode="identity")
 
     def reset(
         self, *, seed: int | list[int | None] | None = None, options: dict[str, Any] | None = None
@@ -104,9 +106,10 @@ class DiceThrowVectorEnv(VectorEnv):
         """Throw all N dice in one kernel call, then start the next episodes."""
         if not self._rngs:
             raise RuntimeError("call reset() before step()")
-        actions = check_actions(actions)
+        actions = check_actions(actions, self.task.action_dim)
         if actions.shape[0] != self.num_envs:
-            raise ValueError(f"actions must have shape ({self.num_envs}, 6), got {actions.shape}")
+            raise ValueError(f"actions must have shape ({self.num_envs}, "
+                             f"{self.task.action_dim}), got {actions.shape}")
         noise = np.concatenate([self.task.sample_noise(rng) for rng in self._rngs])
         throw = self.task.throw(actions, self._targets, self._hands, noise)
         mask = np.ones(self.num_envs, np.bool_)
@@ -117,15 +120,18 @@ class DiceThrowVectorEnv(VectorEnv):
         info = {"final_obs": throw.observation, "_final_obs": mask,
                 "final_info": final_info, "_final_info": mask}
         self._targets, self._hands = self.task.sample_hands(
-            self._rngs, self.target_face, self.orientation_mode)
+            self._rngs, self.task.fixed_target(self.target_face, self.target_sum),
+            self.orientation_mode)
         return (self.task.observe(self._targets, self._hands), throw.reward.copy(),
                 mask.copy(), np.zeros(self.num_envs, np.bool_), info)
 
     def render(self) -> tuple[np.ndarray, ...] | None:
-        """Each env's die in the hand ("rgb_array"), a tuple of N frames."""
+        """Each env's dice in the hand ("rgb_array"), a tuple of ``num_envs`` frames."""
         if self.render_mode != "rgb_array":
             return None
-        from dice_env.envs.render import render_die
+        from dice_env.envs.render import render_task
 
-        return tuple(render_die(self.task.scene, self.task.release_position, self._hands[i],
-                                size=self.render_size) for i in range(self.num_envs))
+        task = self.task
+        position = task.release_position if task.n_dice == 1 else task.release_positions
+        return tuple(render_task(task, position, self._hands[i], size=self.render_size)
+                     for i in range(self.num_envs))
