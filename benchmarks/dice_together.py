@@ -1,15 +1,16 @@
 """Cost of a throw against the number of dice thrown together: groups of 1, 2, 5 and 12 d6.
 
-    python benchmarks/dice_together.py                  # 1, 2, 5, 12 dice, a few minutes
-    python benchmarks/dice_together.py --dice 1 2 --throws 64
+    python benchmarks/dice_together.py                  # 1, 2, 5, 12 dice, about 3 minutes
+    python benchmarks/dice_together.py --dice 1 2 --throws 256 --repeats 3
 
 Each group is thrown from the pairs study's hand (``dice_env.studies.pairs.hand_throws``: the
 dice side by side 3 cm apart in rows of four, one hand velocity plus each die's noise) into
 the tray (``Scene(walls=tray())``), seeded, each throw until every face is decided
 (``simulate_group(..., stop_when_decided=True)``, 10 s at most). Timed on one thread as this
-process's CPU time (other processes on the shared cores inflate it less than wall-clock time),
-best of ``--repeats``, after a warm-up that compiles the kernel. ``--throws`` is the number of
-throws of the single die; a group of N dice gets ``ceil(throws / N)`` (at least 4). Beside the
+process's CPU time (other processes on the shared cores inflate it less than wall-clock
+time), best of ``--repeats`` (default 1), after a warm-up that compiles the kernels.
+``--throws`` is the number of throws of the single die; a group of N dice gets
+``ceil(throws / N)`` (at least 4), so a few throws of the large groups set their rate. Beside the
 group of one, the same throws through the single-die path (``simulate``, with its free-flight
 shortcut) for reference. Prints a table and writes ``benchmarks/results/dice_together.json``.
 """
@@ -77,9 +78,9 @@ def measure(n_dice: int, throws: int, repeats: int, seed: int) -> list[dict]:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--dice", type=int, nargs="+", default=[1, 2, 5, 12])
-    parser.add_argument("--throws", type=int, default=256,
+    parser.add_argument("--throws", type=int, default=96,
                         help="throws of the single die (a group of N gets throws / N)")
-    parser.add_argument("--repeats", type=int, default=2)
+    parser.add_argument("--repeats", type=int, default=1)
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--out", type=Path, default=ROOT / "benchmarks/results/dice_together.json")
     args = parser.parse_args()
