@@ -11,8 +11,10 @@ process's CPU time (other processes on the shared cores inflate it less than wal
 time), best of ``--repeats`` (default 1), after a warm-up that compiles the kernels.
 ``--throws`` is the number of throws of the single die; a group of N dice gets
 ``ceil(throws / N)`` (at least 4), so a few throws of the large groups set their rate. Beside the
-group of one, the same throws through the single-die path (``simulate``, with its free-flight
-shortcut) for reference. Prints a table and writes ``benchmarks/results/dice_together.json``.
+group of one, the same throws through the single-die path (``simulate``) with its free-flight
+shortcut (flights between contacts in one step) and without it (every step, as the group
+kernel steps each die), for reference; die-steps count a shortcut flight's steps as taken.
+Prints a table and writes ``benchmarks/results/dice_together.json``.
 """
 
 from __future__ import annotations
@@ -65,13 +67,15 @@ def measure(n_dice: int, throws: int, repeats: int, seed: int) -> list[dict]:
     rows = [row]
     if n_dice == 1:
         alone = state.die(0)
-        seconds, one = cpu_best(lambda: simulate(scene, alone, stop_when_decided=True,
-                                                 num_threads=1), repeats)
-        rows.append({"path": "simulate", "dice": 1, "throws": throws, "cpu_s": seconds,
-                     "throws_per_s": throws / seconds,
-                     "die_steps_per_s": float(one.steps.sum()) / seconds,
-                     "decided": float((one.decided | one.settled).mean()), "all_read": 1.0,
-                     "met": 0.0, "sim_s": float(one.steps.mean() * scene.step)})
+        for flight in (True, False):
+            seconds, one = cpu_best(lambda f=flight: simulate(
+                scene, alone, stop_when_decided=True, free_flight=f, num_threads=1), repeats)
+            rows.append({"path": f"simulate(free_flight={flight})", "dice": 1, "throws": throws,
+                         "cpu_s": seconds, "throws_per_s": throws / seconds,
+                         "die_steps_per_s": float(one.steps.sum()) / seconds,
+                         "decided": float((one.decided | one.settled).mean()),
+                         "all_read": 1.0, "met": 0.0,
+                         "sim_s": float(one.steps.mean() * scene.step)})
     return rows
 
 
