@@ -1,0 +1,397 @@
+"""Two fair dice thrown together into a tray: the total against 2d6's triangle, and independence.
+
+``run(out, quick, throws)`` writes ``out/pairs.md`` and ``out/figures/pairs.png``. Two default
+d6 leave one hand together (:func:`hand_throws`) into the 30 x 20 cm tray
+(:func:`dice_env.surroundings.tray`), colliding with each other and the walls
+(:func:`dice_env.group.simulate_group`), each throw until both faces are decided. Reported:
+the totals 2–12 against the triangle ``(6 - |k - 7|) / 36`` of two independent fair dice
+(chi-square, 10 degrees of freedom), the 6 x 6 table of (die 1, die 2) faces with a
+chi-square test of independence and each die's test of uniformity, how often the dice met,
+and the throws voided (not counted).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt
+import numba
+import numpy as np
+from scipy import stats
+
+from dice_env.die import Die
+from dice_env.group import GroupState, group_step, simulate_group
+from dice_env.scene import Scene
+from dice_env.simulate import State
+from dice_env.studies.fairness import (
+    random_directions,
+    random_orientations,
+    toward_table,
+    wilson,
+)
+from dice_env.studies.paper_figures import DOCS, progress, save_figure
+from dice_env.surroundings import TRAY, tray
+
+# Throws of the pair in the full and the quick run; throws per kernel call.
+FULL, QUICK, BATCH = 100_000, 60, 500
+# Fewest throws a run takes (the 6 x 6 table needs some in every row and column).
+MIN_THROWS = 20
+# Simulated time limit per throw (s): a throw not decided by then is voided.
+T_MAX = 10.0
+SEED = 2026
+# p-value below which a test counts as a detected departure.
+SIGNIFICANT = 0.01
+TOTALS = np.arange(2, 13)
+
+
+@dataclass(frozen=True)
+class Hand:
+    """A hand that throws several dice at once; lengths in metres, speeds in m/s.
+
+    The dice sit in rows of at most ``per_row`` along y, ``spacing`` apart centre to centre
+    (rows along x), the group centred above the origin at a common height ``clearance`` above
+    the height where a die's lowest corner could touch (half its diagonal). The hand moves at
+    one velocity, ``speed`` in a uniform direction toward the table, and each die adds its own
+    normal noise (``noise`` per component); each die spins at ``spin`` (rad/s) about its own
+    uniform axis and has its own uniform orientation. Ranges are drawn uniformly per throw.
+    """
+
+    spacing: float = 0.03
+    per_row: int = 4
+    clearance: tuple[float, float] = (0.08, 0.32)
+    speed: tuple[float, float] = (0.48, 2.4)
+    noise: float = 0.1
+    spin: tuple[float, float] = (10.0, 100.0)
+
+
+# The two-dice hand of the study: the fairness study's vigorous throw (8–32 cm up, 0.48–2.4 m/s,
+# 10–100 rad/s for the 16 mm die), given to both dice at once.
+HAND = Hand()
+
+
+def layout(n_dice: int, hand: Hand = HAND) -> np.ndarray:
+    """Horizontal offsets (n_dice, 3) of the dice in the hand, centred on the origin."""
+    if not isinstance(n_dice, int) or isinstance(n_dice, bool) or n_dice < 1:
+        raise ValueError(f"n_dice must be an int >= 1, got {n_dice!r}")
+    index = np.arange(n_dice)
+    row, column = divmod(index, hand.per_row)
+    rows, columns = row.max() + 1, min(n_dice, hand.per_row)
+    offsets = np.zeros((n_dice, 3))
+    offsets[:, 0] = (row - (rows - 1) / 2) * hand.spacing
+    offsets[:, 1] = (column - (columns - 1) / 2) * hand.spacing
+    return offsets
+
+
+def hand_throws(scene: Scene, dice: tuple[Die, ...], n: int, rng: np.random.Generator,
+                hand: Hand = HAND) -> GroupState:
+    """``n`` throws of ``dice`` from one ``hand`` (see :class:`Hand`) in ``scene``."""
+    reach = max(float(np.linalg.norm(d.vertices_body, axis=1).max()) for d in dice)
+    height = rng.uniform(*hand.clearance, n) + reach
+    velocity = (toward_table(scene, random_directions(rng, n))
+                * rng.uniform(*hand.speed, n)[:, None])
+    states = []
+    for die, offset in zip(dice, layout(len(dice), hand), strict=True):
+        position = offset + height[:, None] * np.asarray(scene.ground.normal)
+        spin = random_directions(rng, n) * rng.uniform(*hand.spin, n)[:, None]
+        states.append(State.release(scene.with_(die=die), position,
+                                    velocity + rng.normal(0.0, hand.noise, (n, 3)), spin,
+                                    random_orientations(rng, n)))
+    return GroupState.of(states)
+
+
+def triangle() -> np.ndarray:
+    """P(total = k) for k = 2..12 of two independent fair d6: ``(6 - |k - 7|) / 36``."""
+    return (6 - np.abs(TOTALS - 7)) / 36
+
+
+def independence(table: np.ndarray) -> tuple[float, float, int]:
+    """Chi-square test that rows and columns of the count ``table`` are independent.
+
+    Returns (chi2, p, degrees of freedom); rows and columns without counts are left out.
+    """
+    table = np.asarray(table)
+    table = table[table.sum(axis=1) > 0][:, table.sum(axis=0) > 0]
+    if min(table.shape) < 2:
+        raise ValueError(f"table must hold counts in at least two rows and two columns, got "
+                         f"{table.shape} non-empty")
+    chi2, p, dof, _ = stats.chi2_contingency(table, correction=False)
+    return float(chi2), float(p), int(dof)
+
+
+@dataclass
+class Pairs:
+    """The outcome of a set of two-dice throws.
+
+    ``table`` (6, 6): counted throws by (die 1, die 2) face; ``met`` (B,): the dice touched
+    each other; ``counted`` (B,): both dice decided and read, no instability, no sink;
+    ``voided``: the number of throws for each reason (a throw may have several);
+    ``impacts`` (B, 2) and ``time`` (B,): each throw's impacts and time to its end (s).
+    """
+
+    table: np.ndarray
+    met: np.ndarray
+    counted: np.ndarray
+    voided: dict[str, int]
+    impacts: np.ndarray
+    time: np.ndarray
+    met_table: np.ndarray
+
+    @property
+    def n(self) -> int:
+        """Number of counted throws."""
+        return int(self.table.sum())
+
+    @property
+    def totals(self) -> np.ndarray:
+        """Counted throws by total 2..12, (11,)."""
+        faces = np.add.outer(np.arange(1, 7), np.arange(1, 7))
+        return np.bincount(faces.ravel(), weights=self.table.ravel(), minlength=13)[2:] \
+            .astype(np.int64)
+
+    def total_test(self) -> tuple[float, float]:
+        """Chi-square of the totals against :func:`triangle` (10 dof): (chi2, p)."""
+        chi2, p = stats.chisquare(self.totals, self.n * triangle())
+        return float(chi2), float(p)
+
+    def uniformity(self, die: int) -> tuple[float, float]:
+        """Chi-square of die ``die``'s (0 or 1) faces against uniform (5 dof): (chi2, p)."""
+        chi2, p = stats.chisquare(self.table.sum(axis=1 - die))
+        return float(chi2), float(p)
+
+
+def throw_pairs(scene: Scene, dice: tuple[Die, ...], state: GroupState, bar: object = None,
+                batch: int = BATCH) -> Pairs:
+    """Throw ``state`` until the faces are decided, in batches of ``batch``; count them."""
+    parts = []
+    for start in range(0, state.batch_size, batch):
+        chunk = GroupState(*(a[start:start + batch] for a in state._arrays()))
+        parts.append(simulate_group(scene, dice, chunk, stop_when_decided=True))
+        if bar is not None:
+            bar.update(chunk.batch_size)
+    res = {name: np.concatenate([getattr(p, name) for p in parts])
+           for name in ("face", "read", "settled", "decided", "impacts", "unstable", "overlap",
+                        "sunk", "steps")}
+    reasons = {"not decided within the time limit": ~(res["decided"] | res["settled"]),
+               "unstable (energy rose)": res["unstable"], "a die sunk": res["sunk"].any(axis=1),
+               "a die leaning on the other (not read)": ~res["read"].all(axis=1)}
+    counted = ~np.any(list(reasons.values()), axis=0)
+    met = res["overlap"] > 0
+    return Pairs(table=_table(res["face"], counted), met=met, counted=counted,
+                 voided={k: int(v.sum()) for k, v in reasons.items()}, impacts=res["impacts"],
+                 time=res["steps"] * group_step(scene, dice),
+                 met_table=_table(res["face"], counted & met))
+
+
+def _table(face: np.ndarray, which: np.ndarray) -> np.ndarray:
+    """Counts of (die 1, die 2) faces over the throws ``which``, (6, 6)."""
+    return np.bincount((face[which, 0] - 1) * 6 + face[which, 1] - 1,
+                       minlength=36).reshape(6, 6)
+
+
+def run(out: Path = DOCS, quick: bool = False, throws: int | None = None,
+        seed: int = SEED) -> dict[str, float]:
+    """Regenerate ``pairs.md`` and its figure under ``out``; return the headline numbers.
+
+    ``throws``: throws of the pair (default :data:`FULL`, :data:`QUICK` with ``quick``).
+    """
+    if throws is not None and (not isinstance(throws, int) or isinstance(throws, bool)
+                               or throws < MIN_THROWS):
+        raise ValueError(f"throws must be an int >= {MIN_THROWS}, got {throws!r}")
+    n = throws if throws is not None else QUICK if quick else FULL
+    scene = Scene(walls=tray(), t_max=T_MAX)
+    dice = (scene.die, scene.die)
+    state = hand_throws(scene, dice, n, np.random.default_rng(seed))
+    bar = progress(n, "two-dice throws")
+    bar.unit = "throw"
+    start, cpu = time.perf_counter(), time.process_time()
+    pairs = throw_pairs(scene, dice, state, bar)
+    seconds, cpu = time.perf_counter() - start, time.process_time() - cpu
+    bar.close()
+    _plot(pairs, out / "figures" / "pairs.png")
+    numbers = _numbers(pairs, seconds, cpu)
+    (out / "pairs.md").write_text(_markdown(pairs, numbers, scene, seed))
+    return numbers
+
+
+def _numbers(pairs: Pairs, seconds: float, cpu: float) -> dict[str, float]:
+    chi2, p = pairs.total_test()
+    ind = independence(pairs.table)
+    met_ind = independence(pairs.met_table)
+    shares = pairs.totals / pairs.n
+    thrown = len(pairs.counted)
+    return {
+        "throws": thrown, "counted": pairs.n, "voided": 1 - pairs.n / thrown,
+        "met": float(pairs.met.mean()), "seconds": seconds, "rate": thrown / seconds,
+        "cpu_seconds": cpu,
+        "total_chi2": chi2, "total_p": p, "p7": float(shares[5]),
+        "max_dev": float(np.abs(shares - triangle()).max()),
+        "independence_chi2": ind[0], "independence_p": ind[1],
+        "met_independence_p": met_ind[1],
+        "die1_p": pairs.uniformity(0)[1], "die2_p": pairs.uniformity(1)[1],
+        "impacts": float(pairs.impacts[pairs.counted].mean()),
+        "time_median": float(np.median(pairs.time[pairs.counted])),
+    }
+
+
+def _plot(pairs: Pairs, path: Path) -> None:
+    fig, axes = plt.subplots(1, 2, figsize=(12, 4.5), layout="constrained")
+    share = pairs.totals / pairs.n
+    ci = wilson(pairs.totals, pairs.n)
+    ax = axes[0]
+    ax.bar(TOTALS, share, color="C0", label="simulated (95% interval)")
+    ax.errorbar(TOTALS, share, yerr=np.clip([share - ci[:, 0], ci[:, 1] - share], 0, None),
+                fmt="none", color="k", capsize=3)
+    ax.plot(TOTALS, triangle(), "o--", color="C3", label="2d6: (6 - |k - 7|) / 36")
+    ax.set_xticks(TOTALS)
+    ax.set_xlabel("total of the two dice")
+    ax.set_ylabel("share of counted throws")
+    ax.set_title(f"{pairs.n} counted throws, chi-square p = {pairs.total_test()[1]:.3g}",
+                 fontsize=10)
+    ax.legend(fontsize=8)
+    expected = np.outer(pairs.table.sum(axis=1), pairs.table.sum(axis=0)) / pairs.n
+    residual = (pairs.table - expected) / np.sqrt(expected)
+    ax = axes[1]
+    image = ax.imshow(residual, cmap="RdBu_r", vmin=-3, vmax=3, origin="lower",
+                      extent=(0.5, 6.5, 0.5, 6.5))
+    for (i, j), count in np.ndenumerate(pairs.table):
+        ax.text(j + 1, i + 1, str(count), ha="center", va="center", fontsize=8)
+    ax.set_xlabel("die 2 face")
+    ax.set_ylabel("die 1 face")
+    ax.set_title(f"(die 1, die 2) counts; colour: (observed - expected) / sqrt(expected), "
+                 f"independence p = {independence(pairs.table)[1]:.3g}", fontsize=9)
+    fig.colorbar(image, ax=ax, shrink=0.8)
+    save_figure(fig, path)
+
+
+def _detected(p: float) -> str:
+    return "departs from" if p < SIGNIFICANT else "agrees with"
+
+
+def _half_width(n: int) -> float:
+    """Half-width of the 95% interval of P(7) = 1/6 after ``n`` counted throws."""
+    return 1.959964 * float(np.sqrt(triangle()[5] * (1 - triangle()[5]) / n))
+
+
+def _conclusion(pairs: Pairs, n: dict) -> str:
+    shares = pairs.totals / pairs.n
+    worst = int(np.argmax(np.abs(shares - triangle())))
+    dependence = ("shows a dependence" if n["independence_p"] < SIGNIFICANT
+                  else "shows no detectable dependence")
+    met_dependence = ("does" if n["met_independence_p"] < SIGNIFICANT else "does not")
+    uniform = [f"die {d + 1}: p = {n[f'die{d + 1}_p']:.3g}" for d in range(2)]
+    faces = ("both dice's faces are consistent with uniform"
+             if min(n["die1_p"], n["die2_p"]) >= SIGNIFICANT
+             else "a die's faces depart from uniform")
+    ci = wilson(pairs.totals, pairs.n)
+    missed = int(np.sum((triangle() < ci[:, 0]) | (triangle() > ci[:, 1])))
+    return (
+        f"At the {SIGNIFICANT:.0%} level the distribution of the total {_detected(n['total_p'])} "
+        f"2d6's triangle (p = {n['total_p']:.3g}); the largest gap between a total's share and "
+        f"the triangle is {shares[worst] - triangle()[worst]:+.4f}, at total {TOTALS[worst]}, "
+        f"and {missed} of the 11 totals' 95% intervals miss the triangle's value (by chance "
+        f"alone about {0.05 * 11:.2f} would). "
+        f"The (die 1, die 2) table {dependence} (p = {n['independence_p']:.3g}), and among "
+        f"the {int(pairs.met_table.sum())} counted throws in which the dice touched each other "
+        f"it {met_dependence} (p = {n['met_independence_p']:.3g}); {faces} "
+        f"({', '.join(uniform)}). Resolution: with {pairs.n} counted throws the 95% interval of "
+        f"P(7) is about ±{_half_width(pairs.n):.4f} around 1/6, so a smaller bias of the seven "
+        f"would go unseen here; 100,000 throws would narrow it to ±{_half_width(100_000):.4f}.")
+
+
+def _markdown(pairs: Pairs, n: dict, scene: Scene, seed: int) -> str:
+    ci = wilson(pairs.totals, pairs.n)
+    total_rows = "\n".join(
+        f"| {k} | {c} | {c / pairs.n:.4f} | [{lo:.4f}, {hi:.4f}] | {t:.4f} | "
+        f"{'yes' if lo <= t <= hi else 'no'} |"
+        for k, c, (lo, hi), t in zip(TOTALS, pairs.totals, ci, triangle(), strict=True))
+    table_rows = "\n".join(f"| **{i + 1}** | " + " | ".join(str(c) for c in row) + f" | "
+                           f"{row.sum()} |" for i, row in enumerate(pairs.table))
+    column_sums = " | ".join(str(c) for c in pairs.table.sum(axis=0))
+    thrown = len(pairs.counted)
+    voided_rows = "\n".join(f"| {reason} | {count} | {count / thrown:.4%} |"
+                            for reason, count in pairs.voided.items())
+    chi2, _ = pairs.total_test()
+    ind_chi2, _, dof = independence(pairs.table)
+    h = HAND
+    full_hours = FULL / n["rate"] / 3600
+    return f"""# Two dice thrown together
+
+Generated by `python -m dice_env.studies pairs --throws {thrown}` (module
+`dice_env/studies/pairs.py`, seed {seed}). This run threw the pair **{thrown}** times in
+**{n['seconds']:.0f} s** of wall-clock time on {numba.get_num_threads()} thread(s) of a shared
+machine ({n['cpu_seconds']:.0f} s of this process's CPU time), {n['rate']:.1f} throws/s; at that
+rate the study's default of {FULL:,} throws (`python -m dice_env.studies pairs`) would take
+about {full_hours:.1f} h. `benchmarks/dice_together.py` measures the cost per throw against
+the number of dice.
+
+## The throw
+
+Two default d6 (edge {scene.die.size * 1e3:g} mm, mass {scene.die.mass * 1e3:g} g) leave one
+hand together into the {TRAY[0] * 100:g} x {TRAY[1] * 100:g} cm tray
+(`dice_env.surroundings.tray()`, walls of the table's material), on the default table, with
+the automatic step ({scene.step * 1e6:.1f} µs) and the default die–die contact
+(`dice_env.group.DieContact`). The hand (`pairs.Hand`, `pairs.hand_throws`): the dice side by
+side, {h.spacing * 100:g} cm apart centre to centre, above the tray's centre at a common height
+of {h.clearance[0] * 100:g}–{h.clearance[1] * 100:g} cm above the height where a corner could
+touch; one hand velocity of {h.speed[0]:g}–{h.speed[1]:g} m/s in a uniform direction toward
+the table, plus each die's own normal noise of {h.noise:g} m/s per component; each die its
+own uniform orientation and a spin of {h.spin[0]:g}–{h.spin[1]:g} rad/s about its own uniform
+axis (the fairness study's vigorous throw, given to both dice at once). Die 1 is the one at
+y < 0. Each throw runs (`simulate_group(..., stop_when_decided=True)`) until no energy left
+in it can change either face, or {T_MAX:g} s.
+
+**The dice meet:** in {n['met']:.1%} of the throws the two dice touched each other at least
+once (`GroupResult.overlap > 0`). A counted throw had on average {n['impacts']:.1f} impacts per
+die as `GroupResult.impacts` counts them (each start of a contact with the floor or a wall
+faster than the rest speed; touches of the other die are not counted on their own, so the
+number of die–die collisions is not measured here) and was decided after a median
+{n['time_median']:.2f} s of simulated time.
+
+## Voided throws (not counted)
+
+| reason | throws | share |
+|---|---|---|
+{voided_rows}
+
+Counted: **{pairs.n}** of {thrown} throws ({1 - n['voided']:.4%}); a throw may be voided
+for more than one reason.
+
+## The total against 2d6's triangle
+
+![pairs](figures/pairs.png)
+
+Chi-square goodness of fit of the totals 2–12 against `(6 - |k - 7|) / 36` (10 degrees of
+freedom): chi2 = {chi2:.2f}, **p = {n['total_p']:.3g}**.
+
+| total | count | share | 95% interval | 2d6 | inside |
+|---|---|---|---|---|---|
+{total_rows}
+
+## The two faces
+
+Counts of (die 1 face, die 2 face) over the counted throws:
+
+| die 1 \\ die 2 | 1 | 2 | 3 | 4 | 5 | 6 | sum |
+|---|---|---|---|---|---|---|---|
+{table_rows}
+| sum | {column_sums} | {pairs.n} |
+
+- Independence (chi-square on the 6 x 6 table, {dof} dof): chi2 = {ind_chi2:.2f},
+  **p = {n['independence_p']:.3g}**; on the throws in which the dice touched each other only:
+  p = {n['met_independence_p']:.3g}.
+- Uniformity of each die (5 dof): die 1 p = {n['die1_p']:.3g}, die 2 p = {n['die2_p']:.3g}.
+
+## Conclusion
+
+{_conclusion(pairs, n)}
+
+Caveats: the dice are the corner-node penalty model (sharp edges, no air); the die–die
+material is an estimate (see `dice_env/group.py`); the hand is one model of a two-dice throw,
+with uniform release orientations, which average any memory of the release out over the faces
+(see `docs/fairness.md`).
+"""
