@@ -660,9 +660,34 @@ def _figure_tray() -> np.ndarray:
                       view_edges=25.0)
 
 
-# The README's pictures: ``python -m dice_env.envs.render NAME --out PATH``. Placed by
-# construction (no simulation), so they are made at once.
-FIGURES = {"die-d20": _figure_d20, "tray": _figure_tray}
+def _figure_pair(frames: int = 6) -> np.ndarray:
+    """Two d6 thrown together into the tray: a seeded, simulated throw.
+
+    ``frames`` frames from the release to the decided faces, side by side.
+    """
+    from dice_env.group import GroupState, simulate_group
+    from dice_env.simulate import State
+
+    scene = Scene(walls=walls("tray"), t_max=3.0)
+    dice = (Die(), Die())
+    rng = np.random.default_rng(11)
+    hands = [State.release(scene, [-0.09, 0.022 * side, 0.06], [0.9, -0.22 * side, 0.0],
+                           rng.normal(0.0, 25.0, 3), axis_angle(rng.normal(size=3), 2.0))
+             for side in (1.0, -1.0)]
+    every = 40
+    result = simulate_group(scene, dice, GroupState.of(hands), stop_when_decided=True,
+                            record_every=every, orientations=True)
+    last = max(1, int(result.steps[0]) // every - 1)
+    shown = np.linspace(0, last, frames).round().astype(int)
+    images = [render_dice(scene, dice, result.x_cm[0, j], result.orientations[0, j],
+                          size=(240, 240), elevation=60.0, view_edges=6.0) for j in shown]
+    gap = np.full((240, 6, 3), 255, np.uint8)
+    return np.concatenate([part for image in images for part in (image, gap)][:-1], axis=1)
+
+
+# The README's pictures: ``python -m dice_env.envs.render NAME --out PATH``. The single dice
+# are placed by construction (no simulation), the pair is a short simulated throw.
+FIGURES = {"die-d20": _figure_d20, "tray": _figure_tray, "pair": _figure_pair}
 
 
 def has_display() -> bool:
