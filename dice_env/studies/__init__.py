@@ -19,8 +19,9 @@ STUDIES = {
     "cuboids": "dice_env.studies.cuboids",
     "pips": "dice_env.studies.pips",
     "materials": "dice_env.studies.materials",
+    "weldon": "dice_env.studies.weldon",
 }
-SIZED = ("shapes", "cuboids", "materials")
+SIZED = ("shapes", "cuboids", "materials", "weldon")
 
 
 def run(name: str, out: Path, quick: bool = False,
