@@ -59,10 +59,10 @@ SIGNIFICANCE = 0.05
 RESOLVING_POWER = 0.8  # a test "resolves" a difference it detects with this probability
 # Twelve-dice throws of the full and quick runs: thrown together, and (in cups of 12) alone
 # for the reference die and for each other variant.
-FULL = {"together": 150, "alone": 3000, "variant": 1000}
+FULL = {"together": 240, "alone": 4500, "variant": 1200}
 QUICK = {"together": 3, "alone": 12, "variant": 6}
 BATCH_TOGETHER = 6  # twelve-dice throws per kernel call (the kernel runs them in parallel)
-T_MAX_TOGETHER = 4.0  # s of simulated time; a throw not decided by then is not counted
+T_MAX_TOGETHER = 2.0  # s of simulated time; a throw not decided by then is not counted
 SEED = 2026
 
 
@@ -284,9 +284,10 @@ def distribution_verdict(test: Chi2, power_against_fair: float) -> str:
 class Cup:
     """A cup of twelve dice tipped onto the table; lengths in units of the die's edge.
 
-    The dice sit in a 3 × 2 × 2 block, centres ``spacing`` apart (more than the cube's
-    diagonal, sqrt 3, so apart in any orientation) with a uniform ``jitter``; the lowest
-    layer is ``height`` above the height at which a die in any orientation clears the table.
+    The dice sit side by side in a 4 × 3 block (:data:`BLOCK`), centres ``spacing`` apart
+    (more than the cube's diagonal, sqrt 3, so apart in any orientation) with a uniform
+    ``jitter``, ``height`` above the height at which a die in any orientation clears the
+    table (a single layer: dice dropped in layers pile onto each other and many end leaning).
     The cup moves along a uniform horizontal direction at ``speed`` (edges/s); each die adds
     its own velocity (normal, ``scatter`` edges/s per component), spins at ``spin`` (rad/s)
     about a uniform axis and has a uniform orientation. Ranges are drawn uniformly.
@@ -301,7 +302,7 @@ class Cup:
 
 
 CUP = Cup()
-BLOCK = (3, 2, 2)
+BLOCK = (4, 3, 1)
 
 
 def cup_throws(scene: Scene, n: int, rng: np.random.Generator, cup: Cup = CUP) -> list[State]:
@@ -379,6 +380,36 @@ def throw_alone(scene: Scene, cups: list[State], bar: object = None) -> Faces:
     """Throw every die of ``cups`` alone (``stop_when_decided``); count the faces."""
     state = State(*(np.concatenate([getattr(s, f.name) for s in cups]) for f in fields(State)))
     return throw_faces(scene, state, bar)
+
+
+def excess_per_offset(offsets: np.ndarray, excess: np.ndarray, se: np.ndarray
+                      ) -> tuple[float, float]:
+    """Slope of p(5 or 6) - 1/3 against the centre of mass's offset, through the origin.
+
+    Weighted least squares (weights ``1 / se^2``) of ``excess`` on ``offsets`` (µm) over
+    dice whose centre of mass moves along one direction (the pips' 3 : 1 : 5), so that a
+    single number measures the offset; returns the slope (per µm) and its standard error.
+    A die with its centre at the middle (offset 0) has no excess by symmetry and adds
+    nothing.
+    """
+    x, y, s = (np.asarray(v, dtype=np.float64) for v in (offsets, excess, se))
+    weights = 1.0 / s**2
+    information = float(np.sum(weights * x * x))
+    if information <= 0:
+        raise ValueError("offsets must hold at least one die with its centre off the middle")
+    return float(np.sum(weights * x * y)) / information, 1.0 / math.sqrt(information)
+
+
+def offset_for_weldon(slope: float, se: float) -> tuple[float, float, float]:
+    """The offset (µm) whose excess the slope puts at Weldon's, with a 95% range.
+
+    The range is Weldon's excess over the slope's 95% interval; its upper end is inf when
+    that interval reaches zero (no excess cannot be ruled out).
+    """
+    low_slope, high_slope = slope - Z95 * se, slope + Z95 * se
+    centre = EFFECT / slope if slope > 0 else math.inf
+    return (centre, EFFECT / high_slope if high_slope > 0 else math.inf,
+            EFFECT / low_slope if low_slope > 0 else math.inf)
 
 
 def success_estimate(faces: Faces) -> Estimate:
@@ -551,11 +582,12 @@ lightest, the one the heaviest, so the centre of mass sits toward the 1-2-3 corn
 ## The simulation
 
 The sources we have do not say how the dice were thrown. Twelve dice are thrown at once from
-a cup (one hand does not hold twelve): the dice sit in a 3 × 2 × 2 block, centres
-{cup.spacing:g} edges apart, the lowest layer {cup.height[0]:g}–{cup.height[1]:g} edges
-({cup.height[0] * 1.6:g}–{cup.height[1] * 1.6:g} cm for the 16 mm die) above clearing the
-table; the cup moves at {cup.speed[0]:g}–{cup.speed[1]:g} edges/s in a uniform horizontal
-direction, each die adds its own velocity (normal, {cup.scatter:g} edges/s per component),
+a cup (one hand does not hold twelve), poured out side by side: the dice leave in a
+{BLOCK[0]} × {BLOCK[1]} block, centres {cup.spacing:g} edges apart,
+{cup.height[0]:g}–{cup.height[1]:g} edges ({cup.height[0] * 1.6:g}–{cup.height[1] * 1.6:g} cm
+for the 16 mm die) above clearing the table; the cup moves at
+{cup.speed[0]:g}–{cup.speed[1]:g} edges/s in a uniform horizontal direction, each die adds
+its own velocity (normal, {cup.scatter:g} edges/s per component),
 spins at {cup.spin[0]:g}–{cup.spin[1]:g} rad/s about a uniform axis and has a uniform
 orientation. The table is the default wooden one (`Scene()`, no walls). Each throw runs until
 every face is decided (`stop_when_decided`).
@@ -607,6 +639,8 @@ The casino die's paint weighs what the drilled cellulose weighed, so it is the u
 |---|---|---|---|---|---|---|---|---|
 {variant_rows}
 
+{_sensitivity_text(n)}
+
 Per-face probabilities predicted (single throws; faces 1–6):
 
 | die | 1 | 2 | 3 | 4 | 5 | 6 |
@@ -630,6 +664,37 @@ def _p_rows(n: dict) -> str:
                     f"{_verdict(entry['vs_weldon_p']['verdict'])} | "
                     f"{_verdict(entry['vs_fair_p']['verdict'])} |")
     return "\n".join(rows)
+
+
+def sensitivity(n: dict) -> dict[str, float]:
+    """The slope of :func:`excess_per_offset` over the pip-drilled dice, and Weldon's offset.
+
+    From the numbers of :func:`summarise` (every variant but the casino die, whose centre is
+    at the middle): ``slope`` (per µm), ``se``, ``offset`` (µm) and its 95% ``low``, ``high``.
+    """
+    drilled = [v for key, v in n["alone"].items() if key != "casino19"]
+    slope, se = excess_per_offset(np.array([math.hypot(*v["com_um"]) for v in drilled]),
+                                  np.array([v["p"] - FAIR for v in drilled]),
+                                  np.array([v["se"] for v in drilled]))
+    offset, low, high = offset_for_weldon(slope, se)
+    return {"slope": slope, "se": se, "offset": offset, "low": low, "high": high}
+
+
+def _sensitivity_text(n: dict) -> str:
+    s = sensitivity(n)
+    ref = n["alone"][VARIANTS[0][0]]
+    r = math.hypot(*ref["com_um"])
+    high = "no upper bound" if math.isinf(s["high"]) else f"{s['high']:.0f} µm"
+    return (
+        f"The pip-drilled dice move their centre of mass along one direction (3 : 1 : 5), so one "
+        f"number, its offset, measures them. A straight line through the origin (weighted "
+        f"least squares over the three drilled dice, `excess_per_offset`) gives "
+        f"{1e3 * s['slope']:+.3f} ± {1e3 * s['se']:.3f} (10⁻³ per µm; 95%: "
+        f"± {1e3 * Z95 * s['se']:.3f}): {s['slope'] * r:+.4f} for `drilled16` "
+        f"({r:.1f} µm). Weldon's excess of {EFFECT:.4f} would need an offset of about "
+        f"{s['offset']:.0f} µm (95%: {s['low']:.0f} µm to {high}) on this throw, "
+        f"{s['offset'] / r:.1f} times the `drilled16` die's. A reading of the model at Weldon's "
+        f"excess, used in no verdict: his dice's size and pips are not recorded.")
 
 
 def _distribution_text(t: dict) -> str:
