@@ -20,6 +20,7 @@ STUDIES = {
     "pips": "dice_env.studies.pips",
     "materials": "dice_env.studies.materials",
     "weldon": "dice_env.studies.weldon",
+    "validation": "dice_env.studies.validation",
 }
 SIZED = ("shapes", "cuboids", "materials", "weldon")
 
