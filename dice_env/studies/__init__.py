@@ -20,8 +20,10 @@ STUDIES = {
     "pips": "dice_env.studies.pips",
     "materials": "dice_env.studies.materials",
     "pairs": "dice_env.studies.pairs",
+    "weldon": "dice_env.studies.weldon",
+    "validation": "dice_env.studies.validation",
 }
-SIZED = ("shapes", "cuboids", "materials", "pairs")
+SIZED = ("shapes", "cuboids", "materials", "pairs", "weldon")
 
 
 def run(name: str, out: Path, quick: bool = False,

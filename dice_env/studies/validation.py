@@ -1,0 +1,411 @@
+"""The validation page: the simulator against experiments on real dice, one section each.
+
+``run(out, quick)`` writes ``out/validation.md``. Sections:
+
+- **Weldon's dice** (1894): the numbers ``python -m dice_env.studies weldon`` wrote to
+  ``out/weldon.json`` (run first when absent; an expensive study, so not rerun here);
+- **the initially-down face against throw energy** (Kapitaniak et al. 2012, the direction of
+  their finding): thrown here, :func:`initial_face_memory`;
+- **restitution and friction of the default table** against the sources in
+  :mod:`dice_env.table`: measured here on the simulator (:func:`sliding_friction`,
+  :func:`dice_env.calibration.measured_restitution`);
+- **square-cuboid dice**, a prediction: the numbers of ``out/cuboids.md``
+  (:func:`dice_env.studies.cuboids.read_page`; run first when absent).
+
+Every verdict is computed from the numbers; nothing is fitted to the data it is compared
+with, and where a parameter was set from the same source the page says so.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+
+from dice_env import table
+from dice_env.calibration import measured_restitution
+from dice_env.rotations import up_rotation
+from dice_env.scene import Scene
+from dice_env.simulate import UP, State, simulate
+from dice_env.studies import cuboids, weldon
+from dice_env.studies.fairness import energy_throws, face_down, throw_energy, wilson
+from dice_env.studies.paper_figures import DOCS
+
+COMMAND = "python -m dice_env.studies validation"
+SEED = 2026
+# Throws of the initially-down-face experiment: full and quick run.
+MEMORY_THROWS = {False: 4000, True: 300}
+ENERGY_RANGE = (0.01, 100.0)  # throw energy above a gentle release (m g a), log-uniform
+Z_ONE_SIDED = 1.644854  # 5% one-sided
+# The default table's sources (dice_env/table.py, docs/error-vs-runtime.md).
+RESTITUTION_RANGE = (0.4, 0.5)
+RESTITUTION_SOURCE = ("dice on wooden tables, 0.4–0.5: Kapitaniak, Strzalko, Grabski & "
+                      "Kapitaniak, Chaos 22, 047504 (2012); Strzalko et al., Physics Reports "
+                      "469, 59 (2008)")
+FRICTION_RANGE = (0.3, 0.5)
+FRICTION_SOURCE = ("plastics on dry wood, 0.3–0.5: Murase, J. Fac. Agr. Kyushu Univ. 28, 147 "
+                   "(1984); Blau, Tribology International 34, 585 (2001)")
+SPEEDS = (0.5, 1.0, 2.0)  # m/s: landing speeds of the restitution check
+SLIDE_SPEED = 0.5  # m/s: the sliding die's start
+
+
+def within(value: float, low: float, high: float) -> str:
+    """"agrees" when ``low <= value <= high``, else "differs"."""
+    return "agrees" if low <= value <= high else "differs"
+
+
+def sliding_friction(scene: Scene, speed: float = SLIDE_SPEED) -> float:
+    """Friction coefficient the simulator produces: a die sliding flat, deceleration / g.
+
+    The die rests on its face with its centre at the resting height and starts sliding along
+    x at ``speed`` (m/s), no spin; the deceleration is the slope of a straight line through
+    its speed while that is between 20% and 80% of ``speed``.
+    """
+    die = scene.die
+    face = int(np.argmin(die.resting_heights))
+    state = State.release(scene, [0.0, 0.0, float(die.resting_heights[face])],
+                          [speed, 0.0, 0.0], orientation=up_rotation(die.reading[face]))
+    every = 10
+    result = simulate(scene, state, t_max=1.0, record_every=every, record=())
+    x = result.x_cm[0, :, 0]
+    t = np.arange(1, x.size + 1) * every * scene.step
+    v = np.gradient(x, t)
+    sliding = (v > 0.2 * speed) & (v < 0.8 * speed)
+    if sliding.sum() < 3:
+        raise ValueError(f"the die did not slide from {speed} m/s to 20% of it within 1 s")
+    slope = np.polyfit(t[sliding], v[sliding], 1)[0]
+    return -slope / scene.gravity
+
+
+def initial_face_memory(n: int, rng: np.random.Generator, scene: Scene | None = None) -> dict:
+    """P(rests on the face down at release) in energy terciles: the fairness study's throws.
+
+    ``n`` throws of :func:`dice_env.studies.fairness.energy_throws` with energies log-uniform
+    over :data:`ENERGY_RANGE` (m g a above a gentle release), each until its face is decided.
+    Per tercile (low, middle, high energy among the counted throws): its energy range, the
+    throws, and the hits on the release-down and release-up faces. ``scene``'s die must be a
+    d6 (default: the default scene).
+    """
+    scene = Scene() if scene is None else scene
+    if scene.die.name != "d6":
+        raise ValueError(f"scene.die must be a d6, got {scene.die.name!r}")
+    excess = 10 ** rng.uniform(*np.log10(ENERGY_RANGE), n)
+    state = energy_throws(scene, excess, rng)
+    result = simulate(scene, state, stop_when_decided=True)
+    ok = (result.decided | result.settled) & ~result.unstable & ~result.sunk
+    down0 = face_down(scene.die, state.orientation, np.asarray(UP))
+    final_down = 7 - result.face  # the d6's opposite face: the face it rests on
+    energy = throw_energy(scene, state)
+    edges = np.quantile(energy[ok], [0, 1 / 3, 2 / 3, 1])
+    which = np.clip(np.searchsorted(edges, energy, side="right") - 1, 0, 2)
+    bins = []
+    for b in range(3):
+        sel = ok & (which == b)
+        bins.append({"low": float(edges[b]), "high": float(edges[b + 1]),
+                     "n": int(sel.sum()),
+                     "down": int(np.sum(final_down[sel] == down0[sel])),
+                     "up": int(np.sum(final_down[sel] == 7 - down0[sel]))})
+    return {"thrown": n, "counted": int(ok.sum()), "bins": bins}
+
+
+def memory_verdict(low: dict, high: dict) -> str:
+    """Kapitaniak's direction: the release-down face favoured at low energy, less at high.
+
+    "agrees" when the low tercile's 95% interval of P(release-down) lies above 1/6 and a
+    one-sided two-proportion test (5%) finds it above the high tercile's; "differs" when the
+    low tercile is below 1/6 or significantly below the high one; else "not resolvable at
+    this sample".
+    """
+    p_low, p_high = low["down"] / low["n"], high["down"] / high["n"]
+    pooled = (low["down"] + high["down"]) / (low["n"] + high["n"])
+    se = math.sqrt(max(pooled * (1 - pooled), 1e-300) * (1 / low["n"] + 1 / high["n"]))
+    z = (p_low - p_high) / se
+    lo, hi = wilson(low["down"], low["n"])
+    if lo > 1 / 6 and z > Z_ONE_SIDED:
+        return "agrees"
+    if hi < 1 / 6 or z < -Z_ONE_SIDED:
+        return "differs"
+    return "not resolvable at this sample"
+
+
+def _study_numbers(out: Path, quick: bool) -> tuple[dict, cuboids.Page]:
+    """Weldon's numbers and the cuboid page under ``out``; each study is run when absent."""
+    if not (out / "weldon.json").exists():
+        weldon.run(out, quick)
+    if not (out / "cuboids.md").exists():
+        cuboids.run(out, quick)
+    return json.loads((out / "weldon.json").read_text()), cuboids.read_page(out / "cuboids.md")
+
+
+def run(out: Path = DOCS, quick: bool = False, seed: int = SEED) -> dict[str, float]:
+    """Write ``validation.md`` under ``out``; return the headline numbers."""
+    out.mkdir(parents=True, exist_ok=True)
+    w, cube_page = _study_numbers(out, quick)
+    rng = np.random.default_rng(seed)
+    scene = Scene()
+    memory = initial_face_memory(MEMORY_THROWS[quick], rng, scene)
+    restitution = {v: measured_restitution(scene, v) for v in SPEEDS}
+    friction = sliding_friction(scene)
+    sections = [
+        _weldon_section(w),
+        _memory_section(memory, quick),
+        _table_section(scene, restitution, friction, quick),
+        _cuboid_section(cube_page),
+    ]
+    command = COMMAND + (" --quick" if quick else "")
+    text = _header(sections, command) + "\n".join(body for _, body in sections)
+    (out / "validation.md").write_text(text)
+    low, high = memory["bins"][0], memory["bins"][-1]
+    return {"weldon_p": w["alone"]["drilled16"]["p"], "memory_low": low["down"] / low["n"],
+            "memory_high": high["down"] / high["n"], "restitution": restitution[1.0],
+            "friction": friction,
+            "cube_p": cube_page.table[cuboids.CONDITIONS[0][0]][1.0][0]}
+
+
+# ---- the page ----------------------------------------------------------------------------
+
+def _bold(verdict: str) -> str:
+    return f"**{verdict}**"
+
+
+def _header(sections: list[tuple[list[tuple[str, str, str, str]], str]], command: str) -> str:
+    rows = "\n".join(f"| {a} | {b} | {c} | {_bold(d)} |"
+                     for summary, _ in sections for a, b, c, d in summary)
+    return f"""# Validation: the simulator against experiments on real dice
+
+Generated by `{command}` (module `dice_env/studies/validation.py`, seed {SEED}). One section
+per experiment: what was measured on real dice and where, what the simulator gives for the
+same set-up and by which command, and a verdict computed by the script. Nothing is fitted to
+the data it is compared with; where a parameter was set from the same source, the section
+says so. Expensive studies are not rerun here: their sections quote the numbers their own
+command wrote, with its size.
+
+Verdicts: **agrees** (within the stated error or range), **differs**, **not resolvable at
+this sample** (the error is wider than the effect looked for), **prediction** (no
+measurement to compare with yet).
+
+| experiment | real dice | simulator | verdict |
+|---|---|---|---|
+{rows}
+
+"""
+
+
+def _ci(p: float, interval: list[float] | tuple[float, float], digits: int = 4) -> str:
+    return f"{p:.{digits}f} [{interval[0]:.{digits}f}, {interval[1]:.{digits}f}]"
+
+
+def _weldon_section(w: dict) -> tuple[list, str]:
+    meta, wd, t, a = w["meta"], w["weldon"], w["together"], w["alone"]
+    ref = a["drilled16"]
+    together = (_ci(t["p"], t["interval"]) if "p" in t else "too few throws")
+    t_verdict = t["vs_weldon_p"]["verdict"] if "p" in t else "not resolvable at this sample"
+    dist = t.get("distribution_verdict", "not resolvable at this sample")
+    sens = "\n".join(
+        f"| {v['label']} | {', '.join(f'{c:.1f}' for c in v['com_um'])} | {v['n']:,} | "
+        f"{_ci(v['p'], v['interval'])} | {v['p'] - 1 / 3:+.4f} | "
+        f"{_bold(v['vs_fair_p']['verdict'])} | {_bold(v['vs_weldon_p']['verdict'])} |"
+        for v in a.values())
+    summary = [
+        ("Weldon's dice: p(5 or 6), one die at a time",
+         f"{_ci(wd['p'], wd['interval'])} (Weldon 1894)",
+         f"`drilled16`: {_ci(ref['p'], ref['interval'])}", ref["vs_weldon_p"]["verdict"]),
+        ("Weldon's dice: twelve thrown together",
+         f"{_ci(wd['p'], wd['interval'])}; its distribution of 0–12",
+         f"{t['counted']} throws: {together}", t_verdict),
+        ("Weldon's dice: distribution of successes per throw",
+         "26,306 throws", f"{t['counted']} throws, chi-square vs Weldon's", dist),
+    ]
+    dist_line = (f"chi-square against Weldon's (tails pooled, cells "
+                 f"{_cells(t['vs_weldon'])}): chi2 = {t['vs_weldon']['statistic']:.2f}, "
+                 f"{t['vs_weldon']['dof']} d.f., p = {t['vs_weldon']['p_value']:.3g}; this "
+                 f"sample tells Weldon's distribution from a fair die's with probability "
+                 f"{t['power_against_fair']:.2f}"
+                 + (f" (0.8 needs about {t['throws_to_resolve']:,} throws)"
+                    if t.get("throws_to_resolve") else "")
+                 + f"; variance of successes per throw {t['dispersion']:.2f} × the "
+                 f"binomial's (1 for independent dice)" if "p" in t else "too few throws")
+    body = f"""## Weldon's dice (1894)
+
+**Real dice.** W. F. R. Weldon threw 12 dice 26,306 times and counted the dice showing a 5 or
+a 6: {wd['n']:,} die-throws, p = {_ci(wd['p'], wd['interval'])} (standard error
+{wd['se']:.4f}), {wd['effect']:+.4f} above 1/3; his 0–12 counts
+{', '.join(map(str, wd['counts']))} (K. Pearson, Phil. Mag. 50, 157 (1900); A. W. Kemp &
+C. D. Kemp, The American Statistician 45, 216 (1991)). Against the binomial at 1/3:
+chi2 = {wd['vs_fair']['statistic']:.1f}, {wd['vs_fair']['dof']} d.f., p =
+{wd['vs_fair']['p_value']:.2g}; against the binomial at his own p: p =
+{wd['vs_own_p']['p_value']:.2f}. The usual explanation is the drilled pips.
+
+**Simulator.** `{meta['command']}` ({meta['date']}, {meta['threads']} thread(s), seed
+{meta['seed']}; details in [weldon.md](weldon.md)): pip-drilled 16 mm dice (`drilled16`:
+3 mm pips, 1 mm deep, centre of mass {math.hypot(*ref['com_um']):.1f} µm toward the 1-2-3
+corner) tipped twelve at a time from a cup onto the default wooden table.
+
+- **Alone** (each die of the cups thrown by itself; the per-die probability only):
+  {ref['n']:,} die-throws, p = {_ci(ref['p'], ref['interval'])}, {ref['p'] - 1 / 3:+.4f}
+  above 1/3: against Weldon {_bold(ref['vs_weldon_p']['verdict'])} (difference
+  {ref['vs_weldon_p']['difference']:+.4f} ± {ref['vs_weldon_p']['half_width']:.4f}); against
+  1/3 {_bold(ref['vs_fair_p']['verdict'])}. Resolving Weldon's excess needs about
+  {ref['trials_to_resolve'] or 0:,} die-throws.
+- **Together** (`simulate_group`, the dice collide; {t['thrown']} throws, {t['counted']}
+  counted, {t['leaning']} left out for a die leaning on another, {t['undecided']} not decided
+  in time, {meta['seconds_together']:.0f} s): p = {together}, against Weldon
+  {_bold(t_verdict)}; {dist_line}: {_bold(dist)}.
+
+Sensitivity to the pips (single throws; centre of mass in µm along the axes of faces 2, 3, 1).
+{_offset_line(w)}
+
+| die | com x, y, z (µm) | die-throws | p(5 or 6) [95%] | − 1/3 | vs 1/3 | vs Weldon |
+|---|---|---|---|---|---|---|
+{sens}
+
+"""
+    return summary, body
+
+
+def _offset_line(w: dict) -> str:
+    s = weldon.sensitivity(w)
+    high = "no upper bound" if math.isinf(s["high"]) else f"{s['high']:.0f} µm"
+    return (f"On this throw the excess over 1/3 grows by {1e3 * s['slope']:.3f} ± "
+            f"{1e3 * s['se']:.3f} × 10⁻³ per µm of the centre's offset (a line through the "
+            f"origin, `weldon.excess_per_offset`); Weldon's excess would need about "
+            f"{s['offset']:.0f} µm (95%: {s['low']:.0f} µm to {high}). A reading of the "
+            f"model, used in no verdict: the size and pips of Weldon's dice are not recorded.")
+
+
+def _cells(test: dict) -> str:
+    return ", ".join(f"{x}" if x == y else f"{x}–{y}" for x, y in test["cells"])
+
+
+def _memory_section(m: dict, quick: bool) -> tuple[list, str]:
+    rows = []
+    for name, b in zip(("low", "middle", "high"), m["bins"], strict=True):
+        down, up = wilson(b["down"], b["n"]), wilson(b["up"], b["n"])
+        rows.append(f"| {name} | {b['low']:.3g}–{b['high']:.3g} | {b['n']} | "
+                    f"{_ci(b['down'] / b['n'], down, 3)} | {_ci(b['up'] / b['n'], up, 3)} |")
+    low, high = m["bins"][0], m["bins"][-1]
+    verdict = memory_verdict(low, high)
+    command = COMMAND + (" --quick" if quick else "")
+    summary = [("Initially-down face against throw energy",
+                "favoured at low energy, fading with energy (Kapitaniak et al. 2012)",
+                f"P(release-down) {low['down'] / low['n']:.3f} (low) → "
+                f"{high['down'] / high['n']:.3f} (high)", verdict)]
+    body = f"""## The initially-down face against throw energy (Kapitaniak et al. 2012)
+
+**Real dice.** M. Kapitaniak, J. Strzalko, J. Grabski & T. Kapitaniak (Chaos 22, 047504,
+2012) modelled the three-dimensional throw and filmed real ones: the die tends to land on the
+face that was down at release, the more so the less energy the throw has. Compared here: the
+direction of that finding (their energies are those of their own release set, so only the
+trend compares, not the energies at which it fades).
+
+**Simulator.** `{command}` ({m['thrown']} throws, {m['counted']} decided and counted): the
+default die on the default table with the fairness study's energy throws
+(`fairness.energy_throws`: energy {ENERGY_RANGE[0]:g}–{ENERGY_RANGE[1]:g} m g a above a
+gentle release, log-uniform, split at random between drop, speed and spin; orientation
+uniform), each until its face is decided; terciles of energy. The full study over 40,000
+throws is [fairness.md](fairness.md).
+
+| energy | m g a | throws | P(rests on release-down face) [95%] | P(release-up face) [95%] |
+|---|---|---|---|---|
+{chr(10).join(rows)}
+
+**Verdict: {verdict}** (the low tercile's interval above 1/6 and a one-sided test of low
+above high at 5%).
+
+"""
+    return summary, body
+
+
+def _table_section(scene: Scene, restitution: dict[float, float], friction: float,
+                   quick: bool) -> tuple[list, str]:
+    g = scene.ground
+    e_verdicts = {v: within(e, *RESTITUTION_RANGE) for v, e in restitution.items()}
+    e_verdict = "agrees" if all(x == "agrees" for x in e_verdicts.values()) else "differs"
+    f_verdict = within(friction, *FRICTION_RANGE)
+    e_rows = ", ".join(f"{e:.3f} at {v:g} m/s" for v, e in restitution.items())
+    command = COMMAND + (" --quick" if quick else "")
+    summary = [("Restitution of the default table", f"{RESTITUTION_RANGE[0]:g}–"
+                f"{RESTITUTION_RANGE[1]:g}", f"{restitution[1.0]:.3f} at 1 m/s (set from it)",
+                e_verdict),
+               ("Sliding friction of the default table", f"{FRICTION_RANGE[0]:g}–"
+                f"{FRICTION_RANGE[1]:g}", f"{friction:.3f} (an input)", f_verdict)]
+    body = f"""## Restitution and friction of the default table
+
+**Real dice.** Restitution of a die on a wooden table: {RESTITUTION_SOURCE}. Sliding
+friction: {FRICTION_SOURCE}. (`dice_env/table.py`; `docs/error-vs-runtime.md`.)
+
+**Simulator.** `{command}`: the default scene (16 mm, 4.5 g die; S = {g.stiffness:g} N/m,
+D = {g.damping:.4g} N s/m, mu = {g.friction:g} per corner).
+
+- Restitution (`calibration.measured_restitution`: dropped flat, no spin, rebound speed over
+  impact speed): {e_rows}. **Verdict: {e_verdict}** (inside {RESTITUTION_RANGE[0]:g}–
+  {RESTITUTION_RANGE[1]:g} at every speed). Not an independent test: the damping D is
+  computed from the target {table.RESTITUTION:g}, the middle of this range
+  (`table.damping_for_restitution`); this checks that the contact model delivers it.
+- Sliding friction (`validation.sliding_friction`: the die slides flat from
+  {SLIDE_SPEED:g} m/s, deceleration over g): {friction:.3f}. **Verdict: {f_verdict}**
+  (inside {FRICTION_RANGE[0]:g}–{FRICTION_RANGE[1]:g}). Not independent either: mu =
+  {table.FRICTION:g} is the model's input; this checks that the regularised, stick-slip
+  friction law delivers it.
+
+The other tables (felt, glass, craps) have no measurement of a die on them; their estimates
+and what the simulator makes of them are in [materials.md](materials.md).
+
+"""
+    return summary, body
+
+
+def _steepness(page: cuboids.Page) -> str:
+    """Whether the prediction of record is steeper than the solid-angle share at both ends."""
+    row = page.table[cuboids.CONDITIONS[0][0]]
+    flat, tall = min(row), max(row)
+    if row[flat][0] > cuboids.solid_angle_share(flat) and \
+            row[tall][0] < cuboids.solid_angle_share(tall):
+        return ("steeper at both ends: a die that bounces and rolls ends on its large, low "
+                "faces more often than their solid angle says")
+    return "not steeper than the solid-angle share at both ends"
+
+
+def _cuboid_section(page: cuboids.Page) -> tuple[list, str]:
+    record = cuboids.CONDITIONS[0][0]
+    labels = list(page.table)
+    rows = "\n".join(
+        f"| {r:g} | " + " | ".join(_ci(p, (lo, hi), 3) for p, lo, hi in
+                                   (page.table[label][r] for label in labels)) + " |"
+        for r in page.table[record])
+    cube = {label: page.table[label][1.0] for label in labels if 1.0 in page.table[label]}
+    symmetric = all(lo <= 1 / 3 <= hi for _, lo, hi in cube.values())
+    check = "agrees" if symmetric else "differs"
+    flat, tall = min(page.table[record]), max(page.table[record])
+    summary = [("Square-cuboid dice: P(square face) against x/y", "no measurement known to us",
+                f"{page.table[record][flat][0]:.3f} at x/y = {flat:g}, "
+                f"{page.table[record][tall][0]:.3f} at {tall:g}", "prediction"),
+               ("Square cuboid at x/y = 1 (the cube) against 1/3", "1/3 by symmetry",
+                f"{page.table[record][1.0][0]:.3f}", check)]
+    body = f"""## Square-cuboid dice (a prediction)
+
+**Real dice.** No measurement is known to us: **listed as a prediction**, to be compared
+when one is made. A square cuboid has two square faces of side y and height x along their
+normal (`Die.cuboid((y, y, x))`); every shape keeps the default die's volume and mass.
+
+**Simulator.** `{page.command}` (seed {page.seed}, {page.throws} throws per shape and
+condition; the conditions, the sizes and the figure are in [cuboids.md](cuboids.md)).
+P(lands on a square face) [95%]; the prediction of record is "{record}":
+
+| x/y | {' | '.join(labels)} |
+|---|{'---|' * len(labels)}
+{rows}
+
+Against the naive share of directions the two square faces cover from the centre
+(`cuboids.solid_angle_share`, not a fit): {cuboids.solid_angle_share(flat):.3f} at x/y =
+{flat:g} and {cuboids.solid_angle_share(tall):.3f} at {tall:g}, where the model predicts
+{page.table[record][flat][0]:.3f} and {page.table[record][tall][0]:.3f}: {_steepness(page)}.
+
+**Verdict: prediction.** The one check it carries: at x/y = 1 the cuboid is the cube, whose
+square faces must come up 1/3 of the time by symmetry; 1/3 is inside the interval in
+{sum(lo <= 1 / 3 <= hi for _, lo, hi in cube.values())} of {len(cube)} conditions:
+**{check}**.
+"""
+    return summary, body

@@ -1,0 +1,742 @@
+"""Weldon's dice (1894): twelve pip-drilled dice, the chance of a 5 or a 6.
+
+``run(out, quick, throws)`` writes ``out/weldon.md``, its numbers ``out/weldon.json`` (read by
+the validation page) and ``out/figures/weldon.png``.
+
+Weldon threw 12 dice 26,306 times and counted the dice showing a 5 or a 6: 106,602 of
+315,672, p = 0.3377 against 1/3 (Pearson 1900; Kemp & Kemp 1991). The simulator repeats it
+with pip-drilled dice (``Die.standard("d6", pips=...)``) tipped from a cup onto the default
+wooden table, in two ways:
+
+- **together** (:func:`throw_together`, :func:`dice_env.group.simulate_group`): the twelve
+  dice of one cup fall and collide; the distribution of successes per throw and any
+  dependence between the dice of one throw, at the few hundred throws affordable here;
+- **alone** (:func:`throw_alone`, :func:`dice_env.simulate`): every die of the same cup
+  releases thrown by itself, for the per-die probability only (independent by construction),
+  tens of times cheaper; also for the sensitivity to the pips (:data:`VARIANTS`).
+
+Nothing is fitted to Weldon's numbers. The comparison maths (:class:`Estimate`,
+:func:`compare`, :func:`chi2_fit`, :func:`chi2_homogeneity`, :func:`power`) is plain
+frequentist statistics: 95% intervals, chi-square tests with tails pooled until every
+expected count is at least :data:`MIN_EXPECTED`.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import time
+from dataclasses import asdict, dataclass, fields
+from datetime import date
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt
+import numba
+import numpy as np
+from scipy import optimize, stats
+
+from dice_env.die import Die
+from dice_env.group import GroupState, simulate_group
+from dice_env.pips import Pips
+from dice_env.scene import Scene
+from dice_env.simulate import State
+from dice_env.studies.fairness import random_directions, random_orientations
+from dice_env.studies.paper_figures import DOCS, progress, save_figure
+from dice_env.studies.shapes import Faces, throw_faces
+
+# Weldon's data (Pearson 1900, Kemp & Kemp 1991): throws of twelve dice with 0..12 dice
+# showing a 5 or a 6.
+WELDON_COUNTS = (185, 1149, 3265, 5475, 6114, 5194, 3067, 1331, 403, 105, 14, 4, 0)
+DICE = 12
+SUCCESS = (5, 6)
+FAIR = 1 / 3
+Z95 = 1.959964
+MIN_EXPECTED = 5.0  # chi-square cells are pooled until each expects at least this many
+SIGNIFICANCE = 0.05
+RESOLVING_POWER = 0.8  # a test "resolves" a difference it detects with this probability
+# Twelve-dice throws of the full and quick runs: thrown together, and (in cups of 12) alone
+# for the reference die and for each other variant.
+FULL = {"together": 240, "alone": 4500, "variant": 1200}
+QUICK = {"together": 3, "alone": 12, "variant": 6}
+BATCH_TOGETHER = 6  # twelve-dice throws per kernel call (the kernel runs them in parallel)
+T_MAX_TOGETHER = 2.0  # s of simulated time; a throw not decided by then is not counted
+SEED = 2026
+
+
+# ---- comparison maths --------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class Estimate:
+    """A probability ``p`` with its standard error ``se`` from ``n`` trials."""
+
+    p: float
+    se: float
+    n: int
+
+    @classmethod
+    def binomial(cls, successes: int, trials: int) -> Estimate:
+        """``successes`` of ``trials`` independent trials: ``se = sqrt(p (1 - p) / n)``."""
+        if not isinstance(trials, (int, np.integer)) or trials < 1:
+            raise ValueError(f"trials must be an int >= 1, got {trials!r}")
+        if not 0 <= successes <= trials:
+            raise ValueError(f"successes must be in [0, trials={trials}], got {successes!r}")
+        p = successes / trials
+        return cls(p, math.sqrt(p * (1 - p) / trials), int(trials))
+
+    @classmethod
+    def per_throw(cls, successes: np.ndarray, dice: int = DICE) -> Estimate:
+        """The share of successes among ``dice`` dice per throw, the throw as the unit.
+
+        ``successes`` (T,) per throw; the error is the spread between throws,
+        ``sd / (dice sqrt(T))``, which holds whether or not the dice of a throw depend on
+        each other.
+        """
+        successes = np.asarray(successes, dtype=np.float64)
+        if successes.ndim != 1 or successes.size < 2:
+            raise ValueError(f"successes must be a 1-d array of >= 2 throws, got shape "
+                             f"{successes.shape}")
+        se = float(successes.std(ddof=1)) / (dice * math.sqrt(successes.size))
+        return cls(float(successes.mean()) / dice, se, int(successes.size * dice))
+
+    @property
+    def interval(self) -> tuple[float, float]:
+        """The 95% interval ``p ± 1.96 se``."""
+        return self.p - Z95 * self.se, self.p + Z95 * self.se
+
+
+WELDON = Estimate.binomial(sum(k * c for k, c in enumerate(WELDON_COUNTS)),
+                           DICE * sum(WELDON_COUNTS))
+EFFECT = WELDON.p - FAIR  # Weldon's excess over a fair die
+
+
+@dataclass(frozen=True)
+class Comparison:
+    """``a - b`` with its 95% half-width and the verdict of :func:`compare`."""
+
+    difference: float
+    half_width: float
+    verdict: str
+
+
+def compare(a: Estimate, b: Estimate, effect: float = EFFECT) -> Comparison:
+    """Compare two independent estimates against the size of the ``effect`` looked for.
+
+    Verdict: "differs" when ``|a - b|`` exceeds the combined 95% half-width
+    ``1.96 sqrt(se_a^2 + se_b^2)``; else "not resolvable at this sample" when that half-width
+    exceeds ``|effect|`` (the sample could not tell ``b`` from ``b - effect``); else "agrees".
+    """
+    half = Z95 * math.hypot(a.se, b.se)
+    difference = a.p - b.p
+    if abs(difference) > half:
+        verdict = "differs"
+    elif half > abs(effect):
+        verdict = "not resolvable at this sample"
+    else:
+        verdict = "agrees"
+    return Comparison(difference, half, verdict)
+
+
+def trials_to_resolve(p: float, reference: Estimate, effect: float = EFFECT) -> int | None:
+    """Trials needed at probability ``p`` to resolve ``effect`` against ``reference``.
+
+    The fewest whose 95% half-width, combined with ``reference``'s, is below ``|effect|``;
+    None when the reference's own error is too wide for any.
+    """
+    room = (abs(effect) / Z95) ** 2 - reference.se**2
+    return math.ceil(p * (1 - p) / room) if room > 0 else None
+
+
+def binomial_probabilities(p: float, dice: int = DICE) -> np.ndarray:
+    """P(k successes of ``dice``) for k = 0..dice."""
+    return stats.binom.pmf(np.arange(dice + 1), dice, p)
+
+
+def pooled_cells(expected: np.ndarray, minimum: float = MIN_EXPECTED) -> list[range]:
+    """Groups of neighbouring cells with at least ``minimum`` expected each.
+
+    The end group with the smaller expectation is merged into its neighbour until every group
+    reaches ``minimum`` or one group is left (the tails of a binomial pool first).
+    """
+    expected = np.asarray(expected, dtype=np.float64)
+    groups = [range(k, k + 1) for k in range(expected.size)]
+    while len(groups) > 1:
+        sums = [expected[g.start:g.stop].sum() for g in groups]
+        if min(sums) >= minimum:
+            break
+        if sums[0] <= sums[-1]:
+            groups[:2] = [range(groups[0].start, groups[1].stop)]
+        else:
+            groups[-2:] = [range(groups[-2].start, groups[-1].stop)]
+    return groups
+
+
+@dataclass(frozen=True)
+class Chi2:
+    """A chi-square test: statistic, degrees of freedom, p-value and the pooled cells."""
+
+    statistic: float
+    dof: int
+    p_value: float
+    cells: tuple[tuple[int, int], ...]  # (first, last) success counts of each cell
+
+    @property
+    def testable(self) -> bool:
+        """At least two cells, so one degree of freedom or more."""
+        return self.dof >= 1
+
+
+def _pool(counts: np.ndarray, groups: list[range]) -> np.ndarray:
+    return np.array([counts[..., g.start:g.stop].sum(axis=-1) for g in groups]).T
+
+
+def _chi2(observed: np.ndarray, expected: np.ndarray, groups: list[range], dof: int) -> Chi2:
+    statistic = float(((observed - expected) ** 2 / expected).sum()) if dof >= 1 else 0.0
+    p_value = float(stats.chi2.sf(statistic, dof)) if dof >= 1 else 1.0
+    return Chi2(statistic, dof, p_value, tuple((g.start, g.stop - 1) for g in groups))
+
+
+def chi2_fit(counts: np.ndarray, probabilities: np.ndarray,
+             minimum: float = MIN_EXPECTED) -> Chi2:
+    """Goodness of fit of ``counts`` (per number of successes) to ``probabilities``.
+
+    Nothing is estimated from the counts: ``cells - 1`` degrees of freedom.
+    """
+    counts = np.asarray(counts, dtype=np.float64)
+    expected = counts.sum() * np.asarray(probabilities, dtype=np.float64)
+    groups = pooled_cells(expected, minimum)
+    return _chi2(_pool(counts, groups), _pool(expected, groups), groups, len(groups) - 1)
+
+
+def chi2_homogeneity(a: np.ndarray, b: np.ndarray, minimum: float = MIN_EXPECTED) -> Chi2:
+    """Test that two samples of counts (per number of successes) share one distribution.
+
+    The 2 × cells contingency table, pooled until both samples expect ``minimum`` per cell;
+    ``cells - 1`` degrees of freedom.
+    """
+    table = np.array([a, b], dtype=np.float64)
+    share = table.sum(axis=0) / table.sum()
+    groups = pooled_cells(table.sum(axis=1).min() * share, minimum)
+    pooled = _pool(table, groups).T
+    expected = np.outer(pooled.sum(axis=1), pooled.sum(axis=0)) / pooled.sum()
+    return _chi2(pooled, expected, groups, len(groups) - 1)
+
+
+def _effect_size(truth: np.ndarray, null: np.ndarray, test: Chi2) -> float:
+    """Noncentrality per throw on ``test``'s cells: ``sum((truth - null)^2 / null)``."""
+    truth_c = np.array([np.sum(truth[a:b + 1]) for a, b in test.cells])
+    null_c = np.array([np.sum(null[a:b + 1]) for a, b in test.cells])
+    return float(np.sum((truth_c - null_c) ** 2 / null_c))
+
+
+def power(throws: int, truth: np.ndarray, null: np.ndarray, test: Chi2,
+          alpha: float = SIGNIFICANCE) -> float:
+    """Power of ``test``'s chi-square, on ``throws`` throws, against ``truth`` when ``null``.
+
+    Non-central chi-square on ``test``'s cells, noncentrality ``throws`` times
+    :func:`_effect_size`; 0 for a test with no degree of freedom.
+    """
+    if not test.testable:
+        return 0.0
+    critical = stats.chi2.isf(alpha, test.dof)
+    return float(stats.ncx2.sf(critical, test.dof, throws * _effect_size(truth, null, test)))
+
+
+def throws_to_resolve(truth: np.ndarray, null: np.ndarray, test: Chi2,
+                      target: float = RESOLVING_POWER, alpha: float = SIGNIFICANCE
+                      ) -> int | None:
+    """Throws needed for ``test``'s cells to tell ``truth`` from ``null``.
+
+    The fewest at which they detect it with probability ``target``; None when they cannot
+    (no degree of freedom, or no difference on those cells).
+    """
+    size = _effect_size(truth, null, test) if test.testable else 0.0
+    if size <= 0:
+        return None
+    critical = stats.chi2.isf(alpha, test.dof)
+    high = 1.0
+    while stats.ncx2.sf(critical, test.dof, high) < target:
+        high *= 2
+    needed = optimize.brentq(lambda lam: stats.ncx2.sf(critical, test.dof, lam) - target,
+                             0.0, high)
+    return math.ceil(needed / size)
+
+
+def distribution_verdict(test: Chi2, power_against_fair: float) -> str:
+    """The verdict of a test of a simulated distribution against Weldon's.
+
+    "differs" when the test rejects at :data:`SIGNIFICANCE`; else "not resolvable at this
+    sample" when the sample would detect Weldon's distribution against a fair die's with
+    probability below :data:`RESOLVING_POWER` (or cannot be tested); else "agrees".
+    """
+    if test.testable and test.p_value < SIGNIFICANCE:
+        return "differs"
+    if not test.testable or power_against_fair < RESOLVING_POWER:
+        return "not resolvable at this sample"
+    return "agrees"
+
+
+# ---- the throws ----------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class Cup:
+    """A cup of twelve dice tipped onto the table; lengths in units of the die's edge.
+
+    The dice sit side by side in a 4 × 3 block (:data:`BLOCK`), centres ``spacing`` apart
+    (more than the cube's diagonal, sqrt 3, so apart in any orientation) with a uniform
+    ``jitter``, ``height`` above the height at which a die in any orientation clears the
+    table (a single layer: dice dropped in layers pile onto each other and many end leaning).
+    The cup moves along a uniform horizontal direction at ``speed`` (edges/s); each die adds
+    its own velocity (normal, ``scatter`` edges/s per component), spins at ``spin`` (rad/s)
+    about a uniform axis and has a uniform orientation. Ranges are drawn uniformly.
+    """
+
+    height: tuple[float, float] = (3.0, 6.0)
+    speed: tuple[float, float] = (10.0, 40.0)
+    scatter: float = 5.0
+    spin: tuple[float, float] = (5.0, 40.0)
+    spacing: float = 1.8
+    jitter: float = 0.03
+
+
+CUP = Cup()
+BLOCK = (4, 3, 1)
+
+
+def cup_throws(scene: Scene, n: int, rng: np.random.Generator, cup: Cup = CUP) -> list[State]:
+    """``n`` cups of twelve dice (the scene's die): one :class:`State` of ``n`` per die."""
+    a = scene.die.size
+    nx, ny, nz = BLOCK
+    slots = np.array([(i - (nx - 1) / 2, j - (ny - 1) / 2, k)
+                      for k in range(nz) for j in range(ny) for i in range(nx)])
+    lowest = math.sqrt(3) / 2 + rng.uniform(*cup.height, n)
+    heading = rng.uniform(0.0, 2 * math.pi, n)
+    carried = np.stack([np.cos(heading), np.sin(heading), np.zeros(n)], axis=1)
+    carried *= rng.uniform(*cup.speed, n)[:, None]
+    states = []
+    for slot in slots:
+        centre = slot * cup.spacing + rng.uniform(-cup.jitter, cup.jitter, (n, 3))
+        centre[:, 2] += lowest
+        velocity = carried + rng.normal(0.0, cup.scatter, (n, 3))
+        spin = random_directions(rng, n) * rng.uniform(*cup.spin, n)[:, None]
+        states.append(State.release(scene, centre * a, velocity * a, spin,
+                                    random_orientations(rng, n)))
+    return states
+
+
+@dataclass
+class Together:
+    """Twelve-dice throws thrown together: successes per counted throw and what was left out.
+
+    A throw is counted when it ended decided, every die read (none leaning on another), none
+    unstable or sunk. ``faces`` (F, 6): face counts over the counted throws' dice.
+    """
+
+    successes: np.ndarray
+    faces: np.ndarray
+    thrown: int
+    leaning: int
+    undecided: int
+    seconds: float
+
+    @property
+    def counts(self) -> np.ndarray:
+        """Counted throws with 0..12 successes."""
+        return np.bincount(self.successes, minlength=DICE + 1)
+
+
+def successes_of(faces: np.ndarray) -> np.ndarray:
+    """Dice showing a 5 or a 6 in each row of ``faces`` (T, N)."""
+    return np.isin(faces, SUCCESS).sum(axis=1)
+
+
+def throw_together(scene: Scene, cups: list[State], bar: object = None,
+                   batch: int = BATCH_TOGETHER) -> Together:
+    """Throw each cup's twelve dice together (``stop_when_decided``) on ``scene``'s table."""
+    dice = (scene.die,) * len(cups)
+    n = cups[0].batch_size
+    kept, leaning, undecided = [], 0, 0
+    start_time = time.perf_counter()
+    for start in range(0, n, batch):
+        group = GroupState.of([State(*(getattr(s, f.name)[start:start + batch]
+                                       for f in fields(State))) for s in cups])
+        res = simulate_group(scene, dice, group, stop_when_decided=True, t_max=T_MAX_TOGETHER)
+        clean = ~res.unstable & ~res.sunk.any(axis=1)
+        read = res.read.all(axis=1)
+        ok = res.decided & read & clean
+        leaning += int(np.sum(~read & clean))
+        undecided += int(np.sum(~res.decided & read & clean))
+        kept.append(res.face[ok])
+        if bar is not None:
+            bar.update(group.batch_size * len(dice))
+    faces = np.concatenate(kept) if kept else np.zeros((0, len(dice)), np.int64)
+    return Together(successes_of(faces), np.bincount(faces.ravel(), minlength=7)[1:], n,
+                    leaning, undecided, time.perf_counter() - start_time)
+
+
+def throw_alone(scene: Scene, cups: list[State], bar: object = None) -> Faces:
+    """Throw every die of ``cups`` alone (``stop_when_decided``); count the faces."""
+    state = State(*(np.concatenate([getattr(s, f.name) for s in cups]) for f in fields(State)))
+    return throw_faces(scene, state, bar)
+
+
+def excess_per_offset(offsets: np.ndarray, excess: np.ndarray, se: np.ndarray
+                      ) -> tuple[float, float]:
+    """Slope of p(5 or 6) - 1/3 against the centre of mass's offset, through the origin.
+
+    Weighted least squares (weights ``1 / se^2``) of ``excess`` on ``offsets`` (µm) over
+    dice whose centre of mass moves along one direction (the pips' 3 : 1 : 5), so that a
+    single number measures the offset; returns the slope (per µm) and its standard error.
+    A die with its centre at the middle (offset 0) has no excess by symmetry and adds
+    nothing.
+    """
+    x, y, s = (np.asarray(v, dtype=np.float64) for v in (offsets, excess, se))
+    weights = 1.0 / s**2
+    information = float(np.sum(weights * x * x))
+    if information <= 0:
+        raise ValueError("offsets must hold at least one die with its centre off the middle")
+    return float(np.sum(weights * x * y)) / information, 1.0 / math.sqrt(information)
+
+
+def offset_for_weldon(slope: float, se: float) -> tuple[float, float, float]:
+    """The offset (µm) whose excess the slope puts at Weldon's, with a 95% range.
+
+    The range is Weldon's excess over the slope's 95% interval; its upper end is inf when
+    that interval reaches zero (no excess cannot be ruled out).
+    """
+    low_slope, high_slope = slope - Z95 * se, slope + Z95 * se
+    centre = EFFECT / slope if slope > 0 else math.inf
+    return (centre, EFFECT / high_slope if high_slope > 0 else math.inf,
+            EFFECT / low_slope if low_slope > 0 else math.inf)
+
+
+def success_estimate(faces: Faces) -> Estimate:
+    """P(5 or 6) of single throws."""
+    return Estimate.binomial(int(sum(faces.counts[f - 1] for f in SUCCESS)), faces.ended)
+
+
+# (key, label, the die's pips); the first is the die thrown together.
+VARIANTS = (
+    ("drilled16", "16 mm die, drilled pips 3 mm wide, 1 mm deep (`drilled16`)", "drilled16"),
+    ("hemispheres", "16 mm die, hemispherical pips 3 mm wide (1.5 mm deep)",
+     Pips(radius=1.5e-3, depth=1.5e-3)),
+    ("large", "16 mm die, hemispherical pips 4 mm wide (2 mm deep)",
+     Pips(radius=2.0e-3, depth=2.0e-3)),
+    ("casino19", "19 mm casino die, pips filled flush (`casino19`)", "casino19"),
+)
+
+
+def variant_die(pips: Pips | str) -> Die:
+    """The d6 with ``pips`` (a preset name or :class:`Pips`)."""
+    return Die.standard("d6", pips=pips)
+
+
+# ---- the study -------------------------------------------------------------------------------
+
+def run(out: Path = DOCS, quick: bool = False, seed: int = SEED,
+        throws: int | None = None) -> dict[str, float]:
+    """Regenerate ``weldon.md``, ``weldon.json`` and ``figures/weldon.png`` under ``out``.
+
+    ``throws``: the twelve-dice throws thrown together (default :data:`FULL`'s, or
+    :data:`QUICK`'s with ``quick``); the single-die samples keep their sizes.
+    """
+    sizes = dict(QUICK if quick else FULL)
+    if throws is not None:
+        if not isinstance(throws, (int, np.integer)) or isinstance(throws, bool) or throws < 2:
+            raise ValueError(f"throws must be an int >= 2, got {throws!r}")
+        sizes["together"] = int(throws)
+    command = "python -m dice_env.studies weldon" + (" --quick" if quick else "") + (
+        f" --throws {throws}" if throws is not None else "")
+    rng = np.random.default_rng(seed)
+    total = DICE * (sizes["together"] + sizes["alone"] + (len(VARIANTS) - 1) * sizes["variant"])
+    bar = progress(total, "weldon die-throws")
+    bar.unit = "die"
+    scene = Scene(die=variant_die(VARIANTS[0][2]))
+    together = throw_together(scene, cup_throws(scene, sizes["together"], rng), bar)
+    alone = {}
+    alone_seconds = time.perf_counter()
+    for key, _, pips in VARIANTS:
+        die_scene = Scene(die=variant_die(pips))
+        n = sizes["alone" if key == VARIANTS[0][0] else "variant"]
+        alone[key] = throw_alone(die_scene, cup_throws(die_scene, n, rng), bar)
+    alone_seconds = time.perf_counter() - alone_seconds
+    bar.close()
+    numbers = summarise(together, alone)
+    numbers["meta"] = {"command": command, "seed": seed, "date": date.today().isoformat(),
+                       "threads": numba.get_num_threads(), "sizes": sizes,
+                       "seconds_together": together.seconds, "seconds_alone": alone_seconds,
+                       "quick": quick}
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "weldon.json").write_text(json.dumps(numbers, indent=1) + "\n")
+    _plot(numbers, out / "figures" / "weldon.png")
+    (out / "weldon.md").write_text(markdown(numbers))
+    return {"together_p": numbers["together"]["p"], "alone_p": numbers["alone"]["drilled16"]["p"],
+            "together_throws": float(together.successes.size),
+            "large_p": numbers["alone"]["large"]["p"]}
+
+
+def summarise(together: Together, alone: dict[str, Faces]) -> dict:
+    """Every number of the page (JSON-ready): estimates, comparisons, tests, verdicts."""
+    weldon_counts = np.array(WELDON_COUNTS)
+    fair = binomial_probabilities(FAIR)
+    weldon_share = weldon_counts / weldon_counts.sum()
+    out = {"weldon": {"counts": list(WELDON_COUNTS), **asdict(WELDON),
+                      "interval": WELDON.interval, "effect": EFFECT,
+                      "vs_fair": asdict(chi2_fit(weldon_counts, fair)),
+                      "vs_own_p": asdict(chi2_fit(weldon_counts, binomial_probabilities(
+                          WELDON.p)))}}
+    t = together
+    counted = t.successes.size
+    entry = {"thrown": t.thrown, "counted": counted, "leaning": t.leaning,
+             "undecided": t.undecided, "seconds": t.seconds, "counts": t.counts.tolist(),
+             "faces": t.faces.tolist()}
+    if counted >= 2:
+        est = Estimate.per_throw(t.successes)
+        vs_weldon = chi2_homogeneity(t.counts, weldon_counts)
+        against_fair = power(counted, weldon_share, fair, vs_weldon)
+        variance = float(t.successes.var(ddof=1))
+        entry.update({
+            **asdict(est), "interval": est.interval,
+            "vs_weldon_p": asdict(compare(est, WELDON)),
+            "vs_fair_p": asdict(compare(est, Estimate(FAIR, 0.0, 0))),
+            "vs_weldon": asdict(vs_weldon), "power_against_fair": against_fair,
+            "throws_to_resolve": throws_to_resolve(weldon_share, fair, vs_weldon),
+            "vs_fair": asdict(chi2_fit(t.counts, fair)),
+            "distribution_verdict": distribution_verdict(vs_weldon, against_fair),
+            "dispersion": variance / (DICE * est.p * (1 - est.p)) if 0 < est.p < 1 else 1.0,
+            "seconds_per_throw": t.seconds / t.thrown})
+    out["together"] = entry
+    out["alone"] = {}
+    for key, label, pips in VARIANTS:
+        faces = alone[key]
+        est = success_estimate(faces)
+        die = variant_die(pips)
+        out["alone"][key] = {
+            "label": label, **asdict(est), "interval": est.interval,
+            "thrown": faces.ended + faces.undecided, "undecided": faces.undecided,
+            "counts": faces.counts.tolist(), "com_um": (np.asarray(die.com) * 1e6).tolist(),
+            "edge_mm": die.size * 1e3, "mass_g": die.mass * 1e3,
+            "vs_weldon_p": asdict(compare(est, WELDON)),
+            "vs_fair_p": asdict(compare(est, Estimate(FAIR, 0.0, 0))),
+            "trials_to_resolve": trials_to_resolve(est.p, WELDON)}
+    return out
+
+
+def _verdict(verdict: str) -> str:
+    return f"**{verdict}**"
+
+
+def _interval(entry: dict, digits: int = 4) -> str:
+    lo, hi = entry["interval"]
+    return f"{entry['p']:.{digits}f} [{lo:.{digits}f}, {hi:.{digits}f}]"
+
+
+def _cells(test: dict) -> str:
+    return ", ".join(f"{a}" if a == b else f"{a}–{b}" for a, b in test["cells"])
+
+
+def _test(test: dict) -> str:
+    return (f"chi2 = {test['statistic']:.2f}, {test['dof']} d.f., p = {test['p_value']:.3g} "
+            f"(cells {_cells(test)})")
+
+
+def markdown(n: dict) -> str:
+    """The page ``weldon.md`` from :func:`summarise`'s numbers (with their ``meta``)."""
+    w, t, meta = n["weldon"], n["together"], n["meta"]
+    sizes = meta["sizes"]
+    ref = n["alone"][VARIANTS[0][0]]
+    cup = CUP
+    rows = "\n".join(
+        f"| {k} | {w['counts'][k]} | {w['counts'][k] / sum(w['counts']):.4f} | "
+        f"{binomial_probabilities(FAIR)[k]:.4f} | {t['counts'][k]} |"
+        for k in range(DICE + 1))
+    variant_rows = "\n".join(
+        f"| {v['label']} | {v['edge_mm']:.2f} | {v['mass_g']:.3f} | "
+        f"{', '.join(f'{c:.1f}' for c in v['com_um'])} | {v['n']} | {_interval(v)} | "
+        f"{v['p'] - FAIR:+.4f} | {_verdict(v['vs_fair_p']['verdict'])} | "
+        f"{_verdict(v['vs_weldon_p']['verdict'])} |"
+        for v in n["alone"].values())
+    face_rows = "\n".join(
+        f"| {v['label']} | " + " | ".join(
+            f"{c / sum(v['counts']):.4f}" for c in v["counts"]) + " |"
+        for key, v in n["alone"].items() if key in ("drilled16", "casino19"))
+    return f"""# Weldon's dice: twelve pip-drilled dice, the chance of a 5 or a 6
+
+Generated by `{meta['command']}` (module `dice_env/studies/weldon.py`, seed {meta['seed']},
+{meta['date']}, {meta['threads']} thread(s)); its numbers are in `weldon.json`, which the
+validation page (`validation.md`) reads. **Nothing is fitted to Weldon's numbers.**
+
+## The experiment
+
+W. F. R. Weldon threw 12 dice 26,306 times and counted, each time, the dice showing a 5 or a
+6 (K. Pearson, Phil. Mag. 50, 157 (1900); A. W. Kemp & C. D. Kemp, The American
+Statistician 45, 216 (1991)): {w['n']:,} die-throws, p(5 or 6) = {_interval(w)}
+(standard error {w['se']:.4f}), {w['effect']:+.4f} above 1/3. His distribution of successes
+against the binomial at 1/3: {_test(w['vs_fair'])}; against the binomial at his own p:
+{_test(w['vs_own_p'])}. The usual explanation is the drilled pips: the six face is the
+lightest, the one the heaviest, so the centre of mass sits toward the 1-2-3 corner
+(`docs/pips.md`) and the 4, 5 and 6 come up a little more often.
+
+## The simulation
+
+The sources we have do not say how the dice were thrown. Twelve dice are thrown at once from
+a cup (one hand does not hold twelve), poured out side by side: the dice leave in a
+{BLOCK[0]} × {BLOCK[1]} block, centres {cup.spacing:g} edges apart,
+{cup.height[0]:g}–{cup.height[1]:g} edges ({cup.height[0] * 1.6:g}–{cup.height[1] * 1.6:g} cm
+for the 16 mm die) above clearing the table; the cup moves at
+{cup.speed[0]:g}–{cup.speed[1]:g} edges/s in a uniform horizontal direction, each die adds
+its own velocity (normal, {cup.scatter:g} edges/s per component),
+spins at {cup.spin[0]:g}–{cup.spin[1]:g} rad/s about a uniform axis and has a uniform
+orientation. The table is the default wooden one (`Scene()`, no walls). Each throw runs until
+every face is decided (`stop_when_decided`).
+
+- **(a) Together** (`dice_env.group.simulate_group`): the twelve `drilled16` dice of each
+  cup fall and collide. A throw counts when every die is decided and read within
+  {T_MAX_TOGETHER:g} s; a die leaning on another ("cocked") is not read, and its throw is
+  left out (Weldon's rule for such dice is not recorded). {t['thrown']} throws:
+  {t['counted']} counted, {t['leaning']} with a leaning die, {t['undecided']} not decided
+  in time; {t.get('seconds_per_throw', 0.0):.2f} s per throw, so Weldon's 26,306 throws would
+  take about {t.get('seconds_per_throw', 0.0) * 26306 / 3600:.1f} h here. It can show the
+  distribution of successes and whether the dice of one throw depend on each other (their
+  collisions); at this sample it cannot resolve p to Weldon's precision.
+- **(b) Alone** (`dice_env.simulate`): every die of further cups (same hand) thrown by
+  itself, {DICE} × {sizes['alone']} = {ref['n'] + ref['undecided']:,} die-throws of the
+  `drilled16` die and {DICE} × {sizes['variant']} of each other die. Independent by
+  construction, so it gives the per-die probability only, at a fraction of the cost.
+
+## p(5 or 6)
+
+| | die-throws | p(5 or 6) [95%] | − Weldon | verdict vs Weldon | verdict vs 1/3 |
+|---|---|---|---|---|---|
+{_p_rows(n)}
+
+(a)'s error is the spread of successes between throws (valid if the dice of a throw depend on
+each other); (b)'s and Weldon's are binomial. Verdicts: "differs" when the difference exceeds
+the combined 95% half-width; "not resolvable at this sample" when it does not but that
+half-width exceeds Weldon's excess over 1/3 ({EFFECT:.4f}); "agrees" otherwise. To resolve
+{EFFECT:.4f} against Weldon's own error, the `drilled16` die needs about
+**{ref['trials_to_resolve'] or 0:,} die-throws** alone (95% half-width of the difference
+below {EFFECT:.4f}).
+
+## The distribution of successes per throw
+
+| successes | Weldon | share | binomial at 1/3 | (a) together |
+|---|---|---|---|---|
+{rows}
+
+{_distribution_text(t)}
+
+## Sensitivity to the pips (single throws, (b))
+
+Centre of mass from the geometric centre (µm, body axes: +x is face 2, +y face 3, +z face 1).
+The casino die's paint weighs what the drilled cellulose weighed, so it is the uniform cube:
+1/3 exactly by symmetry, a check of the throws.
+
+| die | edge (mm) | mass (g) | com x, y, z (µm) | die-throws | p(5 or 6) [95%] | − 1/3 \
+| vs 1/3 | vs Weldon |
+|---|---|---|---|---|---|---|---|---|
+{variant_rows}
+
+{_sensitivity_text(n)}
+
+Per-face probabilities predicted (single throws; faces 1–6):
+
+| die | 1 | 2 | 3 | 4 | 5 | 6 |
+|---|---|---|---|---|---|---|
+{face_rows}
+
+![weldon](figures/weldon.png)
+"""
+
+
+def _p_rows(n: dict) -> str:
+    w, t, ref = n["weldon"], n["together"], n["alone"][VARIANTS[0][0]]
+    rows = [f"| Weldon (1894) | {w['n']:,} | {_interval(w)} | | | |"]
+    for label, entry in (("(a) together", t), ("(b) alone", ref)):
+        if "p" not in entry:
+            rows.append(f"| {label}, `drilled16` | {entry['counted'] * DICE} | too few throws "
+                        "| | | |")
+            continue
+        rows.append(f"| {label}, `drilled16` | {entry['n']:,} | {_interval(entry)} | "
+                    f"{entry['vs_weldon_p']['difference']:+.4f} | "
+                    f"{_verdict(entry['vs_weldon_p']['verdict'])} | "
+                    f"{_verdict(entry['vs_fair_p']['verdict'])} |")
+    return "\n".join(rows)
+
+
+def sensitivity(n: dict) -> dict[str, float]:
+    """The slope of :func:`excess_per_offset` over the pip-drilled dice, and Weldon's offset.
+
+    From the numbers of :func:`summarise` (every variant but the casino die, whose centre is
+    at the middle): ``slope`` (per µm), ``se``, ``offset`` (µm) and its 95% ``low``, ``high``.
+    """
+    drilled = [v for key, v in n["alone"].items() if key != "casino19"]
+    slope, se = excess_per_offset(np.array([math.hypot(*v["com_um"]) for v in drilled]),
+                                  np.array([v["p"] - FAIR for v in drilled]),
+                                  np.array([v["se"] for v in drilled]))
+    offset, low, high = offset_for_weldon(slope, se)
+    return {"slope": slope, "se": se, "offset": offset, "low": low, "high": high}
+
+
+def _sensitivity_text(n: dict) -> str:
+    s = sensitivity(n)
+    ref = n["alone"][VARIANTS[0][0]]
+    r = math.hypot(*ref["com_um"])
+    high = "no upper bound" if math.isinf(s["high"]) else f"{s['high']:.0f} µm"
+    return (
+        f"The pip-drilled dice move their centre of mass along one direction (3 : 1 : 5), so one "
+        f"number, its offset, measures them. A straight line through the origin (weighted "
+        f"least squares over the three drilled dice, `excess_per_offset`) gives "
+        f"{1e3 * s['slope']:+.3f} ± {1e3 * s['se']:.3f} (10⁻³ per µm; 95%: "
+        f"± {1e3 * Z95 * s['se']:.3f}): {s['slope'] * r:+.4f} for `drilled16` "
+        f"({r:.1f} µm). Weldon's excess of {EFFECT:.4f} would need an offset of about "
+        f"{s['offset']:.0f} µm (95%: {s['low']:.0f} µm to {high}) on this throw, "
+        f"{s['offset'] / r:.1f} times the `drilled16` die's. A reading of the model at Weldon's "
+        f"excess, used in no verdict: his dice's size and pips are not recorded.")
+
+
+def _distribution_text(t: dict) -> str:
+    if "p" not in t:
+        return "Too few counted throws for the tests."
+    needed = (f"{RESOLVING_POWER:g} needs about {t['throws_to_resolve']:,} throws"
+              if t["throws_to_resolve"] else "its cells cannot tell the two apart")
+    return (
+        f"- (a) against Weldon's distribution (2 × cells contingency table): "
+        f"{_test(t['vs_weldon'])}: {_verdict(t['distribution_verdict'])}. At "
+        f"{t['counted']} throws this test detects Weldon's distribution against the "
+        f"binomial at 1/3 with probability {t['power_against_fair']:.2f}; {needed}.\n"
+        f"- (a) against the binomial at 1/3: {_test(t['vs_fair'])}.\n"
+        f"- Dependence between the dice of one throw: the variance of successes per throw is "
+        f"{t['dispersion']:.2f} times the binomial's (1 for independent dice; its standard "
+        f"error is about {math.sqrt(2 / (t['counted'] - 1)):.2f}).")
+
+
+def _plot(n: dict, path: Path) -> None:
+    fig, axes = plt.subplots(1, 2, figsize=(12, 4.5), layout="constrained")
+    k = np.arange(DICE + 1)
+    weldon = np.array(n["weldon"]["counts"], float)
+    axes[0].bar(k - 0.2, weldon / weldon.sum(), 0.4, label="Weldon (26,306 throws)")
+    together = np.array(n["together"]["counts"], float)
+    if together.sum():
+        axes[0].bar(k + 0.2, together / together.sum(), 0.4,
+                    label=f"(a) together ({int(together.sum())} throws)")
+    axes[0].plot(k, binomial_probabilities(FAIR), "k.--", lw=1, label="binomial at 1/3")
+    axes[0].set_xlabel("dice showing 5 or 6 (of 12)")
+    axes[0].set_ylabel("share of throws")
+    axes[0].legend(fontsize=8)
+    rows = [("Weldon", n["weldon"])]
+    if "p" in n["together"]:
+        rows.append(("(a) together, drilled16", n["together"]))
+    rows += [(f"(b) alone, {key}", v) for key, v in n["alone"].items()]
+    for y, (label, entry) in enumerate(rows):
+        lo, hi = entry["interval"]
+        axes[1].errorbar(entry["p"], y, xerr=[[entry["p"] - lo], [hi - entry["p"]]], fmt="o",
+                         color="C3" if label == "Weldon" else "C0", capsize=3)
+    axes[1].axvline(FAIR, color="k", ls=":", lw=1)
+    axes[1].axvline(n["weldon"]["p"], color="C3", ls=":", lw=1)
+    axes[1].set_yticks(range(len(rows)), [label for label, _ in rows], fontsize=8)
+    axes[1].invert_yaxis()
+    axes[1].set_xlabel("p(5 or 6), 95% interval")
+    save_figure(fig, path)
