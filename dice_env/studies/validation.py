@@ -238,7 +238,7 @@ chi2 = {wd['vs_fair']['statistic']:.1f}, {wd['vs_fair']['dof']} d.f., p =
 {wd['vs_fair']['p_value']:.2g}; against the binomial at his own p: p =
 {wd['vs_own_p']['p_value']:.2f}. The usual explanation is the drilled pips.
 
-**Simulator.** `{meta['command']}` ({meta['date']}, {meta['threads']} thread(s), seed
+**Simulator.** `{meta['command']}` ({meta['threads']} thread(s), seed
 {meta['seed']}; details in [weldon.md](weldon.md)): pip-drilled 16 mm dice (`drilled16`:
 3 mm pips, 1 mm deep, centre of mass {math.hypot(*ref['com_um']):.1f} µm toward the 1-2-3
 corner) tipped twelve at a time from a cup onto the default wooden table.
