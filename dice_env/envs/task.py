@@ -330,15 +330,26 @@ class ThrowTask:
         alignment = np.einsum("bij,bj,i->b", result.final.orientation,
                               self.scene.die.reading[targets - 1], normal)
         shaping = np.where(counts, self.shaping * alignment, 0.0)
+        outcome = {"face": result.face, "settled": result.settled, "unstable": result.unstable,
+                   "sunk": result.sunk, "max_sink": result.max_penetration}
+        return self._scored(("target_face", targets), outcome, success, fair, void, shaping,
+                            state, clipped, result)
+
+    def _scored(self, target: tuple[str, np.ndarray], outcome: dict[str, np.ndarray],
+                success: np.ndarray, fair: np.ndarray, void: np.ndarray, shaping: np.ndarray,
+                state: State | GroupState, clipped: np.ndarray,
+                result: Result | GroupResult) -> Throw:
+        """The :class:`Throw` of a scored batch: rewards, info arrays, observations.
+
+        ``target``: the info key of the targets and the targets; ``outcome``: the info arrays
+        of what landed (``face``, ``settled``, ``unstable``, ``sunk``, ``max_sink``, ...).
+        """
+        name, targets = target
         reward_success = success.astype(np.float64)
         info = {
             "is_success": success,
-            "target_face": targets,
-            "face": result.face,
-            "settled": result.settled,
-            "unstable": result.unstable,
-            "sunk": result.sunk,
-            "max_sink": result.max_penetration,
+            name: targets,
+            **outcome,
             "fair": fair,
             "void_reason": void,
             "rest_time": result.rest_time,
@@ -662,30 +673,12 @@ class GroupThrowTask(ThrowTask):
             hit, alignment = total == targets, np.zeros(len(targets))
         success = counts & hit
         shaping = np.where(counts, self.shaping * alignment, 0.0)
-        reward_success = success.astype(np.float64)
-        info = {
-            "is_success": success,
-            "target_face" if by_face else "target_sum": targets,
-            "face": result.face,
-            "total": total,
-            "leaning": leaning,
-            "settled": result.settled,
-            "unstable": result.unstable,
-            "sunk": result.sunk.any(axis=1),
-            "max_sink": result.max_penetration.max(axis=1),
-            "fair": fair,
-            "void_reason": void,
-            "rest_time": result.rest_time,
-            "impacts": result.impacts,
-            "reward_success": reward_success,
-            "reward_shaping": shaping,
-            "release_velocity": state.velocity,
-            "release_spin": state.angular_velocity,
-            "release_orientation": state.orientation,
-            "action_clipped": clipped,
-        }
-        return Throw(reward=reward_success + shaping, info=info, result=result,
-                     observation=self.observe(targets, result.final.orientation))
+        outcome = {"face": result.face, "total": total, "leaning": leaning,
+                   "settled": result.settled, "unstable": result.unstable,
+                   "sunk": result.sunk.any(axis=1),
+                   "max_sink": result.max_penetration.max(axis=1)}
+        return self._scored(("target_face" if by_face else "target_sum", targets), outcome,
+                            success, fair, void, shaping, state, clipped, result)
 
 
 def check_actions(actions: np.ndarray, dim: int = ACTION_DIM) -> np.ndarray:
