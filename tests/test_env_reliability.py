@@ -291,6 +291,10 @@ def test_fuzz_keywords_and_actions():
              *inspect.signature(build_scene).parameters} - {"physics", "scene"}
     assert set(RANGES) | set(CHOICES) | set(INTEGERS) == known | {"target_face",
                                                                    "orientation_mode"}
+    for dice in (1, 2):  # compile the one-die and the group kernels outside the time budget
+        env = gym.make("DiceThrow-v0", num_dice=dice, t_max=0.05)
+        env.reset(seed=0)
+        env.step(env.action_space.sample())
     outcomes = fuzz(np.random.default_rng(14), budget_s=6.0)
     assert outcomes["stepped"] >= 10 and outcomes["refused"] >= 10, outcomes
 
