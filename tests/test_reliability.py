@@ -185,7 +185,8 @@ def _script(body: str) -> list[str]:
 
 def test_ctrl_c_ends_a_long_run_promptly():
     code = _script("""
-        simulate(scene, throws(1, 0), t_max=0.01)  # compiled before the timed run
+        simulate(scene, throws(1, 0), t_max=0.01)  # both kernels compiled before the timed
+        simulate(scene, throws(2, 0), t_max=0.01)  # run: a compile cannot be interrupted
         print("running", flush=True)
         try:
             simulate(scene, throws(2, 0), t_max=9000.0, stop_at_rest=False)
