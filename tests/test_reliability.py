@@ -195,11 +195,14 @@ def test_ctrl_c_ends_a_long_run_promptly():
             sys.exit(3)
     """)
     proc = subprocess.Popen(code, stdout=subprocess.PIPE, text=True)
-    assert proc.stdout.readline().strip() == "running"
-    time.sleep(1.0)
-    sent = time.monotonic()
-    proc.send_signal(signal.SIGINT)
-    out, _ = proc.communicate(timeout=60)
+    try:
+        assert proc.stdout.readline().strip() == "running"
+        time.sleep(1.0)
+        sent = time.monotonic()
+        proc.send_signal(signal.SIGINT)
+        out, _ = proc.communicate(timeout=60)
+    finally:
+        proc.kill()  # never leave a 9000 s run behind a failed test
     assert proc.returncode == 3 and "interrupted" in out
     assert time.monotonic() - sent < 10
 

@@ -128,12 +128,15 @@ def test_ctrl_c_saves_says_so_and_exits_130(tmp_path):
            tmp_path, "--name", "stop", *TINY]
     proc = subprocess.Popen(list(map(str, cmd)), cwd=ROOT, env=ENV, stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE, text=True)
-    for line in proc.stdout:  # the line printed just before training
-        if line.startswith("success before PPO's first update"):
-            break
-    time.sleep(3)
-    proc.send_signal(signal.SIGINT)
-    _, err = proc.communicate(timeout=300)  # saving and the report: seconds on a free machine
+    try:
+        for line in proc.stdout:  # the line printed just before training
+            if line.startswith("success before PPO's first update"):
+                break
+        time.sleep(3)
+        proc.send_signal(signal.SIGINT)
+        _, err = proc.communicate(timeout=300)  # saving and the report: seconds on a free machine
+    finally:
+        proc.kill()  # never leave a training process behind a failed test
     assert proc.returncode == 130, err
     run = tmp_path / "stop"
     report = (run / "report.md").read_text()
