@@ -10,6 +10,7 @@ import time
 
 import numpy as np
 import pytest
+from subprocess_signals import interruptible
 
 from dice_env import ContactLaw, Die, FrictionLaw, Ground, Scene, Scheme, State, paper
 from dice_env import simulate as run
@@ -194,7 +195,7 @@ def test_ctrl_c_ends_a_long_run_promptly():
             print("interrupted", flush=True)
             sys.exit(3)
     """)
-    proc = subprocess.Popen(code, stdout=subprocess.PIPE, text=True)
+    proc = subprocess.Popen(code, stdout=subprocess.PIPE, text=True, preexec_fn=interruptible)
     try:
         assert proc.stdout.readline().strip() == "running"
         time.sleep(1.0)

@@ -10,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from subprocess_signals import interruptible
 
 from agents.config import parse_config
 
@@ -127,7 +128,8 @@ def test_ctrl_c_saves_says_so_and_exits_130(tmp_path):
     cmd = [sys.executable, "-u", str(ROOT / "train.py"), "--total-timesteps", 10**7, "--runs",
            tmp_path, "--name", "stop", *TINY]
     proc = subprocess.Popen(list(map(str, cmd)), cwd=ROOT, env=ENV, stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True)
+                            stderr=subprocess.PIPE, text=True,
+                            preexec_fn=interruptible)
     try:
         for line in proc.stdout:  # the line printed just before training
             if line.startswith("success before PPO's first update"):
