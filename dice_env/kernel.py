@@ -488,10 +488,11 @@ def simulate_one(i: int, dice: Dice, body: Body, contact: Contact, options: Opti
     pu0, pu1, pu2 = u0, u1, u2  # velocities one step back, for the midpoint forces
     pw0, pw1, pw2 = w0, w1, w2
     n_vertices, n_planes = vertices.shape[0], planes.shape[0]
-    heights = np.full((n_vertices, n_planes), -1.0)  # vertex heights entering the last step
-    anchors = np.zeros((n_vertices, n_planes, 3))  # stick-slip: where each spring is tied
-    tied = np.zeros((n_vertices, n_planes), np.bool_)
-    lowest = np.empty(n_planes)
+    offsets = np.empty((n_vertices, 3))  # vertex offsets from the centre, world frame
+    heights = np.full((n_planes, n_vertices), -1.0)  # vertex heights entering the last step
+    anchors = np.zeros((n_planes, n_vertices, 3))  # stick-slip: where each spring is tied
+    tied = np.zeros((n_planes, n_vertices), np.bool_)
+    lowest = np.empty(n_planes)  # each plane's lowest vertex height
     while step < n_steps:
         passes += 1
         if passes & (ABORT_EVERY - 1) == 0 and out.abort[0] != 0:
@@ -508,53 +509,57 @@ def simulate_one(i: int, dice: Dice, body: Body, contact: Contact, options: Opti
             l0 * wl0 + l1 * wl1 + l2 * wl2
         )
         near_rest = stops.at_rest and kinetic < kinetic_rest
-        # 1.-2. vertices, and the forces and torques of the planes on them
+        # 1.-2. vertices, and the forces and torques of the planes on them: first every
+        # vertex's offset (and, near rest, the fastest vertex), then plane by plane the
+        # vertices' heights, and velocities only where a vertex feels the plane
         cu0, cu1, cu2 = cu
         cw0, cw1, cw2 = cw
         f0, f1, f2 = 0.0, 0.0, -mass * g
         t0, t1, t2 = 0.0, 0.0, 0.0
         spring, spring_t, touching, approach, fastest = 0.0, 0.0, 0, 0.0, 0.0
-        n_planes = planes.shape[0]
-        for p in range(n_planes):
-            lowest[p] = np.inf
-        for k in range(vertices.shape[0]):
+        for k in range(n_vertices):
             b0, b1, b2 = vertices[k, 0], vertices[k, 1], vertices[k, 2]
             rk0 = qi[0, 0] * b0 + qi[0, 1] * b1 + qi[0, 2] * b2
             rk1 = qi[1, 0] * b0 + qi[1, 1] * b1 + qi[1, 2] * b2
             rk2 = qi[2, 0] * b0 + qi[2, 1] * b1 + qi[2, 2] * b2
-            velocity = (u0 + w1 * rk2 - w2 * rk1, u1 + w2 * rk0 - w0 * rk2,
-                        u2 + w0 * rk1 - w1 * rk0)
+            offsets[k, 0], offsets[k, 1], offsets[k, 2] = rk0, rk1, rk2
             if near_rest:
-                fastest = max(fastest, velocity[0] * velocity[0] + velocity[1] * velocity[1]
-                              + velocity[2] * velocity[2])
-            position = (x0 + rk0, x1 + rk1, x2 + rk2)
-            for p in range(n_planes):
-                height = (planes[p, NX] * position[0] + planes[p, NY] * position[1]
-                          + planes[p, NZ] * position[2]) - planes[p, OFFSET]
-                lowest[p] = min(lowest[p], height)
-                before = heights[k, p]
-                heights[k, p] = height
+                v0, v1, v2 = u0 + w1 * rk2 - w2 * rk1, u1 + w2 * rk0 - w0 * rk2, \
+                    u2 + w0 * rk1 - w1 * rk0
+                fastest = max(fastest, v0 * v0 + v1 * v1 + v2 * v2)
+        for p in range(n_planes):
+            plane = (planes[p, NX], planes[p, NY], planes[p, NZ], planes[p, OFFSET],
+                     planes[p, STIFF], planes[p, DAMP], planes[p, MU], planes[p, KT],
+                     planes[p, CT])
+            pn0, pn1, pn2, offset = plane[0], plane[1], plane[2], plane[3]
+            low = np.inf
+            for k in range(n_vertices):
+                rk0, rk1, rk2 = offsets[k, 0], offsets[k, 1], offsets[k, 2]
+                position = (x0 + rk0, x1 + rk1, x2 + rk2)
+                height = pn0 * position[0] + pn1 * position[1] + pn2 * position[2] - offset
+                low = min(low, height)
+                before = heights[p, k]
+                heights[p, k] = height
                 if height >= 0.0:
-                    tied[k, p] = False
+                    tied[p, k] = False
                     if gated:
                         continue
+                velocity = (u0 + w1 * rk2 - w2 * rk1, u1 + w2 * rk0 - w0 * rk2,
+                            u2 + w0 * rk1 - w1 * rk0)
                 middle = velocity
                 if midpoint:
                     middle = (cu0 + cw1 * rk2 - cw2 * rk1, cu1 + cw2 * rk0 - cw0 * rk2,
                               cu2 + cw0 * rk1 - cw1 * rk0)
-                plane = (planes[p, NX], planes[p, NY], planes[p, NZ], planes[p, OFFSET],
-                         planes[p, STIFF], planes[p, DAMP], planes[p, MU], planes[p, KT],
-                         planes[p, CT])
                 anchor, tie = (0.0, 0.0, 0.0), False  # the ties matter to stick-slip only
                 if stick:
-                    anchor = (anchors[k, p, 0], anchors[k, p, 1], anchors[k, p, 2])
-                    tie = tied[k, p]
+                    anchor = (anchors[p, k, 0], anchors[p, k, 1], anchors[p, k, 2])
+                    tie = tied[p, k]
                 fk0, fk1, fk2, spring_k, stored, below, dg, approach_k, anchor, tie = (
                     vertex_on_plane(plane, stick, vmin, height, before, position, velocity,
                                     middle, midpoint, dt, dt_m, anchor, tie))
                 if stick:
-                    anchors[k, p, 0], anchors[k, p, 1], anchors[k, p, 2] = anchor
-                    tied[k, p] = tie
+                    anchors[p, k, 0], anchors[p, k, 1], anchors[p, k, 2] = anchor
+                    tied[p, k] = tie
                 if below:
                     touching += 1
                     spring += spring_k
@@ -568,6 +573,7 @@ def simulate_one(i: int, dice: Dice, body: Body, contact: Contact, options: Opti
                     t0 += rk1 * fk2 - rk2 * fk1
                     t1 += rk2 * fk0 - rk0 * fk2
                     t2 += rk0 * fk1 - rk1 * fk0
+            lowest[p] = low
         # energy of the state entering this step. The gain check leaves out the tangential
         # springs: a slip re-ties a spring to carry the whole force mu fn, damping share
         # included, which can stretch it beyond what the vertex's motion put in (on a soft,
