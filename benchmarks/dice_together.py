@@ -15,6 +15,17 @@ group of one, the same throws through the single-die path (``simulate``) with it
 shortcut (flights between contacts in one step) and without it (every step, as the group
 kernel steps each die), for reference; die-steps count a shortcut flight's steps as taken.
 Prints a table and writes ``benchmarks/results/dice_together.json``.
+
+``--mujoco 2 12`` adds MuJoCo on the same throws of those groups (``pip install mujoco``): N
+free boxes of the die's size, mass and inertia in the same tray (a plane floor and four plane
+walls), every geom with the table's friction (MuJoCo takes the larger of a pair's), once at
+its default contact and 2 ms step, once with a contact that bounces like the table's (the
+``solref`` time constant and damping ratio of our landing's spring, at a quarter of that time
+constant as its step, as ``benchmarks/step_limit.py`` found it needs). Each throw runs until
+the group rule of ``dice_env.group_kernel`` holds on MuJoCo's energies (no energy left in the
+throw can change any die's face: the total less the other dice's resting energy below each
+die's lock), checked every millisecond of simulated time, or 10 s; timed as the CPU time of
+its ``mj_step`` calls.
 """
 
 from __future__ import annotations
@@ -32,9 +43,11 @@ import numpy as np
 
 from dice_env import Scene, simulate
 from dice_env.die import Die
-from dice_env.group import group_step, simulate_group
+from dice_env.group import GroupState, group_step, simulate_group
+from dice_env.simulate import UP, lock_energy
 from dice_env.studies.pairs import hand_throws
 from dice_env.surroundings import tray
+from dice_env.table import RESTITUTION, damping_ratio
 
 ROOT = Path(__file__).resolve().parents[1]
 T_MAX = 10.0
@@ -79,6 +92,112 @@ def measure(n_dice: int, throws: int, repeats: int, seed: int) -> list[dict]:
     return rows
 
 
+_TRAY_MJCF = """
+<mujoco>
+  <option timestep="{dt}" gravity="0 0 -{g}"/>
+  <default><geom friction="{mu} 0.005 0.0001" {contact}/></default>
+  <worldbody>
+{planes}
+{boxes}
+  </worldbody>
+</mujoco>
+"""
+# MuJoCo's decision check: every this many seconds of simulated time.
+CHECK_EVERY = 1e-3
+
+
+def mujoco_tray(scene: Scene, n_dice: int, dt: float, contact: str = ""):
+    """MuJoCo's model of ``n_dice`` of ``scene``'s d6 in ``scene``'s planes (floor and walls)."""
+    import mujoco
+
+    die = scene.die
+    planes = "\n".join(
+        f'    <geom type="plane" size="1 1 0.1" pos="{_xyz(np.multiply(p.normal, p.offset))}" '
+        f'zaxis="{_xyz(p.normal)}"/>' for p in (scene.ground, *scene.walls))
+    boxes = "\n".join(
+        f'    <body name="die{k}"><freejoint/><geom type="box" size="{die.size / 2} '
+        f'{die.size / 2} {die.size / 2}"/><inertial pos="0 0 0" mass="{die.mass}" '
+        f'diaginertia="{die.inertia_body[0, 0]} {die.inertia_body[1, 1]} '
+        f'{die.inertia_body[2, 2]}"/></body>' for k in range(n_dice))
+    return mujoco.MjModel.from_xml_string(_TRAY_MJCF.format(
+        dt=dt, g=scene.gravity, mu=scene.ground.friction, contact=contact, planes=planes,
+        boxes=boxes))
+
+
+def _xyz(v: object) -> str:
+    """A 3-vector as MJCF writes it."""
+    return " ".join(f"{c:.9g}" for c in np.asarray(v, float))
+
+
+def bouncing_contact(scene: Scene) -> tuple[str, float]:
+    """MuJoCo's ``solref`` for a landing like the table's, and the step it needs."""
+    zeta = damping_ratio(RESTITUTION)
+    time_constant = 1.0 / (zeta * math.sqrt(4 * scene.ground.stiffness / scene.die.mass))
+    return f'solref="{time_constant:.6g} {zeta:.6g}"', time_constant / 4
+
+
+def mujoco_decided(scene: Scene, state: GroupState, model) -> dict:
+    """MuJoCo on the throws ``state`` until each throw is decided by the group rule."""
+    import mujoco
+
+    die = scene.die
+    b, n = state.batch_size, state.n_dice
+    data = mujoco.MjData(model)
+    lock = lock_energy(scene)
+    weight = die.mass * scene.gravity
+    floor = weight * float(die.resting_heights.min())  # each die's least energy, at rest
+    inertia = np.diag(die.inertia_body)
+    block = max(1, round(CHECK_EVERY / model.opt.timestep))
+    n_blocks = math.ceil(T_MAX / (block * model.opt.timestep))
+    cpu, steps, decided, faces = 0.0, np.zeros(b, np.int64), np.zeros(b, bool), []
+    for k in range(b):
+        mujoco.mj_resetData(model, data)
+        for i in range(n):
+            q = state.orientation[k, i]
+            data.qpos[7 * i:7 * i + 3] = state.position[k, i]
+            mujoco.mju_mat2Quat(data.qpos[7 * i + 3:7 * i + 7], q.ravel())
+            data.qvel[6 * i:6 * i + 6] = np.concatenate(
+                [state.velocity[k, i], q.T @ state.angular_velocity[k, i]])
+        for _ in range(n_blocks):
+            begin = time.thread_time()
+            mujoco.mj_step(model, data, nstep=block)
+            cpu += time.thread_time() - begin
+            steps[k] += block
+            rot = data.xmat[1:].reshape(n, 3, 3)
+            vel = data.qvel.reshape(n, 6)
+            energy = float(0.5 * die.mass * (vel[:, :3] ** 2).sum()
+                           + 0.5 * (inertia * vel[:, 3:] ** 2).sum()
+                           + weight * data.qpos.reshape(n, 7)[:, 2].sum())
+            read = die.face_read(rot, UP)
+            if np.all(energy - (n - 1) * floor < lock[read - 1]):
+                decided[k] = True
+                break
+        faces.append(die.face_read(data.xmat[1:].reshape(n, 3, 3), UP))
+    return {"version": mujoco.__version__, "dt_s": model.opt.timestep, "throws": b,
+            "cpu_s": cpu, "throws_per_s": b / cpu, "decided": float(decided.mean()),
+            "sim_s": float(steps.mean() * model.opt.timestep),
+            "face_counts": np.bincount(np.concatenate(faces), minlength=7)[1:].tolist()}
+
+
+def compare_mujoco(n_dice: int, throws: int, seed: int) -> dict:
+    """Ours and MuJoCo (default and bouncing contact) on the same ``throws`` of ``n_dice``."""
+    scene = Scene(walls=tray(), t_max=T_MAX)
+    dice = (Die(),) * n_dice
+    state = hand_throws(scene, dice, throws, np.random.default_rng(seed))
+    seconds, ours = cpu_best(lambda: simulate_group(scene, dice, state, stop_when_decided=True,
+                                                    num_threads=1), 1)
+    contact, dt = bouncing_contact(scene)
+    rows = {"ours": {"throws_per_s": throws / seconds, "cpu_s": seconds,
+                     "decided": float(ours.decided.mean()),
+                     "sim_s": float(ours.steps.mean() * group_step(scene, dice))},
+            "mujoco_default": mujoco_decided(scene, state, mujoco_tray(scene, n_dice, 0.002)),
+            "mujoco_bouncing": mujoco_decided(scene, state,
+                                              mujoco_tray(scene, n_dice, dt, contact))}
+    for name in ("mujoco_default", "mujoco_bouncing"):
+        rows[name]["ours_vs_mujoco"] = rows["ours"]["throws_per_s"] / rows[name]["throws_per_s"]
+    return {"dice": n_dice, "throws": throws, **rows}
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--dice", type=int, nargs="+", default=[1, 2, 5, 12])
@@ -86,13 +205,17 @@ def main() -> None:
                         help="throws of the single die (a group of N gets throws / N)")
     parser.add_argument("--repeats", type=int, default=1)
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--mujoco", type=int, nargs="*", default=[],
+                        help="groups to run through MuJoCo as well, e.g. 2 12")
     parser.add_argument("--out", type=Path, default=ROOT / "benchmarks/results/dice_together.json")
     args = parser.parse_args()
     for name in ("throws", "repeats"):
         if getattr(args, name) < 1:
             parser.error(f"--{name} must be >= 1, got {getattr(args, name)}")
-    if min(args.dice) < 1 or max(args.dice) > 64:
-        parser.error(f"--dice must be 1 to 64 dice, got {args.dice}")
+    for name in ("dice", "mujoco"):
+        if getattr(args, name) and (min(getattr(args, name)) < 1
+                                    or max(getattr(args, name)) > 64):
+            parser.error(f"--{name} must be 1 to 64 dice, got {getattr(args, name)}")
     for n_dice in (1, 2):
         measure(n_dice, 2, 1, args.seed)  # compile both paths' kernels, untimed
     rows = []
@@ -110,8 +233,26 @@ def main() -> None:
               f"{base['throws_per_s'] / r['throws_per_s']:.2f} | {r['die_steps_per_s']:,.0f} | "
               f"{r['decided']:.0%} | {r['all_read']:.0%} | {r['met']:.0%} | "
               f"{r['sim_s']:.2f} |")
+    mujoco_rows = []
+    for n_dice in args.mujoco:
+        mujoco_rows.append(compare_mujoco(n_dice, max(4, math.ceil(args.throws / n_dice)),
+                                          args.seed))
+    if mujoco_rows:
+        print("\nThe same throws in MuJoCo, one thread, CPU time, to decided faces:\n")
+        print("| dice | throws | ours throws/s | MuJoCo default (2 ms) throws/s | ours / it | "
+              "MuJoCo bouncing (step) throws/s | ours / it | simulated s: ours, default, "
+              "bouncing | decided: ours, default, bouncing |")
+        print("|---|---|---|---|---|---|---|---|---|")
+        for r in mujoco_rows:
+            o, d, c = r["ours"], r["mujoco_default"], r["mujoco_bouncing"]
+            print(f"| {r['dice']} | {r['throws']} | {o['throws_per_s']:.2f} | "
+                  f"{d['throws_per_s']:.2f} | {d['ours_vs_mujoco']:.3f} | "
+                  f"{c['throws_per_s']:.2f} ({c['dt_s'] * 1e6:.0f} us) | "
+                  f"{c['ours_vs_mujoco']:.2f} | {o['sim_s']:.2f}, {d['sim_s']:.2f}, "
+                  f"{c['sim_s']:.2f} | {o['decided']:.0%}, {d['decided']:.0%}, "
+                  f"{c['decided']:.0%} |")
     args.out.parent.mkdir(parents=True, exist_ok=True)
-    args.out.write_text(json.dumps({
+    args.out.write_text(json.dumps({"mujoco": mujoco_rows,
         "command": "python benchmarks/dice_together.py " + " ".join(
             f"--{k} {' '.join(map(str, v)) if isinstance(v, list) else v}"
             for k, v in vars(args).items() if k != "out"),
