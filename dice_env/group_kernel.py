@@ -424,6 +424,7 @@ def simulate_group(g: int, dice: GroupDice, bodies: Bodies, pair: Pair, contact:
     heights = np.full((n_dice, n_v, n_planes), -1.0)  # vertex heights entering the last step
     anchors = np.zeros((n_dice, n_v, n_planes, 3))  # stick-slip: where each spring is tied
     tied = np.zeros((n_dice, n_v, n_planes), np.bool_)
+    lowest = np.empty((n_dice, n_planes))  # each die's lowest vertex height over each plane
     force, torque = np.empty((n_dice, 3)), np.empty((n_dice, 3))
     kinetic, own = np.empty(n_dice), np.empty(n_dice)
     touching = np.zeros(n_dice, np.int64)
@@ -466,27 +467,31 @@ def simulate_group(g: int, dice: GroupDice, bodies: Bodies, pair: Pair, contact:
             spring, spring_t, touch, fast, hit = 0.0, 0.0, 0, 0.0, 0.0
             dt_m = dt / m
             x0, x1, x2 = x[a, 0], x[a, 1], x[a, 2]
+            for p in range(n_planes):
+                lowest[a, p] = np.inf
             for k in range(n_vertices[a]):
                 b0, b1, b2 = vertices[a, k, 0], vertices[a, k, 1], vertices[a, k, 2]
                 rk0 = q[a, 0, 0] * b0 + q[a, 0, 1] * b1 + q[a, 0, 2] * b2
                 rk1 = q[a, 1, 0] * b0 + q[a, 1, 1] * b1 + q[a, 1, 2] * b2
                 rk2 = q[a, 2, 0] * b0 + q[a, 2, 1] * b1 + q[a, 2, 2] * b2
-                velocity = (u0 + w1 * rk2 - w2 * rk1, u1 + w2 * rk0 - w0 * rk2,
-                            u2 + w0 * rk1 - w1 * rk0)
                 if near[a]:
-                    fast = max(fast, velocity[0] * velocity[0] + velocity[1] * velocity[1]
-                               + velocity[2] * velocity[2])
+                    v0, v1, v2 = u0 + w1 * rk2 - w2 * rk1, u1 + w2 * rk0 - w0 * rk2, \
+                        u2 + w0 * rk1 - w1 * rk0
+                    fast = max(fast, v0 * v0 + v1 * v1 + v2 * v2)
                 position = (x0 + rk0, x1 + rk1, x2 + rk2)
                 world[a, k, 0], world[a, k, 1], world[a, k, 2] = position
                 for p in range(n_planes):
                     height = (planes[p, NX] * position[0] + planes[p, NY] * position[1]
                               + planes[p, NZ] * position[2]) - planes[p, OFFSET]
+                    lowest[a, p] = min(lowest[a, p], height)
                     before = heights[a, k, p]
                     heights[a, k, p] = height
                     if height >= 0.0:
                         tied[a, k, p] = False
                         if gated:
                             continue
+                    velocity = (u0 + w1 * rk2 - w2 * rk1, u1 + w2 * rk0 - w0 * rk2,
+                                u2 + w0 * rk1 - w1 * rk0)
                     middle = velocity
                     if midpoint:
                         middle = (cu0 + cw1 * rk2 - cw2 * rk1, cu1 + cw2 * rk0 - cw0 * rk2,
