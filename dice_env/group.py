@@ -171,14 +171,16 @@ def simulate_group(
     t_max: float | None = None,
     stop_at_rest: bool = True,
     stop_when_decided: bool = False,
+    free_flight: bool = True,
     record_every: int = 0,
     orientations: bool = False,
     num_threads: int | None = None,
 ) -> GroupResult:
     """Run B throws of the N ``dice`` together; ``state`` is not modified.
 
-    Keywords as :func:`dice_env.simulate` (each die's contact-free steps are stepped one by
-    one). ``stop_when_decided`` ends a throw when no energy left in it can change any die's
+    Keywords as :func:`dice_env.simulate`; ``free_flight`` takes the steps in which no die
+    touches a plane or another die (their bounding spheres apart) at once, in closed form.
+    ``stop_when_decided`` ends a throw when no energy left in it can change any die's
     face (see :mod:`dice_env.group_kernel`); ``stop_at_rest`` when every die is at rest.
     ``record_every`` > 0 records the centres (and with ``orientations`` the orientations).
     Refused: dice that overlap at the start, more than :data:`MAX_DICE` dice, a step count
@@ -214,7 +216,7 @@ def simulate_group(
         raise ValueError(f"state.position: die {die} of throw {throw} starts with a corner "
                          f"{sinks[throw, die]:.3g} m inside a plane")
     _, contact_planes = pack_scene(scenes[0])
-    options, _ = pack_run(scenes[0], n_steps=n_steps, free_flight=False)
+    options, _ = pack_run(scenes[0], n_steps=n_steps, free_flight=free_flight)
     stops = group_kernel.GroupStops(
         n_steps=n_steps, at_rest=bool(stop_at_rest), v_rest=float(scene.rest.speed),
         hold_steps=math.ceil(scene.rest.hold / dt), decide=bool(stop_when_decided),
@@ -297,7 +299,9 @@ def _bodies(scenes: list[Scene], decide: bool) -> group_kernel.Bodies:
         edges=edges, n_edges=np.array([len(d.edges) for d in dice]),
         mass=np.array([p.mass for p in packed]),
         inv_inertia=np.stack([p.inv_inertia for p in packed]),
-        inv_iso=np.array([p.inv_iso for p in packed]), r_max=np.array([p.r_max for p in packed]),
+        inv_iso=np.array([p.inv_iso for p in packed]),
+        inv_i_min=np.array([p.inv_i_min for p in packed]),
+        r_max=np.array([p.r_max for p in packed]),
         reads_down=np.array([p.reads_down for p in packed]), lock=lock, floor=floor)
 
 

@@ -62,6 +62,7 @@ from dice_env.kernel import (
     Options,
     angular_velocity,
     face_read,
+    flight_jump,
     relative_rise,
     torque_free,
     vertex_on_plane,
@@ -86,7 +87,8 @@ class Bodies(NamedTuple):
     ``faces`` (N, F, 3) outward unit normals in label order, ``offsets`` (N, F) their planes
     ``n . r = offset``, ``n_faces``; ``edges`` (N, E, 2) vertex pairs and ``n_edges``;
     ``mass``, ``inv_inertia`` (N, 3, 3), ``inv_iso`` (``1/I`` for an isotropic die, else 0),
-    ``r_max`` (the farthest vertex), ``reads_down`` (the d4); ``lock`` (N, F): the energy below
+    ``inv_i_min`` (the inverse of the smallest principal moment), ``r_max`` (the farthest
+    vertex), ``reads_down`` (the d4); ``lock`` (N, F): the energy below
     which a die alone keeps the face it reads (``-inf``: no decision rule); ``floor`` (N,): a
     lower bound of each die's energy (potential and spring energy on the floor at rest).
     """
@@ -101,6 +103,7 @@ class Bodies(NamedTuple):
     mass: np.ndarray
     inv_inertia: np.ndarray
     inv_iso: np.ndarray
+    inv_i_min: np.ndarray
     r_max: np.ndarray
     reads_down: np.ndarray
     lock: np.ndarray
@@ -531,12 +534,14 @@ def simulate_group(g: int, dice: GroupDice, bodies: Bodies, pair: Pair, contact:
         # die against die
         for a in range(n_dice):
             die_touch[a] = False
+        apart = True  # every pair's bounding spheres apart
         for a in range(n_dice):
             for b in range(a + 1, n_dice):
                 d0, d1, d2 = x[a, 0] - x[b, 0], x[a, 1] - x[b, 1], x[a, 2] - x[b, 2]
                 reach = r_max[a] + r_max[b]
                 if d0 * d0 + d1 * d1 + d2 * d2 >= reach * reach:
                     continue
+                apart = False
                 spring, deepest, touch_ab = pair_contacts(a, b, world, x, q, cu, cw, bodies,
                                                           pair, force, torque)
                 checked += spring
@@ -579,12 +584,23 @@ def simulate_group(g: int, dice: GroupDice, bodies: Bodies, pair: Pair, contact:
                     break
             else:
                 quiet = 0
+        jump = 1
+        if options.flight and apart:
+            jump = min(_group_jump(planes, lowest, touching, x, u, ang, force, bodies, rotation,
+                                   dt, n_steps - step + 1), next_record - step)
         finite = True
         for a in range(n_dice):
             dt_m = dt / mass[a]
             dv0, dv1, dv2 = force[a, 0] * dt_m, force[a, 1] * dt_m, force[a, 2] * dt_m
-            nu0, nu1, nu2 = u[a, 0] + dv0, u[a, 1] + dv1, u[a, 2] + dv2
-            nx0, nx1, nx2 = x[a, 0] + dt * nu0, x[a, 1] + dt * nu1, x[a, 2] + dt * nu2
+            if jump > 1:  # flight steps in closed form, as kernel.simulate_one takes them
+                half = 0.5 * jump * (jump + 1)
+                nx0 = x[a, 0] + dt * (jump * u[a, 0] + half * dv0)
+                nx1 = x[a, 1] + dt * (jump * u[a, 1] + half * dv1)
+                nx2 = x[a, 2] + dt * (jump * u[a, 2] + half * dv2)
+                nu0, nu1, nu2 = u[a, 0] + jump * dv0, u[a, 1] + jump * dv1, u[a, 2] + jump * dv2
+            else:
+                nu0, nu1, nu2 = u[a, 0] + dv0, u[a, 1] + dv1, u[a, 2] + dv2
+                nx0, nx1, nx2 = x[a, 0] + dt * nu0, x[a, 1] + dt * nu1, x[a, 2] + dt * nu2
             nl0, nl1, nl2 = ang[a, 0], ang[a, 1], ang[a, 2]
             if rotation:
                 nl0, nl1, nl2 = nl0 + dt * torque[a, 0], nl1 + dt * torque[a, 1], \
@@ -599,11 +615,12 @@ def simulate_group(g: int, dice: GroupDice, bodies: Bodies, pair: Pair, contact:
             ang[a, 0], ang[a, 1], ang[a, 2] = nl0, nl1, nl2
             if rotation:
                 w[a, 0], w[a, 1], w[a, 2] = torque_free(q[a], inv_inertia[a], inv_iso[a], nl0,
-                                                        nl1, nl2, dt, 1)
+                                                        nl1, nl2, dt, jump)
         if not finite:
             end = NONFINITE
             step -= 1
             break
+        step += jump - 1
         if step >= next_record:
             if step % stride == 0 and step // stride <= n_rec:
                 _record(records, step // stride - 1, g, x, q)
@@ -626,6 +643,42 @@ def simulate_group(g: int, dice: GroupDice, bodies: Bodies, pair: Pair, contact:
     out.steps[g] = step
     out.overlap[g] = overlap
     out.energy_rise[g] = max(out.energy_rise[g], relative_rise(e_max, e_start, e_tol))
+
+
+@njit(cache=True)
+def _group_jump(planes: np.ndarray, lowest: np.ndarray, touching: np.ndarray, x: np.ndarray,
+                u: np.ndarray, ang: np.ndarray, force: np.ndarray, bodies: Bodies,
+                rotation: bool, dt: float, limit: int) -> int:
+    """Flight steps the whole group takes at once (at least 1); see :func:`flight_jump`.
+
+    Called when every pair's bounding spheres are apart. No die touches a plane, each die's
+    flight steps are :func:`dice_env.kernel.flight_jump`'s, and a pair stays apart while its
+    centres' distance exceeds the spheres' reach: in flight both feel gravity alone, so the
+    distance shrinks by at most ``dt |u_a - u_b|`` a step. One die alone jumps exactly as
+    :func:`dice_env.kernel.simulate_one` does.
+    """
+    n_dice = x.shape[0]
+    jump = limit
+    for a in range(n_dice):
+        if touching[a] > 0:
+            return 1
+        m = bodies.mass[a]
+        spin = 0.0
+        if rotation:
+            spin = math.sqrt(ang[a, 0] ** 2 + ang[a, 1] ** 2 + ang[a, 2] ** 2) \
+                * bodies.inv_i_min[a]
+        dt_m = dt / m
+        jump = min(jump, flight_jump(planes, lowest[a], (u[a, 0], u[a, 1], u[a, 2]), spin,
+                                     bodies.r_max[a], (force[a, 0] * dt_m, force[a, 1] * dt_m,
+                                                       force[a, 2] * dt_m), dt, limit))
+        for b in range(a + 1, n_dice):
+            gap = math.sqrt((x[a, 0] - x[b, 0]) ** 2 + (x[a, 1] - x[b, 1]) ** 2
+                            + (x[a, 2] - x[b, 2]) ** 2) - bodies.r_max[a] - bodies.r_max[b]
+            closing = dt * math.sqrt((u[a, 0] - u[b, 0]) ** 2 + (u[a, 1] - u[b, 1]) ** 2
+                                     + (u[a, 2] - u[b, 2]) ** 2)
+            if closing > 0.0 and gap < closing * jump:
+                jump = min(jump, max(1, int(gap / closing)))  # all but the last free step
+    return jump
 
 
 @njit(cache=True, inline="always")

@@ -609,8 +609,8 @@ def simulate_one(i: int, dice: Dice, body: Body, contact: Contact, options: Opti
         jump = 1
         if options.flight and touching == 0:
             spin = math.sqrt(l0 * l0 + l1 * l1 + l2 * l2) * body.inv_i_min if rotation else 0.0
-            jump = _jump(planes, lowest, (u0, u1, u2), spin, body.r_max, (dv0, dv1, dv2), dt,
-                         n_steps - step + 1)
+            jump = flight_jump(planes, lowest, (u0, u1, u2), spin, body.r_max, (dv0, dv1, dv2),
+                               dt, n_steps - step + 1)
         if jump > 1:
             # records falling inside the jump, from the same closed form (the jump itself does
             # not depend on the recording)
@@ -676,7 +676,7 @@ def simulate_one(i: int, dice: Dice, body: Body, contact: Contact, options: Opti
 
 
 @njit(cache=True, inline="always")
-def _jump(planes: np.ndarray, lowest: np.ndarray, u: tuple, spin: float, r_max: float,
+def flight_jump(planes: np.ndarray, lowest: np.ndarray, u: tuple, spin: float, r_max: float,
           dv: tuple, dt: float, limit: int) -> int:
     """Flight steps to take at once (at least 1).
 
