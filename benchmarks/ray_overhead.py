@@ -69,7 +69,7 @@ def main() -> None:
     row("this process, 1 thread", 1, seconds, reference)
     row(f"this process, {numba.config.NUMBA_NUM_THREADS} threads", 1,
         *timed(lambda: run_throws(scene, args.throws, **kwargs)))
-    start_s, _ = timed(lambda: ray.init(num_cpus=2, include_dashboard=False))
+    start_s, _ = timed(lambda: ray.init(address="local", num_cpus=2, include_dashboard=False))
     try:
         # load the kernel in both workers: one chunk each, two at a time
         run_throws(scene, 2 * args.chunk, ray="auto", workers=2, **kwargs)

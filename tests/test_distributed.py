@@ -145,7 +145,7 @@ def test_the_shapes_study_throws_through_faces_of(tmp_path, monkeypatch):
 def ray():
     ray = pytest.importorskip("ray", reason="the Ray tests need the extra: pip install "
                               "'dice_env[ray]'")
-    ray.init(num_cpus=2, include_dashboard=False)
+    ray.init(address="local", num_cpus=2, include_dashboard=False)  # never a cluster found here
     # the workers unpickle this module's DieOnce by value (they cannot import a test module)
     ray.cloudpickle.register_pickle_by_value(sys.modules[__name__])
     yield ray
