@@ -2,11 +2,13 @@
 
 Each entry of :data:`STUDIES` names a module with ``run(out: Path, quick: bool) -> dict``
 that writes its markdown and figures under ``out`` and returns its headline numbers. Those in
-:data:`SIZED` also take ``throws`` (the sample size per die or per point).
+:data:`SIZED` also take ``throws`` (the sample size per die or per point), those in
+:data:`CHUNKED` ``faces_of`` (their throws run elsewhere: ``--ray ADDRESS``).
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from importlib import import_module
 from pathlib import Path
 
@@ -24,18 +26,23 @@ STUDIES = {
     "validation": "dice_env.studies.validation",
 }
 SIZED = ("shapes", "cuboids", "materials", "pairs", "weldon")
+CHUNKED = ("shapes",)
 
 
-def run(name: str, out: Path, quick: bool = False,
-        throws: int | None = None) -> dict[str, float]:
+def run(name: str, out: Path, quick: bool = False, throws: int | None = None,
+        faces_of: Callable | None = None) -> dict[str, float]:
     """Run study ``name`` (a key of :data:`STUDIES`) into ``out``.
 
-    ``throws`` (studies in :data:`SIZED` only) replaces the study's sample size.
+    ``throws`` (studies in :data:`SIZED` only) replaces the study's sample size;
+    ``faces_of`` (studies in :data:`CHUNKED` only) throws its dice (see ``shapes.run``).
     """
     if name not in STUDIES:
         raise ValueError(f"name must be one of {sorted(STUDIES)}, got {name!r}")
-    if throws is None:
-        return import_module(STUDIES[name]).run(out, quick)
-    if name not in SIZED:
-        raise ValueError(f"throws is taken by the studies {', '.join(SIZED)} only, not {name!r}")
-    return import_module(STUDIES[name]).run(out, quick, throws=throws)
+    options = {}
+    for key, value, takers in (("throws", throws, SIZED), ("faces_of", faces_of, CHUNKED)):
+        if value is not None:
+            if name not in takers:
+                raise ValueError(f"{key} is taken by the studies {', '.join(takers)} only, "
+                                 f"not {name!r}")
+            options[key] = value
+    return import_module(STUDIES[name]).run(out, quick, **options)

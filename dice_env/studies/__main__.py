@@ -1,11 +1,14 @@
-"""``python -m dice_env.studies {all,<study>} [--quick] [--throws N] [--out DIR]``."""
+"""``python -m dice_env.studies {all,<study>} [--quick] [--throws N] [--ray ADDR] [--out DIR]``."""
 
 from __future__ import annotations
 
 import argparse
+import contextlib
+import functools
 from pathlib import Path
 
-from dice_env.studies import SIZED, STUDIES, run
+from dice_env.distributed import connected, hand_faces
+from dice_env.studies import CHUNKED, SIZED, STUDIES, run
 
 
 def main(argv: list[str] | None = None) -> None:
@@ -18,12 +21,18 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--throws", type=int, default=None,
                         help=f"sample size per die or per point ({', '.join(SIZED)} only; "
                         "default: the study's full size)")
+    parser.add_argument("--ray", metavar="ADDRESS", default=None,
+                        help=f"throw in seeded chunks on Ray ({', '.join(CHUNKED)} only): "
+                        "auto, ray://host:10001, or local (a fresh local instance)")
     args = parser.parse_args(argv)
-    if args.throws is not None and args.study not in SIZED:
-        parser.error(f"--throws is taken by {', '.join(SIZED)} only, not {args.study!r}")
-    for name in STUDIES if args.study == "all" else [args.study]:
-        numbers = run(name, args.out, args.quick, args.throws)
-        print(f"{name}: " + ", ".join(f"{k}={v:.4g}" for k, v in numbers.items()))
+    for flag, value, takers in (("--throws", args.throws, SIZED), ("--ray", args.ray, CHUNKED)):
+        if value is not None and args.study not in takers:
+            parser.error(f"{flag} is taken by {', '.join(takers)} only, not {args.study!r}")
+    faces_of = None if args.ray is None else functools.partial(hand_faces, ray=args.ray)
+    with contextlib.nullcontext() if args.ray is None else connected(args.ray):
+        for name in STUDIES if args.study == "all" else [args.study]:
+            numbers = run(name, args.out, args.quick, args.throws, faces_of)
+            print(f"{name}: " + ", ".join(f"{k}={v:.4g}" for k, v in numbers.items()))
 
 
 if __name__ == "__main__":

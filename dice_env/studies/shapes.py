@@ -16,6 +16,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, fields
 from pathlib import Path
 
@@ -28,7 +29,7 @@ from scipy import stats
 
 from dice_env.die import STANDARD_SIZES, Die
 from dice_env.scene import Scene
-from dice_env.simulate import UP, State, simulate
+from dice_env.simulate import UP, Result, State, simulate
 from dice_env.studies.fairness import (
     VIGOROUS,
     Vigour,
@@ -78,6 +79,13 @@ class Faces:
     chi2: float
     p_value: float
 
+    @classmethod
+    def of(cls, counts: np.ndarray, throws: int) -> Faces:
+        """The faces ``counts`` (F,) counted among ``throws`` throws, with their chi-square."""
+        ended = int(counts.sum())
+        chi2, p = stats.chisquare(counts) if ended else (np.nan, np.nan)
+        return cls(counts, ended, throws - ended, float(chi2), float(p))
+
     @property
     def shares(self) -> np.ndarray:
         """Each face's share of the counted throws."""
@@ -94,21 +102,22 @@ class Faces:
         return float(np.abs(self.shares - 1 / len(self.counts)).max())
 
 
+def counted(result: Result) -> np.ndarray:
+    """The throws whose face counts: ended decided or at rest, neither unstable nor sunk."""
+    return (result.decided | result.settled) & ~result.unstable & ~result.sunk
+
+
 def throw_faces(scene: Scene, state: State, bar: object = None, batch: int = BATCH) -> Faces:
     """Throw ``state`` in ``scene`` until each face is decided; count the faces."""
     n_faces = scene.die.n_faces
     counts = np.zeros(n_faces, np.int64)
-    ended = 0
     for start in range(0, state.batch_size, batch):
         chunk = State(*(getattr(state, f.name)[start:start + batch] for f in fields(State)))
         res = simulate(scene, chunk, stop_when_decided=True)
-        ok = (res.decided | res.settled) & ~res.unstable & ~res.sunk
-        counts += np.bincount(res.face[ok], minlength=n_faces + 1)[1:]
-        ended += int(ok.sum())
+        counts += np.bincount(res.face[counted(res)], minlength=n_faces + 1)[1:]
         if bar is not None:
             bar.update(chunk.batch_size)
-    chi2, p = stats.chisquare(counts) if ended else (np.nan, np.nan)
-    return Faces(counts, ended, state.batch_size - ended, float(chi2), float(p))
+    return Faces.of(counts, state.batch_size)
 
 
 def favoured_face(die: Die, face: int) -> int:
@@ -217,11 +226,16 @@ def flight_dice() -> dict[str, Die]:
 
 
 def run(out: Path = DOCS, quick: bool = False, seed: int = 2026,
-        throws: int | None = None) -> dict[str, float]:
+        throws: int | None = None,
+        faces_of: Callable[[Scene, int, int], Faces] | None = None) -> dict[str, float]:
     """Regenerate ``shapes.md`` and its figure under ``out``; return the headline numbers.
 
     ``throws``: fair throws per die (default :data:`FULL`'s, or :data:`QUICK`'s with
     ``quick``); the loaded dice then get half as many (at least the quick size).
+    ``faces_of(scene, n, seed)``: the faces of ``n`` hand throws of ``scene`` from ``seed``
+    (each die, fair and loaded, gets its own seed from ``SeedSequence(seed)``), e.g.
+    :func:`dice_env.distributed.hand_faces` in seeded chunks on Ray; default: thrown here,
+    every die's throws drawn in turn from one generator.
     """
     sizes = dict(QUICK if quick else FULL)
     if throws is not None:
@@ -229,17 +243,24 @@ def run(out: Path = DOCS, quick: bool = False, seed: int = 2026,
             raise ValueError(f"throws must be an int >= 60, got {throws!r}")
         sizes = {"fair": int(throws), "loaded": max(QUICK["loaded"], int(throws) // 2)}
     rng = np.random.default_rng(seed)
+    seeds = iter(np.random.SeedSequence(seed).generate_state(2 * len(DICE)))
     bar = progress(len(DICE) * (sizes["fair"] + sizes["loaded"]), "shapes throws")
     bar.unit = "throw"
+
+    def thrown(scene: Scene, n: int) -> Faces:
+        if faces_of is None:
+            return throw_faces(scene, hand_throws(scene, n, rng), bar)
+        faces = faces_of(scene, n, int(next(seeds)))
+        bar.update(n)
+        return faces
+
     fair, loaded = {}, {}
     for name in DICE:
         scene = Scene(die=Die.standard(name))
-        fair[name] = throw_faces(scene, hand_throws(scene, sizes["fair"], rng), bar)
+        fair[name] = thrown(scene, sizes["fair"])
         heavy = scene.die.load(**LOAD)
-        heavy_scene = scene.with_(die=heavy)
-        loaded[name] = Loaded(heavy, throw_faces(
-            heavy_scene, hand_throws(heavy_scene, sizes["loaded"], rng), bar),
-            favoured_face(heavy, LOAD["face"]))
+        loaded[name] = Loaded(heavy, thrown(scene.with_(die=heavy), sizes["loaded"]),
+                              favoured_face(heavy, LOAD["face"]))
     bar.close()
     flight = {name: (free_flight(die), free_flight(die, step_by_step=True))
               for name, die in flight_dice().items()}
@@ -252,7 +273,8 @@ def run(out: Path = DOCS, quick: bool = False, seed: int = 2026,
     numbers["flight_velocity"] = max(f[k]["velocity"] for f in flight.values() for k in (0, 1))
     numbers["flight_momentum"] = max(f[k]["momentum"] for f in flight.values() for k in (0, 1))
     numbers["flight_energy"] = max(f[k]["energy"] for f in flight.values() for k in (0, 1))
-    (out / "shapes.md").write_text(_markdown(fair, loaded, flight, sizes, seed, quick, throws))
+    (out / "shapes.md").write_text(_markdown(fair, loaded, flight, sizes, seed, quick, throws,
+                                             faces_of is not None))
     return numbers
 
 
@@ -297,9 +319,10 @@ def _header(*names: str) -> str:
 
 
 def _markdown(fair: dict[str, Faces], loaded: dict[str, Loaded], flight: dict,
-              sizes: dict, seed: int, quick: bool, throws: int | None) -> str:
+              sizes: dict, seed: int, quick: bool, throws: int | None, chunked: bool) -> str:
     command = "python -m dice_env.studies shapes" + (" --quick" if quick else "") + (
-        f" --throws {throws}" if throws is not None else "")
+        f" --throws {throws}" if throws is not None else "") + (
+        " --ray ADDRESS" if chunked else "")
     v, g = VIGOROUS, Scene().ground
     rows = []
     for name in DICE:
@@ -325,7 +348,10 @@ def _markdown(fair: dict[str, Faces], loaded: dict[str, Loaded], flight: dict,
     full = FULL["fair"]
     note = ("" if sizes["fair"] >= full else
             f"\nThis page was made with {sizes['fair']} fair throws per die (the command's "
-            f"default is {full}).\n")
+            f"default is {full}).\n") + (
+        "\nEach die's throws ran in seeded chunks (`dice_env.distributed`, one seed per die "
+        "from the study's seed): the same numbers on any Ray cluster or `--ray local`, not "
+        "those of a run without `--ray`.\n" if chunked else "")
     return f"""# Every standard die: fairness, loaded dice, free flight
 
 Generated by `{command}` (module `dice_env/studies/shapes.py`, seed {seed}).

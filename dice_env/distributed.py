@@ -1,0 +1,409 @@
+"""Many throws in seeded chunks, in this process or on a Ray cluster, merged into one tally.
+
+:func:`run_throws` splits ``throws`` throws (by default the vigorous hand throws of
+:func:`~dice_env.studies.shapes.hand_throws`) into chunks of ``chunk``. Chunk ``i`` draws its
+throws from ``SeedSequence(seed, spawn_key=(i,))``, the ``i``-th child of
+``SeedSequence(seed).spawn``: a chunk's throws depend on its index alone, never on the worker
+that runs it. Each chunk runs to a decided face (``simulate(..., stop_when_decided=True)``) and
+is reduced to a :class:`Tally`; the tallies merge exactly (counts add, sums are ``math.fsum``
+of the chunks' ``math.fsum``), so the result is the same bit for bit in this process, on one
+Ray worker or on many.
+
+With ``ray`` an address (``"auto"``, ``"ray://host:10001"``, or ``"local"`` for a fresh local
+instance) each chunk is a Ray task on one CPU; a worker that dies loses its chunk only, and Ray
+runs it again (``max_retries``). With ``out`` a folder, ``spec.json`` records what is thrown
+and each finished chunk's per-throw outcomes go to ``chunk_NNNNNN.npz``: a run interrupted and
+started again on the same folder computes only the missing chunks.
+
+Command line (prints the chi-square summary)::
+
+    python -m dice_env.distributed --die d20 --throws 1000000 --ray auto --out runs/d20
+
+Ray is an optional extra (``pip install 'dice_env[ray]'``); without it the local path works.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import dataclasses
+import json
+import math
+import os
+import time
+from collections.abc import Callable, Iterable, Iterator
+from dataclasses import dataclass
+from pathlib import Path
+from types import ModuleType
+
+import numpy as np
+from tqdm import tqdm
+
+from dice_env.die import STANDARD_SIZES, Die
+from dice_env.scene import Scene
+from dice_env.simulate import State, simulate
+from dice_env.studies.shapes import Faces, counted, hand_throws
+
+# Per-throw outcomes a chunk keeps (``chunk_NNNNNN.npz`` holds these arrays).
+OUTCOMES = ("face", "counted", "decided", "settled", "unstable", "sunk", "steps", "time",
+            "impacts")
+# Outcomes summarised by their sum and sum of squares (mean and standard deviation).
+MOMENTS = ("steps", "time", "impacts")
+# Histogram bins: of the time to the end over [0, scene.t_max]; of impacts 0, 1, ... (the
+# last bin: that many or more).
+TIME_BINS, IMPACT_BINS = 50, 32
+CHUNK = 10_000  # throws per chunk by default: seconds of work for one thread
+SPEC_FILE = "spec.json"
+INSTALL_RAY = "pip install 'dice_env[ray]'"
+
+Draw = Callable[[Scene, int, np.random.Generator], State]
+
+
+@dataclass(frozen=True)
+class Spec:
+    """What a run throws; a run folder holds one spec.
+
+    ``scene``; ``throws`` in all; ``chunk`` throws per chunk (the last one takes the rest);
+    ``seed`` of the chunks' seed sequences; ``draw(scene, n, rng)`` the throws of a chunk (a
+    module-level function or a picklable callable: Ray ships it to the workers).
+    """
+
+    scene: Scene
+    throws: int
+    chunk: int
+    seed: int
+    draw: Draw = hand_throws
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.scene, Scene):
+            raise TypeError(f"scene must be a Scene or a standard die's name "
+                            f"{tuple(STANDARD_SIZES)}, got {type(self.scene).__name__}")
+        for name, low in (("throws", 1), ("chunk", 1), ("seed", 0)):
+            value = getattr(self, name)
+            if not isinstance(value, (int, np.integer)) or isinstance(value, bool) \
+                    or value < low:
+                raise ValueError(f"{name} must be an int >= {low}, got {value!r}")
+            object.__setattr__(self, name, int(value))
+        if not callable(self.draw):
+            raise TypeError(f"draw must be callable (scene, n, rng) -> State, got {self.draw!r}")
+
+    @property
+    def n_chunks(self) -> int:
+        """Number of chunks."""
+        return -(-self.throws // self.chunk)
+
+    def size(self, index: int) -> int:
+        """Throws in chunk ``index``."""
+        return min(self.chunk, self.throws - index * self.chunk)
+
+    def rng(self, index: int) -> np.random.Generator:
+        """Chunk ``index``'s generator: the ``index``-th child of ``SeedSequence(seed)``."""
+        return np.random.default_rng(np.random.SeedSequence(self.seed, spawn_key=(index,)))
+
+    def record(self) -> dict:
+        """The spec as JSON data (the scene field by field, ``draw`` by its name)."""
+        name = getattr(self.draw, "__qualname__", None)
+        draw = f"{self.draw.__module__}.{name}" if name else repr(self.draw)
+        data = {"scene": dataclasses.asdict(self.scene), "throws": self.throws,
+                "chunk": self.chunk, "seed": self.seed, "draw": draw}
+        return json.loads(json.dumps(data))
+
+
+@dataclass(frozen=True)
+class Tally:
+    """Counts and sums over a set of throws; :meth:`merge` adds tallies exactly.
+
+    ``throws``; ``counts`` (F,) the faces, per label, of the throws that count
+    (:func:`~dice_env.studies.shapes.counted`: ended decided or at rest, neither unstable nor
+    sunk); ``unfinished``: no face by the time limit; ``unstable``, ``sunk``: throws flagged
+    so; ``sums`` (3, 2): for each of :data:`MOMENTS` (steps, time to the end in s, impacts) the
+    sum and the sum of squares over all throws; ``time_hist`` (:data:`TIME_BINS`,) throws per
+    bin of the time to the end over [0, ``scene.t_max``]; ``impacts_hist``
+    (:data:`IMPACT_BINS`,) throws with 0, 1, ... impacts, the last bin that many or more.
+    """
+
+    throws: int
+    counts: np.ndarray
+    unfinished: int
+    unstable: int
+    sunk: int
+    sums: np.ndarray
+    time_hist: np.ndarray
+    impacts_hist: np.ndarray
+
+    @classmethod
+    def of(cls, scene: Scene, outcomes: dict[str, np.ndarray]) -> Tally:
+        """The tally of one chunk's per-throw ``outcomes`` (arrays named :data:`OUTCOMES`)."""
+        o = outcomes
+        ok = o["counted"]
+        sums = np.array([[math.fsum(o[q].astype(float)), math.fsum(o[q].astype(float) ** 2)]
+                         for q in MOMENTS])
+        time_hist = np.histogram(np.clip(o["time"], 0.0, scene.t_max), TIME_BINS,
+                                 (0.0, scene.t_max))[0]
+        impacts_hist = np.bincount(np.minimum(o["impacts"], IMPACT_BINS - 1),
+                                   minlength=IMPACT_BINS)
+        return cls(throws=len(ok),
+                   counts=np.bincount(o["face"][ok], minlength=scene.die.n_faces + 1)[1:],
+                   unfinished=int(np.sum(~(o["decided"] | o["settled"]))),
+                   unstable=int(o["unstable"].sum()), sunk=int(o["sunk"].sum()), sums=sums,
+                   time_hist=time_hist, impacts_hist=impacts_hist)
+
+    @classmethod
+    def merge(cls, tallies: Iterable[Tally]) -> Tally:
+        """One tally of all ``tallies``: counts added, sums by ``math.fsum`` (any order)."""
+        parts = list(tallies)
+        if not parts:
+            raise ValueError("tallies must hold at least one Tally, got none")
+        sums = np.array([[math.fsum(p.sums[i, j] for p in parts) for j in range(2)]
+                         for i in range(len(MOMENTS))])
+        return cls(throws=sum(p.throws for p in parts),
+                   counts=np.sum([p.counts for p in parts], axis=0),
+                   unfinished=sum(p.unfinished for p in parts),
+                   unstable=sum(p.unstable for p in parts), sunk=sum(p.sunk for p in parts),
+                   sums=sums, time_hist=np.sum([p.time_hist for p in parts], axis=0),
+                   impacts_hist=np.sum([p.impacts_hist for p in parts], axis=0))
+
+    @property
+    def faces(self) -> Faces:
+        """The face counts with their shares, intervals and chi-square of uniformity."""
+        return Faces.of(self.counts, self.throws)
+
+    def mean(self, name: str) -> float:
+        """Mean of ``name`` (one of :data:`MOMENTS`) over all throws."""
+        return float(self.sums[_moment(name), 0] / self.throws)
+
+    def std(self, name: str) -> float:
+        """Sample standard deviation of ``name`` (one of :data:`MOMENTS`); 0 for one throw."""
+        total, squares = self.sums[_moment(name)]
+        n = self.throws
+        return float(math.sqrt(max(squares - total * total / n, 0.0) / (n - 1))) if n > 1 \
+            else 0.0
+
+    def same_as(self, other: Tally) -> bool:
+        """Equal in every field, bit for bit."""
+        return all(np.array_equal(getattr(self, f.name), getattr(other, f.name))
+                   for f in dataclasses.fields(self))
+
+
+def _moment(name: str) -> int:
+    if name not in MOMENTS:
+        raise ValueError(f"name must be one of {MOMENTS}, got {name!r}")
+    return MOMENTS.index(name)
+
+
+def throw_chunk(spec: Spec, index: int, num_threads: int | None = None) -> dict[str, np.ndarray]:
+    """Per-throw outcomes (arrays named :data:`OUTCOMES`) of chunk ``index`` of ``spec``."""
+    state = spec.draw(spec.scene, spec.size(index), spec.rng(index))
+    res = simulate(spec.scene, state, stop_when_decided=True, num_threads=num_threads)
+    return {"face": res.face.astype(np.int16), "counted": counted(res), "decided": res.decided,
+            "settled": res.settled, "unstable": res.unstable, "sunk": res.sunk, "steps": res.steps,
+            "time": res.rest_time, "impacts": res.impacts.astype(np.int32)}
+
+
+def run_throws(scene: Scene | str, throws: int, *, chunk: int = CHUNK, seed: int = 0,
+               ray: str | None = None, out: Path | str | None = None, progress: bool = True,
+               draw: Draw = hand_throws, workers: int | None = None,
+               max_retries: int = 3) -> Tally:
+    """Throw ``throws`` throws of ``scene`` in seeded chunks of ``chunk``; merge their tallies.
+
+    ``scene``: a :class:`Scene`, or a standard die's name (``"d20"``) on the default table.
+    ``ray``: None runs the chunks one after the other in this process (all numba threads);
+    an address runs each chunk as a Ray task on one thread: ``"auto"`` (the cluster this
+    node belongs to), ``"ray://host:10001"`` (Ray Client), ``"local"`` (a fresh local
+    instance, stopped at the end). A process already connected to Ray uses that connection.
+    ``workers``: at most this many chunks at once on Ray (default: the cluster's CPUs).
+    ``max_retries``: Ray runs a chunk again this many times when its worker dies.
+    ``out``: the run folder (see the module's docstring); refused if it holds another spec.
+    ``progress``: a tqdm bar in throws (throws/s). The result does not depend on ``ray``,
+    ``workers``, ``out`` or on interruptions.
+    """
+    if isinstance(scene, str):
+        if scene not in STANDARD_SIZES:
+            raise ValueError(f"scene must be a Scene or one of {tuple(STANDARD_SIZES)}, "
+                             f"got {scene!r}")
+        scene = Scene(die=Die.standard(scene))
+    spec = Spec(scene, throws, chunk, seed, draw)
+    if ray is not None and (not isinstance(ray, str) or not ray):
+        raise ValueError(f"ray must be None or an address ('auto', 'local', 'ray://host:port'), "
+                         f"got {ray!r}")
+    if workers is not None and (not isinstance(workers, int) or isinstance(workers, bool)
+                                or workers < 1):
+        raise ValueError(f"workers must be None or an int >= 1, got {workers!r}")
+    if not isinstance(max_retries, int) or isinstance(max_retries, bool) or max_retries < 0:
+        raise ValueError(f"max_retries must be an int >= 0, got {max_retries!r}")
+    folder = None if out is None else _run_folder(Path(out), spec)
+    tallies = {} if folder is None else _saved_tallies(folder, spec)
+    todo = [i for i in range(spec.n_chunks) if i not in tallies]
+    bar = tqdm(total=spec.throws, initial=sum(t.throws for t in tallies.values()),
+               unit="throw", unit_scale=True, desc="throws", disable=not progress,
+               dynamic_ncols=True)
+
+    def done(index: int, outcomes: dict[str, np.ndarray]) -> None:
+        if folder is not None:
+            _save_chunk(folder, index, outcomes)
+        tallies[index] = Tally.of(spec.scene, outcomes)
+        bar.update(spec.size(index))
+
+    try:
+        if ray is None:
+            for index in todo:
+                done(index, throw_chunk(spec, index))
+        else:
+            _run_on_ray(ray, spec, todo, done, workers, max_retries)
+    finally:
+        bar.close()
+    return Tally.merge(tallies[i] for i in range(spec.n_chunks))
+
+
+def hand_faces(scene: Scene, n: int, seed: int, *, ray: str | None = None,
+               chunk: int = CHUNK) -> Faces:
+    """The faces of ``n`` hand throws of ``scene`` from ``seed`` by :func:`run_throws`.
+
+    A study's ``faces_of`` (``python -m dice_env.studies shapes --ray ADDRESS``); no bar.
+    """
+    return run_throws(scene, n, chunk=chunk, seed=seed, ray=ray, progress=False).faces
+
+
+@contextlib.contextmanager
+def connected(address: str) -> Iterator[ModuleType]:
+    """Ray, connected to ``address`` for the block; a process already connected stays so.
+
+    ``"local"`` starts a fresh local instance (without its dashboard), stopped at the end.
+    """
+    try:
+        import ray
+    except ImportError as error:
+        raise ImportError(f"ray={address!r} needs Ray: {INSTALL_RAY}") from error
+    started = not ray.is_initialized()
+    if started:
+        ray.init(address=address, **({"include_dashboard": False} if address == "local"
+                                     else {}))
+    try:
+        yield ray
+    finally:
+        if started:
+            ray.shutdown()
+
+
+def _run_on_ray(address: str, spec: Spec, todo: list[int],
+                done: Callable[[int, dict[str, np.ndarray]], None], workers: int | None,
+                max_retries: int) -> None:
+    """Run the chunks ``todo`` as Ray tasks, ``workers`` at a time; ``done`` each result."""
+    with connected(address) as ray:
+        task = ray.remote(num_cpus=1, max_retries=max_retries)(throw_chunk)
+        at_once = workers or max(1, int(ray.cluster_resources().get("CPU", 1)))
+        spec_ref = ray.put(spec)
+        waiting, running = list(reversed(todo)), {}
+        try:
+            while waiting or running:
+                while waiting and len(running) < at_once:
+                    index = waiting.pop()
+                    running[task.remote(spec_ref, index, 1)] = index
+                finished, _ = ray.wait(list(running), num_returns=1)
+                index = running.pop(finished[0])
+                done(index, ray.get(finished[0]))
+        finally:
+            for ref in running:
+                ray.cancel(ref, force=True)
+
+
+def _run_folder(folder: Path, spec: Spec) -> Path:
+    """``folder`` made ready for ``spec``: created with its ``spec.json``, or checked against it."""
+    record = spec.record()
+    path = folder / SPEC_FILE
+    if path.exists():
+        saved = json.loads(path.read_text())
+        differ = [key for key in record if saved.get(key) != record[key]]
+        if differ:
+            shown = "; ".join("another scene" if k == "scene" else
+                              f"{k} {saved.get(k)!r} there, {record[k]!r} asked" for k in differ)
+            raise ValueError(f"out={str(folder)!r} holds a run of another spec ({shown}): "
+                             "pass the same scene, throws, chunk, seed and draw, or another "
+                             "folder")
+    else:
+        folder.mkdir(parents=True, exist_ok=True)
+        _write_atomically(path, lambda f: f.write(json.dumps(record, indent=1).encode()))
+    return folder
+
+
+def _chunk_path(folder: Path, index: int) -> Path:
+    return folder / f"chunk_{index:06d}.npz"
+
+
+def _saved_tallies(folder: Path, spec: Spec) -> dict[int, Tally]:
+    """The tallies of the chunks already in ``folder``, by index."""
+    tallies = {}
+    for index in range(spec.n_chunks):
+        path = _chunk_path(folder, index)
+        if path.exists():
+            with np.load(path) as saved:
+                tallies[index] = Tally.of(spec.scene, {name: saved[name] for name in OUTCOMES})
+    return tallies
+
+
+def _save_chunk(folder: Path, index: int, outcomes: dict[str, np.ndarray]) -> None:
+    _write_atomically(_chunk_path(folder, index), lambda f: np.savez(f, **outcomes))
+
+
+def _write_atomically(path: Path, write: Callable) -> None:
+    """``write(file)`` to a temporary file renamed to ``path``: never a half-written file."""
+    partial = path.with_name(path.name + ".partial")
+    with open(partial, "wb") as f:
+        write(f)
+    os.replace(partial, path)
+
+
+def summary(tally: Tally, title: str) -> str:
+    """A markdown summary of ``tally``: faces, chi-square, the other outcomes' moments."""
+    faces = tally.faces
+    rows = "\n".join(f"| {label} | {c} | {s:.5f} | [{lo:.5f}, {hi:.5f}] |"
+                     for label, c, s, (lo, hi) in zip(range(1, len(faces.counts) + 1),
+                                                      faces.counts, faces.shares,
+                                                      faces.intervals, strict=True))
+    return f"""{title}
+
+| face | count | share | 95% interval |
+|---|---|---|---|
+{rows}
+
+Counted {faces.ended} of {tally.throws} throws (not counted: {tally.unfinished} unfinished, \
+{tally.unstable} unstable, {tally.sunk} sunk). Chi-square of uniformity: \
+chi2 = {faces.chi2:.2f} ({len(faces.counts) - 1} degrees of freedom), p = {faces.p_value:.4g}.
+Steps {tally.mean('steps'):.0f} ± {tally.std('steps'):.0f}; time to the decided face \
+{tally.mean('time'):.3f} ± {tally.std('time'):.3f} s; impacts {tally.mean('impacts'):.2f} \
+± {tally.std('impacts'):.2f} (mean ± standard deviation)."""
+
+
+def main(argv: list[str] | None = None) -> None:
+    """Throw a standard die many times (optionally on Ray) and print the summary."""
+    parser = argparse.ArgumentParser(
+        prog="python -m dice_env.distributed",
+        description="Many vigorous hand throws of a standard die to a decided face, in seeded "
+        "chunks, in this process or on a Ray cluster; prints the faces and their chi-square.")
+    parser.add_argument("--die", choices=tuple(STANDARD_SIZES), default="d6")
+    parser.add_argument("--throws", type=int, default=100_000)
+    parser.add_argument("--chunk", type=int, default=CHUNK, help="throws per chunk")
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--ray", metavar="ADDRESS", default=None,
+                        help="run on Ray: auto, ray://host:10001, or local (a fresh local "
+                        "instance); default: in this process")
+    parser.add_argument("--workers", type=int, default=None,
+                        help="chunks at once on Ray (default: the cluster's CPUs)")
+    parser.add_argument("--out", type=Path, default=None,
+                        help="run folder: per-chunk outcomes, resumed when run again")
+    args = parser.parse_args(argv)
+    start = time.perf_counter()
+    tally = run_throws(args.die, args.throws, chunk=args.chunk, seed=args.seed, ray=args.ray,
+                       out=args.out, workers=args.workers)
+    seconds = time.perf_counter() - start
+    where = f"on Ray ({args.ray})" if args.ray else "in this process"
+    print(summary(tally, f"## {args.die}: {args.throws} throws in chunks of {args.chunk}, seed "
+                  f"{args.seed}, {where}: {seconds:.1f} s"))
+
+
+if __name__ == "__main__":
+    # run the imported module's main, so Ray ships ``dice_env.distributed.throw_chunk`` by
+    # reference and not this ``__main__`` copy by value
+    from dice_env.distributed import main as imported_main
+
+    imported_main()

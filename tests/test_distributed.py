@@ -1,0 +1,197 @@
+"""Many throws in seeded chunks: exact merges, resumable run folders, the same tally on Ray."""
+
+import os
+import sys
+from dataclasses import dataclass
+
+import numpy as np
+import pytest
+
+from dice_env import distributed as dist
+from dice_env.scene import Scene
+from dice_env.studies import run as run_study
+from dice_env.studies import shapes as sh
+from dice_env.studies.__main__ import main as studies_main
+
+THROWS, CHUNK, SEED = 120, 30, 7  # four chunks of default-d6 throws: about 0.3 s in all
+
+
+def throws(**kwargs):
+    options = {"chunk": CHUNK, "seed": SEED, "progress": False} | kwargs
+    return dist.run_throws(Scene(), THROWS, **options)
+
+
+@pytest.fixture(scope="module")
+def reference():
+    """The tally of the run in this process, without a folder."""
+    return throws()
+
+
+def outcomes_of(spec):
+    return [dist.throw_chunk(spec, i) for i in range(spec.n_chunks)]
+
+
+def test_chunk_generators_are_the_spawned_children_of_the_seed():
+    spec = dist.Spec(Scene(), THROWS, CHUNK, SEED)
+    children = np.random.SeedSequence(SEED).spawn(spec.n_chunks)
+    for i, child in enumerate(children):
+        assert np.array_equal(spec.rng(i).integers(0, 2**62, 4),
+                              np.random.default_rng(child).integers(0, 2**62, 4))
+    assert [spec.size(i) for i in range(spec.n_chunks)] == [30, 30, 30, 30]
+    assert dist.Spec(Scene(), 100, 30, 0).size(3) == 10
+
+
+def test_tallies_merge_exactly_in_any_order():
+    spec = dist.Spec(Scene(), 60, 20, SEED)
+    parts = outcomes_of(spec)
+    tallies = [dist.Tally.of(spec.scene, o) for o in parts]
+    merged = dist.Tally.merge(tallies)
+    assert merged.same_as(dist.Tally.merge(tallies[::-1]))
+    every = {name: np.concatenate([o[name] for o in parts]) for name in dist.OUTCOMES}
+    assert merged.throws == 60 == merged.time_hist.sum() == merged.impacts_hist.sum()
+    assert np.array_equal(merged.counts, np.bincount(every["face"][every["counted"]],
+                                                     minlength=7)[1:])
+    for name in dist.MOMENTS:
+        values = every[name].astype(float)
+        assert merged.mean(name) == pytest.approx(values.mean(), rel=1e-13)
+        assert merged.std(name) == pytest.approx(values.std(ddof=1), rel=1e-9)
+    assert merged.faces.ended + merged.faces.undecided == 60
+    with pytest.raises(ValueError, match="name must be one of"):
+        merged.mean("energy")
+
+
+def test_an_interrupted_run_resumes_from_its_saved_chunks(tmp_path, monkeypatch, reference):
+    computed, real = [], dist.throw_chunk
+
+    def interrupted_after_two(spec, index, num_threads=None):
+        if len(computed) == 2:
+            raise KeyboardInterrupt
+        computed.append(index)
+        return real(spec, index, num_threads)
+
+    monkeypatch.setattr(dist, "throw_chunk", interrupted_after_two)
+    with pytest.raises(KeyboardInterrupt):
+        throws(out=tmp_path)
+    assert sorted(p.name for p in tmp_path.iterdir()) == [
+        "chunk_000000.npz", "chunk_000001.npz", "spec.json"]
+    computed.clear()
+    resumed = throws(out=tmp_path)
+    assert computed == [2, 3]  # the saved chunks are read, not thrown again
+    assert resumed.same_as(reference)
+    computed.clear()
+    assert throws(out=tmp_path).same_as(reference) and computed == []
+
+
+def test_a_folder_of_another_spec_is_refused(tmp_path):
+    dist.run_throws(Scene(), 30, chunk=30, seed=SEED, out=tmp_path, progress=False)
+    for scene, n, kwargs, what in (
+            (Scene(), 60, {}, "throws 30 there, 60 asked"),
+            (Scene(), 30, {"chunk": 15}, "chunk 30 there, 15 asked"),
+            (Scene(), 30, {"seed": 1}, f"seed {SEED} there, 1 asked"),
+            ("d20", 30, {}, "another scene"),
+            (Scene(), 30, {"draw": sh.vigorous_throws}, "draw")):
+        options = {"chunk": 30, "seed": SEED} | kwargs
+        with pytest.raises(ValueError, match=f"holds a run of another spec.*{what}"):
+            dist.run_throws(scene, n, out=tmp_path, progress=False, **options)
+
+
+@pytest.mark.parametrize(("kwargs", "match"), [
+    ({"throws": 0}, "throws must be an int >= 1"), ({"chunk": 0}, "chunk must be an int >= 1"),
+    ({"seed": -1}, "seed must be an int >= 0"), ({"throws": 2.5}, "throws must be an int"),
+    ({"scene": "d7"}, "scene must be a Scene or one of"), ({"ray": ""}, "ray must be None"),
+    ({"workers": 0}, "workers must be None or an int >= 1"),
+    ({"max_retries": -1}, "max_retries must be an int >= 0")])
+def test_bad_arguments_are_refused(kwargs, match):
+    options = {"scene": Scene(), "throws": 10} | kwargs
+    with pytest.raises(ValueError, match=match):
+        dist.run_throws(options.pop("scene"), options.pop("throws"), **options)
+
+
+def test_without_ray_the_error_names_the_extra(monkeypatch):
+    monkeypatch.setitem(sys.modules, "ray", None)  # import ray raises ImportError
+    with pytest.raises(ImportError, match=r"pip install 'dice_env\[ray\]'"):
+        throws(ray="local")
+
+
+def test_command_line_prints_the_chi_square_summary(capsys):
+    dist.main(["--die", "d6", "--throws", "60", "--chunk", "30", "--seed", "1"])
+    text = capsys.readouterr().out
+    assert "## d6: 60 throws in chunks of 30, seed 1, in this process" in text
+    assert "Chi-square of uniformity: chi2 =" in text and "(5 degrees of freedom)" in text
+
+
+def test_the_shapes_study_throws_through_faces_of(tmp_path, monkeypatch):
+    calls = []
+
+    def faces_of(scene, n, seed):
+        calls.append(seed)
+        return sh.Faces.of(np.full(scene.die.n_faces, n // scene.die.n_faces), n)
+
+    monkeypatch.setattr(sh, "free_flight", lambda *a, **k: dict.fromkeys(sh.FLIGHT_COLUMNS, 0.0))
+    monkeypatch.setattr(sh, "_plot", lambda *a: None)
+    run_study("shapes", tmp_path, quick=True, faces_of=faces_of)
+    assert len(calls) == 2 * len(sh.DICE) == len(set(calls))  # one seed per die, fair and loaded
+    page = (tmp_path / "shapes.md").read_text()
+    assert "shapes --quick --ray ADDRESS" in page and "seeded chunks" in page
+    with pytest.raises(ValueError, match="faces_of is taken by the studies shapes only"):
+        run_study("fairness", tmp_path, faces_of=faces_of)
+    with pytest.raises(SystemExit):
+        studies_main(["fairness", "--ray", "auto", "--out", str(tmp_path)])
+
+
+# ---- on a local Ray instance ---------------------------------------------------------------
+
+@pytest.fixture(scope="module")
+def ray():
+    ray = pytest.importorskip("ray", reason="the Ray tests need the extra: pip install "
+                              "'dice_env[ray]'")
+    ray.init(address="local", num_cpus=2, include_dashboard=False)  # never a cluster found here
+    # the workers unpickle this module's DieOnce by value (they cannot import a test module)
+    ray.cloudpickle.register_pickle_by_value(sys.modules[__name__])
+    yield ray
+    ray.shutdown()
+
+
+@dataclass(frozen=True)
+class DieOnce:
+    """Hand throws; the first call anywhere ends its process (``marker`` records the pid)."""
+
+    marker: str
+
+    def __call__(self, scene, n, rng):
+        try:
+            fd = os.open(self.marker, os.O_CREAT | os.O_EXCL | os.O_WRONLY)
+        except FileExistsError:
+            return sh.hand_throws(scene, n, rng)
+        os.write(fd, str(os.getpid()).encode())
+        os.close(fd)
+        os._exit(1)
+
+
+def test_ray_gives_the_local_tally_on_one_worker_and_on_two(ray, reference):
+    assert throws(ray="auto", workers=1).same_as(reference)
+    assert throws(ray="auto").same_as(reference)
+
+
+def test_a_worker_that_dies_loses_only_its_chunk(ray, reference, tmp_path):
+    marker = tmp_path / "died"
+    tally = throws(ray="auto", draw=DieOnce(str(marker)), max_retries=2)
+    assert int(marker.read_text()) != os.getpid()  # a Ray worker ended itself
+    assert tally.same_as(reference)
+
+
+def test_a_run_interrupted_here_resumes_on_ray(ray, reference, tmp_path, monkeypatch):
+    real = dist.throw_chunk
+
+    def first_chunk_only(spec, index, num_threads=None):
+        if index > 0:
+            raise KeyboardInterrupt
+        return real(spec, index, num_threads)
+
+    monkeypatch.setattr(dist, "throw_chunk", first_chunk_only)
+    with pytest.raises(KeyboardInterrupt):
+        throws(out=tmp_path)
+    monkeypatch.setattr(dist, "throw_chunk", real)
+    assert throws(ray="auto", out=tmp_path).same_as(reference)
+    assert dist.hand_faces(Scene(), THROWS, SEED, ray="auto", chunk=CHUNK).counts.tolist() \
+        == reference.counts.tolist()
