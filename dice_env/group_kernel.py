@@ -22,8 +22,11 @@ axis of least overlap) can add some, which the group's energy check flags. A bou
 test leaves out pairs that are apart.
 
 The parallel unit is the throw: one group per thread, its dice stepped together with the
-single die's scheme (velocity, then position; angular momentum, then the rotation), one step at
-a time. The throw ends when every die is at rest (three corners on the planes, every corner
+single die's scheme (velocity, then position; angular momentum, then the rotation). While no
+die touches a plane and every pair's bounding spheres are apart, the steps surely free of
+contact are taken at once in the single die's closed form (:func:`_group_jump`).
+
+The throw ends when every die is at rest (three corners on the planes, every corner
 slow, for the hold) or, with a decision rule, when no energy left in the group can change any
 die's face: for every die ``i``, its own energy plus all that the others could give it (their
 energy above their least, ``Bodies.floor``) is below the lock of the face it reads. The loop

@@ -136,7 +136,8 @@ class State(DiceArrays):
 class Result:
     """Outcome of a batch of throws (arrays over the batch, B).
 
-    - ``face``: 1–6, the face up (against gravity, whatever the floor's tilt) at the end;
+    - ``face``: the label read at the end (the face up against gravity, whatever the floor's
+      tilt; the d4's face down);
     - ``settled``: came to rest; ``rest_time``: when the rest began (s; the time simulated if
       not settled);
     - ``decided``: ended by ``stop_when_decided`` with too little energy left to change face;
