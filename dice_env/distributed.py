@@ -256,12 +256,16 @@ def run_throws(scene: Scene | str, throws: int, *, chunk: int = CHUNK, seed: int
 
 
 def hand_faces(scene: Scene, n: int, seed: int, *, ray: str | None = None,
-               chunk: int = CHUNK) -> Faces:
+               chunk: int = CHUNK, keep: Path | str | None = None) -> Faces:
     """The faces of ``n`` hand throws of ``scene`` from ``seed`` by :func:`run_throws`.
 
-    A study's ``faces_of`` (``python -m dice_env.studies shapes --ray ADDRESS``); no bar.
+    A study's ``faces_of`` (``python -m dice_env.studies shapes [--ray ADDRESS] [--chunks
+    DIR]``); no bar. ``keep``: a folder holding one run folder per seed (``seed-N``), so that
+    an interrupted study continues from the chunks it had finished.
     """
-    return run_throws(scene, n, chunk=chunk, seed=seed, ray=ray, progress=False).faces
+    out = None if keep is None else Path(keep) / f"seed-{seed}"
+    return run_throws(scene, n, chunk=chunk, seed=seed, ray=ray, out=out,
+                      progress=False).faces
 
 
 @contextlib.contextmanager

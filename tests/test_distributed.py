@@ -8,6 +8,8 @@ import numpy as np
 import pytest
 
 from dice_env import distributed as dist
+from dice_env.die import Die
+from dice_env.distributed import hand_faces
 from dice_env.scene import Scene
 from dice_env.studies import run as run_study
 from dice_env.studies import shapes as sh
@@ -132,11 +134,23 @@ def test_the_shapes_study_throws_through_faces_of(tmp_path, monkeypatch):
     run_study("shapes", tmp_path, quick=True, faces_of=faces_of)
     assert len(calls) == 2 * len(sh.DICE) == len(set(calls))  # one seed per die, fair and loaded
     page = (tmp_path / "shapes.md").read_text()
-    assert "shapes --quick --ray ADDRESS" in page and "seeded chunks" in page
+    assert "shapes --quick --chunks DIR" in page and "seeded chunks" in page
     with pytest.raises(ValueError, match="faces_of is taken by the studies shapes only"):
         run_study("fairness", tmp_path, faces_of=faces_of)
-    with pytest.raises(SystemExit):
-        studies_main(["fairness", "--ray", "auto", "--out", str(tmp_path)])
+    for flag, value in (("--ray", "auto"), ("--chunks", str(tmp_path))):
+        with pytest.raises(SystemExit):
+            studies_main(["fairness", flag, value, "--out", str(tmp_path)])
+
+
+def test_kept_chunks_let_a_study_continue_where_it_stopped(tmp_path):
+    scene = Scene(die=Die.standard("d20"))
+    first = hand_faces(scene, 40, 7, chunk=20, keep=tmp_path)
+    saved = sorted(p.name for p in (tmp_path / "seed-7").iterdir())
+    assert saved == ["chunk_000000.npz", "chunk_000001.npz", "spec.json"]
+    (tmp_path / "seed-7" / "chunk_000001.npz").unlink()  # as if stopped after one chunk
+    again = hand_faces(scene, 40, 7, chunk=20, keep=tmp_path)
+    np.testing.assert_array_equal(again.counts, first.counts)
+    np.testing.assert_array_equal(first.counts, hand_faces(scene, 40, 7, chunk=20).counts)
 
 
 # ---- on a local Ray instance ---------------------------------------------------------------

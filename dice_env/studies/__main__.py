@@ -1,4 +1,8 @@
-"""``python -m dice_env.studies {all,<study>} [--quick] [--throws N] [--ray ADDR] [--out DIR]``."""
+"""The studies' command line.
+
+``python -m dice_env.studies {all,<study>} [--quick] [--throws N] [--ray ADDR] [--chunks DIR]
+[--out DIR]``.
+"""
 
 from __future__ import annotations
 
@@ -24,11 +28,17 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--ray", metavar="ADDRESS", default=None,
                         help=f"throw in seeded chunks on Ray ({', '.join(CHUNKED)} only): "
                         "auto, ray://host:10001, or local (a fresh local instance)")
+    parser.add_argument("--chunks", metavar="DIR", type=Path, default=None,
+                        help=f"throw in seeded chunks ({', '.join(CHUNKED)} only), each kept "
+                        "under DIR: run again, the study continues from the chunks done")
     args = parser.parse_args(argv)
-    for flag, value, takers in (("--throws", args.throws, SIZED), ("--ray", args.ray, CHUNKED)):
+    for flag, value, takers in (("--throws", args.throws, SIZED), ("--ray", args.ray, CHUNKED),
+                                ("--chunks", args.chunks, CHUNKED)):
         if value is not None and args.study not in takers:
             parser.error(f"{flag} is taken by {', '.join(takers)} only, not {args.study!r}")
-    faces_of = None if args.ray is None else functools.partial(hand_faces, ray=args.ray)
+    chunked = args.ray is not None or args.chunks is not None
+    faces_of = functools.partial(hand_faces, ray=args.ray, keep=args.chunks) if chunked \
+        else None
     with contextlib.nullcontext() if args.ray is None else connected(args.ray):
         for name in STUDIES if args.study == "all" else [args.study]:
             numbers = run(name, args.out, args.quick, args.throws, faces_of)
