@@ -57,10 +57,12 @@ kernel takes a few named groups (:class:`Body`, :class:`Contact`, :class:`Option
 :func:`dice_env.simulate.pack`; each piece of the physics is one small inlined function:
 a vertex on a plane (:func:`vertex_on_plane`, :func:`_stick_slip`), the contact-free jump
 (:func:`free_steps`, :func:`torque_free`), the face read and the decided-face test
-(:func:`face_read`, :func:`decided`), the rotation (:func:`rotate`); :func:`simulate_one`
-loops them. The hot loop hands those pieces numbers, not arrays: in numba each array handed
-on costs an atomic reference count, which cost the loop more than its arithmetic. This
-module imports nothing else from the package.
+(:func:`face_read`, :func:`decided`), the rotation (:func:`rotate`); :func:`advance` loops
+them for one die in scratch arrays its caller gives, :func:`simulate_one` on the CPU and
+:mod:`dice_env.cuda_kernel` on a GPU, where numba-cuda compiles the same functions again.
+The hot loop hands those pieces numbers, not arrays: in numba each array handed on costs an
+atomic reference count, which cost the loop more than its arithmetic. This module imports
+nothing else from the package.
 """
 
 from __future__ import annotations
@@ -458,6 +460,27 @@ def relative_rise(e_max: float, e_start: float, e_tol: float) -> float:
 def simulate_one(i: int, dice: Dice, body: Body, contact: Contact, options: Options,
                  stops: Stops, records: Records, out: Outcome) -> None:
     """Advance die ``i`` in place; see :func:`simulate_batch`."""
+    n_vertices, n_planes = body.vertices.shape[0], contact.planes.shape[0]
+    advance(i, dice, body, contact, options, stops, records, out, np.empty((3, 3)),
+            np.empty((3, 3)), np.empty((n_vertices, 3)), np.empty((n_planes, n_vertices)),
+            np.empty((n_planes, n_vertices, 3)), np.empty((n_planes, n_vertices), np.bool_),
+            np.empty(n_planes))
+
+
+@njit(cache=True, inline="always")
+def advance(i: int, dice: Dice, body: Body, contact: Contact, options: Options, stops: Stops,
+            records: Records, out: Outcome, qi: np.ndarray, qj: np.ndarray, offsets: np.ndarray,
+            heights: np.ndarray, anchors: np.ndarray, tied: np.ndarray,
+            lowest: np.ndarray) -> None:
+    """:func:`simulate_one` in scratch arrays given by the caller, for any numba target.
+
+    ``qi`` (3, 3) the orientation, ``qj`` (3, 3) one recorded within a jump; per vertex (N)
+    and plane (P): ``offsets`` (N, 3) from the centre, ``heights`` (P, N) entering the last
+    step, ``anchors`` (P, N, 3) and ``tied`` (P, N) the stick-slip ties, ``lowest`` (P,) each
+    plane's lowest vertex height; larger arrays are fine, their contents on entry do not
+    matter. Nothing here allocates or calls an array method, so the same source compiles as
+    a CUDA device function (:mod:`dice_env.cuda_kernel`).
+    """
     # the groups' arrays taken out once: each taking costs a reference count
     vertices, planes, faces, lock = body.vertices, contact.planes, body.faces, stops.lock
     inv_body, inv_iso, reads_down = body.inv_inertia, body.inv_iso, body.reads_down
@@ -472,10 +495,14 @@ def simulate_one(i: int, dice: Dice, body: Body, contact: Contact, options: Opti
     w0, w1, w2 = (dice.w[i, 0], dice.w[i, 1], dice.w[i, 2]) if rotation else (0.0, 0.0, 0.0)
     dt_m = dt / mass
     n_steps, stride = stops.n_steps, records.stride
-    qi = dice.q[i].copy()
+    for a in range(3):
+        for c in range(3):
+            qi[a, c] = dice.q[i, a, c]
     n_rec = records.x.shape[1]
     kinetic_rest = 0.5 * mass * stops.v_rest * stops.v_rest
-    lock_max = lock.max()
+    lock_max = -np.inf
+    for f in range(lock.shape[0]):
+        lock_max = max(lock_max, lock[f])
     e_start, e_tol, e_max = 0.0, 1.0, -np.inf
     quiet = 0
     was_in_contact = True
@@ -488,11 +515,11 @@ def simulate_one(i: int, dice: Dice, body: Body, contact: Contact, options: Opti
     pu0, pu1, pu2 = u0, u1, u2  # velocities one step back, for the midpoint forces
     pw0, pw1, pw2 = w0, w1, w2
     n_vertices, n_planes = vertices.shape[0], planes.shape[0]
-    offsets = np.empty((n_vertices, 3))  # vertex offsets from the centre, world frame
-    heights = np.full((n_planes, n_vertices), -1.0)  # vertex heights entering the last step
-    anchors = np.zeros((n_planes, n_vertices, 3))  # stick-slip: where each spring is tied
-    tied = np.zeros((n_planes, n_vertices), np.bool_)
-    lowest = np.empty(n_planes)  # each plane's lowest vertex height
+    for p in range(n_planes):
+        for k in range(n_vertices):
+            heights[p, k] = -1.0
+            tied[p, k] = False
+            anchors[p, k, 0], anchors[p, k, 1], anchors[p, k, 2] = 0.0, 0.0, 0.0
     while step < n_steps:
         passes += 1
         if passes & (ABORT_EVERY - 1) == 0 and out.abort[0] != 0:
@@ -619,7 +646,9 @@ def simulate_one(i: int, dice: Dice, body: Body, contact: Contact, options: Opti
                     break
                 j = s - step + 1
                 half = 0.5 * j * (j + 1)
-                qj = qi.copy()
+                for a in range(3):
+                    for c in range(3):
+                        qj[a, c] = qi[a, c]
                 if rotation:
                     torque_free(qj, inv_body, inv_iso, l0, l1, l2, dt, j)
                 _record(records, s // stride - 1, i,
@@ -663,7 +692,9 @@ def simulate_one(i: int, dice: Dice, body: Body, contact: Contact, options: Opti
     dice.ang[i, 0], dice.ang[i, 1], dice.ang[i, 2] = l0, l1, l2
     if rotation:
         dice.w[i, 0], dice.w[i, 1], dice.w[i, 2] = w0, w1, w2
-    dice.q[i] = qi
+    for a in range(3):
+        for c in range(3):
+            dice.q[i, a, c] = qi[a, c]
     out.status[i] = end
     out.unstable[i] = end == NONFINITE
     if end != SETTLED:
@@ -708,7 +739,9 @@ def _record(records: Records, j: int, i: int, x: tuple, u: tuple, ang: tuple, q:
         records.energy[i, j] = 0.5 * body.mass * (u0 * u0 + u1 * u1 + u2 * u2) + rot \
             + body.mass * g * x2
     if records.orientation.shape[1] > 0:
-        records.orientation[i, j] = q
+        for a in range(3):
+            for c in range(3):
+                records.orientation[i, j, a, c] = q[a, c]
     if records.nodes.shape[1] > 0:
         vertices = body.vertices
         for k in range(vertices.shape[0]):

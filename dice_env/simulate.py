@@ -3,11 +3,13 @@
 from __future__ import annotations
 
 import functools
+import importlib.util
 import math
 import os
 import threading
 from collections.abc import Callable
 from dataclasses import dataclass
+from types import ModuleType
 from typing import ClassVar, Self
 
 import numba
@@ -184,6 +186,7 @@ def simulate(
     free_flight: bool = True,
     early_rest: bool = False,
     stop_when_decided: bool = False,
+    device: str = "cpu",
 ) -> Result:
     """Run a batch of throws; ``state`` is not modified.
 
@@ -205,6 +208,10 @@ def simulate(
     of the cost; the final state, rest time and impacts are those of that moment, and it is
     not ``settled``.
 
+    ``device``: ``"cpu"`` (numba's threads) or ``"cuda"``: one die per thread of an NVIDIA GPU
+    (:mod:`dice_env.cuda_kernel`; the extra ``dice_env[cuda]``), the same physics to
+    round-off, without records; ``num_threads`` does not apply there.
+
     Refused before any work (``ValueError``/``TypeError`` naming the argument): a step count
     above :data:`dice_env.scene.MAX_STEPS`, records above :data:`MAX_RECORD_BYTES`, a state
     starting deeper in the table than the scene's sink limit. Ctrl-C ends a long run within
@@ -219,6 +226,8 @@ def simulate(
             or record_every < 0:
         raise ValueError(f"record_every must be an int >= 0, got {record_every!r}")
     threads = thread_count(num_threads)
+    if device not in DEVICES:
+        raise ValueError(f"device must be one of {', '.join(map(repr, DEVICES))}, got {device!r}")
     for name, flag in (("stop_at_rest", stop_at_rest), ("free_flight", free_flight),
                        ("early_rest", early_rest), ("stop_when_decided", stop_when_decided)):
         if not isinstance(flag, (bool, np.bool_)):
@@ -244,11 +253,14 @@ def simulate(
         status=np.zeros(b, np.int8), unstable=np.zeros(b, np.bool_), rest_time=np.zeros(b),
         impacts=np.zeros(b, np.int64), max_pen=np.maximum(start_sink, 0.0),
         energy_rise=np.zeros(b), steps=np.zeros(b, np.int64), abort=np.zeros(1, np.int64))
-    chosen = vector_kernel if vector_kernel.covers(
-        scene, b, options.flight, records.stride <= n_steps) else kernel
-    run_kernel(chosen.simulate_batch, chosen.simulate_serial,
-               (dice, body, contact, options, stops, records, outcome), outcome.abort,
-               batch=b, threads=threads, work=b * n_steps)
+    groups = (dice, body, contact, options, stops, records, outcome)
+    if device == "cuda":
+        _cuda_kernel().run(*groups)
+    else:
+        chosen = vector_kernel if vector_kernel.covers(
+            scene, b, options.flight, records.stride <= n_steps) else kernel
+        run_kernel(chosen.simulate_batch, chosen.simulate_serial, groups, outcome.abort,
+                   batch=b, threads=threads, work=b * n_steps)
     energy_rise, unstable, status = outcome.energy_rise, outcome.unstable, outcome.status
     energy_rise /= scene.energy_tol
     unstable |= energy_rise > 1.0
@@ -333,6 +345,7 @@ def _records(record: tuple[str, ...], record_every: int, b: int, n_steps: int,
         nodes=np.zeros((b, n_rec if "nodes" in record else 0, n_vertices, 3)))
 
 
+DEVICES = ("cpu", "cuda")  # where simulate runs
 UP = np.array([0.0, 0.0, 1.0])  # against gravity: faces are read relative to it
 RECORDS = ("energy", "orientations", "nodes")
 RELEASE_SINK = 1e-3  # deepest corner of a release, as a fraction of the die's size
@@ -366,6 +379,22 @@ def _record_names(record: object) -> tuple[str, ...]:
         raise ValueError(f"record must name only {', '.join(map(repr, RECORDS))}, "
                          f"got {sorted(unknown)}")
     return tuple(names)
+
+
+def _cuda_kernel() -> ModuleType:
+    """:mod:`dice_env.cuda_kernel`, once numba-cuda and a GPU (or its simulator) are there."""
+    if importlib.util.find_spec("numba_cuda") is None:
+        raise ImportError("device='cuda' needs numba-cuda: pip install 'dice_env[cuda]' (an "
+                          "NVIDIA GPU and its driver too)")
+    from numba import cuda
+
+    if not cuda.is_available():
+        raise RuntimeError("device='cuda' found no usable CUDA GPU (numba.cuda.is_available() "
+                           "is False): it needs an NVIDIA GPU with its driver; "
+                           "numba.cuda.detect() says what is missing")
+    from dice_env import cuda_kernel
+
+    return cuda_kernel
 
 
 def thread_count(num_threads: int | None) -> int:
