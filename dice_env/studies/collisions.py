@@ -122,18 +122,19 @@ def entropy_bits(counts: np.ndarray) -> float:
     return float(-(p * np.log2(p)).sum())
 
 
-def entropy_interval(codes: np.ndarray, k: int, rng: np.random.Generator) -> tuple[float, float]:
-    """95% basic bootstrap interval of the entropy (bits) of ``codes`` (integers 0..k-1).
+def entropy_estimate(codes: np.ndarray, k: int,
+                     rng: np.random.Generator) -> tuple[float, float, float]:
+    """The bias-corrected entropy (bits) of ``codes`` (0..k-1) and its 95% interval.
 
-    The basic interval ``2 H - q`` reflects the resamples' quantiles ``q`` about the estimate
-    ``H``, which corrects the plug-in estimate's downward bias to first order (resamples sit
-    lower still).
+    The plug-in entropy ``H`` of a sample sits low, and its resamples' ``H*`` lower still by
+    about as much: the estimate is ``2 H - mean(H*)`` and the interval ``2 H - q`` over the
+    resamples' 97.5% and 2.5% quantiles ``q``.
     """
-    estimate = entropy_bits(np.bincount(codes, minlength=k))
+    plug_in = entropy_bits(np.bincount(codes, minlength=k))
     draws = rng.integers(0, len(codes), (BOOTSTRAP, len(codes)))
     values = [entropy_bits(np.bincount(codes[d], minlength=k)) for d in draws]
-    return (float(2 * estimate - np.quantile(values, 0.975)),
-            float(2 * estimate - np.quantile(values, 0.025)))
+    return (float(2 * plug_in - np.mean(values)), float(2 * plug_in - np.quantile(values, 0.975)),
+            float(2 * plug_in - np.quantile(values, 0.025)))
 
 
 def mcnemar(a: np.ndarray, b: np.ndarray) -> float:
@@ -256,10 +257,10 @@ def run(out: Path = DOCS, quick: bool = False, throws: int | None = None,
     return {k: v for k, v in numbers.items() if isinstance(v, float)}
 
 
-def _rate(hits: np.ndarray) -> tuple[float, float, float]:
-    """Share of ``hits`` and its 95% Wilson interval."""
+def _rate(hits: np.ndarray) -> tuple[float, float, float, int, int]:
+    """Share of ``hits``, its 95% Wilson interval, the hits and the trials."""
     lo, hi = wilson(int(hits.sum()), len(hits))
-    return float(hits.mean()), float(lo), float(hi)
+    return float(hits.mean()), float(lo), float(hi), int(hits.sum()), len(hits)
 
 
 def _numbers(study: Collisions, seconds: float, cpu: float,
@@ -302,12 +303,10 @@ def _numbers(study: Collisions, seconds: float, cpu: float,
         f = faces[case]
         for die in range(2):
             counts = np.bincount(f[:, die] - 1, minlength=6)
-            n[f"{case}_entropy{die + 1}"] = (entropy_bits(counts),
-                                            *entropy_interval(f[:, die] - 1, 6, rng))
+            n[f"{case}_entropy{die + 1}"] = entropy_estimate(f[:, die] - 1, 6, rng)
             n[f"{case}_uniform{die + 1}"] = float(stats.chisquare(counts).pvalue)
         joint = (f[:, 0] - 1) * 6 + f[:, 1] - 1
-        n[f"{case}_joint"] = (entropy_bits(np.bincount(joint, minlength=36)),
-                              *entropy_interval(joint, 36, rng))
+        n[f"{case}_joint"] = entropy_estimate(joint, 36, rng)
     n["spin_change_median"] = n["together_spin_change"][2][0]
     n["spin_turn_median"] = n["together_spin_turn"][2][0]
     return n
@@ -330,7 +329,7 @@ def _plot(study: Collisions, n: dict, path: Path) -> None:
     bars = [("together: die 1", n["change_together"]), ("together: die 2", n["change_die2"]),
             ("together: either", n["change_either"]), ("apart: die 1", n["change_apart"]),
             ("never met: die 1", n["change_quiet"])]
-    for i, (label, (p, lo, hi)) in enumerate(bars):
+    for i, (label, (p, lo, hi, _, _)) in enumerate(bars):
         ax.bar(i, p, color="C3" if label.startswith("together") else "C0")
         ax.errorbar(i, p, yerr=[[p - lo], [hi - p]], color="k", capsize=3)
     ax.set_xticks(range(len(bars)), [b[0] for b in bars], rotation=20, fontsize=8)
@@ -362,8 +361,10 @@ def _quantile_rows(n: dict) -> str:
     return "\n".join(rows)
 
 
-def _share(value: tuple[float, float, float]) -> str:
-    return f"{value[0]:.3f} [{value[1]:.3f}, {value[2]:.3f}]"
+def _share(value: tuple) -> str:
+    """``share [low, high]``, and ``(hits / trials)`` where given."""
+    counts = f" ({value[3]} / {value[4]})" if len(value) > 3 else ""
+    return f"{value[0]:.3f} [{value[1]:.3f}, {value[2]:.3f}]{counts}"
 
 
 def _markdown(study: Collisions, n: dict, seed: int) -> str:
@@ -461,7 +462,8 @@ Die 1's face changes {verdict} when the dice meet than when the same die is thro
 {PERTURBATION:g} m/s turns is not determined by any hand; the share is the part of the
 outcome that is chaos, not aim.
 
-Entropy of the faces (bits, plug-in estimate [95% basic bootstrap interval]; a fair die
+Entropy of the faces (bits, `collisions.entropy_estimate`: the plug-in entropy corrected for
+its sampling bias by the bootstrap [95% basic bootstrap interval]; a fair die
 {np.log2(6):.3f}, a fair pair {np.log2(36):.3f}; the plug-in estimate of 36 cells from
 {int(n['counted_met'])} throws sits about {35 / (2 * max(n['counted_met'], 1) * np.log(2)):.3f}
 bits low by sampling alone) and the chi-square p-value of each die's uniformity:
