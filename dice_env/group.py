@@ -105,12 +105,20 @@ class GroupResult:
     """Outcome of B throws of N dice.
 
     Per die (B, N): ``face`` (the label read, 0 where not read), ``read`` (False for a die
-    leaning on another at the end), ``impacts``, ``max_penetration`` (deepest corner in a
-    plane, m), ``sunk``. Per throw (B,): ``settled`` (every die at rest), ``decided`` (no
-    face can change any more), ``rest_time``, ``unstable`` (energy gain beyond the scene's
-    tolerance, or a non-finite state), ``energy_rise``, ``overlap`` (deepest die–die contact,
-    m), ``steps``; ``final`` the state at the end. With recording: ``t`` (n,), ``x_cm``
-    (B, n, N, 3), ``orientations`` (B, n, N, 3, 3).
+    leaning on another at the end), ``impacts``, ``die_impacts`` (starts of a contact with
+    another die, their centres' relative speed above the rest speed), ``max_penetration``
+    (deepest corner in a plane, m), ``sunk``; ``touched`` (B, N, P): the die touched plane P
+    (:attr:`Scene.planes`: the floor, then the walls). Per throw (B,): ``settled`` (every die
+    at rest), ``decided`` (no face can change any more), ``rest_time``, ``unstable`` (energy
+    gain beyond the scene's tolerance, or a non-finite state), ``energy_rise``, ``overlap``
+    (deepest die–die contact, m), ``steps``; ``final`` the state at the end.
+
+    The first die–die contact: ``meet_dice`` (B, 2) the pair (-1 where no dice touched),
+    ``meet_steps`` (B, 2) the steps done when it starts and when it ends (-1: none, or the
+    pair still touching at the end), ``meet_velocity`` and ``meet_spin`` (B, 2, N, 3): every
+    die's velocity and angular velocity (world frame) then, before the contact's first force
+    and after its last. With recording: ``t`` (n,), ``x_cm`` (B, n, N, 3), ``orientations``
+    (B, n, N, 3, 3).
     """
 
     face: np.ndarray
@@ -126,6 +134,12 @@ class GroupResult:
     sunk: np.ndarray
     steps: np.ndarray
     final: GroupState
+    die_impacts: np.ndarray
+    touched: np.ndarray
+    meet_dice: np.ndarray
+    meet_steps: np.ndarray
+    meet_velocity: np.ndarray
+    meet_spin: np.ndarray
     t: np.ndarray | None = None
     x_cm: np.ndarray | None = None
     orientations: np.ndarray | None = None
@@ -235,7 +249,10 @@ def simulate_group(
         energy_rise=np.zeros(b), steps=np.zeros(b, np.int64), overlap=np.zeros(b),
         impacts=np.zeros((b, n), np.int64), max_pen=np.maximum(sinks, 0.0),
         contacts=np.zeros((b, n), np.int64), touching=np.zeros((b, n), np.bool_),
-        abort=np.zeros(1, np.int64))
+        die_impacts=np.zeros((b, n), np.int64),
+        touched=np.zeros((b, n, len(scene.planes)), np.bool_),
+        meet_dice=np.full((b, 2), -1, np.int64), meet_steps=np.full((b, 2), -1, np.int64),
+        meet=np.zeros((b, 2, n, 6)), abort=np.zeros(1, np.int64))
     group = group_kernel.GroupDice(out.position, out.velocity, out.angular_momentum,
                                    out.orientation, out.angular_velocity)
     run_kernel(group_kernel.simulate_groups, group_kernel.simulate_groups_serial,
@@ -256,7 +273,9 @@ def simulate_group(
         impacts=outcome.impacts, unstable=outcome.unstable | (energy_rise > 1.0),
         energy_rise=energy_rise, max_penetration=outcome.max_pen, overlap=outcome.overlap,
         sunk=(outcome.max_pen > limit) | (outcome.overlap[:, None] > limit),
-        steps=outcome.steps, final=out, **recorded)
+        steps=outcome.steps, final=out, die_impacts=outcome.die_impacts,
+        touched=outcome.touched, meet_dice=outcome.meet_dice, meet_steps=outcome.meet_steps,
+        meet_velocity=outcome.meet[..., :3], meet_spin=outcome.meet[..., 3:], **recorded)
 
 
 def _dice(dice: Sequence[Die]) -> tuple[Die, ...]:

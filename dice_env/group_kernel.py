@@ -175,8 +175,14 @@ class GroupOutcome(NamedTuple):
 
     Per throw (G,) ``status``, ``unstable``, ``rest_time``, ``energy_rise``, ``steps``,
     ``overlap`` (the deepest die–die contact); per die (G, N) ``impacts``, ``max_pen``
-    (deepest sink into a plane), ``contacts`` (vertices on the planes at the end) and
-    ``touching`` (in contact with another die at the end); ``abort`` (1,).
+    (deepest sink into a plane), ``contacts`` (vertices on the planes at the end),
+    ``touching`` (in contact with another die at the end) and ``die_impacts`` (starts of a
+    contact with another die whose centre moves faster than the rest speed relative to this
+    one's); ``touched`` (G, N, P): the die had a corner in plane P at some step. The first
+    die–die contact of a throw: ``meet_dice`` (G, 2) the pair (-1: none), ``meet_steps``
+    (G, 2) the steps done when it starts and when it ends (-1: not ended), ``meet`` (G, 2, N,
+    6) every die's velocity and angular velocity then (before its first force, after its
+    last). ``abort`` (1,).
     """
 
     status: np.ndarray
@@ -189,6 +195,11 @@ class GroupOutcome(NamedTuple):
     max_pen: np.ndarray
     contacts: np.ndarray
     touching: np.ndarray
+    die_impacts: np.ndarray
+    touched: np.ndarray
+    meet_dice: np.ndarray
+    meet_steps: np.ndarray
+    meet: np.ndarray
     abort: np.ndarray
 
 
@@ -437,6 +448,9 @@ def simulate_group(g: int, dice: GroupDice, bodies: Bodies, pair: Pair, contact:
     near, was = np.zeros(n_dice, np.bool_), np.ones(n_dice, np.bool_)
     fastest, approach = np.zeros(n_dice), np.zeros(n_dice)
     die_touch = np.zeros(n_dice, np.bool_)
+    met = np.zeros((n_dice, n_dice), np.bool_)  # each pair touching after the last step
+    first_a, first_b, parted = -1, -1, False
+    v_rest2 = stops.v_rest * stops.v_rest
     floor_total = 0.0
     for a in range(n_dice):
         floor_total += bodies.floor[a]
@@ -517,6 +531,7 @@ def simulate_group(g: int, dice: GroupDice, bodies: Bodies, pair: Pair, contact:
                         tied[a, k, p] = tie
                     if below:
                         touch += 1
+                        out.touched[g, a, p] = True
                         spring += spring_k
                         out.max_pen[g, a] = max(out.max_pen[g, a], dg)
                         hit = max(hit, approach_k)
@@ -542,13 +557,26 @@ def simulate_group(g: int, dice: GroupDice, bodies: Bodies, pair: Pair, contact:
             for b in range(a + 1, n_dice):
                 d0, d1, d2 = x[a, 0] - x[b, 0], x[a, 1] - x[b, 1], x[a, 2] - x[b, 2]
                 reach = r_max[a] + r_max[b]
-                if d0 * d0 + d1 * d1 + d2 * d2 >= reach * reach:
-                    continue
-                apart = False
-                spring, deepest, touch_ab = pair_contacts(a, b, world, x, q, cu, cw, bodies,
-                                                          pair, force, torque)
-                checked += spring
-                overlap = max(overlap, deepest)
+                touch_ab = False
+                if d0 * d0 + d1 * d1 + d2 * d2 < reach * reach:
+                    apart = False
+                    spring, deepest, touch_ab = pair_contacts(a, b, world, x, q, cu, cw,
+                                                              bodies, pair, force, torque)
+                    checked += spring
+                    overlap = max(overlap, deepest)
+                if touch_ab and not met[a, b]:
+                    s0, s1, s2 = u[a, 0] - u[b, 0], u[a, 1] - u[b, 1], u[a, 2] - u[b, 2]
+                    if s0 * s0 + s1 * s1 + s2 * s2 > v_rest2:
+                        out.die_impacts[g, a] += 1
+                        out.die_impacts[g, b] += 1
+                    if first_a < 0:
+                        first_a, first_b = a, b
+                        _meeting(out, g, 0, step - 1, u, w)
+                elif met[a, b] and not touch_ab and a == first_a and b == first_b \
+                        and not parted:
+                    parted = True
+                    _meeting(out, g, 1, step - 1, u, w)
+                met[a, b] = touch_ab
                 if touch_ab:
                     die_touch[a] = True
                     die_touch[b] = True
@@ -645,6 +673,7 @@ def simulate_group(g: int, dice: GroupDice, bodies: Bodies, pair: Pair, contact:
         out.rest_time[g] = step * dt
     out.steps[g] = step
     out.overlap[g] = overlap
+    out.meet_dice[g, 0], out.meet_dice[g, 1] = first_a, first_b
     out.energy_rise[g] = max(out.energy_rise[g], relative_rise(e_max, e_start, e_tol))
 
 
@@ -702,6 +731,17 @@ def _decided(bodies: Bodies, q: np.ndarray, energy: float, floor_total: float,
         if most >= lock[read]:
             return False
     return True
+
+
+@njit(cache=True, inline="always")
+def _meeting(out: GroupOutcome, g: int, end: int, done: int, u: np.ndarray,
+             w: np.ndarray) -> None:
+    """Store the first die–die contact's start (``end`` 0) or end (1), after ``done`` steps."""
+    out.meet_steps[g, end] = done
+    for a in range(u.shape[0]):
+        for k in range(3):
+            out.meet[g, end, a, k] = u[a, k]
+            out.meet[g, end, a, 3 + k] = w[a, k]
 
 
 @njit(cache=True, inline="always")

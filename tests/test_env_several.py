@@ -145,7 +145,9 @@ def fake_result(face, read, settled=True):
             decided=np.zeros(b, bool), rest_time=np.ones(b), impacts=np.ones((b, n), int),
             unstable=np.zeros(b, bool), energy_rise=np.zeros(b), max_penetration=np.zeros((b, n)),
             overlap=np.zeros(b), sunk=np.zeros((b, n), bool), steps=np.ones(b, int),
-            final=state)
+            final=state, die_impacts=np.zeros((b, n), int), touched=np.ones((b, n, 1), bool),
+            meet_dice=np.full((b, 2), -1), meet_steps=np.full((b, 2), -1),
+            meet_velocity=np.zeros((b, 2, n, 3)), meet_spin=np.zeros((b, 2, n, 3)))
     return simulate_group
 
 

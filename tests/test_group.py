@@ -6,7 +6,7 @@ import pytest
 from dice_env import Die, Scene, State, simulate
 from dice_env.group import DieContact, GroupState, group_step, simulate_group
 from dice_env.rotations import axis_angle, random_rotations
-from dice_env.surroundings import tray
+from dice_env.surroundings import craps, tray
 
 DIE = Die()
 EDGE = DIE.size
@@ -224,3 +224,65 @@ def test_free_flight_jumps_only_where_no_die_can_touch_anything():
     faces = [simulate_group(scene, (DIE, DIE), start, free_flight=flight,
                             stop_when_decided=True).face for flight in (True, False)]
     assert (faces[0] == faces[1]).all(axis=1).mean() >= 0.75
+
+
+def test_the_first_meeting_records_the_velocities_before_and_after():
+    scene, start = free_pair([EDGE * 1.05, 0.003, 0.002], [0.6, 0.05, 0.0], spin=[3.0, -5.0, 8.0])
+    result = simulate_group(scene, (DIE, DIE), start, stop_at_rest=False)
+    assert result.meet_dice.tolist() == [[0, 1]]
+    begin, end = result.meet_steps[0]
+    assert 0 < begin < end < result.steps[0]
+    assert result.die_impacts.tolist() == [[1, 1]] and not result.touched.any()  # no floor
+    # no force before the contact, none after it: the release's and the final velocities
+    np.testing.assert_array_equal(result.meet_velocity[0, 0], start.velocity[0])
+    np.testing.assert_allclose(result.meet_spin[0, 0], start.angular_velocity[0], rtol=1e-12)
+    np.testing.assert_array_equal(result.meet_velocity[0, 1], result.final.velocity[0])
+    np.testing.assert_allclose(result.meet_spin[0, 1], result.final.angular_velocity[0],
+                               rtol=1e-12)
+    momentum = result.meet_velocity[0].sum(axis=1)  # equal masses: kept across the contact
+    np.testing.assert_allclose(momentum[1], momentum[0], atol=1e-15)
+    assert not np.allclose(result.meet_spin[0, 1], result.meet_spin[0, 0])  # spins changed
+
+
+def test_a_die_alone_moves_as_in_its_group_until_the_dice_meet():
+    # stepped every step (a group's flight jumps depend on all its dice)
+    scene = Scene(walls=tray(), t_max=4.0)
+    scene = scene.with_(dt=group_step(scene, (DIE, DIE)))
+    rng = np.random.default_rng(1)
+    n = 6
+    states = [State.release(scene, [0.0, 0.02 * (2 * i - 1), 0.05],
+                            np.array([0.3, 0.0, 0.0]) + rng.normal(0, 0.4, (n, 3)),
+                            rng.normal(0, 20, (n, 3)), random_rotations(rng, n))
+              for i in range(2)]
+    group = simulate_group(scene, (DIE, DIE), GroupState.of(states), stop_when_decided=True,
+                           free_flight=False)
+    met = group.meet_steps[:, 0] >= 0
+    np.testing.assert_array_equal(met, group.overlap > 0)
+    assert 0 < met.sum() < n
+    np.testing.assert_array_equal(group.die_impacts[~met], 0)
+    assert (group.die_impacts[met] >= 1).all()
+    alone = [simulate_group(scene, (DIE,), GroupState.of([s]), stop_when_decided=True,
+                            free_flight=False) for s in states]
+    for i in range(2):  # dice that never met land as if thrown alone
+        np.testing.assert_array_equal(group.face[~met, i], alone[i].face[~met, 0])
+    start = GroupState.of(states)
+    for throw in np.flatnonzero(met):  # alone to the step the dice met: the same, bit for bit
+        steps = int(group.meet_steps[throw, 0])
+        one = GroupState(*(a[throw, :, None] for a in start._arrays()))  # each die a throw
+        run = simulate_group(scene.with_(t_max=steps * scene.dt), (DIE,), one,
+                             stop_at_rest=False, free_flight=False)
+        assert (run.steps == steps).all()
+        np.testing.assert_array_equal(run.final.velocity[:, 0], group.meet_velocity[throw, 0])
+        np.testing.assert_array_equal(run.final.angular_velocity[:, 0],
+                                      group.meet_spin[throw, 0])
+
+
+def test_touched_tells_which_planes_a_die_hit():
+    scene = Scene(walls=craps(), t_max=0.4)
+    ahead = State.release(scene, [0.95, 0.0, 0.02], [0.8, 0.0, 0.0])  # toward the back wall
+    down = State.release(scene, [0.0, 0.0, 0.02], [0.0, 0.0, -0.2])
+    result = simulate_group(scene, (DIE,), GroupState.of([State(*(
+        np.concatenate(a) for a in zip(ahead._arrays(), down._arrays(), strict=True)))]))
+    assert result.touched[:, 0].tolist() == [[True, True, False, False],
+                                             [True, False, False, False]]
+    assert result.meet_steps.tolist() == [[-1, -1]] * 2 and not result.die_impacts.any()

@@ -22,10 +22,12 @@ STUDIES = {
     "pips": "dice_env.studies.pips",
     "materials": "dice_env.studies.materials",
     "pairs": "dice_env.studies.pairs",
+    "collisions": "dice_env.studies.collisions",
+    "craps": "dice_env.studies.craps",
     "weldon": "dice_env.studies.weldon",
     "validation": "dice_env.studies.validation",
 }
-SIZED = ("shapes", "cuboids", "materials", "pairs", "weldon")
+SIZED = ("shapes", "cuboids", "materials", "pairs", "weldon", "collisions", "craps")
 CHUNKED = ("shapes",)
 
 

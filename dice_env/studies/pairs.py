@@ -13,7 +13,7 @@ and the throws voided (not counted).
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from pathlib import Path
 
 import matplotlib
@@ -25,7 +25,7 @@ import numpy as np
 from scipy import stats
 
 from dice_env.die import Die
-from dice_env.group import GroupState, group_step, simulate_group
+from dice_env.group import GroupResult, GroupState, group_step, simulate_group
 from dice_env.scene import Scene
 from dice_env.simulate import State
 from dice_env.studies.fairness import (
@@ -164,27 +164,49 @@ class Pairs:
         return float(chi2), float(p)
 
 
-def throw_pairs(scene: Scene, dice: tuple[Die, ...], state: GroupState, bar: object = None,
-                batch: int = BATCH) -> Pairs:
-    """Throw ``state`` until the faces are decided, in batches of ``batch``; count them."""
+def simulate_in_batches(scene: Scene, dice: tuple[Die, ...], state: GroupState,
+                        bar: object = None, batch: int = BATCH, **keywords: object) -> GroupResult:
+    """:func:`simulate_group` of ``state`` in batches of ``batch`` throws, joined.
+
+    ``bar`` (a progress bar) advances by each batch's throws; ``keywords`` go to
+    :func:`simulate_group` (no recording).
+    """
     parts = []
     for start in range(0, state.batch_size, batch):
         chunk = GroupState(*(a[start:start + batch] for a in state._arrays()))
-        parts.append(simulate_group(scene, dice, chunk, stop_when_decided=True))
+        parts.append(simulate_group(scene, dice, chunk, **keywords))
         if bar is not None:
             bar.update(chunk.batch_size)
-    res = {name: np.concatenate([getattr(p, name) for p in parts])
-           for name in ("face", "read", "settled", "decided", "impacts", "unstable", "overlap",
-                        "sunk", "steps")}
-    reasons = {"not decided within the time limit": ~(res["decided"] | res["settled"]),
-               "unstable (energy rose)": res["unstable"], "a die sunk": res["sunk"].any(axis=1),
-               "a die leaning on the other (not read)": ~res["read"].all(axis=1)}
+    joined = {f.name: np.concatenate([getattr(p, f.name) for p in parts])
+              for f in fields(GroupResult) if f.name not in ("final", "t", "x_cm",
+                                                             "orientations")}
+    final = GroupState(*(np.concatenate(arrays) for arrays in zip(
+        *(p.final._arrays() for p in parts), strict=True)))
+    return GroupResult(**joined, final=final)
+
+
+def throw_pairs(scene: Scene, dice: tuple[Die, ...], state: GroupState, bar: object = None,
+                batch: int = BATCH) -> Pairs:
+    """Throw ``state`` until the faces are decided, in batches of ``batch``; count them."""
+    result = simulate_in_batches(scene, dice, state, bar, batch, stop_when_decided=True)
+    reasons = void_reasons(result)
     counted = ~np.any(list(reasons.values()), axis=0)
-    met = res["overlap"] > 0
-    return Pairs(table=_table(res["face"], counted), met=met, counted=counted,
-                 voided={k: int(v.sum()) for k, v in reasons.items()}, impacts=res["impacts"],
-                 time=res["steps"] * group_step(scene, dice),
-                 met_table=_table(res["face"], counted & met))
+    met = result.overlap > 0
+    return Pairs(table=_table(result.face, counted), met=met, counted=counted,
+                 voided={k: int(v.sum()) for k, v in reasons.items()}, impacts=result.impacts,
+                 time=result.steps * group_step(scene, dice),
+                 met_table=_table(result.face, counted & met))
+
+
+def void_reasons(result: GroupResult) -> dict[str, np.ndarray]:
+    """The throws (B,) of ``result`` that cannot be counted, by reason (a throw may have several).
+
+    Not decided (nor at rest) within the time limit, unstable, a die sunk, a die leaning on
+    another (not read).
+    """
+    return {"not decided within the time limit": ~(result.decided | result.settled),
+            "unstable (energy rose)": result.unstable, "a die sunk": result.sunk.any(axis=1),
+            "a die leaning on the other (not read)": ~result.read.all(axis=1)}
 
 
 def _table(face: np.ndarray, which: np.ndarray) -> np.ndarray:

@@ -1,0 +1,482 @@
+"""Two dice that meet: what their first collision does to them, and to the outcome's randomness.
+
+``run(out, quick, throws)`` writes ``out/collisions.md`` and ``out/figures/collisions.png``.
+Two default d6 leave one hand together into the tray (:func:`dice_env.studies.pairs.hand_throws`,
+the pairs study's throw), each throw until both faces are decided. The same throws are also
+thrown *apart*: each die alone, its own group, at the pair's step, so that a die alone moves
+bit for bit as in the pair until the dice first touch.
+
+- **The first collision**: each die's velocity and angular velocity when the dice first touch
+  and when that contact ends (:attr:`dice_env.group.GroupResult.meet_velocity`,
+  ``meet_spin``), against the same dice thrown apart over the same steps: the change of the
+  spin's and the velocity's magnitude and the angle they turn, as quantiles with
+  distribution-free 95% intervals.
+- **Randomness**: every throw again with die 1's release velocity changed by
+  :data:`PERTURBATION` along x; how often the faces change in the throws where the dice met,
+  together against apart (exact McNemar test on the same throws), and the entropy and
+  uniformity of the faces in each case.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt
+import numba
+import numpy as np
+from scipy import stats
+
+from dice_env.die import Die
+from dice_env.group import GroupResult, GroupState, group_step, simulate_group
+from dice_env.scene import Scene
+from dice_env.studies.fairness import wilson
+from dice_env.studies.pairs import HAND, hand_throws, simulate_in_batches, void_reasons
+from dice_env.studies.paper_figures import DOCS, progress, save_figure
+from dice_env.surroundings import TRAY, tray
+
+# Throws of the pair in the full and the quick run; the fewest a run takes.
+FULL, QUICK, MIN_THROWS = 2400, 24, 20
+# Added to die 1's release velocity along x (m/s) in the perturbed throws.
+PERTURBATION = 1e-6
+# Simulated time limit per throw (s): a throw not decided by then is voided.
+T_MAX = 10.0
+SEED = 2026
+QUANTILES = (0.05, 0.25, 0.5, 0.75, 0.95)
+# Bootstrap resamples of the entropy's interval.
+BOOTSTRAP = 2000
+# The first collision's measures: (key, label, unit).
+MEASURES = (("spin_change", "change of |angular velocity|", "rad/s"),
+            ("spin_turn", "angle the angular velocity turns", "deg"),
+            ("speed_change", "change of |velocity|", "m/s"),
+            ("velocity_turn", "angle the velocity turns", "deg"))
+
+
+def pair_scene() -> tuple[Scene, tuple[Die, Die]]:
+    """The tray, with the pair's step fixed so that a die alone steps as in the pair."""
+    scene = Scene(walls=tray(), t_max=T_MAX)
+    dice = (scene.die, scene.die)
+    return scene.with_(dt=group_step(scene, dice)), dice
+
+
+def alone(state: GroupState) -> GroupState:
+    """Each die of each throw as a throw of its own: (N B, 1), die 0 of every throw first."""
+    return GroupState(*(np.concatenate([a[:, i:i + 1] for i in range(state.n_dice)])
+                        for a in state._arrays()))
+
+
+def alone_after(scene: Scene, die: Die, state: GroupState, steps: np.ndarray,
+                bar: object = None) -> tuple[np.ndarray, np.ndarray]:
+    """Each throw's dice thrown alone for ``steps`` (B,) steps: velocity and spin (B, N, 3)."""
+    velocity, spin = np.zeros(state.position.shape), np.zeros(state.position.shape)
+    for b, n in enumerate(steps):
+        one = GroupState(*(a[b, :, None] for a in state._arrays()))
+        run = simulate_group(scene.with_(t_max=int(n) * scene.dt), (die,), one,
+                             stop_at_rest=False)
+        velocity[b], spin[b] = run.final.velocity[:, 0], run.final.angular_velocity[:, 0]
+        if bar is not None:
+            bar.update(1)
+    return velocity, spin
+
+
+def turn(before: np.ndarray, after: np.ndarray) -> np.ndarray:
+    """The angle (degrees) between the vectors ``before`` and ``after`` (..., 3)."""
+    cross = np.linalg.norm(np.cross(before, after), axis=-1)
+    return np.degrees(np.arctan2(cross, np.einsum("...i,...i", before, after)))
+
+
+def measures(velocity: np.ndarray, spin: np.ndarray) -> dict[str, np.ndarray]:
+    """The changes from ``[:, 0]`` to ``[:, 1]`` of ``velocity`` and ``spin`` (B, 2, N, 3).
+
+    Per die (B, N), keyed as :data:`MEASURES`.
+    """
+    speed, rate = np.linalg.norm(velocity, axis=-1), np.linalg.norm(spin, axis=-1)
+    return {"spin_change": rate[:, 1] - rate[:, 0], "spin_turn": turn(spin[:, 0], spin[:, 1]),
+            "speed_change": speed[:, 1] - speed[:, 0],
+            "velocity_turn": turn(velocity[:, 0], velocity[:, 1])}
+
+
+def quantile_interval(x: np.ndarray, q: float, level: float = 0.95) -> tuple[float, float, float]:
+    """The ``q`` quantile of ``x`` and its distribution-free ``level`` interval.
+
+    The interval runs between the order statistics the binomial (n, q) puts on either side
+    (clipped to the sample's ends).
+    """
+    x = np.sort(np.ravel(x))
+    if not 0.0 < q < 1.0 or len(x) == 0:
+        raise ValueError(f"q must be in (0, 1) and x non-empty, got q={q!r}, {len(x)} values")
+    n = len(x)
+    low = int(stats.binom.ppf((1 - level) / 2, n, q))
+    high = int(stats.binom.ppf(1 - (1 - level) / 2, n, q))
+    return float(np.quantile(x, q)), float(x[max(low - 1, 0)]), float(x[min(high, n - 1)])
+
+
+def entropy_bits(counts: np.ndarray) -> float:
+    """The Shannon entropy (bits) of the distribution with ``counts``."""
+    p = np.asarray(counts, float) / np.sum(counts)
+    p = p[p > 0]
+    return float(-(p * np.log2(p)).sum())
+
+
+def entropy_estimate(codes: np.ndarray, k: int,
+                     rng: np.random.Generator) -> tuple[float, float, float]:
+    """The bias-corrected entropy (bits) of ``codes`` (0..k-1) and its 95% interval.
+
+    The plug-in entropy ``H`` of a sample sits low, and its resamples' ``H*`` lower still by
+    about as much: the estimate is ``2 H - mean(H*)`` and the interval ``2 H - q`` over the
+    resamples' 97.5% and 2.5% quantiles ``q``.
+    """
+    plug_in = entropy_bits(np.bincount(codes, minlength=k))
+    draws = rng.integers(0, len(codes), (BOOTSTRAP, len(codes)))
+    values = [entropy_bits(np.bincount(codes[d], minlength=k)) for d in draws]
+    return (float(2 * plug_in - np.mean(values)), float(2 * plug_in - np.quantile(values, 0.975)),
+            float(2 * plug_in - np.quantile(values, 0.025)))
+
+
+def mcnemar(a: np.ndarray, b: np.ndarray) -> float:
+    """Exact McNemar p-value that the paired booleans ``a`` and ``b`` are true equally often."""
+    a, b = np.asarray(a, bool), np.asarray(b, bool)
+    only_a, only_b = int((a & ~b).sum()), int((~a & b).sum())
+    if only_a + only_b == 0:
+        return 1.0
+    return float(stats.binomtest(only_a, only_a + only_b, 0.5).pvalue)
+
+
+def faces_changed(a: GroupResult, b: GroupResult) -> np.ndarray:
+    """(B,) die 1's face differs between the runs ``a`` and ``b`` of the same throws."""
+    return a.face[:, 0] != b.face[:, 0]
+
+
+@dataclass
+class Collisions:
+    """The study's throws.
+
+    ``together``, ``nudged``: the pair and the pair with die 1 perturbed (B throws);
+    ``met`` (B,): the dice touched; ``apart``: each met throw's dice alone (2 M, 1), die 1 of
+    every met throw first; ``apart_nudged``: die 1 of each met throw alone, perturbed (M, 1);
+    ``window`` (B,): the first contact ended (parted) before the throw did; ``apart_velocity``,
+    ``apart_spin`` (W, 2, 3): the dice alone at the step the first contact ended, over the
+    ``window`` throws; ``dt`` the step (s).
+    """
+
+    together: GroupResult
+    nudged: GroupResult
+    met: np.ndarray
+    apart: GroupResult
+    apart_nudged: GroupResult
+    window: np.ndarray
+    apart_velocity: np.ndarray
+    apart_spin: np.ndarray
+    dt: float
+
+    @property
+    def first_contact(self) -> dict[str, dict[str, np.ndarray]]:
+        """:func:`measures` across the first contact, ``together`` and ``apart`` (W, 2)."""
+        w = self.window
+        velocity, spin = self.together.meet_velocity[w], self.together.meet_spin[w]
+        apart_v = np.stack([velocity[:, 0], self.apart_velocity], axis=1)
+        apart_w = np.stack([spin[:, 0], self.apart_spin], axis=1)
+        return {"together": measures(velocity, spin), "apart": measures(apart_v, apart_w)}
+
+    @property
+    def in_flight(self) -> np.ndarray:
+        """(W,) both dice alone kept their spin over the first contact: neither touched a plane.
+
+        A cube's angular velocity is constant in free flight (isotropic inertia, no torque).
+        """
+        return np.all(self.apart_spin == self.together.meet_spin[self.window, 0], axis=(1, 2))
+
+    @property
+    def counted(self) -> np.ndarray:
+        """(M,) met throws counted in all four runs (together, nudged, apart, apart nudged)."""
+        m = int(self.met.sum())
+        ok = [~np.any(list(void_reasons(r).values()), axis=0)
+              for r in (self.together, self.nudged)]
+        apart = ~np.any(list(void_reasons(self.apart).values()), axis=0)
+        nudged = ~np.any(list(void_reasons(self.apart_nudged).values()), axis=0)
+        return ok[0][self.met] & ok[1][self.met] & apart[:m] & apart[m:] & nudged
+
+    def faces(self) -> dict[str, np.ndarray]:
+        """Faces (C, 2) of the counted met throws: together, nudged, apart, apart nudged."""
+        c, m = self.counted, int(self.met.sum())
+        apart = np.stack([self.apart.face[:m, 0], self.apart.face[m:, 0]], axis=1)[c]
+        nudged = apart.copy()
+        nudged[:, 0] = self.apart_nudged.face[c, 0]
+        return {"together": self.together.face[self.met][c],
+                "nudged": self.nudged.face[self.met][c], "apart": apart,
+                "apart_nudged": nudged}
+
+
+def throw(n: int, seed: int = SEED, bar: object = None) -> Collisions:
+    """``n`` throws of the pair, each together and apart, at rest and perturbed."""
+    scene, dice = pair_scene()
+    state = hand_throws(scene, dice, n, np.random.default_rng(seed))
+    nudged = state.copy()
+    nudged.velocity[:, 0, 0] += PERTURBATION
+    together = simulate_in_batches(scene, dice, state, bar, stop_when_decided=True)
+    twin = simulate_in_batches(scene, dice, nudged, bar, stop_when_decided=True)
+    met = together.meet_steps[:, 0] >= 0
+    chosen = GroupState(*(a[met] for a in state._arrays()))
+    apart = simulate_in_batches(scene, dice[:1], alone(chosen), stop_when_decided=True)
+    apart_nudged = simulate_in_batches(
+        scene, dice[:1], GroupState(*(a[met, :1] for a in nudged._arrays())),
+        stop_when_decided=True)
+    window = together.meet_steps[:, 1] >= 0
+    if bar is not None:
+        bar.total = 2 * n + int(window.sum())
+        bar.refresh()
+    velocity, spin = alone_after(scene, dice[0], GroupState(*(a[window] for a in
+                                                               state._arrays())),
+                                 together.meet_steps[window, 1], bar)
+    return Collisions(together, twin, met, apart, apart_nudged, window, velocity, spin,
+                      scene.dt)
+
+
+def run(out: Path = DOCS, quick: bool = False, throws: int | None = None,
+        seed: int = SEED) -> dict[str, float]:
+    """Regenerate ``collisions.md`` and its figure under ``out``; return the headline numbers.
+
+    ``throws``: throws of the pair (default :data:`FULL`, :data:`QUICK` with ``quick``).
+    """
+    if throws is not None and (not isinstance(throws, int) or isinstance(throws, bool)
+                               or throws < MIN_THROWS):
+        raise ValueError(f"throws must be an int >= {MIN_THROWS}, got {throws!r}")
+    n = throws if throws is not None else QUICK if quick else FULL
+    bar = progress(2 * n, "pair throws, then first contacts alone")
+    start, cpu = time.perf_counter(), time.process_time()
+    study = throw(n, seed, bar)
+    seconds, cpu = time.perf_counter() - start, time.process_time() - cpu
+    bar.close()
+    numbers = _numbers(study, seconds, cpu, np.random.default_rng(seed))
+    _plot(study, numbers, out / "figures" / "collisions.png")
+    (out / "collisions.md").write_text(_markdown(study, numbers, seed))
+    return {k: v for k, v in numbers.items() if isinstance(v, float)}
+
+
+def _rate(hits: np.ndarray) -> tuple[float, float, float, int, int]:
+    """Share of ``hits``, its 95% Wilson interval, the hits and the trials."""
+    lo, hi = wilson(int(hits.sum()), len(hits))
+    return float(hits.mean()), float(lo), float(hi), int(hits.sum()), len(hits)
+
+
+def _numbers(study: Collisions, seconds: float, cpu: float,
+             rng: np.random.Generator) -> dict[str, object]:
+    together = study.together
+    faces = study.faces()
+    changed = {name: faces[name] != faces[nudged] for name, nudged in
+               (("together", "nudged"), ("apart", "apart_nudged"))}
+    counted = ~np.any(list(void_reasons(together).values()), axis=0) & \
+        ~np.any(list(void_reasons(study.nudged).values()), axis=0)
+    quiet = counted & ~study.met & (study.nudged.meet_steps[:, 0] < 0)
+    first = study.first_contact
+    n = {
+        "throws": float(len(study.met)), "met": float(study.met.mean()),
+        "counted_met": float(len(faces["together"])), "windows": float(study.window.sum()),
+        "seconds": seconds, "cpu_seconds": cpu,
+        "die_impacts": float(together.die_impacts[study.met, 0].mean()),
+        "several_impacts": float((together.die_impacts[study.met, 0] > 1).mean()),
+        "contact_ms": float(np.median(np.diff(together.meet_steps[study.window], axis=1))
+                            * study.dt * 1e3),
+        "meet_time": float(np.median(together.meet_steps[study.window, 0]) * study.dt),
+        "in_flight": float(study.in_flight.mean()),
+        "spin_before": float(np.median(np.linalg.norm(together.meet_spin[study.window, 0],
+                                                      axis=-1))),
+        "speed_before": float(np.median(np.linalg.norm(
+            together.meet_velocity[study.window, 0], axis=-1))),
+        "change_together": _rate(changed["together"][:, 0]),
+        "change_either": _rate(changed["together"].any(axis=1)),
+        "change_die2": _rate(changed["together"][:, 1]),
+        "change_apart": _rate(changed["apart"][:, 0]),
+        "change_quiet": _rate(faces_changed(together, study.nudged)[quiet]),
+        "quiet": float(quiet.sum()),
+        "mcnemar_p": mcnemar(changed["together"][:, 0], changed["apart"][:, 0]),
+    }
+    n["change_together_share"] = n["change_together"][0]
+    n["change_apart_share"] = n["change_apart"][0]
+    for case in ("together", "apart"):
+        for key, _, _ in MEASURES:
+            n[f"{case}_{key}"] = [quantile_interval(first[case][key], q) for q in QUANTILES]
+        f = faces[case]
+        for die in range(2):
+            counts = np.bincount(f[:, die] - 1, minlength=6)
+            n[f"{case}_entropy{die + 1}"] = entropy_estimate(f[:, die] - 1, 6, rng)
+            n[f"{case}_uniform{die + 1}"] = float(stats.chisquare(counts).pvalue)
+        joint = (f[:, 0] - 1) * 6 + f[:, 1] - 1
+        n[f"{case}_joint"] = entropy_estimate(joint, 36, rng)
+    n["spin_change_median"] = n["together_spin_change"][2][0]
+    n["spin_turn_median"] = n["together_spin_turn"][2][0]
+    return n
+
+
+def _plot(study: Collisions, n: dict, path: Path) -> None:
+    first = study.first_contact
+    fig, axes = plt.subplots(2, 3, figsize=(15, 8.5), layout="constrained")
+    for ax, (key, label, unit) in zip(axes.ravel()[:4], MEASURES, strict=True):
+        for case, colour in (("together", "C3"), ("apart", "C0")):
+            x = np.sort(first[case][key].ravel())
+            ax.plot(x, np.arange(1, len(x) + 1) / len(x), color=colour,
+                    label=f"{case} ({len(x)} dice)")
+        ax.set_xlabel(f"{label} ({unit})")
+        ax.set_ylabel("share of dice (cumulative)")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=8)
+    axes[0, 0].set_title("across the first die–die contact, and the same steps alone", fontsize=9)
+    ax = axes[1, 1]
+    bars = [("together: die 1", n["change_together"]), ("together: die 2", n["change_die2"]),
+            ("together: either", n["change_either"]), ("apart: die 1", n["change_apart"]),
+            ("never met: die 1", n["change_quiet"])]
+    for i, (label, (p, lo, hi, _, _)) in enumerate(bars):
+        ax.bar(i, p, color="C3" if label.startswith("together") else "C0")
+        ax.errorbar(i, p, yerr=[[p - lo], [hi - p]], color="k", capsize=3)
+    ax.set_xticks(range(len(bars)), [b[0] for b in bars], rotation=20, fontsize=8)
+    ax.set_ylabel("share of throws whose face changed")
+    ax.set_title(f"die 1 released {PERTURBATION:g} m/s faster along x (95% intervals)",
+                 fontsize=9)
+    ax = axes[1, 2]
+    faces = study.faces()
+    for offset, (case, colour) in zip((-0.2, 0.2), (("together", "C3"), ("apart", "C0")),
+                                      strict=True):
+        share = np.bincount(faces[case].ravel() - 1, minlength=6) / faces[case].size
+        ax.bar(np.arange(1, 7) + offset, share, width=0.4, color=colour,
+               label=f"{case}: {n[f'{case}_entropy1'][0]:.3f} / "
+               f"{n[f'{case}_entropy2'][0]:.3f} bits")
+    ax.axhline(1 / 6, color="k", ls="--", lw=1)
+    ax.set_xlabel("face (both dice)")
+    ax.set_ylabel("share")
+    ax.set_title(f"faces of the met throws (max entropy {np.log2(6):.3f} bits)", fontsize=9)
+    ax.legend(fontsize=8)
+    save_figure(fig, path)
+
+
+def _quantile_rows(n: dict) -> str:
+    rows = []
+    for key, label, unit in MEASURES:
+        for case in ("together", "apart"):
+            cells = " | ".join(f"{v:.3g} [{lo:.3g}, {hi:.3g}]" for v, lo, hi in n[f"{case}_{key}"])
+            rows.append(f"| {label} ({unit}) | {case} | {cells} |")
+    return "\n".join(rows)
+
+
+def _share(value: tuple) -> str:
+    """``share [low, high]``, and ``(hits / trials)`` where given."""
+    counts = f" ({value[3]} / {value[4]})" if len(value) > 3 else ""
+    return f"{value[0]:.3f} [{value[1]:.3f}, {value[2]:.3f}]{counts}"
+
+
+def _markdown(study: Collisions, n: dict, seed: int) -> str:
+    scene, _ = pair_scene()
+    thrown = int(n["throws"])
+    entropy_rows = "\n".join(
+        f"| {case} | {_share(n[f'{case}_entropy1'])} | {n[f'{case}_uniform1']:.3g} | "
+        f"{_share(n[f'{case}_entropy2'])} | {n[f'{case}_uniform2']:.3g} | "
+        f"{_share(n[f'{case}_joint'])} |" for case in ("together", "apart"))
+    quick_note = "" if thrown >= FULL else (
+        f" (fewer than the default {FULL}: `python -m dice_env.studies collisions`)")
+    significant = n["mcnemar_p"] < 0.01
+    verdict = ("more often" if n["change_together"][0] > n["change_apart"][0] else "less often") \
+        if significant else "not detectably differently"
+    spin = n["together_spin_change"]
+    turn_q = n["together_spin_turn"]
+    return f"""# Two dice that meet: the collision and the outcome's randomness
+
+Generated by `python -m dice_env.studies collisions --throws {thrown}`{quick_note} (module
+`dice_env/studies/collisions.py`, seed {seed}): {thrown} throws of the pair, each also thrown
+with a perturbed release, and the throws in which the dice met once more with each die
+alone: {n['seconds']:.0f} s of wall-clock time on {numba.get_num_threads()} thread(s) of a
+shared machine ({n['cpu_seconds']:.0f} s of this process's CPU time).
+
+The paper's closing question: "how would two cubes interact with each other when thrown onto
+the ground? If they were to bump into each other, how would they react? How would their
+angular velocities change?"
+
+## The throw
+
+The pairs study's throw (`docs/pairs.md`, `pairs.hand_throws`): two default d6 from one hand
+into the {TRAY[0] * 100:g} x {TRAY[1] * 100:g} cm tray, {HAND.spacing * 100:g} cm apart,
+{HAND.clearance[0] * 100:g}–{HAND.clearance[1] * 100:g} cm above the table, the hand at
+{HAND.speed[0]:g}–{HAND.speed[1]:g} m/s toward the table plus {HAND.noise:g} m/s of noise per
+die and component, each die spinning at {HAND.spin[0]:g}–{HAND.spin[1]:g} rad/s about its
+own uniform axis from its own uniform orientation; until both faces are decided or
+{T_MAX:g} s. Die 1 is the one at y < 0. The step is the pair's ({scene.dt * 1e6:.2f} µs,
+`group_step`) in every run, so a die thrown **apart** (alone, `simulate_group` with one die)
+moves bit for bit as in the pair until the dice first touch
+(`tests/test_group.py::test_a_die_alone_moves_as_in_its_group_until_the_dice_meet`).
+
+The dice met in **{n['met']:.1%}** of the throws. In a throw where they met they struck each
+other {n['die_impacts']:.2f} times on average (`GroupResult.die_impacts`: starts of a contact
+at a relative speed of the centres above the rest speed); {n['several_impacts']:.1%} of them
+struck more than once.
+
+## The first collision
+
+`GroupResult.meet_velocity` and `meet_spin` hold each die's velocity and angular velocity
+(world frame) at the step the dice first touch, before any force of that contact, and at the
+step it ends, after its last; {int(n['windows'])} first contacts ended before their throw
+did. The first contact came a median {n['meet_time']:.3f} s after the release and lasted a
+median {n['contact_ms']:.2f} ms; before it the dice moved at a median {n['speed_before']:.2f}
+m/s and spun at {n['spin_before']:.1f} rad/s. In {n['in_flight']:.1%} of the first contacts
+neither die alone touched the floor or a wall over the same steps (its spin stayed exactly
+the same: a cube's spin is constant in flight): those collisions happened in the air; in the
+others a die also felt a plane, and the change below includes it. **Apart** is each die
+alone over the same steps: what the throw would have done to it without the other die.
+
+![collisions](figures/collisions.png)
+
+Quantiles over both dice of every first contact (value [distribution-free 95% interval]):
+
+| measure | case | 5% | 25% | median | 75% | 95% |
+|---|---|---|---|---|---|---|
+{_quantile_rows(n)}
+
+How they react: the collision changes a die's spin by a median {spin[2][0]:+.3g} rad/s
+(5–95%: {spin[0][0]:+.3g} to {spin[4][0]:+.3g}) and turns its axis by a median
+{turn_q[2][0]:.3g}° (95% of dice under {turn_q[4][0]:.3g}°); alone over the same steps the
+median change is {n['apart_spin_change'][2][0]:+.3g} rad/s and the axis turns by
+{n['apart_spin_turn'][2][0]:.3g}°. The collision changes a die's speed by a median
+{n['together_speed_change'][2][0]:+.3g} m/s (alone: {n['apart_speed_change'][2][0]:+.3g})
+and turns its velocity by {n['together_velocity_turn'][2][0]:.3g}° (alone:
+{n['apart_velocity_turn'][2][0]:.3g}°).
+
+## Randomness: a perturbation of {PERTURBATION:g} m/s
+
+Every throw again with die 1's release velocity {PERTURBATION:g} m/s higher along x, the
+rest the same. Over the **{int(n['counted_met'])}** throws where the dice met and every run
+was counted (decided, read, stable, not sunk: together, perturbed, and each die alone, plain
+and perturbed), share of throws whose face changed (95% Wilson intervals):
+
+| case | share changed |
+|---|---|
+| together: die 1 (the perturbed die) | {_share(n['change_together'])} |
+| together: die 2 (not perturbed; changed through the collisions) | {_share(n['change_die2'])} |
+| together: either die | {_share(n['change_either'])} |
+| apart: die 1 alone, same throws | {_share(n['change_apart'])} |
+| together, throws where the dice met in neither run ({int(n['quiet'])}): die 1 | \
+{_share(n['change_quiet'])} |
+
+Die 1's face changes {verdict} when the dice meet than when the same die is thrown alone
+(exact McNemar test on the same throws: p = {n['mcnemar_p']:.3g}). A face that a change of
+{PERTURBATION:g} m/s turns is not determined by any hand; the share is the part of the
+outcome that is chaos, not aim.
+
+Entropy of the faces (bits, `collisions.entropy_estimate`: the plug-in entropy corrected for
+its sampling bias by the bootstrap [95% basic bootstrap interval]; a fair die
+{np.log2(6):.3f}, a fair pair {np.log2(36):.3f}; the plug-in estimate of 36 cells from
+{int(n['counted_met'])} throws sits about {35 / (2 * max(n['counted_met'], 1) * np.log(2)):.3f}
+bits low by sampling alone) and the chi-square p-value of each die's uniformity:
+
+| case | die 1 entropy | die 1 uniform p | die 2 entropy | die 2 uniform p | pair entropy |
+|---|---|---|---|---|---|
+{entropy_rows}
+
+The release orientations are uniform, so every face is equally likely by construction
+whether or not the dice meet; what a collision changes is how much a small error in the
+release moves the outcome (the table above), not the faces' shares.
+
+Caveats: the die–die material is an estimate (`dice_env/group.py`, restitution 0.5,
+friction 0.4); a first contact may be a graze; "apart" is the same die without the other, so
+after the first contact it follows another path (its later impacts differ from the pair's).
+"""

@@ -1,0 +1,53 @@
+"""Setting the dice for a craps throw: the set, the throw, the voiding rule and the page."""
+
+import numpy as np
+import pytest
+
+from dice_env import Die, State
+from dice_env.group import GroupState, simulate_group
+from dice_env.rotations import axis_angle
+from dice_env.simulate import UP
+from dice_env.studies import craps as cr
+from dice_env.studies import run as run_study
+
+
+@pytest.mark.parametrize("angle", [0.0, 0.3, np.pi / 2, np.pi, 4.0, 3 * np.pi / 2])
+def test_the_sevens_set_shows_a_seven_while_both_dice_turn_alike_about_the_roll_axis(angle):
+    die = Die()
+    turned = axis_angle([0.0, 1.0, 0.0], angle) @ cr.sevens_set()
+    assert die.face_read(turned, UP).sum() == 7
+
+
+def test_the_throw_goes_forward_with_backspin():
+    a = cr.action(2.0)
+    np.testing.assert_allclose(a[:3] * cr.MAX_SPEED, [2.0, 0.0, cr.LIFT])
+    assert a[4] * cr.MAX_SPIN == -cr.BACKSPIN and np.all(np.abs(a) <= 1.0)
+
+
+def test_a_die_that_misses_the_back_wall_voids_the_throw():
+    scene = cr.craps_scene().with_(t_max=0.3)
+    near = State.release(scene, [0.96, 0.0, 0.02], [0.8, 0.0, 0.0])  # into the back wall
+    short = State.release(scene, [0.0, 0.0, 0.02], [0.0, 0.0, -0.2])  # straight down
+    both = GroupState.of([State(*(np.concatenate(a) for a in zip(
+        near._arrays(), short._arrays(), strict=True)))])
+    result = simulate_group(scene, (Die(),), both)
+    assert scene.planes[cr.BACK_WALL].normal == (-1.0, 0.0, 0.0)  # the back wall
+    assert cr.reasons(result)["a die did not touch the back wall"].tolist() == [False, True]
+
+
+def test_quick_study_writes_its_page(tmp_path):
+    n = cr.run(tmp_path, quick=True)
+    assert n["throws_per_cell"] == cr.QUICK and 0.0 <= n["voided"] < 0.5
+    cells = [k for k in n if k.startswith("p7_")]
+    assert len(cells) == len(cr.QUICK_NOISES) * len(cr.QUICK_SPEEDS) * 2
+    assert all(0.0 <= n[k] <= 1.0 for k in cells)
+    text = (tmp_path / "craps.md").read_text()
+    assert f"--throws {cr.QUICK}" in text and "Fisher" in text and "nan" not in text
+    assert (tmp_path / "figures" / "craps.png").stat().st_size > 10_000
+
+
+@pytest.mark.parametrize("throws", [cr.MIN_THROWS - 1, 2.5, True])
+def test_a_bad_sample_size_is_refused_before_any_work(tmp_path, throws):
+    with pytest.raises(ValueError, match="throws must be an int >= 10"):
+        run_study("craps", tmp_path, throws=throws)
+    assert not any(tmp_path.iterdir())
