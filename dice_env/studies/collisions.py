@@ -36,7 +36,7 @@ from dice_env.group import GroupResult, GroupState, group_step, simulate_group
 from dice_env.scene import Scene
 from dice_env.studies.fairness import wilson
 from dice_env.studies.pairs import HAND, hand_throws, simulate_in_batches, void_reasons
-from dice_env.studies.paper_figures import DOCS, progress, save_figure
+from dice_env.studies.paper_figures import DOCS, checked_throws, progress, save_figure
 from dice_env.surroundings import TRAY, tray
 
 # Every run takes each step (no flight jumps: a group's jumps depend on all its dice), so that
@@ -249,9 +249,7 @@ def run(out: Path = DOCS, quick: bool = False, throws: int | None = None,
 
     ``throws``: throws of the pair (default :data:`FULL`, :data:`QUICK` with ``quick``).
     """
-    if throws is not None and (not isinstance(throws, int) or isinstance(throws, bool)
-                               or throws < MIN_THROWS):
-        raise ValueError(f"throws must be an int >= {MIN_THROWS}, got {throws!r}")
+    throws = checked_throws(throws, MIN_THROWS)
     n = throws if throws is not None else QUICK if quick else FULL
     bar = progress(2 * n, "pair throws, then first contacts alone")
     start, cpu = time.perf_counter(), time.process_time()

@@ -32,7 +32,7 @@ from dice_env.rotations import axis_angle
 from dice_env.scene import Scene
 from dice_env.studies.fairness import random_orientations, wilson
 from dice_env.studies.pairs import TOTALS, simulate_in_batches, triangle, void_reasons
-from dice_env.studies.paper_figures import DOCS, progress, save_figure
+from dice_env.studies.paper_figures import DOCS, checked_throws, progress, save_figure
 from dice_env.surroundings import CRAPS, craps
 
 # Throws per cell in the full and the quick run; the fewest a run takes per cell.
@@ -118,9 +118,7 @@ def run(out: Path = DOCS, quick: bool = False, throws: int | None = None,
 
     ``throws``: throws per cell (default :data:`FULL`, :data:`QUICK` with ``quick``).
     """
-    if throws is not None and (not isinstance(throws, int) or isinstance(throws, bool)
-                               or throws < MIN_THROWS):
-        raise ValueError(f"throws must be an int >= {MIN_THROWS}, got {throws!r}")
+    throws = checked_throws(throws, MIN_THROWS)
     n = throws if throws is not None else QUICK if quick else FULL
     noises, speeds = (QUICK_NOISES, QUICK_SPEEDS) if quick else (NOISES, SPEEDS)
     rng = np.random.default_rng(seed)

@@ -27,7 +27,7 @@ import numpy as np
 from dice_env.die import Die
 from dice_env.scene import Ground, Scene
 from dice_env.studies.fairness import VIGOROUS, Vigour, wilson
-from dice_env.studies.paper_figures import DOCS, progress, save_figure
+from dice_env.studies.paper_figures import DOCS, checked_throws, progress, save_figure
 from dice_env.studies.shapes import Faces, hand_throws, throw_faces
 from dice_env.table import DIE_EDGE, RESTITUTION, damping_for_restitution
 
@@ -84,9 +84,7 @@ def run(out: Path = DOCS, quick: bool = False, seed: int = 2026,
 
     ``throws`` per shape and condition (default :data:`FULL`, or :data:`QUICK` with ``quick``).
     """
-    if throws is not None and (not isinstance(throws, (int, np.integer))
-                               or isinstance(throws, bool) or throws < 20):
-        raise ValueError(f"throws must be an int >= 20, got {throws!r}")
+    throws = checked_throws(throws, 20)
     n = throws if throws is not None else (QUICK if quick else FULL)
     ratios = QUICK_RATIOS if quick else RATIOS
     rng = np.random.default_rng(seed)

@@ -28,7 +28,7 @@ from dice_env import materials
 from dice_env.simulate import UP, State, simulate
 from dice_env.studies.cuboids import GENTLE
 from dice_env.studies.fairness import VIGOROUS, Vigour, throw_energy, vigorous_throws, wilson
-from dice_env.studies.paper_figures import DOCS, progress, save_figure
+from dice_env.studies.paper_figures import DOCS, checked_throws, progress, save_figure
 from dice_env.studies.shapes import BATCH, Faces
 
 # Throws per material: (vigorous, gentle) in the full and the quick run.
@@ -94,9 +94,7 @@ def run(out: Path = DOCS, quick: bool = False, throws: int | None = None,
 
     ``throws``: vigorous throws per material (the gentle ones are half as many).
     """
-    if throws is not None and (not isinstance(throws, int) or isinstance(throws, bool)
-                               or throws < 2):
-        raise ValueError(f"throws must be an int >= 2, got {throws!r}")
+    throws = checked_throws(throws, 2)
     sizes = (throws, throws // 2) if throws is not None else QUICK if quick else FULL
     start = time.perf_counter()
     rng = np.random.default_rng(seed)

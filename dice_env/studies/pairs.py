@@ -34,7 +34,7 @@ from dice_env.studies.fairness import (
     toward_table,
     wilson,
 )
-from dice_env.studies.paper_figures import DOCS, progress, save_figure
+from dice_env.studies.paper_figures import DOCS, checked_throws, progress, save_figure
 from dice_env.surroundings import TRAY, tray
 
 # Throws of the pair in the full and the quick run; throws per kernel call.
@@ -221,9 +221,7 @@ def run(out: Path = DOCS, quick: bool = False, throws: int | None = None,
 
     ``throws``: throws of the pair (default :data:`FULL`, :data:`QUICK` with ``quick``).
     """
-    if throws is not None and (not isinstance(throws, int) or isinstance(throws, bool)
-                               or throws < MIN_THROWS):
-        raise ValueError(f"throws must be an int >= {MIN_THROWS}, got {throws!r}")
+    throws = checked_throws(throws, MIN_THROWS)
     n = throws if throws is not None else QUICK if quick else FULL
     scene = Scene(walls=tray(), t_max=T_MAX)
     dice = (scene.die, scene.die)

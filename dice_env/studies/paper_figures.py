@@ -52,6 +52,14 @@ def progress(total: int, desc: str) -> tqdm:
     return tqdm(total=total, desc=desc, unit="run", dynamic_ncols=True)
 
 
+def checked_throws(throws: object, least: int) -> int | None:
+    """A study's ``throws`` checked: None (the study's own size) or an int >= ``least``."""
+    if throws is not None and (not isinstance(throws, (int, np.integer))
+                               or isinstance(throws, bool) or throws < least):
+        raise ValueError(f"throws must be an int >= {least}, got {throws!r}")
+    return None if throws is None else int(throws)
+
+
 # ---- the claims, each as the number it rests on -------------------------------------------
 
 def sliding_speed_at_end(run: PaperRun) -> float:

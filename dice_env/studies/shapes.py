@@ -38,7 +38,7 @@ from dice_env.studies.fairness import (
     vigorous_throws,
     wilson,
 )
-from dice_env.studies.paper_figures import DOCS, progress, save_figure
+from dice_env.studies.paper_figures import DOCS, checked_throws, progress, save_figure
 from dice_env.table import DIE_EDGE
 
 DICE = tuple(STANDARD_SIZES)
@@ -238,9 +238,7 @@ def run(out: Path = DOCS, quick: bool = False, seed: int = 2026,
     every die's throws drawn in turn from one generator.
     """
     sizes = dict(QUICK if quick else FULL)
-    if throws is not None:
-        if not isinstance(throws, (int, np.integer)) or isinstance(throws, bool) or throws < 60:
-            raise ValueError(f"throws must be an int >= 60, got {throws!r}")
+    if checked_throws(throws, 60) is not None:
         sizes = {"fair": int(throws), "loaded": max(QUICK["loaded"], int(throws) // 2)}
     rng = np.random.default_rng(seed)
     seeds = iter(np.random.SeedSequence(seed).generate_state(2 * len(DICE)))

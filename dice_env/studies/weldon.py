@@ -43,7 +43,7 @@ from dice_env.pips import Pips
 from dice_env.scene import Scene
 from dice_env.simulate import State
 from dice_env.studies.fairness import random_directions, random_orientations
-from dice_env.studies.paper_figures import DOCS, progress, save_figure
+from dice_env.studies.paper_figures import DOCS, checked_throws, progress, save_figure
 from dice_env.studies.shapes import Faces, throw_faces
 
 # Weldon's data (Pearson 1900, Kemp & Kemp 1991): throws of twelve dice with 0..12 dice
@@ -442,9 +442,7 @@ def run(out: Path = DOCS, quick: bool = False, seed: int = SEED,
     :data:`QUICK`'s with ``quick``); the single-die samples keep their sizes.
     """
     sizes = dict(QUICK if quick else FULL)
-    if throws is not None:
-        if not isinstance(throws, (int, np.integer)) or isinstance(throws, bool) or throws < 2:
-            raise ValueError(f"throws must be an int >= 2, got {throws!r}")
+    if checked_throws(throws, 2) is not None:
         sizes["together"] = int(throws)
     command = "python -m dice_env.studies weldon" + (" --quick" if quick else "") + (
         f" --throws {throws}" if throws is not None else "")
