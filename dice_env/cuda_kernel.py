@@ -29,7 +29,17 @@ import math
 import numpy as np
 from numba import cuda
 
-from dice_env.kernel import Body, Contact, Dice, Options, Outcome, Records, Stops, advance
+from dice_env.kernel import (
+    Body,
+    Contact,
+    Dice,
+    Options,
+    Outcome,
+    Records,
+    Scratch,
+    Stops,
+    advance,
+)
 
 MAX_VERTICES = 32  # the most vertices of a die on the GPU (a d12 has 20)
 MAX_PLANES = 8  # the most planes (a tray has 5)
@@ -42,13 +52,13 @@ def simulate_cuda(dice: Dice, body: Body, contact: Contact, options: Options, st
     """:func:`dice_env.kernel.simulate_batch` on the GPU, die ``i`` on thread ``i``."""
     i = cuda.grid(1)
     if i < dice.x.shape[0]:
-        advance(i, dice, body, contact, options, stops, records, out,
-                cuda.local.array((3, 3), np.float64), cuda.local.array((3, 3), np.float64),
-                cuda.local.array((MAX_VERTICES, 3), np.float64),
-                cuda.local.array((MAX_PLANES, MAX_VERTICES), np.float64),
-                cuda.local.array((MAX_PLANES, MAX_VERTICES, 3), np.float64),
-                cuda.local.array((MAX_PLANES, MAX_VERTICES), np.bool_),
-                cuda.local.array(MAX_PLANES, np.float64))
+        advance(i, dice, body, contact, options, stops, records, out, Scratch(
+            cuda.local.array((3, 3), np.float64), cuda.local.array((3, 3), np.float64),
+            cuda.local.array((MAX_VERTICES, 3), np.float64),
+            cuda.local.array((MAX_PLANES, MAX_VERTICES), np.float64),
+            cuda.local.array((MAX_PLANES, MAX_VERTICES, 3), np.float64),
+            cuda.local.array((MAX_PLANES, MAX_VERTICES), np.bool_),
+            cuda.local.array(MAX_PLANES, np.float64)))
 
 
 def run(dice: Dice, body: Body, contact: Contact, options: Options, stops: Stops,

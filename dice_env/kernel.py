@@ -204,6 +204,25 @@ class Outcome(NamedTuple):
     abort: np.ndarray
 
 
+class Scratch(NamedTuple):
+    """One die's working arrays in :func:`advance`.
+
+    Larger arrays are fine; their contents on entry do not matter. ``qi`` (3, 3) the
+    orientation, ``qj`` (3, 3) one recorded within a jump; per vertex (N) and plane (P):
+    ``offsets`` (N, 3) from the centre, ``heights`` (P, N) entering the last step,
+    ``anchors`` (P, N, 3) and ``tied`` (P, N) the stick-slip ties, ``lowest`` (P,) each
+    plane's lowest vertex height.
+    """
+
+    qi: np.ndarray
+    qj: np.ndarray
+    offsets: np.ndarray
+    heights: np.ndarray
+    anchors: np.ndarray
+    tied: np.ndarray
+    lowest: np.ndarray
+
+
 @njit(cache=True, inline="always")
 def rotation_series(t2: float) -> tuple[float, float]:
     """``a = sin(t)/t`` and ``b = (1 - cos t)/t^2`` from their series in ``t^2 < SERIES``.
@@ -461,26 +480,21 @@ def simulate_one(i: int, dice: Dice, body: Body, contact: Contact, options: Opti
                  stops: Stops, records: Records, out: Outcome) -> None:
     """Advance die ``i`` in place; see :func:`simulate_batch`."""
     n_vertices, n_planes = body.vertices.shape[0], contact.planes.shape[0]
-    advance(i, dice, body, contact, options, stops, records, out, np.empty((3, 3)),
-            np.empty((3, 3)), np.empty((n_vertices, 3)), np.empty((n_planes, n_vertices)),
-            np.empty((n_planes, n_vertices, 3)), np.empty((n_planes, n_vertices), np.bool_),
-            np.empty(n_planes))
+    advance(i, dice, body, contact, options, stops, records, out, Scratch(
+        np.empty((3, 3)), np.empty((3, 3)), np.empty((n_vertices, 3)),
+        np.empty((n_planes, n_vertices)), np.empty((n_planes, n_vertices, 3)),
+        np.empty((n_planes, n_vertices), np.bool_), np.empty(n_planes)))
 
 
 @njit(cache=True, inline="always")
 def advance(i: int, dice: Dice, body: Body, contact: Contact, options: Options, stops: Stops,
-            records: Records, out: Outcome, qi: np.ndarray, qj: np.ndarray, offsets: np.ndarray,
-            heights: np.ndarray, anchors: np.ndarray, tied: np.ndarray,
-            lowest: np.ndarray) -> None:
-    """:func:`simulate_one` in scratch arrays given by the caller, for any numba target.
+            records: Records, out: Outcome, scratch: Scratch) -> None:
+    """:func:`simulate_one` in the :class:`Scratch` arrays given by the caller, for any target.
 
-    ``qi`` (3, 3) the orientation, ``qj`` (3, 3) one recorded within a jump; per vertex (N)
-    and plane (P): ``offsets`` (N, 3) from the centre, ``heights`` (P, N) entering the last
-    step, ``anchors`` (P, N, 3) and ``tied`` (P, N) the stick-slip ties, ``lowest`` (P,) each
-    plane's lowest vertex height; larger arrays are fine, their contents on entry do not
-    matter. Nothing here allocates or calls an array method, so the same source compiles as
-    a CUDA device function (:mod:`dice_env.cuda_kernel`).
+    Nothing here allocates or calls an array method, so the same source compiles as a CUDA
+    device function (:mod:`dice_env.cuda_kernel`).
     """
+    qi, qj, offsets, heights, anchors, tied, lowest = scratch
     # the groups' arrays taken out once: each taking costs a reference count
     vertices, planes, faces, lock = body.vertices, contact.planes, body.faces, stops.lock
     inv_body, inv_iso, reads_down = body.inv_inertia, body.inv_iso, body.reads_down
