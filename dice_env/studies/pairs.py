@@ -368,8 +368,8 @@ in it can change either face, or {T_MAX:g} s.
 **The dice meet:** in {n['met']:.1%} of the throws the two dice touched each other at least
 once (`GroupResult.overlap > 0`). A counted throw had on average {n['impacts']:.1f} impacts per
 die as `GroupResult.impacts` counts them (each start of a contact with the floor or a wall
-faster than the rest speed; touches of the other die are not counted on their own, so the
-number of die–die collisions is not measured here) and was decided after a median
+faster than the rest speed; touches of the other die are not counted on their own: die–die
+impacts are `GroupResult.die_impacts`, studied in `collisions.md`) and was decided after a median
 {n['time_median']:.2f} s of simulated time.
 
 ## Voided throws (not counted)
