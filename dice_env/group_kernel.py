@@ -616,9 +616,9 @@ def simulate_group(g: int, dice: GroupDice, bodies: Bodies, pair: Pair, contact:
             else:
                 quiet = 0
         jump = 1
-        if options.flight and apart:
+        if options.flight and apart:  # no record falls inside a jump: it may end on one
             jump = min(_group_jump(planes, lowest, touching, x, u, ang, force, bodies, rotation,
-                                   dt, n_steps - step + 1), next_record - step)
+                                   dt, n_steps - step + 1), next_record - step + 1)
         finite = True
         for a in range(n_dice):
             dt_m = dt / mass[a]

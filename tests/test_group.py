@@ -286,3 +286,16 @@ def test_touched_tells_which_planes_a_die_hit():
     assert result.touched[:, 0].tolist() == [[True, True, False, False],
                                              [True, False, False, False]]
     assert result.meet_steps.tolist() == [[-1, -1]] * 2 and not result.die_impacts.any()
+
+
+def test_records_fall_on_the_same_steps_with_free_flight():
+    # a jump stops at the next record: the records are those of stepping (before any contact,
+    # to round-off), every record filled, and the run ends
+    scene = Scene(walls=tray(), t_max=0.2)
+    start = GroupState.of([State.release(scene, [x, 0.0, 0.3], [0.0, 0.0, 0.0], [0, 0, 5.0])
+                           for x in (-0.03, 0.03)])
+    runs = [simulate_group(scene, (DIE, DIE), start, free_flight=flight, record_every=500,
+                           stop_at_rest=False) for flight in (True, False)]
+    np.testing.assert_array_equal(runs[0].t, runs[1].t)
+    np.testing.assert_allclose(runs[0].x_cm, runs[1].x_cm, rtol=0, atol=1e-9)
+    assert (runs[0].x_cm[:, :, :, 2] < 0.3).all()  # the dice fell: every record written
