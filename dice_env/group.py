@@ -298,6 +298,7 @@ def _bodies(scenes: list[Scene], decide: bool) -> group_kernel.Bodies:
     offsets, edges = np.zeros((n, n_f)), np.zeros((n, n_e, 2), np.int64)
     lock = np.full((n, n_f), -math.inf)
     floor = np.zeros(n)
+    axes = [_distinct_axes(die.face_normals) for die in dice]
     for i, (scene, die) in enumerate(zip(scenes, dice, strict=True)):
         body, _ = pack_scene(scene)
         vertices[i, :len(die.vertices)] = body.vertices
@@ -315,6 +316,8 @@ def _bodies(scenes: list[Scene], decide: bool) -> group_kernel.Bodies:
     return group_kernel.Bodies(
         vertices=vertices, n_vertices=np.array([len(d.vertices) for d in dice]),
         faces=faces, offsets=offsets, n_faces=np.array([d.n_faces for d in dice]),
+        axes=np.array([np.pad(a, (0, n_f - len(a))) for a in axes]),
+        n_axes=np.array([len(a) for a in axes]),
         edges=edges, n_edges=np.array([len(d.edges) for d in dice]),
         mass=np.array([p.mass for p in packed]),
         inv_inertia=np.stack([p.inv_inertia for p in packed]),
@@ -322,6 +325,15 @@ def _bodies(scenes: list[Scene], decide: bool) -> group_kernel.Bodies:
         inv_i_min=np.array([p.inv_i_min for p in packed]),
         r_max=np.array([p.r_max for p in packed]),
         reads_down=np.array([p.reads_down for p in packed]), lock=lock, floor=floor)
+
+
+def _distinct_axes(normals: np.ndarray, tol: float = 1e-9) -> np.ndarray:
+    """The faces whose normals are distinct axes: each but one of two opposite faces."""
+    kept: list[int] = []
+    for f, normal in enumerate(normals):
+        if not any(np.abs(normals[k] + normal).max() <= tol for k in kept):
+            kept.append(f)
+    return np.array(kept, np.int64)
 
 
 def _check_apart(dice: tuple[Die, ...], state: GroupState) -> None:

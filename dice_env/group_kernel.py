@@ -88,7 +88,9 @@ class Bodies(NamedTuple):
 
     Arrays over the dice, padded to the largest die: ``vertices`` (N, V, 3) and ``n_vertices``;
     ``faces`` (N, F, 3) outward unit normals in label order, ``offsets`` (N, F) their planes
-    ``n . r = offset``, ``n_faces``; ``edges`` (N, E, 2) vertex pairs and ``n_edges``;
+    ``n . r = offset``, ``n_faces``; ``axes`` (N, F) the faces whose normals are distinct
+    separating axes (one of each pair of opposite faces) and ``n_axes``; ``edges`` (N, E, 2)
+    vertex pairs and ``n_edges``;
     ``mass``, ``inv_inertia`` (N, 3, 3), ``inv_iso`` (``1/I`` for an isotropic die, else 0),
     ``inv_i_min`` (the inverse of the smallest principal moment), ``r_max`` (the farthest
     vertex), ``reads_down`` (the d4); ``lock`` (N, F): the energy below
@@ -101,6 +103,8 @@ class Bodies(NamedTuple):
     faces: np.ndarray
     offsets: np.ndarray
     n_faces: np.ndarray
+    axes: np.ndarray
+    n_axes: np.ndarray
     edges: np.ndarray
     n_edges: np.ndarray
     mass: np.ndarray
@@ -289,50 +293,99 @@ def _extent(die: int, n0: float, n1: float, n2: float, world: np.ndarray,
 
 
 @njit(cache=True, inline="always")
+def _face_axis(die: int, f: int, q: np.ndarray, bodies: Bodies) -> tuple:
+    """Face ``f``'s outward normal of die ``die`` in the world."""
+    g0, g1, g2 = bodies.faces[die, f, 0], bodies.faces[die, f, 1], bodies.faces[die, f, 2]
+    return (q[die, 0, 0] * g0 + q[die, 0, 1] * g1 + q[die, 0, 2] * g2,
+            q[die, 1, 0] * g0 + q[die, 1, 1] * g1 + q[die, 1, 2] * g2,
+            q[die, 2, 0] * g0 + q[die, 2, 1] * g1 + q[die, 2, 2] * g2)
+
+
+@njit(cache=True, inline="always")
+def _edge_axis(a: int, i: int, b: int, j: int, world: np.ndarray, bodies: Bodies) -> tuple:
+    """The unit cross product of edge ``i`` of die ``a`` and edge ``j`` of die ``b``.
+
+    Returns it and whether the edges are not parallel (:data:`PARALLEL`).
+    """
+    edges = bodies.edges
+    a0, a1, b0, b1 = edges[a, i, 0], edges[a, i, 1], edges[b, j, 0], edges[b, j, 1]
+    e0, e1, e2 = world[a, a1, 0] - world[a, a0, 0], world[a, a1, 1] - world[a, a0, 1], \
+        world[a, a1, 2] - world[a, a0, 2]
+    h0, h1, h2 = world[b, b1, 0] - world[b, b0, 0], world[b, b1, 1] - world[b, b0, 1], \
+        world[b, b1, 2] - world[b, b0, 2]
+    c0, c1, c2 = e1 * h2 - e2 * h1, e2 * h0 - e0 * h2, e0 * h1 - e1 * h0
+    size2 = c0 * c0 + c1 * c1 + c2 * c2
+    if size2 <= PARALLEL * (e0 * e0 + e1 * e1 + e2 * e2) * (h0 * h0 + h1 * h1 + h2 * h2):
+        return (0.0, 0.0, 0.0), False
+    size = math.sqrt(size2)
+    return (c0 / size, c1 / size, c2 / size), True
+
+
+@njit(cache=True, inline="always")
+def _candidate_overlap(c: int, a: int, b: int, world: np.ndarray, x: np.ndarray,
+                       q: np.ndarray, bodies: Bodies) -> tuple:
+    """The overlap along candidate axis ``c``, numbered as :func:`least_overlap` visits them.
+
+    Returns it, the axis pointing from ``b`` toward ``a``, and False for parallel edges.
+    """
+    n_a, n_b = bodies.n_axes[a], bodies.n_axes[b]
+    if c < n_a:
+        n, real = _face_axis(a, bodies.axes[a, c], q, bodies), True
+    elif c < n_a + n_b:
+        n, real = _face_axis(b, bodies.axes[b, c - n_a], q, bodies), True
+    else:
+        k = c - n_a - n_b
+        n, real = _edge_axis(a, k // bodies.n_edges[b], b, k % bodies.n_edges[b], world, bodies)
+    if not real:
+        return np.inf, n, False
+    overlap, axis = _axis_overlap(a, b, n[0], n[1], n[2], world, x, bodies)
+    return overlap, axis, True
+
+
+@njit(cache=True, inline="always")
 def least_overlap(a: int, b: int, world: np.ndarray, x: np.ndarray, q: np.ndarray,
-                  bodies: Bodies) -> tuple:
+                  bodies: Bodies, first: int) -> tuple:
     """The axis along which dice ``a`` and ``b`` overlap least (separating axes).
 
-    The candidates are the face normals of both dice and the cross products of their edges.
-    Returns ``(overlap, n, i, j)``: ``overlap`` <= 0 when an axis separates them; ``n`` the
-    unit axis pointing from ``b`` toward ``a``; for an edge axis the edges ``i`` of ``a`` and
-    ``j`` of ``b`` that meet (the closest pair among the parallel ones), else ``i = -1``.
-    A face axis wins a tie: an aligned stack rests face on face.
+    The candidates are the face normals of both dice (one of each pair of opposite faces,
+    ``Bodies.axes``) and the cross products of their edges. ``first`` (-1: none) is a
+    candidate to try first: the one that separated the pair last time, usually still does.
+    Returns ``(overlap, n, i, j, c)``: ``overlap`` <= 0 when an axis separates them, ``c``
+    that axis (else -1); ``n`` the unit axis pointing from ``b`` toward ``a``; for an edge
+    axis the edges ``i`` of ``a`` and ``j`` of ``b`` that meet (the closest pair among the
+    parallel ones), else ``i = -1``. A face axis wins a tie: an aligned stack rests face on
+    face.
     """
-    best, n = np.inf, (0.0, 0.0, 0.0)
+    if first >= 0:
+        overlap, axis, real = _candidate_overlap(first, a, b, world, x, q, bodies)
+        if real and overlap <= 0.0:
+            return overlap, axis, -1, -1, first
+    best, n, c = np.inf, (0.0, 0.0, 0.0), 0
     for die in (a, b):
-        for f in range(bodies.n_faces[die]):
-            g0, g1, g2 = bodies.faces[die, f, 0], bodies.faces[die, f, 1], bodies.faces[die, f, 2]
-            n0 = q[die, 0, 0] * g0 + q[die, 0, 1] * g1 + q[die, 0, 2] * g2
-            n1 = q[die, 1, 0] * g0 + q[die, 1, 1] * g1 + q[die, 1, 2] * g2
-            n2 = q[die, 2, 0] * g0 + q[die, 2, 1] * g1 + q[die, 2, 2] * g2
+        for s in range(bodies.n_axes[die]):
+            n0, n1, n2 = _face_axis(die, bodies.axes[die, s], q, bodies)
             overlap, axis = _axis_overlap(a, b, n0, n1, n2, world, x, bodies)
             if overlap <= 0.0:
-                return overlap, axis, -1, -1
+                return overlap, axis, -1, -1, c
             if overlap < best:
                 best, n = overlap, axis
+            c += 1
     edge, edge_n, best_i, best_j, gap = np.inf, (0.0, 0.0, 0.0), -1, -1, np.inf
     edges = bodies.edges
     for i in range(bodies.n_edges[a]):
         a0, a1 = edges[a, i, 0], edges[a, i, 1]
-        e0, e1, e2 = world[a, a1, 0] - world[a, a0, 0], world[a, a1, 1] - world[a, a0, 1], \
-            world[a, a1, 2] - world[a, a0, 2]
         for j in range(bodies.n_edges[b]):
-            b0, b1 = edges[b, j, 0], edges[b, j, 1]
-            h0, h1, h2 = world[b, b1, 0] - world[b, b0, 0], world[b, b1, 1] - world[b, b0, 1], \
-                world[b, b1, 2] - world[b, b0, 2]
-            c0, c1, c2 = e1 * h2 - e2 * h1, e2 * h0 - e0 * h2, e0 * h1 - e1 * h0
-            size2 = c0 * c0 + c1 * c1 + c2 * c2
-            if size2 <= PARALLEL * (e0 * e0 + e1 * e1 + e2 * e2) * (h0 * h0 + h1 * h1 + h2 * h2):
+            c += 1
+            (c0, c1, c2), real = _edge_axis(a, i, b, j, world, bodies)
+            if not real:
                 continue
-            size = math.sqrt(size2)
-            overlap, axis = _axis_overlap(a, b, c0 / size, c1 / size, c2 / size, world, x,
-                                          bodies)
+            overlap, axis = _axis_overlap(a, b, c0, c1, c2, world, x, bodies)
             if overlap <= 0.0:
-                return overlap, axis, -1, -1
+                return overlap, axis, -1, -1, c - 1
             if overlap > edge * (1.0 + TIE):
                 continue
             # parallel edges share the axis: the pair that meets is the closest one
+            b0, b1 = edges[b, j, 0], edges[b, j, 1]
             pa, pb = closest_on_segments(
                 (world[a, a0, 0], world[a, a0, 1], world[a, a0, 2]),
                 (world[a, a1, 0], world[a, a1, 1], world[a, a1, 2]),
@@ -343,8 +396,8 @@ def least_overlap(a: int, b: int, world: np.ndarray, x: np.ndarray, q: np.ndarra
             if overlap < edge * (1.0 - TIE) or distance < gap:
                 edge, edge_n, best_i, best_j, gap = min(edge, overlap), axis, i, j, distance
     if edge < best * (1.0 - TIE):
-        return edge, edge_n, best_i, best_j
-    return best, n, -1, -1
+        return edge, edge_n, best_i, best_j, -1
+    return best, n, -1, -1, -1
 
 
 @njit(cache=True, inline="always")
@@ -379,7 +432,7 @@ def within(p: tuple, die: int, x: np.ndarray, q: np.ndarray, bodies: Bodies,
 @njit(cache=True, inline="always")
 def pair_contacts(a: int, b: int, world: np.ndarray, x: np.ndarray, q: np.ndarray,
                   cu: np.ndarray, cw: np.ndarray, bodies: Bodies, pair: Pair,
-                  force: np.ndarray, torque: np.ndarray) -> tuple:
+                  force: np.ndarray, torque: np.ndarray, separating: np.ndarray) -> tuple:
     """Every contact of dice ``a`` and ``b``, their forces applied.
 
     The contact normal is the axis of least overlap (:func:`least_overlap`). A face axis:
@@ -387,10 +440,12 @@ def pair_contacts(a: int, b: int, world: np.ndarray, x: np.ndarray, q: np.ndarra
     corners exactly on a side plane, as in an aligned stack, still bear) is pushed along it
     by its depth beyond the other die's extent along it. An edge axis (edge across edge: two
     cubes meeting edge on edge at a right angle have no corner inside the other): one contact
-    at the middle of the two edges' closest points, as deep as the overlap. Returns the
-    springs' energy, the deepest contact, and whether they touch.
+    at the middle of the two edges' closest points, as deep as the overlap. ``separating``
+    (N, N): the candidate axis that last separated each pair (-1: none), read and updated.
+    Returns the springs' energy, the deepest contact, and whether they touch.
     """
-    overlap, n, i, j = least_overlap(a, b, world, x, q, bodies)
+    overlap, n, i, j, separating[a, b] = least_overlap(a, b, world, x, q, bodies,
+                                                       separating[a, b])
     if overlap <= 0.0:
         return 0.0, 0.0, False
     if i >= 0:
@@ -449,6 +504,7 @@ def simulate_group(g: int, dice: GroupDice, bodies: Bodies, pair: Pair, contact:
     fastest, approach = np.zeros(n_dice), np.zeros(n_dice)
     die_touch = np.zeros(n_dice, np.bool_)
     met = np.zeros((n_dice, n_dice), np.bool_)  # each pair touching after the last step
+    separating = np.full((n_dice, n_dice), -1, np.int64)  # see pair_contacts
     first_a, first_b, parted = -1, -1, False
     v_rest2 = stops.v_rest * stops.v_rest
     floor_total = 0.0
@@ -561,7 +617,8 @@ def simulate_group(g: int, dice: GroupDice, bodies: Bodies, pair: Pair, contact:
                 if d0 * d0 + d1 * d1 + d2 * d2 < reach * reach:
                     apart = False
                     spring, deepest, touch_ab = pair_contacts(a, b, world, x, q, cu, cw,
-                                                              bodies, pair, force, torque)
+                                                              bodies, pair, force, torque,
+                                                              separating)
                     checked += spring
                     overlap = max(overlap, deepest)
                 if touch_ab and not met[a, b]:
