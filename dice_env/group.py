@@ -236,6 +236,7 @@ def simulate_group(
         hold_steps=math.ceil(scene.rest.hold / dt), decide=bool(stop_when_decided),
         energy_scale=float(sum(d.mass * scene.gravity * d.size for d in dice)))
     bodies = _bodies(scenes, stop_when_decided)
+    hulls = _hulls(scenes, bodies)
     pair = group_kernel.Pair(float(contact.stiffness), float(contact.damping),
                              float(contact.friction), float(scene.friction_vmin),
                              float(group_kernel.GRIP * pair_mass(scene, dice) / dt))
@@ -256,7 +257,7 @@ def simulate_group(
     group = group_kernel.GroupDice(out.position, out.velocity, out.angular_momentum,
                                    out.orientation, out.angular_velocity)
     run_kernel(group_kernel.simulate_groups, group_kernel.simulate_groups_serial,
-               (group, bodies, pair, contact_planes, options, stops, records, outcome),
+               (group, bodies, hulls, pair, contact_planes, options, stops, records, outcome),
                outcome.abort, batch=b, threads=threads, work=b * n * n_steps)
     energy_rise = outcome.energy_rise / scene.energy_tol
     read = ~(outcome.touching & (outcome.contacts < 3))
@@ -293,20 +294,13 @@ def _bodies(scenes: list[Scene], decide: bool) -> group_kernel.Bodies:
     n = len(dice)
     n_v = max(len(d.vertices) for d in dice)
     n_f = max(d.n_faces for d in dice)
-    n_e = max(len(d.edges) for d in dice)
     vertices, faces = np.zeros((n, n_v, 3)), np.zeros((n, n_f, 3))
-    offsets, edges = np.zeros((n, n_f)), np.zeros((n, n_e, 2), np.int64)
     lock = np.full((n, n_f), -math.inf)
     floor = np.zeros(n)
-    axes = [_distinct_axes(die.face_normals) for die in dice]
     for i, (scene, die) in enumerate(zip(scenes, dice, strict=True)):
         body, _ = pack_scene(scene)
         vertices[i, :len(die.vertices)] = body.vertices
         faces[i, :die.n_faces] = die.face_normals
-        offsets[i, :die.n_faces] = [body.vertices[face[0]] @ normal
-                                    for face, normal in zip(die.faces, die.face_normals,
-                                                            strict=True)]
-        edges[i, :len(die.edges)] = die.edges
         if decide:
             lock[i, :die.n_faces] = lock_energy(scene)
         weight = die.mass * scene.gravity
@@ -315,16 +309,40 @@ def _bodies(scenes: list[Scene], decide: bool) -> group_kernel.Bodies:
     packed = [pack_scene(s)[0] for s in scenes]
     return group_kernel.Bodies(
         vertices=vertices, n_vertices=np.array([len(d.vertices) for d in dice]),
-        faces=faces, offsets=offsets, n_faces=np.array([d.n_faces for d in dice]),
-        axes=np.array([np.pad(a, (0, n_f - len(a))) for a in axes]),
-        n_axes=np.array([len(a) for a in axes]),
-        edges=edges, n_edges=np.array([len(d.edges) for d in dice]),
+        faces=faces, n_faces=np.array([d.n_faces for d in dice]),
         mass=np.array([p.mass for p in packed]),
         inv_inertia=np.stack([p.inv_inertia for p in packed]),
         inv_iso=np.array([p.inv_iso for p in packed]),
         inv_i_min=np.array([p.inv_i_min for p in packed]),
         r_max=np.array([p.r_max for p in packed]),
         reads_down=np.array([p.reads_down for p in packed]), lock=lock, floor=floor)
+
+
+def _hulls(scenes: list[Scene], bodies: group_kernel.Bodies) -> group_kernel.Hulls:
+    """The kernel's :class:`~dice_env.group_kernel.Hulls`, one scene per die."""
+    dice = [s.die for s in scenes]
+    vertices = [bodies.vertices[i, :len(d.vertices)] for i, d in enumerate(dice)]
+    axes = [d.face_normals[_distinct_axes(d.face_normals)] for d in dice]
+    classes = [_edge_classes(v, d.edges) for v, d in zip(vertices, dice, strict=True)]
+    planes = [np.column_stack([d.face_normals, [v[face[0]] @ normal for face, normal in zip(
+        d.faces, d.face_normals, strict=True)]]) for v, d in zip(vertices, dice, strict=True)]
+    n_c = max(len(directions) for _, _, directions in classes)
+    starts = np.zeros((len(dice), n_c + 1), np.int64)
+    edges = np.zeros((len(dice), max(len(d.edges) for d in dice), 2), np.int64)
+    for i, (order, start, _) in enumerate(classes):
+        edges[i, :len(order)] = dice[i].edges[order]
+        starts[i, :len(start)] = start
+        starts[i, len(start):] = start[-1]  # padded classes are empty
+    return group_kernel.Hulls(
+        axes=_repeat_first([a for a in axes]), directions=_repeat_first([d for *_, d in classes]),
+        edges=edges, classes=starts, planes=_repeat_first(planes), n_vertices=bodies.n_vertices,
+        r_max=bodies.r_max)
+
+
+def _repeat_first(rows: list[np.ndarray]) -> np.ndarray:
+    """The rows stacked, each padded to the longest by repeating its first entry."""
+    size = max(len(r) for r in rows)
+    return np.stack([np.concatenate([r, np.repeat(r[:1], size - len(r), axis=0)]) for r in rows])
 
 
 def _distinct_axes(normals: np.ndarray, tol: float = 1e-9) -> np.ndarray:
@@ -334,6 +352,28 @@ def _distinct_axes(normals: np.ndarray, tol: float = 1e-9) -> np.ndarray:
         if not any(np.abs(normals[k] + normal).max() <= tol for k in kept):
             kept.append(f)
     return np.array(kept, np.int64)
+
+
+def _edge_classes(vertices: np.ndarray, edges: np.ndarray,
+                  tol: float = 1e-9) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The edges grouped by direction.
+
+    Returns the order that puts parallel edges together, where each class starts in it (then
+    the end), and each class's unit direction.
+    """
+    directions = vertices[edges[:, 1]] - vertices[edges[:, 0]]
+    directions /= np.linalg.norm(directions, axis=1, keepdims=True)
+    classes: list[list[int]] = []
+    for k, d in enumerate(directions):
+        for members in classes:
+            if np.linalg.norm(np.cross(directions[members[0]], d)) <= tol:
+                members.append(k)
+                break
+        else:
+            classes.append([k])
+    return (np.array([k for members in classes for k in members], np.int64),
+            np.cumsum([0] + [len(members) for members in classes]),
+            np.array([directions[members[0]] for members in classes]))
 
 
 def _check_apart(dice: tuple[Die, ...], state: GroupState) -> None:

@@ -87,26 +87,18 @@ class Bodies(NamedTuple):
     """The N dice of a throw (the same for every throw), body frames about the centre of mass.
 
     Arrays over the dice, padded to the largest die: ``vertices`` (N, V, 3) and ``n_vertices``;
-    ``faces`` (N, F, 3) outward unit normals in label order, ``offsets`` (N, F) their planes
-    ``n . r = offset``, ``n_faces``; ``axes`` (N, F) the faces whose normals are distinct
-    separating axes (one of each pair of opposite faces) and ``n_axes``; ``edges`` (N, E, 2)
-    vertex pairs and ``n_edges``;
-    ``mass``, ``inv_inertia`` (N, 3, 3), ``inv_iso`` (``1/I`` for an isotropic die, else 0),
+    ``faces`` (N, F, 3) outward unit normals in label order and ``n_faces``; ``mass``,
+    ``inv_inertia`` (N, 3, 3), ``inv_iso`` (``1/I`` for an isotropic die, else 0),
     ``inv_i_min`` (the inverse of the smallest principal moment), ``r_max`` (the farthest
-    vertex), ``reads_down`` (the d4); ``lock`` (N, F): the energy below
-    which a die alone keeps the face it reads (``-inf``: no decision rule); ``floor`` (N,): a
-    lower bound of each die's energy (potential and spring energy on the floor at rest).
+    vertex), ``reads_down`` (the d4); ``lock`` (N, F): the energy below which a die alone
+    keeps the face it reads (``-inf``: no decision rule); ``floor`` (N,): a lower bound of
+    each die's energy (potential and spring energy on the floor at rest).
     """
 
     vertices: np.ndarray
     n_vertices: np.ndarray
     faces: np.ndarray
-    offsets: np.ndarray
     n_faces: np.ndarray
-    axes: np.ndarray
-    n_axes: np.ndarray
-    edges: np.ndarray
-    n_edges: np.ndarray
     mass: np.ndarray
     inv_inertia: np.ndarray
     inv_iso: np.ndarray
@@ -115,6 +107,27 @@ class Bodies(NamedTuple):
     reads_down: np.ndarray
     lock: np.ndarray
     floor: np.ndarray
+
+
+class Hulls(NamedTuple):
+    """The N dice's shapes as die–die contact sees them, body frames, padded by repetition.
+
+    ``axes`` (N, A, 3): the distinct face normals (one of each pair of opposite faces; a
+    smaller set repeats its first); ``directions`` (N, C, 3): one unit direction per class of
+    parallel edges (repeating the first likewise); ``edges`` (N, E, 2): vertex pairs, class by
+    class; ``classes`` (N, C + 1): where each class starts in ``edges`` (and the last ends; a
+    padded class is empty); ``planes`` (N, F, 4): the faces' planes ``n . r = offset`` (a
+    smaller set repeats its first); ``n_vertices`` and ``r_max`` as :class:`Bodies`'.
+    Repeated axes and planes change no extent, overlap or inside test.
+    """
+
+    axes: np.ndarray
+    directions: np.ndarray
+    edges: np.ndarray
+    classes: np.ndarray
+    planes: np.ndarray
+    n_vertices: np.ndarray
+    r_max: np.ndarray
 
 
 class Pair(NamedTuple):
@@ -282,193 +295,188 @@ def _push(a: int, b: int, point: tuple, depth: float, n: tuple, x: np.ndarray,
 
 
 @njit(cache=True, inline="always")
-def _extent(die: int, n0: float, n1: float, n2: float, world: np.ndarray,
-            bodies: Bodies) -> tuple:
-    """The least and the largest projection of die ``die``'s corners on ``n``."""
+def _extent(die: int, n0: float, n1: float, n2: float, world: np.ndarray) -> tuple:
+    """The least and the largest projection of die ``die``'s corners on ``n``.
+
+    ``world`` (N, V, 3): every die's corners, a smaller die's padding repeating its first.
+    """
     low, high = np.inf, -np.inf
-    for k in range(bodies.n_vertices[die]):
+    for k in range(world.shape[1]):
         along = n0 * world[die, k, 0] + n1 * world[die, k, 1] + n2 * world[die, k, 2]
         low, high = min(low, along), max(high, along)
     return low, high
 
 
 @njit(cache=True, inline="always")
-def _face_axis(die: int, f: int, q: np.ndarray, bodies: Bodies) -> tuple:
-    """Face ``f``'s outward normal of die ``die`` in the world."""
-    g0, g1, g2 = bodies.faces[die, f, 0], bodies.faces[die, f, 1], bodies.faces[die, f, 2]
-    return (q[die, 0, 0] * g0 + q[die, 0, 1] * g1 + q[die, 0, 2] * g2,
-            q[die, 1, 0] * g0 + q[die, 1, 1] * g1 + q[die, 1, 2] * g2,
-            q[die, 2, 0] * g0 + q[die, 2, 1] * g1 + q[die, 2, 2] * g2)
+def _turned(q: np.ndarray, die: int, v: tuple) -> tuple:
+    """The body-frame vector ``v`` of die ``die`` in the world: ``q[die] v``."""
+    return (q[die, 0, 0] * v[0] + q[die, 0, 1] * v[1] + q[die, 0, 2] * v[2],
+            q[die, 1, 0] * v[0] + q[die, 1, 1] * v[1] + q[die, 1, 2] * v[2],
+            q[die, 2, 0] * v[0] + q[die, 2, 1] * v[1] + q[die, 2, 2] * v[2])
 
 
 @njit(cache=True, inline="always")
-def _edge_axis(a: int, i: int, b: int, j: int, world: np.ndarray, bodies: Bodies) -> tuple:
-    """The unit cross product of edge ``i`` of die ``a`` and edge ``j`` of die ``b``.
+def _cross_axis(e: tuple, h: tuple) -> tuple:
+    """The unit cross product of the unit vectors ``e`` and ``h``.
 
-    Returns it and whether the edges are not parallel (:data:`PARALLEL`).
+    Returns it and False when they are parallel (:data:`PARALLEL`).
     """
-    edges = bodies.edges
-    a0, a1, b0, b1 = edges[a, i, 0], edges[a, i, 1], edges[b, j, 0], edges[b, j, 1]
-    e0, e1, e2 = world[a, a1, 0] - world[a, a0, 0], world[a, a1, 1] - world[a, a0, 1], \
-        world[a, a1, 2] - world[a, a0, 2]
-    h0, h1, h2 = world[b, b1, 0] - world[b, b0, 0], world[b, b1, 1] - world[b, b0, 1], \
-        world[b, b1, 2] - world[b, b0, 2]
-    c0, c1, c2 = e1 * h2 - e2 * h1, e2 * h0 - e0 * h2, e0 * h1 - e1 * h0
+    c0, c1, c2 = e[1] * h[2] - e[2] * h[1], e[2] * h[0] - e[0] * h[2], e[0] * h[1] - e[1] * h[0]
     size2 = c0 * c0 + c1 * c1 + c2 * c2
-    if size2 <= PARALLEL * (e0 * e0 + e1 * e1 + e2 * e2) * (h0 * h0 + h1 * h1 + h2 * h2):
+    if size2 <= PARALLEL:
         return (0.0, 0.0, 0.0), False
     size = math.sqrt(size2)
     return (c0 / size, c1 / size, c2 / size), True
 
 
 @njit(cache=True, inline="always")
-def _candidate_overlap(c: int, a: int, b: int, world: np.ndarray, x: np.ndarray,
-                       q: np.ndarray, bodies: Bodies) -> tuple:
-    """The overlap along candidate axis ``c``, numbered as :func:`least_overlap` visits them.
-
-    Returns it, the axis pointing from ``b`` toward ``a``, and False for parallel edges.
-    """
-    n_a, n_b = bodies.n_axes[a], bodies.n_axes[b]
-    if c < n_a:
-        n, real = _face_axis(a, bodies.axes[a, c], q, bodies), True
-    elif c < n_a + n_b:
-        n, real = _face_axis(b, bodies.axes[b, c - n_a], q, bodies), True
-    else:
-        k = c - n_a - n_b
-        n, real = _edge_axis(a, k // bodies.n_edges[b], b, k % bodies.n_edges[b], world, bodies)
-    if not real:
-        return np.inf, n, False
-    overlap, axis = _axis_overlap(a, b, n[0], n[1], n[2], world, x, bodies)
-    return overlap, axis, True
-
-
-@njit(cache=True, inline="always")
-def least_overlap(a: int, b: int, world: np.ndarray, x: np.ndarray, q: np.ndarray,
-                  bodies: Bodies, first: int) -> tuple:
-    """The axis along which dice ``a`` and ``b`` overlap least (separating axes).
-
-    The candidates are the face normals of both dice (one of each pair of opposite faces,
-    ``Bodies.axes``) and the cross products of their edges. ``first`` (-1: none) is a
-    candidate to try first: the one that separated the pair last time, usually still does.
-    Returns ``(overlap, n, i, j, c)``: ``overlap`` <= 0 when an axis separates them, ``c``
-    that axis (else -1); ``n`` the unit axis pointing from ``b`` toward ``a``; for an edge
-    axis the edges ``i`` of ``a`` and ``j`` of ``b`` that meet (the closest pair among the
-    parallel ones), else ``i = -1``. A face axis wins a tie: an aligned stack rests face on
-    face.
-    """
-    if first >= 0:
-        overlap, axis, real = _candidate_overlap(first, a, b, world, x, q, bodies)
-        if real and overlap <= 0.0:
-            return overlap, axis, -1, -1, first
-    best, n, c = np.inf, (0.0, 0.0, 0.0), 0
-    for die in (a, b):
-        for s in range(bodies.n_axes[die]):
-            n0, n1, n2 = _face_axis(die, bodies.axes[die, s], q, bodies)
-            overlap, axis = _axis_overlap(a, b, n0, n1, n2, world, x, bodies)
-            if overlap <= 0.0:
-                return overlap, axis, -1, -1, c
-            if overlap < best:
-                best, n = overlap, axis
-            c += 1
-    edge, edge_n, best_i, best_j, gap = np.inf, (0.0, 0.0, 0.0), -1, -1, np.inf
-    edges = bodies.edges
-    for i in range(bodies.n_edges[a]):
-        a0, a1 = edges[a, i, 0], edges[a, i, 1]
-        for j in range(bodies.n_edges[b]):
-            c += 1
-            (c0, c1, c2), real = _edge_axis(a, i, b, j, world, bodies)
-            if not real:
-                continue
-            overlap, axis = _axis_overlap(a, b, c0, c1, c2, world, x, bodies)
-            if overlap <= 0.0:
-                return overlap, axis, -1, -1, c - 1
-            if overlap > edge * (1.0 + TIE):
-                continue
-            # parallel edges share the axis: the pair that meets is the closest one
-            b0, b1 = edges[b, j, 0], edges[b, j, 1]
-            pa, pb = closest_on_segments(
-                (world[a, a0, 0], world[a, a0, 1], world[a, a0, 2]),
-                (world[a, a1, 0], world[a, a1, 1], world[a, a1, 2]),
-                (world[b, b0, 0], world[b, b0, 1], world[b, b0, 2]),
-                (world[b, b1, 0], world[b, b1, 1], world[b, b1, 2]))
-            d0, d1, d2 = pa[0] - pb[0], pa[1] - pb[1], pa[2] - pb[2]
-            distance = d0 * d0 + d1 * d1 + d2 * d2
-            if overlap < edge * (1.0 - TIE) or distance < gap:
-                edge, edge_n, best_i, best_j, gap = min(edge, overlap), axis, i, j, distance
-    if edge < best * (1.0 - TIE):
-        return edge, edge_n, best_i, best_j, -1
-    return best, n, -1, -1, -1
-
-
-@njit(cache=True, inline="always")
-def _axis_overlap(a: int, b: int, n0: float, n1: float, n2: float, world: np.ndarray,
-                  x: np.ndarray, bodies: Bodies) -> tuple:
+def _axis_overlap(a: int, b: int, n: tuple, world: np.ndarray, x: np.ndarray) -> tuple:
     """The overlap of dice ``a`` and ``b`` along the unit axis ``n``.
 
     Returns it and ``n`` turned to point from ``b`` toward ``a``.
     """
-    low_a, high_a = _extent(a, n0, n1, n2, world, bodies)
-    low_b, high_b = _extent(b, n0, n1, n2, world, bodies)
+    n0, n1, n2 = n
+    low_a, high_a = _extent(a, n0, n1, n2, world)
+    low_b, high_b = _extent(b, n0, n1, n2, world)
     if n0 * (x[a, 0] - x[b, 0]) + n1 * (x[a, 1] - x[b, 1]) + n2 * (x[a, 2] - x[b, 2]) >= 0.0:
         return high_b - low_a, (n0, n1, n2)
     return high_a - low_b, (-n0, -n1, -n2)
 
 
 @njit(cache=True, inline="always")
-def within(p: tuple, die: int, x: np.ndarray, q: np.ndarray, bodies: Bodies,
+def _candidate_overlap(c: int, a: int, b: int, world: np.ndarray, x: np.ndarray,
+                       q: np.ndarray, axes: np.ndarray, directions: np.ndarray) -> tuple:
+    """The overlap along candidate axis ``c``, numbered as :func:`least_overlap` visits them.
+
+    Returns it, the axis pointing from ``b`` toward ``a``, and False for parallel edges.
+    """
+    n_a, n_c = axes.shape[1], directions.shape[1]
+    if c < 2 * n_a:
+        die, s = (a, c) if c < n_a else (b, c - n_a)
+        n, real = _turned(q, die, (axes[die, s, 0], axes[die, s, 1], axes[die, s, 2])), True
+    else:
+        ca, cb = (c - 2 * n_a) // n_c, (c - 2 * n_a) % n_c
+        n, real = _cross_axis(
+            _turned(q, a, (directions[a, ca, 0], directions[a, ca, 1], directions[a, ca, 2])),
+            _turned(q, b, (directions[b, cb, 0], directions[b, cb, 1], directions[b, cb, 2])))
+    if not real:
+        return np.inf, n, False
+    overlap, axis = _axis_overlap(a, b, n, world, x)
+    return overlap, axis, True
+
+
+@njit(cache=True, inline="always")
+def least_overlap(a: int, b: int, world: np.ndarray, x: np.ndarray, q: np.ndarray,
+                  axes: np.ndarray, directions: np.ndarray, first: int) -> tuple:
+    """The axis along which dice ``a`` and ``b`` overlap least (separating axes).
+
+    The candidates are the face normals of both dice (``axes``: one of each pair of
+    opposite faces) and the cross products of their edges' directions (``directions``: one
+    per class of parallel edges), :class:`Hulls`' arrays. ``first`` (-1: none) is a
+    candidate to try first: the one that separated the pair last time usually still does.
+    Returns ``(overlap, n, ca, cb, c)``: ``overlap`` <= 0 when an axis separates them, ``c``
+    that axis (else -1); ``n`` the unit axis pointing from ``b`` toward ``a``; for an edge
+    axis the edge classes ``ca`` of ``a`` and ``cb`` of ``b`` that meet, else -1. A face axis
+    wins a tie: an aligned stack rests face on face.
+    """
+    if first >= 0:
+        overlap, axis, real = _candidate_overlap(first, a, b, world, x, q, axes, directions)
+        if real and overlap <= 0.0:
+            return overlap, axis, -1, -1, first
+    best, n, c = np.inf, (0.0, 0.0, 0.0), 0
+    for die in (a, b):
+        for s in range(axes.shape[1]):
+            overlap, axis = _axis_overlap(
+                a, b, _turned(q, die, (axes[die, s, 0], axes[die, s, 1], axes[die, s, 2])),
+                world, x)
+            if overlap <= 0.0:
+                return overlap, axis, -1, -1, c
+            if overlap < best:
+                best, n = overlap, axis
+            c += 1
+    edge, edge_n, best_a, best_b = np.inf, (0.0, 0.0, 0.0), -1, -1
+    for ca in range(directions.shape[1]):
+        e = _turned(q, a, (directions[a, ca, 0], directions[a, ca, 1], directions[a, ca, 2]))
+        for cb in range(directions.shape[1]):
+            c += 1
+            axis, real = _cross_axis(e, _turned(
+                q, b, (directions[b, cb, 0], directions[b, cb, 1], directions[b, cb, 2])))
+            if not real:
+                continue
+            overlap, axis = _axis_overlap(a, b, axis, world, x)
+            if overlap <= 0.0:
+                return overlap, axis, -1, -1, c - 1
+            if overlap < edge:
+                edge, edge_n, best_a, best_b = overlap, axis, ca, cb
+    if edge < best * (1.0 - TIE):
+        return edge, edge_n, best_a, best_b, -1
+    return best, n, -1, -1, -1
+
+
+@njit(cache=True, inline="always")
+def within(p: tuple, die: int, x: np.ndarray, q: np.ndarray, planes: np.ndarray,
            tol: float) -> bool:
-    """Whether the point ``p`` lies inside die ``die``, its faces moved out by ``tol``."""
+    """Whether the point ``p`` lies inside die ``die``.
+
+    ``planes``: :class:`Hulls`' (their offsets moved out by ``tol``).
+    """
     d0, d1, d2 = p[0] - x[die, 0], p[1] - x[die, 1], p[2] - x[die, 2]
     b0 = q[die, 0, 0] * d0 + q[die, 1, 0] * d1 + q[die, 2, 0] * d2
     b1 = q[die, 0, 1] * d0 + q[die, 1, 1] * d1 + q[die, 2, 1] * d2
     b2 = q[die, 0, 2] * d0 + q[die, 1, 2] * d1 + q[die, 2, 2] * d2
-    for f in range(bodies.n_faces[die]):
-        if bodies.faces[die, f, 0] * b0 + bodies.faces[die, f, 1] * b1 \
-                + bodies.faces[die, f, 2] * b2 - bodies.offsets[die, f] > tol:
+    for f in range(planes.shape[1]):
+        if planes[die, f, 0] * b0 + planes[die, f, 1] * b1 + planes[die, f, 2] * b2 \
+                - planes[die, f, 3] > tol:
             return False
     return True
 
 
 @njit(cache=True, inline="always")
-def pair_contacts(a: int, b: int, world: np.ndarray, x: np.ndarray, q: np.ndarray,
-                  cu: np.ndarray, cw: np.ndarray, bodies: Bodies, pair: Pair,
-                  force: np.ndarray, torque: np.ndarray, separating: np.ndarray) -> tuple:
-    """Every contact of dice ``a`` and ``b``, their forces applied.
+def pair_contacts(a: int, b: int, overlap: float, n: tuple, ca: int, cb: int,
+                  world: np.ndarray, x: np.ndarray, q: np.ndarray, cu: np.ndarray,
+                  cw: np.ndarray, hulls: Hulls, pair: Pair, force: np.ndarray,
+                  torque: np.ndarray) -> tuple:
+    """Every contact of dice ``a`` and ``b``, which overlap, their forces applied.
 
-    The contact normal is the axis of least overlap (:func:`least_overlap`). A face axis:
-    every corner of one die inside the other (to :data:`LATERAL` of its reach, so that
-    corners exactly on a side plane, as in an aligned stack, still bear) is pushed along it
-    by its depth beyond the other die's extent along it. An edge axis (edge across edge: two
-    cubes meeting edge on edge at a right angle have no corner inside the other): one contact
-    at the middle of the two edges' closest points, as deep as the overlap. ``separating``
-    (N, N): the candidate axis that last separated each pair (-1: none), read and updated.
-    Returns the springs' energy, the deepest contact, and whether they touch.
+    ``overlap``, ``n``, ``ca``, ``cb``: the least overlap and its axis
+    (:func:`least_overlap`). A face axis: every corner of one die inside the other (to
+    :data:`LATERAL` of its reach, so that corners exactly on a side plane, as in an aligned
+    stack, still bear) is pushed along it by its depth beyond the other die's extent along
+    it. An edge axis (edge across edge: two cubes meeting edge on edge at a right angle have
+    no corner inside the other): one contact at the middle of the closest points of the
+    closest pair of edges of the two classes, as deep as the overlap. Returns the springs'
+    energy, the deepest contact, and whether a contact bears.
     """
-    overlap, n, i, j, separating[a, b] = least_overlap(a, b, world, x, q, bodies,
-                                                       separating[a, b])
-    if overlap <= 0.0:
-        return 0.0, 0.0, False
-    if i >= 0:
-        edges = bodies.edges
-        a0, a1, b0, b1 = edges[a, i, 0], edges[a, i, 1], edges[b, j, 0], edges[b, j, 1]
-        pa, pb = closest_on_segments(
-            (world[a, a0, 0], world[a, a0, 1], world[a, a0, 2]),
-            (world[a, a1, 0], world[a, a1, 1], world[a, a1, 2]),
-            (world[b, b0, 0], world[b, b0, 1], world[b, b0, 2]),
-            (world[b, b1, 0], world[b, b1, 1], world[b, b1, 2]))
-        point = (0.5 * (pa[0] + pb[0]), 0.5 * (pa[1] + pb[1]), 0.5 * (pa[2] + pb[2]))
+    if ca >= 0:
+        edges, start = hulls.edges, hulls.classes
+        gap, point = np.inf, (0.0, 0.0, 0.0)
+        for i in range(start[a, ca], start[a, ca + 1]):
+            a0, a1 = edges[a, i, 0], edges[a, i, 1]
+            for j in range(start[b, cb], start[b, cb + 1]):
+                b0, b1 = edges[b, j, 0], edges[b, j, 1]
+                pa, pb = closest_on_segments(
+                    (world[a, a0, 0], world[a, a0, 1], world[a, a0, 2]),
+                    (world[a, a1, 0], world[a, a1, 1], world[a, a1, 2]),
+                    (world[b, b0, 0], world[b, b0, 1], world[b, b0, 2]),
+                    (world[b, b1, 0], world[b, b1, 1], world[b, b1, 2]))
+                d0, d1, d2 = pa[0] - pb[0], pa[1] - pb[1], pa[2] - pb[2]
+                distance = d0 * d0 + d1 * d1 + d2 * d2
+                if distance < gap:  # parallel edges share the axis: the closest pair meets
+                    gap = distance
+                    point = (0.5 * (pa[0] + pb[0]), 0.5 * (pa[1] + pb[1]), 0.5 * (pa[2] + pb[2]))
         return _push(a, b, point, overlap, n, x, cu, cw, pair, force, torque), overlap, True
     n0, n1, n2 = n
-    low_a = _extent(a, n0, n1, n2, world, bodies)[0]
-    high_b = _extent(b, n0, n1, n2, world, bodies)[1]
+    low_a = _extent(a, n0, n1, n2, world)[0]
+    high_b = _extent(b, n0, n1, n2, world)[1]
+    planes, n_vertices, r_max = hulls.planes, hulls.n_vertices, hulls.r_max
     spring, deepest, found = 0.0, 0.0, False
     for first, other in ((a, b), (b, a)):
-        tol = LATERAL * bodies.r_max[other]
-        for k in range(bodies.n_vertices[first]):
+        tol = LATERAL * r_max[other]
+        for k in range(n_vertices[first]):
             p = (world[first, k, 0], world[first, k, 1], world[first, k, 2])
             along = n0 * p[0] + n1 * p[1] + n2 * p[2]
             depth = high_b - along if first == a else along - low_a
-            if depth <= 0.0 or not within(p, other, x, q, bodies, tol):
+            if depth <= 0.0 or not within(p, other, x, q, planes, tol):
                 continue
             found = True
             deepest = max(deepest, depth)
@@ -477,14 +485,15 @@ def pair_contacts(a: int, b: int, world: np.ndarray, x: np.ndarray, q: np.ndarra
 
 
 @njit(cache=True)
-def simulate_group(g: int, dice: GroupDice, bodies: Bodies, pair: Pair, contact: Contact,
-                   options: Options, stops: GroupStops, records: GroupRecords,
+def simulate_group(g: int, dice: GroupDice, bodies: Bodies, hulls: Hulls, pair: Pair,
+                   contact: Contact, options: Options, stops: GroupStops, records: GroupRecords,
                    out: GroupOutcome) -> None:
     """Advance throw ``g`` (its N dice) in place; see :func:`simulate_groups`."""
     n_dice, n_planes = dice.x.shape[1], contact.planes.shape[0]
     planes, gated, stick, vmin = contact.planes, contact.gated, contact.stick, contact.vmin
     vertices, n_vertices, mass = bodies.vertices, bodies.n_vertices, bodies.mass
     inv_inertia, inv_iso, r_max = bodies.inv_inertia, bodies.inv_iso, bodies.r_max
+    axes, directions = hulls.axes, hulls.directions  # taken once: see least_overlap
     n0, n1, n2, floor = planes[0, NX], planes[0, NY], planes[0, NZ], planes[0, OFFSET]
     rotation, midpoint, dt, g_acc = options.rotation, options.midpoint, options.dt, options.gravity
     x, u, ang, q = dice.x[g].copy(), dice.u[g].copy(), dice.ang[g].copy(), dice.q[g].copy()
@@ -499,6 +508,8 @@ def simulate_group(g: int, dice: GroupDice, bodies: Bodies, pair: Pair, contact:
     lowest = np.empty((n_dice, n_planes))  # each die's lowest vertex height over each plane
     force, torque = np.empty((n_dice, 3)), np.empty((n_dice, 3))
     kinetic, own = np.empty(n_dice), np.empty(n_dice)
+    qa, inv_a = np.empty((3, 3)), np.empty((3, 3))
+    touched, max_pen = out.touched, out.max_pen
     touching = np.zeros(n_dice, np.int64)
     near, was = np.zeros(n_dice, np.bool_), np.ones(n_dice, np.bool_)
     fastest, approach = np.zeros(n_dice), np.zeros(n_dice)
@@ -510,6 +521,11 @@ def simulate_group(g: int, dice: GroupDice, bodies: Bodies, pair: Pair, contact:
     floor_total = 0.0
     for a in range(n_dice):
         floor_total += bodies.floor[a]
+    decisive = -np.inf  # _decided is False unless the energy is below this
+    if stops.decide:
+        decisive = np.inf
+        for a in range(n_dice):
+            decisive = min(decisive, bodies.lock[a].max() + floor_total - bodies.floor[a])
     up = (0.0, 0.0, 1.0)
     n_steps, stride, n_rec = stops.n_steps, records.stride, records.x.shape[1]
     e_start, e_tol, e_max = 0.0, 1.0, -np.inf
@@ -533,7 +549,10 @@ def simulate_group(g: int, dice: GroupDice, bodies: Bodies, pair: Pair, contact:
             cu[a, 0], cu[a, 1], cu[a, 2], cw[a, 0], cw[a, 1], cw[a, 2] = cu0, cu1, cu2, cw0, cw1, \
                 cw2
             l0, l1, l2 = ang[a, 0], ang[a, 1], ang[a, 2]
-            wl0, wl1, wl2 = angular_velocity(q[a], inv_inertia[a], inv_iso[a], l0, l1, l2)
+            for r in range(3):  # this die's rotation and inertia, as the single die's kernel
+                for c in range(3):  # takes them (a view of q[a] costs a reference count)
+                    qa[r, c], inv_a[r, c] = q[a, r, c], inv_inertia[a, r, c]
+            wl0, wl1, wl2 = angular_velocity(qa, inv_a, inv_iso[a], l0, l1, l2)
             m = mass[a]
             kinetic[a] = 0.5 * m * (u0 * u0 + u1 * u1 + u2 * u2) + 0.5 * (
                 l0 * wl0 + l1 * wl1 + l2 * wl2)
@@ -587,9 +606,9 @@ def simulate_group(g: int, dice: GroupDice, bodies: Bodies, pair: Pair, contact:
                         tied[a, k, p] = tie
                     if below:
                         touch += 1
-                        out.touched[g, a, p] = True
+                        touched[g, a, p] = True
                         spring += spring_k
-                        out.max_pen[g, a] = max(out.max_pen[g, a], dg)
+                        max_pen[g, a] = max(max_pen[g, a], dg)
                         hit = max(hit, approach_k)
                     spring_t += stored
                     f0 += fk0
@@ -599,6 +618,9 @@ def simulate_group(g: int, dice: GroupDice, bodies: Bodies, pair: Pair, contact:
                         t0 += rk1 * fk2 - rk2 * fk1
                         t1 += rk2 * fk0 - rk0 * fk2
                         t2 += rk0 * fk1 - rk1 * fk0
+            for k in range(n_vertices[a], n_v):  # a smaller die's padding: its first corner
+                world[a, k, 0], world[a, k, 1], world[a, k, 2] = world[a, 0, 0], world[a, 0, 1], \
+                    world[a, 0, 2]
             force[a, 0], force[a, 1], force[a, 2] = f0, f1, f2
             torque[a, 0], torque[a, 1], torque[a, 2] = t0, t1, t2
             touching[a], fastest[a], approach[a] = touch, fast, hit
@@ -616,11 +638,14 @@ def simulate_group(g: int, dice: GroupDice, bodies: Bodies, pair: Pair, contact:
                 touch_ab = False
                 if d0 * d0 + d1 * d1 + d2 * d2 < reach * reach:
                     apart = False
-                    spring, deepest, touch_ab = pair_contacts(a, b, world, x, q, cu, cw,
-                                                              bodies, pair, force, torque,
-                                                              separating)
-                    checked += spring
-                    overlap = max(overlap, deepest)
+                    depth, n, ca, cb, separating[a, b] = least_overlap(
+                        a, b, world, x, q, axes, directions, separating[a, b])
+                    if depth > 0.0:
+                        spring, deepest, touch_ab = pair_contacts(a, b, depth, n, ca, cb, world,
+                                                                  x, q, cu, cw, hulls, pair,
+                                                                  force, torque)
+                        checked += spring
+                        overlap = max(overlap, deepest)
                 if touch_ab and not met[a, b]:
                     s0, s1, s2 = u[a, 0] - u[b, 0], u[a, 1] - u[b, 1], u[a, 2] - u[b, 2]
                     if s0 * s0 + s1 * s1 + s2 * s2 > v_rest2:
@@ -652,7 +677,7 @@ def simulate_group(g: int, dice: GroupDice, bodies: Bodies, pair: Pair, contact:
             if now and not was[a] and approach[a] > stops.v_rest:
                 out.impacts[g, a] += 1
             was[a] = now
-        if stops.decide and _decided(bodies, q, energy, floor_total, up):
+        if energy < decisive and _decided(bodies, q, energy, floor_total, up):
             end = DECIDED
             step -= 1
             break
@@ -702,8 +727,14 @@ def simulate_group(g: int, dice: GroupDice, bodies: Bodies, pair: Pair, contact:
             u[a, 0], u[a, 1], u[a, 2], x[a, 0], x[a, 1], x[a, 2] = nu0, nu1, nu2, nx0, nx1, nx2
             ang[a, 0], ang[a, 1], ang[a, 2] = nl0, nl1, nl2
             if rotation:
-                w[a, 0], w[a, 1], w[a, 2] = torque_free(q[a], inv_inertia[a], inv_iso[a], nl0,
-                                                        nl1, nl2, dt, jump)
+                for r in range(3):
+                    for c in range(3):
+                        qa[r, c], inv_a[r, c] = q[a, r, c], inv_inertia[a, r, c]
+                w[a, 0], w[a, 1], w[a, 2] = torque_free(qa, inv_a, inv_iso[a], nl0, nl1, nl2, dt,
+                                                        jump)
+                for r in range(3):
+                    for c in range(3):
+                        q[a, r, c] = qa[r, c]
         if not finite:
             end = NONFINITE
             step -= 1
@@ -810,22 +841,22 @@ def _record(records: GroupRecords, j: int, g: int, x: np.ndarray, q: np.ndarray)
 
 
 @njit(cache=True, parallel=True, nogil=True)
-def simulate_groups(dice: GroupDice, bodies: Bodies, pair: Pair, contact: Contact,
-                    options: Options, stops: GroupStops, records: GroupRecords,
-                    out: GroupOutcome) -> None:
+def simulate_groups(dice: GroupDice, bodies: Bodies, hulls: Hulls, pair: Pair,
+                    contact: Contact, options: Options, stops: GroupStops,
+                    records: GroupRecords, out: GroupOutcome) -> None:
     """Advance G throws of N dice in place, in parallel over throws.
 
     Throws are independent: the results do not depend on the batch or the threads. The kernel
     releases the GIL, so another thread can set ``out.abort``.
     """
     for g in prange(dice.x.shape[0]):
-        simulate_group(g, dice, bodies, pair, contact, options, stops, records, out)
+        simulate_group(g, dice, bodies, hulls, pair, contact, options, stops, records, out)
 
 
 @njit(cache=True, nogil=True)
-def simulate_groups_serial(dice: GroupDice, bodies: Bodies, pair: Pair, contact: Contact,
-                           options: Options, stops: GroupStops, records: GroupRecords,
-                           out: GroupOutcome) -> None:
+def simulate_groups_serial(dice: GroupDice, bodies: Bodies, hulls: Hulls, pair: Pair,
+                           contact: Contact, options: Options, stops: GroupStops,
+                           records: GroupRecords, out: GroupOutcome) -> None:
     """:func:`simulate_groups` on the calling thread, with the same results."""
     for g in range(dice.x.shape[0]):
-        simulate_group(g, dice, bodies, pair, contact, options, stops, records, out)
+        simulate_group(g, dice, bodies, hulls, pair, contact, options, stops, records, out)
