@@ -146,6 +146,22 @@ def test_cup_releases_twelve_dice_apart_above_the_table():
     assert (centres[..., 2] > math.sqrt(3) / 2 * scene.die.size).all()
 
 
+def test_chunks_kept_are_read_back_and_match_a_run_without_them(tmp_path):
+    scene = Scene(die=wd.variant_die("drilled16"))
+    fresh = wd.chunked_together(scene, 3, seed=5, chunk=2)
+    kept = wd.chunked_together(scene, 3, seed=5, keep=tmp_path, chunk=2)
+    assert sorted(p.name for p in tmp_path.glob("*.npz")) == [
+        "together-5-00000-2.npz", "together-5-00001-1.npz"]
+    (tmp_path / "together-5-00001-1.npz").unlink()  # a run stopped after its first chunk
+    again = wd.chunked_together(scene, 3, seed=5, keep=tmp_path, chunk=2)
+    for other in (kept, again):
+        assert other.thrown == fresh.thrown == 3
+        np.testing.assert_array_equal(other.successes, fresh.successes)
+        np.testing.assert_array_equal(other.faces, fresh.faces)
+    with pytest.raises(ValueError, match="keep"):
+        wd.chunked_together(scene, 3, seed=5, keep=tmp_path, chunk=3)
+
+
 def test_sliding_friction_is_the_tables():
     assert va.sliding_friction(Scene()) == pytest.approx(Scene().ground.friction, abs=0.02)
 

@@ -3,7 +3,8 @@
 Each entry of :data:`STUDIES` names a module with ``run(out: Path, quick: bool) -> dict``
 that writes its markdown and figures under ``out`` and returns its headline numbers. Those in
 :data:`SIZED` also take ``throws`` (the sample size per die or per point), those in
-:data:`CHUNKED` ``faces_of`` (their throws run elsewhere: ``--ray ADDRESS``).
+:data:`CHUNKED` ``faces_of`` (their throws run elsewhere: ``--ray ADDRESS``), those in
+:data:`KEPT` ``keep`` (a folder keeping their throws' chunks: ``--chunks DIR``).
 """
 
 from __future__ import annotations
@@ -29,19 +30,22 @@ STUDIES = {
 }
 SIZED = ("shapes", "cuboids", "materials", "pairs", "weldon", "collisions", "craps")
 CHUNKED = ("shapes",)
+KEPT = ("weldon",)
 
 
 def run(name: str, out: Path, quick: bool = False, throws: int | None = None,
-        faces_of: Callable | None = None) -> dict[str, float]:
+        faces_of: Callable | None = None, keep: Path | None = None) -> dict[str, float]:
     """Run study ``name`` (a key of :data:`STUDIES`) into ``out``.
 
     ``throws`` (studies in :data:`SIZED` only) replaces the study's sample size;
-    ``faces_of`` (studies in :data:`CHUNKED` only) throws its dice (see ``shapes.run``).
+    ``faces_of`` (studies in :data:`CHUNKED` only) throws its dice (see ``shapes.run``);
+    ``keep`` (studies in :data:`KEPT` only) keeps its chunks (see ``weldon.run``).
     """
     if name not in STUDIES:
         raise ValueError(f"name must be one of {sorted(STUDIES)}, got {name!r}")
     options = {}
-    for key, value, takers in (("throws", throws, SIZED), ("faces_of", faces_of, CHUNKED)):
+    for key, value, takers in (("throws", throws, SIZED), ("faces_of", faces_of, CHUNKED),
+                               ("keep", keep, KEPT)):
         if value is not None:
             if name not in takers:
                 raise ValueError(f"{key} is taken by the studies {', '.join(takers)} only, "

@@ -12,7 +12,7 @@ import functools
 from pathlib import Path
 
 from dice_env.distributed import connected, hand_faces
-from dice_env.studies import CHUNKED, SIZED, STUDIES, run
+from dice_env.studies import CHUNKED, KEPT, SIZED, STUDIES, run
 
 
 def main(argv: list[str] | None = None) -> None:
@@ -29,19 +29,20 @@ def main(argv: list[str] | None = None) -> None:
                         help=f"throw in seeded chunks on Ray ({', '.join(CHUNKED)} only): "
                         "auto, ray://host:10001, or local (a fresh local instance)")
     parser.add_argument("--chunks", metavar="DIR", type=Path, default=None,
-                        help=f"throw in seeded chunks ({', '.join(CHUNKED)} only), each kept "
-                        "under DIR: run again, the study continues from the chunks done")
+                        help=f"throw in seeded chunks ({', '.join(CHUNKED + KEPT)} only), each "
+                        "kept under DIR: run again, the study continues from the chunks done")
     args = parser.parse_args(argv)
     for flag, value, takers in (("--throws", args.throws, SIZED), ("--ray", args.ray, CHUNKED),
-                                ("--chunks", args.chunks, CHUNKED)):
+                                ("--chunks", args.chunks, CHUNKED + KEPT)):
         if value is not None and args.study not in takers:
             parser.error(f"{flag} is taken by {', '.join(takers)} only, not {args.study!r}")
-    chunked = args.ray is not None or args.chunks is not None
+    chunked = args.ray is not None or (args.chunks is not None and args.study in CHUNKED)
     faces_of = functools.partial(hand_faces, ray=args.ray, keep=args.chunks) if chunked \
         else None
     with contextlib.nullcontext() if args.ray is None else connected(args.ray):
         for name in STUDIES if args.study == "all" else [args.study]:
-            numbers = run(name, args.out, args.quick, args.throws, faces_of)
+            keep = args.chunks if name in KEPT else None
+            numbers = run(name, args.out, args.quick, args.throws, faces_of, keep)
             print(f"{name}: " + ", ".join(f"{k}={v:.4g}" for k, v in numbers.items()))
 
 

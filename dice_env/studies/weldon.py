@@ -23,6 +23,7 @@ expected count is at least :data:`MIN_EXPECTED`.
 
 from __future__ import annotations
 
+import hashlib
 import json
 import math
 import time
@@ -61,6 +62,7 @@ RESOLVING_POWER = 0.8  # a test "resolves" a difference it detects with this pro
 FULL = {"together": 240, "alone": 4500, "variant": 1200}
 QUICK = {"together": 3, "alone": 12, "variant": 6}
 BATCH_TOGETHER = 6  # twelve-dice throws per kernel call (the kernel runs them in parallel)
+CHUNK_TOGETHER = 250  # twelve-dice throws per seeded chunk (see chunked_together)
 T_MAX_TOGETHER = 2.0  # s of simulated time; a throw not decided by then is not counted
 SEED = 2026
 
@@ -375,6 +377,48 @@ def throw_together(scene: Scene, cups: list[State], bar: object = None,
                     leaning, undecided, time.perf_counter() - start_time)
 
 
+def chunked_together(scene: Scene, throws: int, seed: int, keep: Path | None = None,
+                     bar: object = None, chunk: int = CHUNK_TOGETHER) -> Together:
+    """``throws`` cups thrown together, in chunks of ``chunk`` cups seeded ``(seed, i)``.
+
+    With ``keep``, each chunk's outcome is kept there (``together-<seed>-<i>-<size>.npz``,
+    beside ``spec.json``, which names the die, the table, the cup and the chunk size), and a
+    chunk found there is read instead of thrown: a run stopped part-way continues. The
+    result does not depend on ``keep``.
+    """
+    spec = json.loads(json.dumps({"die": scene.die.name, "cup": asdict(CUP), "chunk": chunk,
+                                  "scene": hashlib.sha1(repr(scene).encode()).hexdigest()}))
+    if keep is not None:
+        keep.mkdir(parents=True, exist_ok=True)
+        saved = keep / "spec.json"
+        if saved.exists() and json.loads(saved.read_text()) != spec:
+            raise ValueError(f"keep: {keep} holds chunks of another set-up; choose an empty "
+                             "folder")
+        saved.write_text(json.dumps(spec, indent=1) + "\n")
+    parts = []
+    for i, start in enumerate(range(0, throws, chunk)):
+        size = min(chunk, throws - start)
+        path = None if keep is None else keep / f"together-{seed}-{i:05d}-{size}.npz"
+        if path is not None and path.exists():
+            with np.load(path) as f:
+                part = Together(f["successes"], f["faces"], int(f["thrown"]), int(f["leaning"]),
+                                int(f["undecided"]), float(f["seconds"]))
+        else:
+            rng = np.random.default_rng([seed, i])
+            part = throw_together(scene, cup_throws(scene, size, rng))
+            if path is not None:
+                temporary = path.with_suffix(".tmp.npz")
+                np.savez(temporary, **asdict(part))
+                temporary.replace(path)
+        parts.append(part)
+        if bar is not None:
+            bar.update(size * DICE)
+    return Together(np.concatenate([p.successes for p in parts]),
+                    np.sum([p.faces for p in parts], axis=0),
+                    *(sum(getattr(p, k) for p in parts)
+                      for k in ("thrown", "leaning", "undecided", "seconds")))
+
+
 def throw_alone(scene: Scene, cups: list[State], bar: object = None) -> Faces:
     """Throw every die of ``cups`` alone (``stop_when_decided``); count the faces."""
     state = State(*(np.concatenate([getattr(s, f.name) for s in cups]) for f in fields(State)))
@@ -435,11 +479,12 @@ def variant_die(pips: Pips | str) -> Die:
 # ---- the study -------------------------------------------------------------------------------
 
 def run(out: Path = DOCS, quick: bool = False, seed: int = SEED,
-        throws: int | None = None) -> dict[str, float]:
+        throws: int | None = None, keep: Path | None = None) -> dict[str, float]:
     """Regenerate ``weldon.md``, ``weldon.json`` and ``figures/weldon.png`` under ``out``.
 
     ``throws``: the twelve-dice throws thrown together (default :data:`FULL`'s, or
-    :data:`QUICK`'s with ``quick``); the single-die samples keep their sizes.
+    :data:`QUICK`'s with ``quick``); the single-die samples keep their sizes. ``keep``: a
+    folder for the together throws' chunks (:func:`chunked_together`), to continue a run.
     """
     sizes = dict(QUICK if quick else FULL)
     if checked_throws(throws, 2) is not None:
@@ -451,7 +496,7 @@ def run(out: Path = DOCS, quick: bool = False, seed: int = SEED,
     bar = progress(total, "weldon die-throws")
     bar.unit = "die"
     scene = Scene(die=variant_die(VARIANTS[0][2]))
-    together = throw_together(scene, cup_throws(scene, sizes["together"], rng), bar)
+    together = chunked_together(scene, sizes["together"], seed, keep, bar)
     alone = {}
     alone_seconds = time.perf_counter()
     for key, _, pips in VARIANTS:
