@@ -698,7 +698,8 @@ def simulate_group(g: int, dice: GroupDice, bodies: Bodies, hulls: Hulls, pair: 
             else:
                 quiet = 0
         jump = 1
-        if options.flight and apart:  # no record falls inside a jump: it may end on one
+        if options.flight and apart and touching.max() == 0:  # no record falls inside a jump:
+            # it may end on one
             jump = min(_group_jump(planes, lowest, touching, x, u, ang, force, bodies, rotation,
                                    dt, n_steps - step + 1), next_record - step + 1)
         finite = True
