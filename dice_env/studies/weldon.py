@@ -61,7 +61,8 @@ RESOLVING_POWER = 0.8  # a test "resolves" a difference it detects with this pro
 # for the reference die and for each other variant.
 FULL = {"together": 240, "alone": 4500, "variant": 1200}
 QUICK = {"together": 3, "alone": 12, "variant": 6}
-BATCH_TOGETHER = 6  # twelve-dice throws per kernel call (the kernel runs them in parallel)
+BATCH_TOGETHER = 125  # twelve-dice throws per kernel call (run in parallel: the threads share long
+# and short throws evenly)
 CHUNK_TOGETHER = 250  # twelve-dice throws per seeded chunk (see chunked_together)
 T_MAX_TOGETHER = 2.0  # s of simulated time; a throw not decided by then is not counted
 SEED = 2026
