@@ -2,6 +2,7 @@
 
     python benchmarks/kernel_ab.py BASE_TREE            # e.g. a `git worktree` of the base
     python benchmarks/kernel_ab.py BASE_TREE --this THIS_TREE --rounds 5
+    python benchmarks/kernel_ab.py BASE_TREE --groups   # the group kernel (several dice)
 
 Each round runs one child process per tree (base, then this one) that times, on one thread
 (its own CPU time, so other processes on shared cores inflate it less), three figures of the
@@ -11,6 +12,13 @@ the default scene's hand throws to a decided face (1024 dice), in throws/s. The 
 each figure's median over the rounds per tree and the ratio this/base per round (the machine
 drifts by ±25 % over minutes; alternating keeps the two trees within a round close in time).
 Writes ``benchmarks/results/kernel_ab.json``.
+
+``--groups`` times the group kernel instead (``simulate_group``, one thread, throws/s to
+decided faces): twelve ``drilled16`` d6 from the Weldon study's cup onto the table (8 throws),
+two d6 from the pairs study's hand into the tray (64 throws), and a d20, a d8 and a d6 from
+that hand into the tray (64 throws); each tree's outcomes are hashed (faces, steps, final
+states) to tell a bit-identical change from one at round-off. Writes
+``benchmarks/results/kernel_ab_groups.json``.
 """
 
 from __future__ import annotations
@@ -66,13 +74,56 @@ print(json.dumps({"paper_vector": vector, "paper_scalar": scalar, "decided": dec
 FIGURES = {"paper_vector": "paper scene, vectorised kernel (die-steps/s)",
            "paper_scalar": "paper scene, scalar kernel (die-steps/s)",
            "decided": "default scene to a decided face (throws/s)"}
+GROUP_CHILD = r"""
+import hashlib, json, time
+import numpy as np
+from dice_env import Die, Scene
+from dice_env.group import GroupState, simulate_group
+from dice_env.studies import pairs, weldon
+from dice_env.surroundings import tray
+
+def cpu(fn):
+    fn()  # compiled and warm
+    start = time.process_time()
+    result = fn()
+    return time.process_time() - start, result
+
+def digest(res):
+    h = hashlib.sha1()
+    for a in (res.face, res.steps, res.final.position, res.final.orientation):
+        h.update(np.ascontiguousarray(a).tobytes())
+    return h.hexdigest()[:12]
+
+out = {}
+table = Scene(die=weldon.variant_die("drilled16"))
+cups = GroupState.of(weldon.cup_throws(table, 8, np.random.default_rng(3)))
+seconds, res = cpu(lambda: simulate_group(table, (table.die,) * 12, cups, t_max=2.0,
+                                          stop_when_decided=True, num_threads=1))
+out["twelve"], out["twelve_hash"] = 8 / seconds, digest(res)
+scene = Scene(walls=tray())
+for key, dice in (("two", (scene.die,) * 2),
+                  ("mixed", (Die.standard("d20"), Die.standard("d8"), scene.die))):
+    state = pairs.hand_throws(scene, dice, 64, np.random.default_rng(4))
+    seconds, res = cpu(lambda: simulate_group(scene, dice, state, t_max=3.0,
+                                              stop_when_decided=True, num_threads=1))
+    out[key], out[key + "_hash"] = 64 / seconds, digest(res)
+print(json.dumps(out))
+"""
+GROUP_FIGURES = {"twelve": "twelve drilled d6 from a cup onto the table (throws/s)",
+                 "two": "two d6 from a hand into the tray (throws/s)",
+                 "mixed": "d20, d8 and d6 from a hand into the tray (throws/s)"}
 
 
-def measure(tree: Path) -> dict:
+def measure(tree: Path, child: str = CHILD) -> dict:
     env = dict(os.environ, PYTHONPATH=str(tree), NUMBA_NUM_THREADS="1")
-    out = subprocess.run([sys.executable, "-c", CHILD], cwd=tree, env=env, check=True,
+    out = subprocess.run([sys.executable, "-c", child], cwd=tree, env=env, check=True,
                          capture_output=True, text=True).stdout
     return json.loads(out.strip().splitlines()[-1])
+
+
+def _rate(x: float) -> str:
+    """A rate for the table: whole numbers from 1,000 up, else three significant figures."""
+    return f"{x:,.0f}" if x >= 1000 else f"{x:.3g}"
 
 
 def main() -> None:
@@ -81,29 +132,40 @@ def main() -> None:
     parser.add_argument("--this", type=Path, default=ROOT,
                         help="the tree to compare (default: this one)")
     parser.add_argument("--rounds", type=int, default=3)
-    parser.add_argument("--out", type=Path, default=ROOT / "benchmarks/results/kernel_ab.json")
+    parser.add_argument("--groups", action="store_true",
+                        help="time the group kernel (several dice) instead")
+    parser.add_argument("--out", type=Path, default=None,
+                        help="default: benchmarks/results/kernel_ab.json (kernel_ab_groups.json)")
     args = parser.parse_args()
+    child, figures = (GROUP_CHILD, GROUP_FIGURES) if args.groups else (CHILD, FIGURES)
+    out = args.out or ROOT / "benchmarks/results" / (
+        "kernel_ab_groups.json" if args.groups else "kernel_ab.json")
     runs = {"base": [], "this": []}
     for r in range(args.rounds):
         for name, tree in (("base", args.base.resolve()), ("this", args.this.resolve())):
-            runs[name].append(measure(tree))
+            runs[name].append(measure(tree, child))
             print(f"round {r + 1}, {name}: {runs[name][-1]}", flush=True)
-    same = len({run["faces"] for run in runs["base"] + runs["this"]}) == 1
-    print(f"\nsame decided faces in every run: {same}\n")
+    if args.groups:
+        same = {k: {run[k + "_hash"] for run in runs["base"] + runs["this"]} for k in figures}
+        same = {k: len(v) == 1 for k, v in same.items()}
+        print(f"\nbit-identical outcomes: {same}\n")
+    else:
+        same = len({run["faces"] for run in runs["base"] + runs["this"]}) == 1
+        print(f"\nsame decided faces in every run: {same}\n")
     print("| figure | base (median) | this (median) | this/base per round |")
     print("|---|---|---|---|")
     table = {}
-    for key, label in FIGURES.items():
+    for key, label in figures.items():
         base = [run[key] for run in runs["base"]]
         this = [run[key] for run in runs["this"]]
         ratios = [t / b for t, b in zip(this, base, strict=True)]
         table[key] = {"base": base, "this": this, "ratios": ratios}
-        print(f"| {label} | {np.median(base):,.0f} | {np.median(this):,.0f} | "
+        print(f"| {label} | {_rate(np.median(base))} | {_rate(np.median(this))} | "
               f"{', '.join(f'{x:.3f}' for x in ratios)} |")
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    args.out.write_text(json.dumps({"base": str(args.base), "this": str(args.this),
-                                    "same_faces": same,
-                                    "figures": table}, indent=1))
+    out.parent.mkdir(parents=True, exist_ok=True)
+    out.write_text(json.dumps({"base": str(args.base), "this": str(args.this),
+                               "same_faces" if not args.groups else "bit_identical": same,
+                               "figures": table}, indent=1))
 
 
 if __name__ == "__main__":

@@ -33,9 +33,10 @@ die touches a plane and every pair's bounding spheres are apart, the steps surel
 contact are taken at once in the single die's closed form (:func:`_group_jump`).
 
 The throw ends when every die is at rest (every corner slow, for the hold, on three corners
-on the planes or held by another die: a die left leaning on another rests too) or, with a decision rule, when no energy left in the group can change any
-die's face: for every die ``i``, its own energy plus all that the others could give it (their
-energy above their least, ``Bodies.floor``) is below the lock of the face it reads. The loop
+on the planes or held by another die: a die left leaning on another rests too) or, with a
+decision rule, when no energy left in the group can change any die's face: for every die
+``i``, its own energy plus all that the others could give it (their energy above their
+least, ``Bodies.floor``) is below the lock of the face it reads. The loop
 over a die's vertices and the planes is :func:`dice_env.kernel.simulate_one`'s, written out
 again: shared as a function taking the arrays, it cost the single-die kernel 30–45 % of its
 speed (reference counts on every array handed on; ``benchmarks/kernel_ab.py``, scalar paper
@@ -159,8 +160,8 @@ class GroupStops(NamedTuple):
 
     After ``n_steps``; with ``at_rest`` when every die has been quiet for ``hold_steps``
     (three contacts with the planes or one with another die, every corner slower than
-    ``v_rest``); with ``decide`` when no die's face can change. ``energy_scale`` is added to the start's kinetic and
-    potential energy to measure a gain in.
+    ``v_rest``); with ``decide`` when no die's face can change. ``energy_scale`` is added to
+    the start's kinetic and potential energy to measure a gain in.
     """
 
     n_steps: int
