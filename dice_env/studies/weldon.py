@@ -638,12 +638,12 @@ every face is decided (`stop_when_decided`).
 - **(a) Together** (`dice_env.group.simulate_group`): the twelve `drilled16` dice of each
   cup fall and collide. A throw counts when every die is decided and read within
   {T_MAX_TOGETHER:g} s; a die leaning on another ("cocked") is not read, and its throw is
-  left out (Weldon's rule for such dice is not recorded). {t['thrown']} throws:
-  {t['counted']} counted, {t['leaning']} with a leaning die, {t['undecided']} not decided
-  in time; {t.get('seconds_per_throw', 0.0):.2f} s per throw, so Weldon's 26,306 throws would
-  take about {t.get('seconds_per_throw', 0.0) * 26306 / 3600:.1f} h here. It can show the
-  distribution of successes and whether the dice of one throw depend on each other (their
-  collisions); at this sample it cannot resolve p to Weldon's precision.
+  left out (Weldon's rule for such dice is not recorded). {t['thrown']:,} throws (Weldon's:
+  26,306), in seeded chunks of {CHUNK_TOGETHER}: {t['counted']:,} counted, {t['leaning']:,}
+  with a leaning die, {t['undecided']:,} not decided in time;
+  {t.get('seconds', 0.0) / 60:.0f} min of wall-clock time on {meta['threads']} thread(s),
+  {t.get('seconds_per_throw', 0.0):.3f} s per throw, so Weldon's 26,306 throws take about
+  {t.get('seconds_per_throw', 0.0) * 26306 / 3600:.1f} h here. {_together_reach(t)}
 - **(b) Alone** (`dice_env.simulate`): every die of further cups (same hand) thrown by
   itself, {DICE} × {sizes['alone']} = {ref['n'] + ref['undecided']:,} die-throws of the
   `drilled16` die and {DICE} × {sizes['variant']} of each other die. Independent by
@@ -692,6 +692,19 @@ Per-face probabilities predicted (single throws; faces 1–6):
 
 ![weldon](figures/weldon.png)
 """
+
+
+def _together_reach(t: dict) -> str:
+    """What the together throws can tell at their sample, from their verdict."""
+    if "p" not in t:
+        return "Too few throws were counted for an estimate."
+    if t["vs_weldon_p"]["verdict"] == "not resolvable at this sample":
+        return ("They show the distribution of successes and whether the dice of one throw "
+                "depend on each other (their collisions); at this sample they cannot resolve "
+                "p to Weldon's precision.")
+    return ("At this sample they resolve p to Weldon's precision, with the dice colliding, and "
+            "show the distribution of successes and whether the dice of one throw depend on "
+            "each other.")
 
 
 def _p_rows(n: dict) -> str:
