@@ -214,9 +214,9 @@ def _weldon_section(w: dict) -> tuple[list, str]:
          f"`drilled16`: {_ci(ref['p'], ref['interval'])}", ref["vs_weldon_p"]["verdict"]),
         ("Weldon's dice: twelve thrown together",
          f"{_ci(wd['p'], wd['interval'])}; its distribution of 0–12",
-         f"{t['counted']} throws: {together}", t_verdict),
+         f"{t['counted']:,} throws: {together}", t_verdict),
         ("Weldon's dice: distribution of successes per throw",
-         "26,306 throws", f"{t['counted']} throws, chi-square vs Weldon's", dist),
+         "26,306 throws", f"{t['counted']:,} throws, chi-square vs Weldon's", dist),
     ]
     dist_line = (f"chi-square against Weldon's (tails pooled, cells "
                  f"{_cells(t['vs_weldon'])}): chi2 = {t['vs_weldon']['statistic']:.2f}, "
@@ -249,7 +249,7 @@ corner) tipped twelve at a time from a cup onto the default wooden table.
   {ref['vs_weldon_p']['difference']:+.4f} ± {ref['vs_weldon_p']['half_width']:.4f}); against
   1/3 {_bold(ref['vs_fair_p']['verdict'])}. Resolving Weldon's excess needs about
   {ref['trials_to_resolve'] or 0:,} die-throws.
-- **Together** (`simulate_group`, the dice collide; {t['thrown']} throws, {t['counted']}
+- **Together** (`simulate_group`, the dice collide; {t['thrown']:,} throws, {t['counted']:,}
   counted, {t['leaning']} left out for a die leaning on another, {t['undecided']} not decided
   in time, {meta['seconds_together']:.0f} s): p = {together}, against Weldon
   {_bold(t_verdict)}; {dist_line}: {_bold(dist)}.
