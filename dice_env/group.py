@@ -334,7 +334,7 @@ def _hulls(scenes: list[Scene], bodies: group_kernel.Bodies) -> group_kernel.Hul
         starts[i, :len(start)] = start
         starts[i, len(start):] = start[-1]  # padded classes are empty
     return group_kernel.Hulls(
-        axes=_repeat_first([a for a in axes]), directions=_repeat_first([d for *_, d in classes]),
+        axes=_repeat_first(axes), directions=_repeat_first([d for *_, d in classes]),
         edges=edges, classes=starts, planes=_repeat_first(planes), n_vertices=bodies.n_vertices,
         r_max=bodies.r_max)
 
