@@ -29,7 +29,6 @@ import contextlib
 import dataclasses
 import json
 import math
-import os
 import time
 from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass
@@ -42,6 +41,7 @@ from tqdm import tqdm
 from dice_env.die import STANDARD_SIZES, Die
 from dice_env.scene import Scene
 from dice_env.simulate import State, simulate
+from dice_env.studies.chunks import prepare, write_atomically
 from dice_env.studies.shapes import Faces, counted, hand_throws
 
 # Per-throw outcomes a chunk keeps (``chunk_NNNNNN.npz`` holds these arrays).
@@ -53,7 +53,6 @@ MOMENTS = ("steps", "time", "impacts")
 # last bin: that many or more).
 TIME_BINS, IMPACT_BINS = 50, 32
 CHUNK = 10_000  # throws per chunk by default: seconds of work for one thread
-SPEC_FILE = "spec.json"
 INSTALL_RAY = "pip install 'dice_env[ray]'"
 
 Draw = Callable[[Scene, int, np.random.Generator], State]
@@ -231,7 +230,7 @@ def run_throws(scene: Scene | str, throws: int, *, chunk: int = CHUNK, seed: int
         raise ValueError(f"workers must be None or an int >= 1, got {workers!r}")
     if not isinstance(max_retries, int) or isinstance(max_retries, bool) or max_retries < 0:
         raise ValueError(f"max_retries must be an int >= 0, got {max_retries!r}")
-    folder = None if out is None else _run_folder(Path(out), spec)
+    folder = None if out is None else prepare(Path(out), spec.record(), "out")
     tallies = {} if folder is None else _saved_tallies(folder, spec)
     todo = [i for i in range(spec.n_chunks) if i not in tallies]
     bar = tqdm(total=spec.throws, initial=sum(t.throws for t in tallies.values()),
@@ -311,25 +310,6 @@ def _run_on_ray(address: str, spec: Spec, todo: list[int],
                 ray.cancel(ref, force=True)
 
 
-def _run_folder(folder: Path, spec: Spec) -> Path:
-    """``folder`` made ready for ``spec``: created with its ``spec.json``, or checked against it."""
-    record = spec.record()
-    path = folder / SPEC_FILE
-    if path.exists():
-        saved = json.loads(path.read_text())
-        differ = [key for key in record if saved.get(key) != record[key]]
-        if differ:
-            shown = "; ".join("another scene" if k == "scene" else
-                              f"{k} {saved.get(k)!r} there, {record[k]!r} asked" for k in differ)
-            raise ValueError(f"out={str(folder)!r} holds a run of another spec ({shown}): "
-                             "pass the same scene, throws, chunk, seed and draw, or another "
-                             "folder")
-    else:
-        folder.mkdir(parents=True, exist_ok=True)
-        _write_atomically(path, lambda f: f.write(json.dumps(record, indent=1).encode()))
-    return folder
-
-
 def _chunk_path(folder: Path, index: int) -> Path:
     return folder / f"chunk_{index:06d}.npz"
 
@@ -346,15 +326,7 @@ def _saved_tallies(folder: Path, spec: Spec) -> dict[int, Tally]:
 
 
 def _save_chunk(folder: Path, index: int, outcomes: dict[str, np.ndarray]) -> None:
-    _write_atomically(_chunk_path(folder, index), lambda f: np.savez(f, **outcomes))
-
-
-def _write_atomically(path: Path, write: Callable) -> None:
-    """``write(file)`` to a temporary file renamed to ``path``: never a half-written file."""
-    partial = path.with_name(path.name + ".partial")
-    with open(partial, "wb") as f:
-        write(f)
-    os.replace(partial, path)
+    write_atomically(_chunk_path(folder, index), lambda f: np.savez(f, **outcomes))
 
 
 def summary(tally: Tally, title: str) -> str:

@@ -43,6 +43,7 @@ from dice_env.group import GroupState, simulate_group
 from dice_env.pips import Pips
 from dice_env.scene import Scene
 from dice_env.simulate import State
+from dice_env.studies.chunks import kept_chunks, prepare
 from dice_env.studies.fairness import random_directions, random_orientations
 from dice_env.studies.paper_figures import DOCS, checked_throws, progress, save_figure
 from dice_env.studies.shapes import Faces, throw_faces
@@ -384,40 +385,24 @@ def chunked_together(scene: Scene, throws: int, seed: int, keep: Path | None = N
 
     With ``keep``, each chunk's outcome is kept there (``together-<seed>-<i>-<size>.npz``,
     beside ``spec.json``, which names the die, the table, the cup and the chunk size), and a
-    chunk found there is read instead of thrown: a run stopped part-way continues. The
-    result does not depend on ``keep``.
+    chunk found there is read instead of thrown: a run stopped part-way continues
+    (:mod:`dice_env.studies.chunks`). The result does not depend on ``keep``.
     """
-    spec = json.loads(json.dumps({"die": scene.die.name, "cup": asdict(CUP), "chunk": chunk,
-                                  "scene": hashlib.sha1(repr(scene).encode()).hexdigest()}))
     if keep is not None:
-        keep.mkdir(parents=True, exist_ok=True)
-        saved = keep / "spec.json"
-        if saved.exists() and json.loads(saved.read_text()) != spec:
-            raise ValueError(f"keep: {keep} holds chunks of another set-up; choose an empty "
-                             "folder")
-        saved.write_text(json.dumps(spec, indent=1) + "\n")
-    parts = []
-    for i, start in enumerate(range(0, throws, chunk)):
-        size = min(chunk, throws - start)
-        path = None if keep is None else keep / f"together-{seed}-{i:05d}-{size}.npz"
-        if path is not None and path.exists():
-            with np.load(path) as f:
-                part = Together(f["successes"], f["faces"], int(f["thrown"]), int(f["leaning"]),
-                                int(f["undecided"]), float(f["seconds"]))
-        else:
-            rng = np.random.default_rng([seed, i])
-            part = throw_together(scene, cup_throws(scene, size, rng))
-            if path is not None:
-                temporary = path.with_suffix(".tmp.npz")
-                np.savez(temporary, **asdict(part))
-                temporary.replace(path)
-        parts.append(part)
-        if bar is not None:
-            bar.update(size * DICE)
+        prepare(keep, {"die": scene.die.name, "cup": asdict(CUP), "chunk": chunk,
+                       "scene": hashlib.sha1(repr(scene).encode()).hexdigest()})
+
+    def throw(i: int, size: int) -> dict[str, np.ndarray]:
+        cups = cup_throws(scene, size, np.random.default_rng([seed, i]))
+        return {k: np.asarray(v) for k, v in asdict(throw_together(scene, cups)).items()}
+
+    parts = [Together(**{f.name: p[f.name] for f in fields(Together)})
+             for p in kept_chunks(throw, throws, chunk, keep, f"together-{seed}", bar, DICE)]
     return Together(np.concatenate([p.successes for p in parts]),
                     np.sum([p.faces for p in parts], axis=0),
-                    *(sum(getattr(p, k) for p in parts)
-                      for k in ("thrown", "leaning", "undecided", "seconds")))
+                    *(int(sum(getattr(p, k) for p in parts))
+                      for k in ("thrown", "leaning", "undecided")),
+                    float(sum(p.seconds for p in parts)))
 
 
 def throw_alone(scene: Scene, cups: list[State], bar: object = None) -> Faces:
