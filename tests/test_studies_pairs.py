@@ -106,3 +106,36 @@ def test_a_bad_sample_size_is_refused_before_any_work(tmp_path, throws):
     with pytest.raises(ValueError, match="throws must be an int >= 20"):
         run_study("pairs", tmp_path, throws=throws)
     assert not any(tmp_path.iterdir())
+
+
+def test_chunks_kept_are_read_back_and_match_a_run_without_them(tmp_path):
+    scene = Scene(walls=tray(), t_max=pr.T_MAX)
+    dice = (scene.die, scene.die)
+    fresh, seconds, cpu = pr.chunked_pairs(scene, dice, 5, seed=5, chunk=3)
+    assert seconds > 0 and cpu > 0 and len(fresh.counted) == 5
+    kept, _, _ = pr.chunked_pairs(scene, dice, 5, seed=5, keep=tmp_path, chunk=3)
+    assert sorted(p.name for p in tmp_path.glob("*.npz")) == [
+        "pairs-5-00000-3.npz", "pairs-5-00001-2.npz"]
+    (tmp_path / "pairs-5-00001-2.npz").unlink()  # a run stopped after its first chunk
+    again, _, _ = pr.chunked_pairs(scene, dice, 5, seed=5, keep=tmp_path, chunk=3)
+    for other in (kept, again):
+        assert other.voided == fresh.voided and sum(fresh.voided.values()) >= 0
+        for name, array in fresh.arrays().items():
+            np.testing.assert_array_equal(other.arrays()[name], array, err_msg=name)
+    with pytest.raises(ValueError, match="keep=.*chunk 3 there, 2 asked"):
+        pr.chunked_pairs(scene, dice, 5, seed=5, keep=tmp_path, chunk=2)
+
+
+def test_joined_pairs_add_their_counts_and_keep_every_throw():
+    rng = np.random.default_rng(3)
+    parts = [pr.Pairs(table=rng.integers(0, 9, (6, 6)), met=rng.random(n) < 0.5,
+                      counted=rng.random(n) < 0.9,
+                      voided=dict(zip(pr.VOID_REASONS, rng.integers(0, 4, 4).tolist())),
+                      impacts=rng.integers(0, 9, (n, 2)), time=rng.random(n),
+                      met_table=rng.integers(0, 9, (6, 6))) for n in (4, 7)]
+    joined = pr.Pairs.joined([p.arrays() for p in parts])
+    np.testing.assert_array_equal(joined.table, parts[0].table + parts[1].table)
+    np.testing.assert_array_equal(joined.met_table, parts[0].met_table + parts[1].met_table)
+    np.testing.assert_array_equal(joined.time, np.concatenate([p.time for p in parts]))
+    assert joined.impacts.shape == (11, 2) and joined.counted.dtype == bool
+    assert joined.voided == {k: parts[0].voided[k] + parts[1].voided[k] for k in pr.VOID_REASONS}

@@ -30,7 +30,7 @@ STUDIES = {
 }
 SIZED = ("shapes", "cuboids", "materials", "pairs", "weldon", "collisions", "craps")
 CHUNKED = ("shapes",)
-KEPT = ("weldon",)
+KEPT = ("pairs", "weldon")
 
 
 def run(name: str, out: Path, quick: bool = False, throws: int | None = None,
@@ -39,7 +39,7 @@ def run(name: str, out: Path, quick: bool = False, throws: int | None = None,
 
     ``throws`` (studies in :data:`SIZED` only) replaces the study's sample size;
     ``faces_of`` (studies in :data:`CHUNKED` only) throws its dice (see ``shapes.run``);
-    ``keep`` (studies in :data:`KEPT` only) keeps its chunks (see ``weldon.run``).
+    ``keep`` (studies in :data:`KEPT` only) keeps its chunks (see ``pairs.run``).
     """
     if name not in STUDIES:
         raise ValueError(f"name must be one of {sorted(STUDIES)}, got {name!r}")

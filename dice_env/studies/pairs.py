@@ -12,8 +12,9 @@ and the throws voided (not counted).
 
 from __future__ import annotations
 
+import hashlib
 import time
-from dataclasses import dataclass, fields
+from dataclasses import asdict, dataclass, fields
 from pathlib import Path
 
 import matplotlib
@@ -28,6 +29,7 @@ from dice_env.die import Die
 from dice_env.group import GroupResult, GroupState, group_step, simulate_group
 from dice_env.scene import Scene
 from dice_env.simulate import State
+from dice_env.studies.chunks import kept_chunks, prepare
 from dice_env.studies.fairness import (
     random_directions,
     random_orientations,
@@ -37,8 +39,9 @@ from dice_env.studies.fairness import (
 from dice_env.studies.paper_figures import DOCS, checked_throws, progress, save_figure
 from dice_env.surroundings import TRAY, tray
 
-# Throws of the pair in the full and the quick run; throws per kernel call.
-FULL, QUICK, BATCH = 100_000, 60, 500
+# Throws of the pair in the full and the quick run; throws per kernel call; throws per seeded
+# chunk (see chunked_pairs).
+FULL, QUICK, BATCH, CHUNK = 100_000, 60, 500, 2_000
 # Fewest throws a run takes (the 6 x 6 table needs some in every row and column).
 MIN_THROWS = 20
 # Simulated time limit per throw (s): a throw not decided by then is voided.
@@ -163,6 +166,22 @@ class Pairs:
         chi2, p = stats.chisquare(self.table.sum(axis=1 - die))
         return float(chi2), float(p)
 
+    def arrays(self) -> dict[str, np.ndarray]:
+        """The fields as arrays (``voided``: the counts in :data:`VOID_REASONS`' order)."""
+        return {f.name: np.asarray(getattr(self, f.name))
+                for f in fields(self) if f.name != "voided"} | {
+            "voided": np.array([self.voided.get(k, 0) for k in VOID_REASONS], np.int64)}
+
+    @classmethod
+    def joined(cls, parts: list[dict[str, np.ndarray]]) -> Pairs:
+        """The pairs of several :meth:`arrays`: per-throw arrays joined, counts added."""
+        added = ("table", "met_table")
+        return cls(**{k: np.sum([p[k] for p in parts], axis=0) for k in added},
+                   **{f.name: np.concatenate([p[f.name] for p in parts])
+                      for f in fields(cls) if f.name not in (*added, "voided")},
+                   voided=dict(zip(VOID_REASONS, (int(c) for c in np.sum(
+                       [p["voided"] for p in parts], axis=0)), strict=True)))
+
 
 def simulate_in_batches(scene: Scene, dice: tuple[Die, ...], state: GroupState,
                         bar: object = None, batch: int = BATCH, **keywords: object) -> GroupResult:
@@ -198,15 +217,46 @@ def throw_pairs(scene: Scene, dice: tuple[Die, ...], state: GroupState, bar: obj
                  met_table=_table(result.face, counted & met))
 
 
+def chunked_pairs(scene: Scene, dice: tuple[Die, ...], throws: int, seed: int,
+                  keep: Path | None = None, bar: object = None,
+                  chunk: int = CHUNK) -> tuple[Pairs, float, float]:
+    """``throws`` hand throws in chunks of ``chunk`` seeded ``(seed, i)``, joined.
+
+    Returns the pairs and the wall-clock and CPU seconds their throwing took. With ``keep``,
+    each chunk is kept there (``pairs-<seed>-<i>-<size>.npz`` beside ``spec.json``) and read
+    back instead of thrown when present (:mod:`dice_env.studies.chunks`): a run stopped
+    part-way continues. The result does not depend on ``keep``.
+    """
+    if keep is not None:
+        prepare(keep, {"dice": [d.name for d in dice], "hand": asdict(HAND), "chunk": chunk,
+                       "scene": hashlib.sha1(repr(scene).encode()).hexdigest()})
+
+    def throw(i: int, size: int) -> dict[str, np.ndarray]:
+        state = hand_throws(scene, dice, size, np.random.default_rng([seed, i]))
+        start, cpu = time.perf_counter(), time.process_time()
+        pairs = throw_pairs(scene, dice, state)
+        return pairs.arrays() | {"seconds": np.float64(time.perf_counter() - start),
+                                 "cpu": np.float64(time.process_time() - cpu)}
+
+    parts = kept_chunks(throw, throws, chunk, keep, f"pairs-{seed}", bar)
+    return (Pairs.joined(parts), float(sum(p["seconds"] for p in parts)),
+            float(sum(p["cpu"] for p in parts)))
+
+
+# Why a throw is not counted (see void_reasons).
+VOID_REASONS = ("not decided within the time limit", "unstable (energy rose)", "a die sunk",
+                "a die leaning on the other (not read)")
+
+
 def void_reasons(result: GroupResult) -> dict[str, np.ndarray]:
     """The throws (B,) of ``result`` that cannot be counted, by reason (a throw may have several).
 
     Not decided (nor at rest) within the time limit, unstable, a die sunk, a die leaning on
-    another (not read).
+    another (not read): :data:`VOID_REASONS`, in that order.
     """
-    return {"not decided within the time limit": ~(result.decided | result.settled),
-            "unstable (energy rose)": result.unstable, "a die sunk": result.sunk.any(axis=1),
-            "a die leaning on the other (not read)": ~result.read.all(axis=1)}
+    return dict(zip(VOID_REASONS, (~(result.decided | result.settled), result.unstable,
+                                   result.sunk.any(axis=1), ~result.read.all(axis=1)),
+                    strict=True))
 
 
 def _table(face: np.ndarray, which: np.ndarray) -> np.ndarray:
@@ -216,21 +266,19 @@ def _table(face: np.ndarray, which: np.ndarray) -> np.ndarray:
 
 
 def run(out: Path = DOCS, quick: bool = False, throws: int | None = None,
-        seed: int = SEED) -> dict[str, float]:
+        keep: Path | None = None, seed: int = SEED) -> dict[str, float]:
     """Regenerate ``pairs.md`` and its figure under ``out``; return the headline numbers.
 
-    ``throws``: throws of the pair (default :data:`FULL`, :data:`QUICK` with ``quick``).
+    ``throws``: throws of the pair (default :data:`FULL`, :data:`QUICK` with ``quick``);
+    ``keep``: a folder for the chunks (:func:`chunked_pairs`), to continue a run.
     """
     throws = checked_throws(throws, MIN_THROWS)
     n = throws if throws is not None else QUICK if quick else FULL
     scene = Scene(walls=tray(), t_max=T_MAX)
     dice = (scene.die, scene.die)
-    state = hand_throws(scene, dice, n, np.random.default_rng(seed))
     bar = progress(n, "two-dice throws")
     bar.unit = "throw"
-    start, cpu = time.perf_counter(), time.process_time()
-    pairs = throw_pairs(scene, dice, state, bar)
-    seconds, cpu = time.perf_counter() - start, time.process_time() - cpu
+    pairs, seconds, cpu = chunked_pairs(scene, dice, n, seed, keep, bar)
     bar.close()
     _plot(pairs, out / "figures" / "pairs.png")
     numbers = _numbers(pairs, seconds, cpu)
@@ -342,7 +390,9 @@ def _markdown(pairs: Pairs, n: dict, scene: Scene, seed: int) -> str:
     return f"""# Two dice thrown together
 
 Generated by `python -m dice_env.studies pairs --throws {thrown}` (module
-`dice_env/studies/pairs.py`, seed {seed}). This run threw the pair **{thrown}** times in
+`dice_env/studies/pairs.py`, seed {seed}, in chunks of {CHUNK:,} throws seeded by their index:
+`--chunks DIR` keeps them, so that a stopped run continues). This run threw the pair
+**{thrown}** times in
 **{n['seconds']:.0f} s** of wall-clock time on {numba.get_num_threads()} thread(s) of a shared
 machine ({n['cpu_seconds']:.0f} s of this process's CPU time), {n['rate']:.1f} throws/s; at that
 rate the study's default of {FULL:,} throws (`python -m dice_env.studies pairs`) would take
