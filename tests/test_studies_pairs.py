@@ -122,7 +122,7 @@ def test_chunks_kept_are_read_back_and_match_a_run_without_them(tmp_path):
         assert other.voided == fresh.voided and sum(fresh.voided.values()) >= 0
         for name, array in fresh.arrays().items():
             np.testing.assert_array_equal(other.arrays()[name], array, err_msg=name)
-    with pytest.raises(ValueError, match="keep=.*chunk 3 there, 2 asked"):
+    with pytest.raises(ValueError, match=r"keep=.*chunk 3 there, 2 asked"):
         pr.chunked_pairs(scene, dice, 5, seed=5, keep=tmp_path, chunk=2)
 
 
@@ -130,7 +130,8 @@ def test_joined_pairs_add_their_counts_and_keep_every_throw():
     rng = np.random.default_rng(3)
     parts = [pr.Pairs(table=rng.integers(0, 9, (6, 6)), met=rng.random(n) < 0.5,
                       counted=rng.random(n) < 0.9,
-                      voided=dict(zip(pr.VOID_REASONS, rng.integers(0, 4, 4).tolist())),
+                      voided=dict(zip(pr.VOID_REASONS, rng.integers(0, 4, 4).tolist(),
+                                      strict=True)),
                       impacts=rng.integers(0, 9, (n, 2)), time=rng.random(n),
                       met_table=rng.integers(0, 9, (6, 6))) for n in (4, 7)]
     joined = pr.Pairs.joined([p.arrays() for p in parts])
