@@ -270,12 +270,11 @@ def contact_force(depth: float, n: tuple, v: tuple, pair: Pair) -> tuple:
 
 
 @njit(cache=True, inline="always")
-def _push(a: int, b: int, point: tuple, depth: float, n: tuple, x: np.ndarray,
-          cu: np.ndarray, cw: np.ndarray, pair: Pair, force: np.ndarray,
-          torque: np.ndarray) -> float:
-    """Apply a contact pushing die ``a`` along ``n`` and die ``b`` against it, at ``point``.
+def _relative_velocity(a: int, b: int, point: tuple, x: np.ndarray, cu: np.ndarray,
+                       cw: np.ndarray) -> tuple:
+    """Die ``a``'s velocity at ``point`` relative to die ``b``'s, and the two lever arms.
 
-    ``cu``, ``cw`` (N, 3): the velocities the forces use. Returns the spring's energy.
+    ``cu``, ``cw`` (N, 3): the velocities the forces use.
     """
     ra0, ra1, ra2 = point[0] - x[a, 0], point[1] - x[a, 1], point[2] - x[a, 2]
     rb0, rb1, rb2 = point[0] - x[b, 0], point[1] - x[b, 1], point[2] - x[b, 2]
@@ -285,7 +284,20 @@ def _push(a: int, b: int, point: tuple, depth: float, n: tuple, x: np.ndarray,
     vb0 = cu[b, 0] + cw[b, 1] * rb2 - cw[b, 2] * rb1
     vb1 = cu[b, 1] + cw[b, 2] * rb0 - cw[b, 0] * rb2
     vb2 = cu[b, 2] + cw[b, 0] * rb1 - cw[b, 1] * rb0
-    f0, f1, f2, spring = contact_force(depth, n, (va0 - vb0, va1 - vb1, va2 - vb2), pair)
+    return (va0 - vb0, va1 - vb1, va2 - vb2), (ra0, ra1, ra2), (rb0, rb1, rb2)
+
+
+@njit(cache=True, inline="always")
+def _apply(a: int, b: int, f: tuple, ra: tuple, rb: tuple, force: np.ndarray,
+           torque: np.ndarray) -> None:
+    """The force ``f`` on die ``a`` and ``-f`` on die ``b`` at one point.
+
+    ``ra``, ``rb``: the point's lever arms from the two centres. The pair's momentum and
+    angular momentum are kept exactly.
+    """
+    f0, f1, f2 = f
+    ra0, ra1, ra2 = ra
+    rb0, rb1, rb2 = rb
     force[a, 0] += f0
     force[a, 1] += f1
     force[a, 2] += f2
@@ -298,6 +310,19 @@ def _push(a: int, b: int, point: tuple, depth: float, n: tuple, x: np.ndarray,
     torque[b, 0] -= rb1 * f2 - rb2 * f1
     torque[b, 1] -= rb2 * f0 - rb0 * f2
     torque[b, 2] -= rb0 * f1 - rb1 * f0
+
+
+@njit(cache=True, inline="always")
+def _push(a: int, b: int, point: tuple, depth: float, n: tuple, x: np.ndarray,
+          cu: np.ndarray, cw: np.ndarray, pair: Pair, force: np.ndarray,
+          torque: np.ndarray) -> float:
+    """Apply a contact pushing die ``a`` along ``n`` and die ``b`` against it, at ``point``.
+
+    ``cu``, ``cw`` (N, 3): the velocities the forces use. Returns the spring's energy.
+    """
+    v, ra, rb = _relative_velocity(a, b, point, x, cu, cw)
+    f0, f1, f2, spring = contact_force(depth, n, v, pair)
+    _apply(a, b, (f0, f1, f2), ra, rb, force, torque)
     return spring
 
 

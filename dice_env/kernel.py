@@ -55,7 +55,7 @@ surroundings: any number of planes (a floor and walls), each with its own materi
 kernel takes a few named groups (:class:`Body`, :class:`Contact`, :class:`Options`,
 :class:`Stops`, :class:`Records`, :class:`Dice`, :class:`Outcome`), built by
 :func:`dice_env.simulate.pack`; each piece of the physics is one small inlined function:
-a vertex on a plane (:func:`vertex_on_plane`, :func:`_stick_slip`), the contact-free jump
+a vertex on a plane (:func:`vertex_on_plane`, :func:`stick_slip`), the contact-free jump
 (:func:`free_steps`, :func:`torque_free`), the face read and the decided-face test
 (:func:`face_read`, :func:`decided`), the rotation (:func:`rotate`); :func:`advance` loops
 them for one die in scratch arrays its caller gives, :func:`simulate_one` on the CPU and
@@ -404,7 +404,7 @@ def vertex_on_plane(plane: tuple, stick: bool, vmin: float, height: float, befor
         cap = mu * max(friction_limit, 0.0)  # Coulomb's limit mu fn
         ut0, ut1, ut2 = uk0 - un * n0, uk1 - un * n1, uk2 - un * n2
         if stick:
-            ft0, ft1, ft2, stored, anchor = _stick_slip(
+            ft0, ft1, ft2, stored, anchor = stick_slip(
                 plane, height, before, position, (ut0, ut1, ut2), cap, dt, dt_m, anchor, tied)
             tied = True
         else:
@@ -417,7 +417,7 @@ def vertex_on_plane(plane: tuple, stick: bool, vmin: float, height: float, befor
 
 
 @njit(cache=True, inline="always")
-def _stick_slip(plane: tuple, height: float, before: float, position: tuple, ut: tuple,
+def stick_slip(plane: tuple, height: float, before: float, position: tuple, ut: tuple,
                 cap: float, dt: float, dt_m: float, anchor: tuple, tied: bool) -> tuple:
     """Stick-slip friction (see the module docstring).
 
