@@ -23,7 +23,7 @@ import numpy as np
 
 from dice_env import group_kernel, kernel
 from dice_env.die import Die
-from dice_env.scene import MAX_STEPS, Scene, critical_step
+from dice_env.scene import MAX_STEPS, FrictionLaw, Scene, as_enum, critical_step
 from dice_env.simulate import (
     UP,
     DiceArrays,
@@ -35,7 +35,7 @@ from dice_env.simulate import (
     thread_count,
 )
 from dice_env.table import DIE_MASS, STIFFNESS, damping_for_restitution
-from dice_env.validation import check_nonnegative, check_positive
+from dice_env.validation import check_nonnegative, check_positive, check_range
 
 # Die against die: plastic on plastic. Estimates: no measurement of dice striking dice is
 # known to us. Restitution 0.5, about the die's on a hard table; friction 0.4, within the
@@ -50,20 +50,32 @@ TOUCH = 1e-3  # dice released closer than this fraction of the smaller's size to
 class DieContact:
     """The die–die material: stiffness, damping and friction of a contact.
 
-    ``stiffness`` S (N/m per contact), ``damping`` D (N s/m), ``friction`` mu (regularised
-    Coulomb, at the scene's ``friction_vmin``).
-    D defaults to the restitution :data:`DIE_RESTITUTION` of the default die's mass on the
-    table's stiffness (:func:`dice_env.table.damping_for_restitution`).
+    ``stiffness`` S (N/m per contact), ``damping`` D (N s/m), ``friction`` mu and its
+    ``friction_law`` (:class:`dice_env.scene.FrictionLaw`): ``REGULARIZED``, Coulomb
+    regularised at the scene's ``friction_vmin`` and capped so that a slip stops over a few
+    steps (a die held by another creeps slowly), or ``STICK_SLIP``, the table's law for a
+    corner inside another die (tied to where it touched by a spring and damper of
+    ``tangential`` times S and D, slipping at ``mu fn``), so that a die leaning on another
+    stays put; edge-on-edge contacts keep the regularised law. D defaults to the restitution
+    :data:`DIE_RESTITUTION` of the default die's mass on the table's stiffness
+    (:func:`dice_env.table.damping_for_restitution`).
     """
 
     stiffness: float = STIFFNESS
     damping: float = damping_for_restitution(DIE_RESTITUTION, STIFFNESS, DIE_MASS)
     friction: float = DIE_FRICTION
+    friction_law: FrictionLaw = FrictionLaw.REGULARIZED
+    tangential: float = 2.0 / 7.0
 
     def __post_init__(self) -> None:
         check_positive("stiffness", self.stiffness)
         check_nonnegative("damping", self.damping)
         check_nonnegative("friction", self.friction)
+        object.__setattr__(self, "friction_law",
+                           as_enum("friction_law", FrictionLaw, self.friction_law))
+        check_range("tangential", self.tangential, 0.0, 1.0)
+        if self.tangential == 0:
+            raise ValueError("tangential must be in (0, 1], got 0")
 
 
 @dataclass
@@ -237,9 +249,13 @@ def simulate_group(
         energy_scale=float(sum(d.mass * scene.gravity * d.size for d in dice)))
     bodies = _bodies(scenes, stop_when_decided)
     hulls = _hulls(scenes, bodies)
-    pair = group_kernel.Pair(float(contact.stiffness), float(contact.damping),
-                             float(contact.friction), float(scene.friction_vmin),
-                             float(group_kernel.GRIP * pair_mass(scene, dice) / dt))
+    reduced = pair_mass(scene, dice)
+    pair = group_kernel.Pair(
+        float(contact.stiffness), float(contact.damping), float(contact.friction),
+        float(scene.friction_vmin), float(group_kernel.GRIP * reduced / dt),
+        contact.friction_law == FrictionLaw.STICK_SLIP and contact.friction > 0,
+        float(contact.tangential * contact.stiffness),
+        float(contact.tangential * contact.damping), float(dt / reduced))
     n_rec = n_steps // record_every if record_every else 0
     records = group_kernel.GroupRecords(
         stride=max(1, record_every) if record_every else n_steps + 1,

@@ -74,6 +74,7 @@ from dice_env.kernel import (
     face_read,
     flight_jump,
     relative_rise,
+    stick_slip,
     torque_free,
     vertex_on_plane,
 )
@@ -140,12 +141,16 @@ class Hulls(NamedTuple):
 class Pair(NamedTuple):
     """The die–die contact's law.
 
-    ``stiffness`` S, ``damping`` D, ``friction`` mu, ``vmin``, and ``grip``: the largest
-    friction per unit slip speed (N s/m) the step can take. Coulomb's law at a contact that
-    sticks asks for a force that ends the slip within a fraction of a step; the explicit step
-    then overshoots and the slip flips every step. The friction is capped at ``grip |vt|``:
-    ``grip`` is :data:`GRIP` of the smallest effective mass of a pair over the step, so
-    several contacts together stop a slip within a few steps.
+    ``stiffness`` S, ``damping`` D, ``friction`` mu. With ``stick``, a corner inside another
+    die feels the table's stick-slip friction (:func:`dice_env.kernel.stick_slip`): tied by a
+    tangential spring ``kt`` and damper ``ct`` to the point of the other die where it
+    touched, slipping at ``mu fn``; ``dt_m``: the step over the pair's reduced mass. Edge
+    contacts, and every contact without ``stick``, feel the regularised Coulomb friction at
+    ``vmin``, capped at ``grip |vt|``: Coulomb's law at a contact that sticks asks for a force
+    that ends the slip within a fraction of a step; the explicit step then overshoots and
+    the slip flips every step. ``grip`` (N s/m) is :data:`GRIP` of the smallest effective
+    mass of a pair over the step, so several contacts together stop a slip within a few
+    steps.
     """
 
     stiffness: float
@@ -153,6 +158,10 @@ class Pair(NamedTuple):
     friction: float
     vmin: float
     grip: float
+    stick: bool
+    kt: float
+    ct: float
+    dt_m: float
 
 
 class GroupStops(NamedTuple):
@@ -327,6 +336,46 @@ def _push(a: int, b: int, point: tuple, depth: float, n: tuple, x: np.ndarray,
 
 
 @njit(cache=True, inline="always")
+def _push_tied(a: int, b: int, first: int, k: int, point: tuple, depth: float, n: tuple,
+               x: np.ndarray, q: np.ndarray, cu: np.ndarray, cw: np.ndarray, pair: Pair,
+               ties: np.ndarray, fresh: bool, force: np.ndarray, torque: np.ndarray) -> tuple:
+    """:func:`_push` for corner ``k`` of die ``first`` (``a`` or ``b``) with stick-slip friction.
+
+    The corner is tied to a point of the other die: ``ties`` (N, V, N, 4) holds it in that
+    die's body frame (0–2) and 1 while it is tied (3); ``fresh``: the pair did not touch at
+    the last step, so no tie holds. One array, as every array handed to an inlined function
+    costs a reference count. Returns the normal spring's and the
+    tangential spring's energy.
+    """
+    other = b if first == a else a
+    v, ra, rb = _relative_velocity(a, b, point, x, cu, cw)
+    n0, n1, n2 = n
+    vn = n0 * v[0] + n1 * v[1] + n2 * v[2]
+    fn = pair.stiffness * depth - pair.damping * vn
+    spring = 0.5 * pair.stiffness * depth * depth
+    if fn <= 0.0:
+        ties[first, k, other, 3] = 0.0
+        return spring, 0.0
+    s = 1.0 if first == a else -1.0  # the corner's die's slip is s times a's
+    ut = (s * (v[0] - vn * n0), s * (v[1] - vn * n1), s * (v[2] - vn * n2))
+    c0, c1, c2 = ties[first, k, other, 0], ties[first, k, other, 1], ties[first, k, other, 2]
+    anchor = (x[other, 0] + q[other, 0, 0] * c0 + q[other, 0, 1] * c1 + q[other, 0, 2] * c2,
+              x[other, 1] + q[other, 1, 0] * c0 + q[other, 1, 1] * c1 + q[other, 1, 2] * c2,
+              x[other, 2] + q[other, 2, 0] * c0 + q[other, 2, 1] * c1 + q[other, 2, 2] * c2)
+    ft0, ft1, ft2, stored, anchor = stick_slip(
+        (n0, n1, n2, 0.0, 0.0, 0.0, 0.0, pair.kt, pair.ct), 0.0, 0.0, point, ut,
+        pair.friction * fn, 0.0, pair.dt_m, anchor, ties[first, k, other, 3] > 0.0 and not fresh)
+    d0, d1, d2 = anchor[0] - x[other, 0], anchor[1] - x[other, 1], anchor[2] - x[other, 2]
+    for r in range(3):
+        ties[first, k, other, r] = q[other, 0, r] * d0 + q[other, 1, r] * d1 \
+            + q[other, 2, r] * d2
+    ties[first, k, other, 3] = 1.0
+    _apply(a, b, (fn * n0 + s * ft0, fn * n1 + s * ft1, fn * n2 + s * ft2), ra, rb, force,
+           torque)
+    return spring, stored
+
+
+@njit(cache=True, inline="always")
 def _extent(die: int, n0: float, n1: float, n2: float, world: np.ndarray) -> tuple:
     """The least and the largest projection of die ``die``'s corners on ``n``.
 
@@ -466,8 +515,8 @@ def within(p: tuple, die: int, x: np.ndarray, q: np.ndarray, planes: np.ndarray,
 @njit(cache=True, inline="always")
 def pair_contacts(a: int, b: int, overlap: float, n: tuple, ca: int, cb: int,
                   world: np.ndarray, x: np.ndarray, q: np.ndarray, cu: np.ndarray,
-                  cw: np.ndarray, hulls: Hulls, pair: Pair, force: np.ndarray,
-                  torque: np.ndarray) -> tuple:
+                  cw: np.ndarray, hulls: Hulls, pair: Pair, ties: np.ndarray, fresh: bool,
+                  force: np.ndarray, torque: np.ndarray) -> tuple:
     """Every contact of dice ``a`` and ``b``, which overlap, their forces applied.
 
     ``overlap``, ``n``, ``ca``, ``cb``: the least overlap and its axis
@@ -476,10 +525,17 @@ def pair_contacts(a: int, b: int, overlap: float, n: tuple, ca: int, cb: int,
     stack, still bear) is pushed along it by its depth beyond the other die's extent along
     it. An edge axis (edge across edge: two cubes meeting edge on edge at a right angle have
     no corner inside the other): one contact at the middle of the closest points of the
-    closest pair of edges of the two classes, as deep as the overlap. Returns the springs'
-    energy, the deepest contact, and whether a contact bears.
+    closest pair of edges of the two classes, as deep as the overlap. With ``pair.stick``
+    the corners' friction is stick-slip (:func:`_push_tied`; ``ties`` and ``fresh`` as
+    there), the edge contact's the regularised law. Returns the normal springs'
+    and the tangential springs' energy, the deepest contact, and whether a contact bears.
     """
+    n_vertices = hulls.n_vertices
     if ca >= 0:
+        if pair.stick:  # the corners' ties end
+            for first, other in ((a, b), (b, a)):
+                for k in range(n_vertices[first]):
+                    ties[first, k, other, 3] = 0.0
         edges, start = hulls.edges, hulls.classes
         gap, point = np.inf, (0.0, 0.0, 0.0)
         for i in range(start[a, ca], start[a, ca + 1]):
@@ -496,12 +552,13 @@ def pair_contacts(a: int, b: int, overlap: float, n: tuple, ca: int, cb: int,
                 if distance < gap:  # parallel edges share the axis: the closest pair meets
                     gap = distance
                     point = (0.5 * (pa[0] + pb[0]), 0.5 * (pa[1] + pb[1]), 0.5 * (pa[2] + pb[2]))
-        return _push(a, b, point, overlap, n, x, cu, cw, pair, force, torque), overlap, True
+        return _push(a, b, point, overlap, n, x, cu, cw, pair, force, torque), 0.0, overlap, \
+            True
     n0, n1, n2 = n
     low_a = _extent(a, n0, n1, n2, world)[0]
     high_b = _extent(b, n0, n1, n2, world)[1]
-    planes, n_vertices, r_max = hulls.planes, hulls.n_vertices, hulls.r_max
-    spring, deepest, found = 0.0, 0.0, False
+    planes, r_max = hulls.planes, hulls.r_max
+    spring, stored, deepest, found = 0.0, 0.0, 0.0, False
     for first, other in ((a, b), (b, a)):
         tol = LATERAL * r_max[other]
         for k in range(n_vertices[first]):
@@ -509,11 +566,19 @@ def pair_contacts(a: int, b: int, overlap: float, n: tuple, ca: int, cb: int,
             along = n0 * p[0] + n1 * p[1] + n2 * p[2]
             depth = high_b - along if first == a else along - low_a
             if depth <= 0.0 or not within(p, other, x, q, planes, tol):
+                if pair.stick:
+                    ties[first, k, other, 3] = 0.0
                 continue
             found = True
             deepest = max(deepest, depth)
-            spring += _push(a, b, p, depth, n, x, cu, cw, pair, force, torque)
-    return spring, deepest, found
+            if pair.stick:
+                spring_k, stored_k = _push_tied(a, b, first, k, p, depth, n, x, q, cu, cw, pair,
+                                                ties, fresh, force, torque)
+                spring += spring_k
+                stored += stored_k
+            else:
+                spring += _push(a, b, p, depth, n, x, cu, cw, pair, force, torque)
+    return spring, stored, deepest, found
 
 
 @njit(cache=True)
@@ -537,6 +602,8 @@ def simulate_group(g: int, dice: GroupDice, bodies: Bodies, hulls: Hulls, pair: 
     heights = np.full((n_dice, n_v, n_planes), -1.0)  # vertex heights entering the last step
     anchors = np.zeros((n_dice, n_v, n_planes, 3))  # stick-slip: where each spring is tied
     tied = np.zeros((n_dice, n_v, n_planes), np.bool_)
+    # likewise die against die (see _push_tied)
+    die_ties = np.zeros((n_dice, n_v, n_dice, 4) if pair.stick else (0, 0, 0, 4))
     lowest = np.empty((n_dice, n_planes))  # each die's lowest vertex height over each plane
     force, torque = np.empty((n_dice, 3)), np.empty((n_dice, 3))
     kinetic, own = np.empty(n_dice), np.empty(n_dice)
@@ -673,10 +740,11 @@ def simulate_group(g: int, dice: GroupDice, bodies: Bodies, hulls: Hulls, pair: 
                     depth, n, ca, cb, separating[a, b] = least_overlap(
                         a, b, world, x, q, axes, directions, separating[a, b])
                     if depth > 0.0:
-                        spring, deepest, touch_ab = pair_contacts(a, b, depth, n, ca, cb, world,
-                                                                  x, q, cu, cw, hulls, pair,
-                                                                  force, torque)
+                        spring, stored, deepest, touch_ab = pair_contacts(
+                            a, b, depth, n, ca, cb, world, x, q, cu, cw, hulls, pair,
+                            die_ties, not met[a, b], force, torque)
                         checked += spring
+                        tangential += stored
                         overlap = max(overlap, deepest)
                 if touch_ab and not met[a, b]:
                     s0, s1, s2 = u[a, 0] - u[b, 0], u[a, 1] - u[b, 1], u[a, 2] - u[b, 2]

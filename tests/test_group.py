@@ -6,6 +6,7 @@ import pytest
 from dice_env import Die, Scene, State, simulate
 from dice_env.group import DieContact, GroupState, group_step, simulate_group
 from dice_env.rotations import axis_angle, random_rotations
+from dice_env.scene import FrictionLaw, Ground
 from dice_env.surroundings import craps, tray
 
 DIE = Die()
@@ -59,9 +60,11 @@ def energy(state):
                                      state.angular_velocity)
 
 
-def test_a_collision_in_free_space_keeps_momentum_and_never_gains_energy():
+@pytest.mark.parametrize("law", list(FrictionLaw))
+def test_a_collision_in_free_space_keeps_momentum_and_never_gains_energy(law):
     scene, start = free_pair([EDGE * 1.05, 0.003, 0.002], [0.6, 0.05, 0.0], spin=[3.0, -5.0, 8.0])
-    result = simulate_group(scene, (DIE, DIE), start, stop_at_rest=False)
+    result = simulate_group(scene, (DIE, DIE), start, stop_at_rest=False,
+                            contact=DieContact(friction_law=law))
     assert result.overlap[0] > 0  # they met
     linear0, angular0 = momenta(start)
     linear1, angular1 = momenta(result.final)
@@ -96,6 +99,30 @@ def test_a_die_stacked_on_another_holds_and_is_not_read():
     assert result.face[0, 0] == 1
     # a die held by another rests: the throw ends at rest, long before t_max
     assert result.settled[0] and result.rest_time[0] < 0.2
+
+
+def test_stick_slip_holds_a_die_stacked_on_another_on_a_slope_the_regularised_law_creeps():
+    # 15 degrees: tan 15 = 0.27 < mu = 0.4 for the table and the dice, so both should hold
+    angle = 15.0
+    scene = Scene(ground=Ground.tilted(angle))
+    normal = np.array(scene.ground.normal)
+    load = DIE.mass * scene.gravity * np.cos(np.radians(angle)) / 4  # per corner, one die
+    tilt = axis_angle([0, 1, 0], np.radians(angle))
+    bottom = normal * (EDGE / 2 - 2 * load / scene.ground.stiffness)  # carrying both dice
+    top = bottom + normal * (EDGE - load / DieContact().stiffness)
+    start = GroupState.of([State.release(scene, centre, [0, 0, 0], orientation=tilt)
+                           for centre in (bottom, top)])
+    apart = start.position[0, 1] - start.position[0, 0]
+
+    def slid(law):
+        result = simulate_group(scene.with_(t_max=1.0), (DIE, DIE), start, stop_at_rest=False,
+                                contact=DieContact(friction_law=law))
+        assert not result.unstable.any() and result.overlap[0] > 0
+        moved = result.final.position[0, 1] - result.final.position[0, 0] - apart
+        return np.linalg.norm(moved - (moved @ normal) * normal)  # along the slope
+
+    assert slid(FrictionLaw.STICK_SLIP) < 1e-6
+    assert slid(FrictionLaw.REGULARIZED) > 1e-5
 
 
 def test_dice_released_inside_each_other_are_refused():
@@ -146,6 +173,12 @@ def test_bad_arguments_are_refused():
         GroupState(*(np.zeros((2, 3)),) * 3, np.eye(3)[None], np.zeros((2, 3)))
     with pytest.raises(ValueError, match="stiffness"):
         DieContact(stiffness=0.0)
+    with pytest.raises(ValueError, match="friction_law must be a FrictionLaw or one of"):
+        DieContact(friction_law="glue")
+    for tangential in (0.0, 1.5, float("nan")):
+        with pytest.raises(ValueError, match="tangential must be in"):
+            DieContact(tangential=tangential)
+    assert DieContact(friction_law="stick_slip").friction_law == FrictionLaw.STICK_SLIP
 
 
 def test_a_throw_alone_equals_the_same_throw_inside_a_batch():
