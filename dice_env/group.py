@@ -7,9 +7,9 @@
 
 The scene gives the planes, gravity, the scheme and the rest test; its ``die`` is not used (the
 dice are given). Dice touch each other through :class:`DieContact` (penalty springs, damping
-and regularised Coulomb friction, :mod:`dice_env.group_kernel`). A die that ends touching
-another die with fewer than three corners on the planes leans on it (a "cocked" die) and is
-not read: its ``face`` is 0 and ``read`` False.
+and Coulomb friction, regularised or stick-slip, :mod:`dice_env.group_kernel`). A die that
+ends touching another die with fewer than three corners on the planes leans on it (a
+"cocked" die) and is not read: its ``face`` is 0 and ``read`` False.
 """
 
 from __future__ import annotations

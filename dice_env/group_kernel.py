@@ -17,7 +17,8 @@ through penalty contacts:
 
 A contact's force is ``fn = S d - D vn`` (pushing only) along its normal plus the regularised
 Coulomb friction ``-mu fn vt / (|vt| + vmin)``, capped where it would reverse the slip within
-a step (:func:`contact_force`, :class:`Pair`); it acts on one die at
+a step (:func:`contact_force`, :class:`Pair`), or, for a corner with ``Pair.stick``, the
+table's stick-slip friction tied to the other die (:func:`_push_tied`); it acts on one die at
 the contact point and, reversed, on the other at the same point, so a contact conserves the
 pair's linear and angular momentum exactly. Its spring stores energy and its damper and
 friction dissipate it; only a jump of the contact's normal or depth between steps (a new
