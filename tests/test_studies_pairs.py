@@ -1,10 +1,13 @@
 """Two dice thrown together: the hand, the 2d6 reference, the tests of the study and its page."""
 
+import json
+from dataclasses import asdict
+
 import numpy as np
 import pytest
 
 from dice_env import Die, Scene
-from dice_env.group import simulate_group
+from dice_env.group import DieContact, simulate_group
 from dice_env.studies import pairs as pr
 from dice_env.studies import run as run_study
 from dice_env.surroundings import tray
@@ -122,6 +125,12 @@ def test_chunks_kept_are_read_back_and_match_a_run_without_them(tmp_path):
         assert other.voided == fresh.voided and sum(fresh.voided.values()) >= 0
         for name, array in fresh.arrays().items():
             np.testing.assert_array_equal(other.arrays()[name], array, err_msg=name)
+    spec = json.loads((tmp_path / "spec.json").read_text())
+    assert spec["contact"] == json.loads(json.dumps(asdict(DieContact())))  # its friction law too
+    (tmp_path / "spec.json").write_text(json.dumps(spec | {"contact": {"friction_law": 9}}))
+    with pytest.raises(ValueError, match=r"keep=.*contact"):
+        pr.chunked_pairs(scene, dice, 5, seed=5, keep=tmp_path, chunk=3)
+    (tmp_path / "spec.json").write_text(json.dumps(spec))
     with pytest.raises(ValueError, match=r"keep=.*chunk 3 there, 2 asked"):
         pr.chunked_pairs(scene, dice, 5, seed=5, keep=tmp_path, chunk=2)
 

@@ -26,7 +26,7 @@ import numpy as np
 from scipy import stats
 
 from dice_env.die import Die
-from dice_env.group import GroupResult, GroupState, group_step, simulate_group
+from dice_env.group import DieContact, GroupResult, GroupState, group_step, simulate_group
 from dice_env.scene import Scene
 from dice_env.simulate import State
 from dice_env.studies.chunks import kept_chunks, prepare
@@ -223,13 +223,15 @@ def chunked_pairs(scene: Scene, dice: tuple[Die, ...], throws: int, seed: int,
     """``throws`` hand throws in chunks of ``chunk`` seeded ``(seed, i)``, joined.
 
     Returns the pairs and the wall-clock and CPU seconds their throwing took. With ``keep``,
-    each chunk is kept there (``pairs-<seed>-<i>-<size>.npz`` beside ``spec.json``) and read
+    each chunk is kept there (``pairs-<seed>-<i>-<size>.npz`` beside ``spec.json``, which
+    names the dice, the scene, the hand, the chunk size and the die–die contact) and read
     back instead of thrown when present (:mod:`dice_env.studies.chunks`): a run stopped
     part-way continues. The result does not depend on ``keep``.
     """
     if keep is not None:
         prepare(keep, {"dice": [d.name for d in dice], "hand": asdict(HAND), "chunk": chunk,
-                       "scene": hashlib.sha1(repr(scene).encode()).hexdigest()})
+                       "scene": hashlib.sha1(repr(scene).encode()).hexdigest(),
+                       "contact": asdict(DieContact())})
 
     def throw(i: int, size: int) -> dict[str, np.ndarray]:
         state = hand_throws(scene, dice, size, np.random.default_rng([seed, i]))

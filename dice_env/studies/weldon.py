@@ -39,7 +39,7 @@ import numpy as np
 from scipy import optimize, stats
 
 from dice_env.die import Die
-from dice_env.group import GroupState, simulate_group
+from dice_env.group import DieContact, GroupState, simulate_group
 from dice_env.pips import Pips
 from dice_env.scene import Scene
 from dice_env.simulate import State
@@ -384,13 +384,15 @@ def chunked_together(scene: Scene, throws: int, seed: int, keep: Path | None = N
     """``throws`` cups thrown together, in chunks of ``chunk`` cups seeded ``(seed, i)``.
 
     With ``keep``, each chunk's outcome is kept there (``together-<seed>-<i>-<size>.npz``,
-    beside ``spec.json``, which names the die, the table, the cup and the chunk size), and a
-    chunk found there is read instead of thrown: a run stopped part-way continues
-    (:mod:`dice_env.studies.chunks`). The result does not depend on ``keep``.
+    beside ``spec.json``, which names the die, the table, the cup, the chunk size and the
+    die–die contact), and a chunk found there is read instead of thrown: a run stopped
+    part-way continues (:mod:`dice_env.studies.chunks`). The result does not depend on
+    ``keep``.
     """
     if keep is not None:
         prepare(keep, {"die": scene.die.name, "cup": asdict(CUP), "chunk": chunk,
-                       "scene": hashlib.sha1(repr(scene).encode()).hexdigest()})
+                       "scene": hashlib.sha1(repr(scene).encode()).hexdigest(),
+                       "contact": asdict(DieContact())})
 
     def throw(i: int, size: int) -> dict[str, np.ndarray]:
         cups = cup_throws(scene, size, np.random.default_rng([seed, i]))
