@@ -51,12 +51,12 @@ class DieContact:
     """The die–die material: stiffness, damping and friction of a contact.
 
     ``stiffness`` S (N/m per contact), ``damping`` D (N s/m), ``friction`` mu and its
-    ``friction_law`` (:class:`dice_env.scene.FrictionLaw`): ``REGULARIZED``, Coulomb
-    regularised at the scene's ``friction_vmin`` and capped so that a slip stops over a few
-    steps (a die held by another creeps slowly), or ``STICK_SLIP``, the table's law for a
-    corner inside another die (tied to where it touched by a spring and damper of
-    ``tangential`` times S and D, slipping at ``mu fn``), so that a die leaning on another
-    stays put; edge-on-edge contacts keep the regularised law. D defaults to the restitution
+    ``friction_law`` (:class:`dice_env.scene.FrictionLaw`): ``STICK_SLIP`` (default), the
+    table's law for a corner inside another die (tied to where it touched by a spring and
+    damper of ``tangential`` times S and D, slipping at ``mu fn``), so that a die leaning on
+    another stays put, edge-on-edge contacts keeping the regularised law; or ``REGULARIZED``,
+    Coulomb regularised at the scene's ``friction_vmin`` and capped so that a slip stops over
+    a few steps (a die held by another creeps slowly). D defaults to the restitution
     :data:`DIE_RESTITUTION` of the default die's mass on the table's stiffness
     (:func:`dice_env.table.damping_for_restitution`).
     """
@@ -64,7 +64,7 @@ class DieContact:
     stiffness: float = STIFFNESS
     damping: float = damping_for_restitution(DIE_RESTITUTION, STIFFNESS, DIE_MASS)
     friction: float = DIE_FRICTION
-    friction_law: FrictionLaw = FrictionLaw.REGULARIZED
+    friction_law: FrictionLaw = FrictionLaw.STICK_SLIP
     tangential: float = 2.0 / 7.0
 
     def __post_init__(self) -> None:
@@ -76,6 +76,11 @@ class DieContact:
         check_range("tangential", self.tangential, 0.0, 1.0)
         if self.tangential == 0:
             raise ValueError("tangential must be in (0, 1], got 0")
+
+    @property
+    def law(self) -> str:
+        """The friction law in words, for reports: ``"stick-slip"`` or ``"regularized"``."""
+        return self.friction_law.name.lower().replace("_", "-")
 
 
 @dataclass

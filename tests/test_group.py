@@ -178,7 +178,8 @@ def test_bad_arguments_are_refused():
     for tangential in (0.0, 1.5, float("nan")):
         with pytest.raises(ValueError, match="tangential must be in"):
             DieContact(tangential=tangential)
-    assert DieContact(friction_law="stick_slip").friction_law == FrictionLaw.STICK_SLIP
+    assert DieContact().friction_law == FrictionLaw.STICK_SLIP  # the default
+    assert DieContact(friction_law="regularized").friction_law == FrictionLaw.REGULARIZED
 
 
 def test_a_throw_alone_equals_the_same_throw_inside_a_batch():
@@ -202,7 +203,8 @@ def _one(state, i):
     return GroupState(*(a[i:i + 1] for a in state._arrays()))
 
 
-def test_mirrored_throws_land_mirrored():
+@pytest.mark.parametrize("law", list(FrictionLaw))
+def test_mirrored_throws_land_mirrored(law):
     # Two dice thrown at each other mirror-symmetrically about the plane y = 0, turned and
     # spinning about y (so that the faces that meet stay across the mirror): each state stays
     # the mirror image of the other's through the collision (in the air: a landing's chaos
@@ -214,7 +216,8 @@ def test_mirrored_throws_land_mirrored():
     a = State.release(scene, [0.0, 0.02, 0.1], [0.2, -0.5, 0.0], spin, rot)
     b = State.release(scene, [0.0, -0.02, 0.1], [0.2, 0.5, 0.0], -mirror @ spin,
                       mirror @ rot @ mirror)
-    result = simulate_group(scene, (DIE, DIE), GroupState.of([a, b]), stop_at_rest=False)
+    result = simulate_group(scene, (DIE, DIE), GroupState.of([a, b]), stop_at_rest=False,
+                            contact=DieContact(friction_law=law))
     assert result.overlap[0] > 0  # they met
     end = result.final
     np.testing.assert_allclose(end.position[0, 1], mirror @ end.position[0, 0], atol=1e-9)
@@ -240,7 +243,10 @@ def test_fast_dice_do_not_pass_through_each_other(speed):
 def test_free_flight_jumps_only_where_no_die_can_touch_anything():
     # two dice dropped side by side from 30 cm toward each other: most of the fall is jumped;
     # the landing and the collision are those of stepping every step to round-off, and after
-    # the chaos of the bounces the faces agree as often as round-off allows
+    # the chaos of the bounces the faces agree as often as round-off allows. "Round-off" grows
+    # in the bounces: where a stick-slip tie starts or ends on a threshold, stepping alone
+    # turns 1e-13 m at the release into 6e-10 m at the end in one of these throws; a jump a
+    # step off would be 1e-5 m off (2.4 m/s for 6.5 us).
     scene = Scene(walls=tray(), t_max=1.0)
     rng = np.random.default_rng(3)
     n = 8
@@ -254,7 +260,7 @@ def test_free_flight_jumps_only_where_no_die_can_touch_anything():
             for flight in (True, False)}
     assert (runs[False].overlap > 0).any() and runs[False].impacts.all()  # met and landed
     np.testing.assert_allclose(runs[True].final.position, runs[False].final.position,
-                               rtol=0, atol=1e-9)
+                               rtol=0, atol=1e-7)
     np.testing.assert_allclose(runs[True].overlap, runs[False].overlap, rtol=1e-6)
     faces = [simulate_group(scene, (DIE, DIE), start, free_flight=flight,
                             stop_when_decided=True).face for flight in (True, False)]

@@ -32,7 +32,7 @@ import numpy as np
 from scipy import stats
 
 from dice_env.die import Die
-from dice_env.group import GroupResult, GroupState, group_step, simulate_group
+from dice_env.group import DieContact, GroupResult, GroupState, group_step, simulate_group
 from dice_env.scene import Scene
 from dice_env.studies.fairness import wilson
 from dice_env.studies.pairs import HAND, hand_throws, simulate_in_batches, void_reasons
@@ -482,6 +482,7 @@ whether or not the dice meet; what a collision changes is how much a small error
 release moves the outcome (the table above), not the faces' shares.
 
 Caveats: the die–die material is an estimate (`dice_env/group.py`, restitution 0.5,
-friction 0.4); a first contact may be a graze; "apart" is the same die without the other, so
-after the first contact it follows another path (its later impacts differ from the pair's).
+{DieContact().law} friction 0.4); a first contact may be a graze; "apart" is the same die
+without the other, so after the first contact it follows another path (its later impacts
+differ from the pair's).
 """

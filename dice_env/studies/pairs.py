@@ -409,12 +409,13 @@ Two default d6 (edge {scene.die.size * 1e3:g} mm, mass {scene.die.mass * 1e3:g} 
 hand together into the {TRAY[0] * 100:g} x {TRAY[1] * 100:g} cm tray
 (`dice_env.surroundings.tray()`, walls of the table's material), on the default table, with
 the automatic step ({scene.step * 1e6:.1f} µs) and the default die–die contact
-(`dice_env.group.DieContact`). The hand (`pairs.Hand`, `pairs.hand_throws`): the dice side by
-side, {h.spacing * 100:g} cm apart centre to centre, above the tray's centre at a common height
-of {h.clearance[0] * 100:g}–{h.clearance[1] * 100:g} cm above the height where a corner could
-touch; one hand velocity of {h.speed[0]:g}–{h.speed[1]:g} m/s in a uniform direction toward
-the table, plus each die's own normal noise of {h.noise:g} m/s per component; each die its
-own uniform orientation and a spin of {h.spin[0]:g}–{h.spin[1]:g} rad/s about its own uniform
+(`dice_env.group.DieContact`, {DieContact().law} friction). The hand (`pairs.Hand`,
+`pairs.hand_throws`): the dice side by side, {h.spacing * 100:g} cm apart centre to centre,
+above the tray's centre at a common height of {h.clearance[0] * 100:g}–{h.clearance[1] * 100:g} cm
+above the height where a corner could touch; one hand velocity of
+{h.speed[0]:g}–{h.speed[1]:g} m/s in a uniform direction toward the table, plus each die's
+own normal noise of {h.noise:g} m/s per component; each die its own uniform orientation and a
+spin of {h.spin[0]:g}–{h.spin[1]:g} rad/s about its own uniform
 axis (the fairness study's vigorous throw, given to both dice at once). Die 1 is the one at
 y < 0. Each throw runs (`simulate_group(..., stop_when_decided=True)`) until no energy left
 in it can change either face, or {T_MAX:g} s.

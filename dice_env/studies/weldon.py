@@ -619,8 +619,9 @@ for the 16 mm die) above clearing the table; the cup moves at
 {cup.speed[0]:g}–{cup.speed[1]:g} edges/s in a uniform horizontal direction, each die adds
 its own velocity (normal, {cup.scatter:g} edges/s per component),
 spins at {cup.spin[0]:g}–{cup.spin[1]:g} rad/s about a uniform axis and has a uniform
-orientation. The table is the default wooden one (`Scene()`, no walls). Each throw runs until
-every face is decided (`stop_when_decided`).
+orientation. The table is the default wooden one (`Scene()`, no walls), the dice meet with
+the default die–die contact (`DieContact()`, {DieContact().law} friction). Each throw runs
+until every face is decided (`stop_when_decided`).
 
 - **(a) Together** (`dice_env.group.simulate_group`): the twelve `drilled16` dice of each
   cup fall and collide. A throw counts when every die is decided and read within
