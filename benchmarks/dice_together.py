@@ -2,6 +2,7 @@
 
     python benchmarks/dice_together.py                  # 1, 2, 5, 12 dice, about 3 minutes
     python benchmarks/dice_together.py --dice 1 2 --throws 256 --repeats 3
+    python benchmarks/dice_together.py --throws 240 --mujoco 2 12 --die-friction regularized
 
 Each group is thrown from the pairs study's hand (``dice_env.studies.pairs.hand_throws``: the
 dice side by side 3 cm apart in rows of four, one hand velocity plus each die's noise) into
@@ -43,7 +44,7 @@ import numpy as np
 
 from dice_env import Scene, simulate
 from dice_env.die import Die
-from dice_env.group import GroupState, group_step, simulate_group
+from dice_env.group import DieContact, GroupState, group_step, simulate_group
 from dice_env.simulate import UP, lock_energy
 from dice_env.studies.pairs import hand_throws
 from dice_env.surroundings import tray
@@ -63,13 +64,14 @@ def cpu_best(fn: object, repeats: int) -> tuple[float, object]:
     return best, result
 
 
-def measure(n_dice: int, throws: int, repeats: int, seed: int) -> list[dict]:
-    """The rows of a group of ``n_dice`` d6 (and of the single-die path when ``n_dice`` = 1)."""
+def measure(n_dice: int, throws: int, repeats: int, seed: int,
+            contact: DieContact) -> list[dict]:
+    """The rows of ``n_dice`` d6 meeting by ``contact`` (and the single-die path for one die)."""
     scene = Scene(walls=tray(), t_max=T_MAX)
     dice = (Die(),) * n_dice
     state = hand_throws(scene, dice, throws, np.random.default_rng(seed))
     seconds, res = cpu_best(lambda: simulate_group(scene, dice, state, stop_when_decided=True,
-                                                   num_threads=1), repeats)
+                                                   contact=contact, num_threads=1), repeats)
     steps = float(res.steps.sum())
     row = {"path": "simulate_group", "dice": n_dice, "throws": throws, "cpu_s": seconds,
            "throws_per_s": throws / seconds, "die_steps_per_s": steps * n_dice / seconds,
@@ -179,13 +181,13 @@ def mujoco_decided(scene: Scene, state: GroupState, model) -> dict:
             "face_counts": np.bincount(np.concatenate(faces), minlength=7)[1:].tolist()}
 
 
-def compare_mujoco(n_dice: int, throws: int, seed: int) -> dict:
+def compare_mujoco(n_dice: int, throws: int, seed: int, contact: DieContact) -> dict:
     """Ours and MuJoCo (default and bouncing contact) on the same ``throws`` of ``n_dice``."""
     scene = Scene(walls=tray(), t_max=T_MAX)
     dice = (Die(),) * n_dice
     state = hand_throws(scene, dice, throws, np.random.default_rng(seed))
     seconds, ours = cpu_best(lambda: simulate_group(scene, dice, state, stop_when_decided=True,
-                                                    num_threads=1), 1)
+                                                    contact=contact, num_threads=1), 1)
     contact, dt = bouncing_contact(scene)
     rows = {"ours": {"throws_per_s": throws / seconds, "cpu_s": seconds,
                      "decided": float(ours.decided.mean()),
@@ -207,8 +209,12 @@ def main() -> None:
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--mujoco", type=int, nargs="*", default=[],
                         help="groups to run through MuJoCo as well, e.g. 2 12")
+    parser.add_argument("--die-friction", choices=["stick_slip", "regularized"],
+                        default=DieContact().friction_law.name.lower(),
+                        help="the die–die friction law (DieContact.friction_law)")
     parser.add_argument("--out", type=Path, default=ROOT / "benchmarks/results/dice_together.json")
     args = parser.parse_args()
+    contact = DieContact(friction_law=args.die_friction)
     for name in ("throws", "repeats"):
         if getattr(args, name) < 1:
             parser.error(f"--{name} must be >= 1, got {getattr(args, name)}")
@@ -217,13 +223,15 @@ def main() -> None:
                                     or max(getattr(args, name)) > 64):
             parser.error(f"--{name} must be 1 to 64 dice, got {getattr(args, name)}")
     for n_dice in (1, 2):
-        measure(n_dice, 2, 1, args.seed)  # compile both paths' kernels, untimed
+        measure(n_dice, 2, 1, args.seed, contact)  # compile both paths' kernels, untimed
     rows = []
     for n_dice in args.dice:
-        rows += measure(n_dice, max(4, math.ceil(args.throws / n_dice)), args.repeats, args.seed)
+        rows += measure(n_dice, max(4, math.ceil(args.throws / n_dice)), args.repeats, args.seed,
+                        contact)
         print(f"{n_dice} dice done", flush=True)
     base = next(r for r in rows if r["path"] == "simulate_group" and r["dice"] == min(args.dice))
-    print(f"\nOne thread, CPU time, best of {args.repeats}; load average "
+    print(f"\nOne thread, CPU time, best of {args.repeats}, {contact.law} die–die friction; "
+          f"load average "
           f"{os.getloadavg()[0]:.2f} on {os.cpu_count()} cores.\n")
     print("| path | dice | throws | throws/s | cost per throw / smallest group | "
           "die-steps/s | decided | all dice read | dice met | simulated s per throw |")
@@ -236,7 +244,7 @@ def main() -> None:
     mujoco_rows = []
     for n_dice in args.mujoco:
         mujoco_rows.append(compare_mujoco(n_dice, max(4, math.ceil(args.throws / n_dice)),
-                                          args.seed))
+                                          args.seed, contact))
     if mujoco_rows:
         print("\nThe same throws in MuJoCo, one thread, CPU time, to decided faces:\n")
         print("| dice | throws | ours throws/s | MuJoCo default (2 ms) throws/s | ours / it | "
@@ -254,9 +262,10 @@ def main() -> None:
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text(json.dumps({"mujoco": mujoco_rows,
         "command": "python benchmarks/dice_together.py " + " ".join(
-            f"--{k} {' '.join(map(str, v)) if isinstance(v, list) else v}"
+            f"--{k.replace('_', '-')} {' '.join(map(str, v)) if isinstance(v, list) else v}"
             for k, v in vars(args).items() if k != "out"),
         "threads": 1, "timer": "process CPU time", "repeats": args.repeats,
+        "die_friction": contact.law,
         "load_average": os.getloadavg()[0], "cpu_count": os.cpu_count(),
         "numba": numba.__version__, "python": platform.python_version(), "rows": rows},
         indent=1))
