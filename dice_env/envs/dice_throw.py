@@ -221,6 +221,8 @@ class DiceThrowEnv(gym.Env):
       unchanged.
     * v0: several dice in one throw (``num_dice``, a ``die`` tuple, ``target``, ``target_sum``,
       ``set_dice``; docs/environment.md). One die, the default, is unchanged.
+    * v0: dice meet with the table's stick-slip friction (``DieContact``), so a die leaning on
+      another stays put; throws of several dice change, one die is unchanged.
     """
 
     metadata: ClassVar[dict[str, Any]] = {"render_modes": list(RENDER_MODES),
