@@ -188,13 +188,13 @@ def compare_mujoco(n_dice: int, throws: int, seed: int, contact: DieContact) -> 
     state = hand_throws(scene, dice, throws, np.random.default_rng(seed))
     seconds, ours = cpu_best(lambda: simulate_group(scene, dice, state, stop_when_decided=True,
                                                     contact=contact, num_threads=1), 1)
-    contact, dt = bouncing_contact(scene)
+    bounce, dt = bouncing_contact(scene)
     rows = {"ours": {"throws_per_s": throws / seconds, "cpu_s": seconds,
                      "decided": float(ours.decided.mean()),
                      "sim_s": float(ours.steps.mean() * group_step(scene, dice))},
             "mujoco_default": mujoco_decided(scene, state, mujoco_tray(scene, n_dice, 0.002)),
             "mujoco_bouncing": mujoco_decided(scene, state,
-                                              mujoco_tray(scene, n_dice, dt, contact))}
+                                              mujoco_tray(scene, n_dice, dt, bounce))}
     for name in ("mujoco_default", "mujoco_bouncing"):
         rows[name]["ours_vs_mujoco"] = rows["ours"]["throws_per_s"] / rows[name]["throws_per_s"]
     return {"dice": n_dice, "throws": throws, **rows}
@@ -231,8 +231,7 @@ def main() -> None:
         print(f"{n_dice} dice done", flush=True)
     base = next(r for r in rows if r["path"] == "simulate_group" and r["dice"] == min(args.dice))
     print(f"\nOne thread, CPU time, best of {args.repeats}, {contact.law} die–die friction; "
-          f"load average "
-          f"{os.getloadavg()[0]:.2f} on {os.cpu_count()} cores.\n")
+          f"load average {os.getloadavg()[0]:.2f} on {os.cpu_count()} cores.\n")
     print("| path | dice | throws | throws/s | cost per throw / smallest group | "
           "die-steps/s | decided | all dice read | dice met | simulated s per throw |")
     print("|---|---|---|---|---|---|---|---|---|---|")
