@@ -356,7 +356,8 @@ def _hulls(scenes: list[Scene], bodies: group_kernel.Bodies) -> group_kernel.Hul
         starts[i, len(start):] = start[-1]  # padded classes are empty
     return group_kernel.Hulls(
         axes=_repeat_first(axes), directions=_repeat_first([d for *_, d in classes]),
-        edges=edges, classes=starts, planes=_repeat_first(planes), n_vertices=bodies.n_vertices,
+        edges=edges, classes=starts, planes=_repeat_first(planes),
+        n_planes=np.array([len(p) for p in planes]), n_vertices=bodies.n_vertices,
         r_max=bodies.r_max)
 
 
@@ -398,33 +399,44 @@ def _edge_classes(vertices: np.ndarray, edges: np.ndarray,
 
 
 def _check_apart(dice: tuple[Die, ...], state: GroupState) -> None:
-    """Refuse dice that start inside each other.
+    """Refuse dice that start inside each other (overlapping by more than :data:`TOUCH` of the
+    smaller die's size; touching counts as apart)."""
+    depth = overlaps(dice, state)
+    for i in range(len(dice)):
+        for j in range(i + 1, len(dice)):
+            inside = depth[:, i, j] > TOUCH * min(dice[i].size, dice[j].size)
+            if inside.any():
+                throw = int(np.flatnonzero(inside)[0])
+                raise ValueError(f"state.position: dice {i} and {j} of throw {throw} overlap "
+                                 "at the start (no plane separates them)")
 
-    Two convex dice are apart when some axis separates them (separating axes: the face
-    normals of both and the cross products of their edges); touching, within
-    :data:`TOUCH` of the smaller die's size, counts as apart.
+
+def overlaps(dice: Sequence[Die], state: GroupState) -> np.ndarray:
+    """How deep each pair of ``dice`` overlaps in ``state``: (B, N, N), m, <= 0 where apart.
+
+    Separating axes: two convex dice overlap by the least of their overlaps along the face
+    normals of both and the cross products of their edges (parallel edges give no axis).
     """
+    dice = _dice(dice)
     corners = [state.position[:, i, None, :] + np.einsum(
         "bij,kj->bki", state.orientation[:, i], die.vertices_body) for i, die in enumerate(dice)]
     normals = [np.einsum("bij,fj->bfi", state.orientation[:, i], die.face_normals)
                for i, die in enumerate(dice)]
     edges = [c[:, die.edges[:, 1]] - c[:, die.edges[:, 0]]
              for c, die in zip(corners, dice, strict=True)]
-    b = state.batch_size
-    for i in range(len(dice)):
-        for j in range(i + 1, len(dice)):
+    b, n = state.batch_size, len(dice)
+    depth = np.full((b, n, n), -np.inf)
+    for i in range(n):
+        for j in range(i + 1, n):
             crossed = np.cross(edges[i][:, :, None], edges[j][:, None, :]).reshape(b, -1, 3)
             length = np.linalg.norm(crossed, axis=-1, keepdims=True)
-            crossed = crossed / np.where(length > 0, length, 1.0)  # parallel edges: no axis
+            crossed = crossed / np.where(length > 0, length, 1.0)
             axes = np.concatenate([normals[i], normals[j], crossed], axis=1)  # (B, A, 3)
             on_i = np.einsum("bai,bki->bak", axes, corners[i])
             on_j = np.einsum("bai,bki->bak", axes, corners[j])
             overlap = np.minimum(on_i.max(-1) - on_j.min(-1), on_j.max(-1) - on_i.min(-1))
             faces = normals[i].shape[1] + normals[j].shape[1]
-            real = np.concatenate([np.ones((b, faces), bool), length[..., 0] > 0], axis=1)
-            touch = TOUCH * min(dice[i].size, dice[j].size)
-            inside = ((overlap > touch) | ~real).all(axis=1)
-            if inside.any():
-                throw = int(np.flatnonzero(inside)[0])
-                raise ValueError(f"state.position: dice {i} and {j} of throw {throw} overlap "
-                                 "at the start (no plane separates them)")
+            real = np.concatenate([np.ones((b, faces), bool), length[..., 0] > 1e-9 * (
+                dice[i].size * dice[j].size)], axis=1)
+            depth[:, i, j] = depth[:, j, i] = np.where(real, overlap, np.inf).min(axis=1)
+    return depth

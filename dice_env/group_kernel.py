@@ -8,12 +8,13 @@ through penalty contacts:
   separating axes: the face normals of both, one per pair of opposite faces, and the cross
   products of their edges, one per pair of classes of parallel edges: 3 + 3 and 9 axes for
   two cubes, not 12 and 144); the axis that separated a pair at the last step is tried
-  first, and usually settles it;
-- along a face normal, every corner of one die inside the other is pushed out by its depth
-  beyond the other die's extent along it;
-- along an edge axis (edge across edge: two cubes meeting edge on edge at a right angle have
-  no corner inside the other), one contact at the middle of the two edges' closest points,
-  as deep as the overlap.
+  first, and usually settles it; a face normal is preferred unless an edge axis is clearly
+  less (:data:`FACE_BIAS`);
+- the contacts are the corners of the region where the two overlap (:func:`pair_contacts`):
+  every corner of one die inside the other and every point where an edge of one passes
+  through a face of the other (two squares turned against each other face on face, or two
+  cubes meeting edge on edge at a right angle, have no corner inside the other), each
+  pushed out along the normal by its depth beyond the other die's extent along it.
 
 A contact's force is ``fn = S d - D vn`` (pushing only) along its normal plus the regularised
 Coulomb friction ``-mu fn vt / (|vt| + vmin)``, capped where it would reverse the slip within
@@ -85,8 +86,11 @@ from dice_env.kernel import (
 PARALLEL = 1e-8
 # A slip is stopped by friction over at least 1 / GRIP steps (see Pair).
 GRIP = 0.25
-# Axes whose overlaps differ by less than this fraction tie (a face axis wins a tie).
-TIE = 1e-6
+# An edge axis is the contact's only where the dice overlap along it by less than this
+# fraction of their least overlap along a face normal: dice meeting face on face, slightly
+# turned or tilted, overlap almost as little along the cross products of the two faces'
+# edges, and one edge contact there would let them sink into each other.
+FACE_BIAS = 0.95
 # A corner bears on another die's face when inside it to this fraction of that die's reach
 # (corners exactly on a side plane, as in an aligned stack, must bear).
 LATERAL = 1e-3
@@ -126,8 +130,9 @@ class Hulls(NamedTuple):
     parallel edges (repeating the first likewise); ``edges`` (N, E, 2): vertex pairs, class by
     class; ``classes`` (N, C + 1): where each class starts in ``edges`` (and the last ends; a
     padded class is empty); ``planes`` (N, F, 4): the faces' planes ``n . r = offset`` (a
-    smaller set repeats its first); ``n_vertices`` and ``r_max`` as :class:`Bodies`'.
-    Repeated axes and planes change no extent, overlap or inside test.
+    smaller set repeats its first), ``n_planes`` (N,) how many are the die's own;
+    ``n_vertices`` and ``r_max`` as :class:`Bodies`'. Repeated axes and planes change no
+    extent, overlap or inside test.
     """
 
     axes: np.ndarray
@@ -135,6 +140,7 @@ class Hulls(NamedTuple):
     edges: np.ndarray
     classes: np.ndarray
     planes: np.ndarray
+    n_planes: np.ndarray
     n_vertices: np.ndarray
     r_max: np.ndarray
 
@@ -235,28 +241,6 @@ class GroupOutcome(NamedTuple):
     meet_steps: np.ndarray
     meet: np.ndarray
     abort: np.ndarray
-
-
-@njit(cache=True, inline="always")
-def closest_on_segments(a0: tuple, a1: tuple, b0: tuple, b1: tuple) -> tuple:
-    """The closest points of the segments ``a0 a1`` and ``b0 b1`` (Ericson 2005, 5.1.9)."""
-    d10, d11, d12 = a1[0] - a0[0], a1[1] - a0[1], a1[2] - a0[2]
-    d20, d21, d22 = b1[0] - b0[0], b1[1] - b0[1], b1[2] - b0[2]
-    r0, r1, r2 = a0[0] - b0[0], a0[1] - b0[1], a0[2] - b0[2]
-    aa = d10 * d10 + d11 * d11 + d12 * d12
-    ee = d20 * d20 + d21 * d21 + d22 * d22
-    ff = d20 * r0 + d21 * r1 + d22 * r2
-    c = d10 * r0 + d11 * r1 + d12 * r2
-    bb = d10 * d20 + d11 * d21 + d12 * d22
-    denom = aa * ee - bb * bb
-    s = min(1.0, max(0.0, (bb * ff - c * ee) / denom)) if denom > 0.0 else 0.0
-    t = (bb * s + ff) / ee
-    if t < 0.0:
-        t, s = 0.0, min(1.0, max(0.0, -c / aa))
-    elif t > 1.0:
-        t, s = 1.0, min(1.0, max(0.0, (bb - c) / aa))
-    return ((a0[0] + s * d10, a0[1] + s * d11, a0[2] + s * d12),
-            (b0[0] + t * d20, b0[1] + t * d21, b0[2] + t * d22))
 
 
 @njit(cache=True, inline="always")
@@ -456,15 +440,14 @@ def least_overlap(a: int, b: int, world: np.ndarray, x: np.ndarray, q: np.ndarra
     opposite faces) and the cross products of their edges' directions (``directions``: one
     per class of parallel edges), :class:`Hulls`' arrays. ``first`` (-1: none) is a
     candidate to try first: the one that separated the pair last time usually still does.
-    Returns ``(overlap, n, ca, cb, c)``: ``overlap`` <= 0 when an axis separates them, ``c``
-    that axis (else -1); ``n`` the unit axis pointing from ``b`` toward ``a``; for an edge
-    axis the edge classes ``ca`` of ``a`` and ``cb`` of ``b`` that meet, else -1. A face axis
-    wins a tie: an aligned stack rests face on face.
+    Returns ``(overlap, n, c)``: ``overlap`` <= 0 when an axis separates them, ``c`` that
+    axis (else -1); ``n`` the unit axis pointing from ``b`` toward ``a``. A face axis wins
+    unless an edge axis is clearly less (:data:`FACE_BIAS`): stacks rest face on face.
     """
     if first >= 0:
         overlap, axis, real = _candidate_overlap(first, a, b, world, x, q, axes, directions)
         if real and overlap <= 0.0:
-            return overlap, axis, -1, -1, first
+            return overlap, axis, first
     best, n, c = np.inf, (0.0, 0.0, 0.0), 0
     for die in (a, b):
         for s in range(axes.shape[1]):
@@ -472,11 +455,11 @@ def least_overlap(a: int, b: int, world: np.ndarray, x: np.ndarray, q: np.ndarra
                 a, b, _turned(q, die, (axes[die, s, 0], axes[die, s, 1], axes[die, s, 2])),
                 world, x)
             if overlap <= 0.0:
-                return overlap, axis, -1, -1, c
+                return overlap, axis, c
             if overlap < best:
                 best, n = overlap, axis
             c += 1
-    edge, edge_n, best_a, best_b = np.inf, (0.0, 0.0, 0.0), -1, -1
+    edge, edge_n = np.inf, (0.0, 0.0, 0.0)
     for ca in range(directions.shape[1]):
         e = _turned(q, a, (directions[a, ca, 0], directions[a, ca, 1], directions[a, ca, 2]))
         for cb in range(directions.shape[1]):
@@ -487,26 +470,20 @@ def least_overlap(a: int, b: int, world: np.ndarray, x: np.ndarray, q: np.ndarra
                 continue
             overlap, axis = _axis_overlap(a, b, axis, world, x)
             if overlap <= 0.0:
-                return overlap, axis, -1, -1, c - 1
+                return overlap, axis, c - 1
             if overlap < edge:
-                edge, edge_n, best_a, best_b = overlap, axis, ca, cb
-    if edge < best * (1.0 - TIE):
-        return edge, edge_n, best_a, best_b, -1
-    return best, n, -1, -1, -1
+                edge, edge_n = overlap, axis
+    if edge < FACE_BIAS * best:
+        return edge, edge_n, -1
+    return best, n, -1
 
 
 @njit(cache=True, inline="always")
-def within(p: tuple, die: int, x: np.ndarray, q: np.ndarray, planes: np.ndarray,
-           tol: float) -> bool:
-    """Whether the point ``p`` lies inside die ``die``.
-
-    ``planes``: :class:`Hulls`' (their offsets moved out by ``tol``).
-    """
-    d0, d1, d2 = p[0] - x[die, 0], p[1] - x[die, 1], p[2] - x[die, 2]
-    b0 = q[die, 0, 0] * d0 + q[die, 1, 0] * d1 + q[die, 2, 0] * d2
-    b1 = q[die, 0, 1] * d0 + q[die, 1, 1] * d1 + q[die, 2, 1] * d2
-    b2 = q[die, 0, 2] * d0 + q[die, 1, 2] * d1 + q[die, 2, 2] * d2
-    for f in range(planes.shape[1]):
+def within(p: tuple, die: int, x: np.ndarray, q: np.ndarray, hulls: Hulls, tol: float) -> bool:
+    """Whether the point ``p`` lies inside die ``die`` (its faces' planes moved out by ``tol``)."""
+    planes = hulls.planes
+    b0, b1, b2 = _turned_back(q, die, p, x)
+    for f in range(hulls.n_planes[die]):
         if planes[die, f, 0] * b0 + planes[die, f, 1] * b1 + planes[die, f, 2] * b2 \
                 - planes[die, f, 3] > tol:
             return False
@@ -514,64 +491,114 @@ def within(p: tuple, die: int, x: np.ndarray, q: np.ndarray, planes: np.ndarray,
 
 
 @njit(cache=True, inline="always")
-def pair_contacts(a: int, b: int, overlap: float, n: tuple, ca: int, cb: int,
-                  world: np.ndarray, x: np.ndarray, q: np.ndarray, cu: np.ndarray,
-                  cw: np.ndarray, hulls: Hulls, pair: Pair, ties: np.ndarray, fresh: bool,
-                  force: np.ndarray, torque: np.ndarray) -> tuple:
+def _seen(p: tuple, along: float, n: tuple, seen: np.ndarray, n_seen: int) -> int:
+    """Note the contact point ``p`` (``along`` the axis ``n``) as seen across the axis."""
+    seen[n_seen, 0] = p[0] - along * n[0]
+    seen[n_seen, 1] = p[1] - along * n[1]
+    seen[n_seen, 2] = p[2] - along * n[2]
+    return n_seen + 1
+
+
+@njit(cache=True, inline="always")
+def _crossings(a: int, b: int, first: int, other: int, n: tuple, high_b: float,
+               low_a: float, world: np.ndarray, x: np.ndarray, q: np.ndarray, cu: np.ndarray,
+               cw: np.ndarray, hulls: Hulls, pair: Pair, seen: np.ndarray, n_seen: int,
+               gap2: float, force: np.ndarray, torque: np.ndarray) -> tuple:
+    """Push every point where an edge of die ``first`` passes through a face of ``other``.
+
+    Each point inside ``other`` (to :data:`LATERAL` of its reach) and beyond its extent along
+    ``n`` (``high_b`` of ``b``, ``low_a`` of ``a``), pushed by that depth as
+    :func:`pair_contacts`' corners, unless within ``sqrt(gap2)`` across the axis of a point
+    already in ``seen`` (``n_seen`` of them). Returns the springs' energy, the deepest, and
+    the count in ``seen``.
+    """
+    n0, n1, n2 = n
+    planes, edges = hulls.planes, hulls.edges
+    tol = LATERAL * hulls.r_max[other]
+    spring, deepest = 0.0, 0.0
+    for e in range(hulls.classes[first, hulls.classes.shape[1] - 1]):
+        k0, k1 = edges[first, e, 0], edges[first, e, 1]
+        p0 = (world[first, k0, 0], world[first, k0, 1], world[first, k0, 2])
+        p1 = (world[first, k1, 0], world[first, k1, 1], world[first, k1, 2])
+        h0, h1 = _turned_back(q, other, p0, x), _turned_back(q, other, p1, x)
+        for f in range(hulls.n_planes[other]):
+            m0, m1, m2, offset = planes[other, f, 0], planes[other, f, 1], planes[other, f, 2], \
+                planes[other, f, 3]
+            above0 = m0 * h0[0] + m1 * h0[1] + m2 * h0[2] - offset
+            above1 = m0 * h1[0] + m1 * h1[1] + m2 * h1[2] - offset
+            if not (above0 < 0.0 < above1 or above1 < 0.0 < above0):
+                continue
+            t = above0 / (above0 - above1)
+            p = (p0[0] + t * (p1[0] - p0[0]), p0[1] + t * (p1[1] - p0[1]),
+                 p0[2] + t * (p1[2] - p0[2]))
+            along = n0 * p[0] + n1 * p[1] + n2 * p[2]
+            depth = high_b - along if first == a else along - low_a
+            if depth <= 0.0 or not within(p, other, x, q, hulls, tol):
+                continue
+            r0, r1, r2 = p[0] - along * n0, p[1] - along * n1, p[2] - along * n2
+            fresh = True
+            for j in range(n_seen):
+                g0, g1, g2 = seen[j, 0] - r0, seen[j, 1] - r1, seen[j, 2] - r2
+                if g0 * g0 + g1 * g1 + g2 * g2 < gap2:
+                    fresh = False
+                    break
+            if not fresh:
+                continue
+            n_seen = _seen(p, along, n, seen, n_seen)
+            deepest = max(deepest, depth)
+            spring += _push(a, b, p, depth, n, x, cu, cw, pair, force, torque)
+    return spring, deepest, n_seen
+
+
+@njit(cache=True, inline="always")
+def _turned_back(q: np.ndarray, die: int, p: tuple, x: np.ndarray) -> tuple:
+    """The world point ``p`` in die ``die``'s body frame: ``q[die]^T (p - x[die])``."""
+    r0, r1, r2 = p[0] - x[die, 0], p[1] - x[die, 1], p[2] - x[die, 2]
+    return (q[die, 0, 0] * r0 + q[die, 1, 0] * r1 + q[die, 2, 0] * r2,
+            q[die, 0, 1] * r0 + q[die, 1, 1] * r1 + q[die, 2, 1] * r2,
+            q[die, 0, 2] * r0 + q[die, 1, 2] * r1 + q[die, 2, 2] * r2)
+
+
+@njit(cache=True, inline="always")
+def pair_contacts(a: int, b: int, n: tuple, world: np.ndarray, x: np.ndarray, q: np.ndarray,
+                  cu: np.ndarray, cw: np.ndarray, hulls: Hulls, pair: Pair, ties: np.ndarray,
+                  fresh: bool, seen: np.ndarray, force: np.ndarray, torque: np.ndarray) -> tuple:
     """Every contact of dice ``a`` and ``b``, which overlap, their forces applied.
 
-    ``overlap``, ``n``, ``ca``, ``cb``: the least overlap and its axis
-    (:func:`least_overlap`). A face axis: every corner of one die inside the other (to
+    ``n``: the axis of least overlap (:func:`least_overlap`). The contacts are the corners
+    of the region where the dice overlap, each pushed along ``n`` by its depth beyond the
+    other die's extent along it: every corner of one die inside the other (to
     :data:`LATERAL` of its reach, so that corners exactly on a side plane, as in an aligned
-    stack, still bear) is pushed along it by its depth beyond the other die's extent along
-    it. An edge axis (edge across edge: two cubes meeting edge on edge at a right angle have
-    no corner inside the other): one contact at the middle of the closest points of the
-    closest pair of edges of the two classes, as deep as the overlap. With ``pair.stick``
-    the corners' friction is stick-slip (:func:`_push_tied`; ``ties`` and ``fresh`` as
-    there), the edge contact's the regularised law. Returns the normal springs'
-    and the tangential springs' energy, the deepest contact, and whether a contact bears.
+    stack, still bear), and every point where an edge of one die passes through a face of
+    the other (:func:`_crossings`: two squares turned against each other face on face have
+    no corner inside the other, nor two cubes meeting edge on edge at a right angle). The
+    same points along a face axis and an edge axis, so that the force changes little where
+    the axis of least overlap changes. With ``pair.stick`` the corners' friction is
+    stick-slip (:func:`_push_tied`; ``ties`` and ``fresh`` as there), the crossings' the
+    regularised law. ``seen`` (M, 3): room for the contacts' points across the axis, so
+    that a crossing where a corner already bears (an aligned stack's edges lie in the
+    other's faces) is not pushed twice. Returns the normal springs' and the tangential
+    springs' energy, the deepest contact, and whether a contact bears.
     """
     n_vertices = hulls.n_vertices
-    if ca >= 0:
-        if pair.stick:  # the corners' ties end
-            for first, other in ((a, b), (b, a)):
-                for k in range(n_vertices[first]):
-                    ties[first, k, other, 3] = 0.0
-        edges, start = hulls.edges, hulls.classes
-        gap, point = np.inf, (0.0, 0.0, 0.0)
-        for i in range(start[a, ca], start[a, ca + 1]):
-            a0, a1 = edges[a, i, 0], edges[a, i, 1]
-            for j in range(start[b, cb], start[b, cb + 1]):
-                b0, b1 = edges[b, j, 0], edges[b, j, 1]
-                pa, pb = closest_on_segments(
-                    (world[a, a0, 0], world[a, a0, 1], world[a, a0, 2]),
-                    (world[a, a1, 0], world[a, a1, 1], world[a, a1, 2]),
-                    (world[b, b0, 0], world[b, b0, 1], world[b, b0, 2]),
-                    (world[b, b1, 0], world[b, b1, 1], world[b, b1, 2]))
-                d0, d1, d2 = pa[0] - pb[0], pa[1] - pb[1], pa[2] - pb[2]
-                distance = d0 * d0 + d1 * d1 + d2 * d2
-                if distance < gap:  # parallel edges share the axis: the closest pair meets
-                    gap = distance
-                    point = (0.5 * (pa[0] + pb[0]), 0.5 * (pa[1] + pb[1]), 0.5 * (pa[2] + pb[2]))
-        return _push(a, b, point, overlap, n, x, cu, cw, pair, force, torque), 0.0, overlap, \
-            True
     n0, n1, n2 = n
     low_a = _extent(a, n0, n1, n2, world)[0]
     high_b = _extent(b, n0, n1, n2, world)[1]
-    planes, r_max = hulls.planes, hulls.r_max
-    spring, stored, deepest, found = 0.0, 0.0, 0.0, False
+    r_max = hulls.r_max
+    spring, stored, deepest, found, n_seen = 0.0, 0.0, 0.0, False, 0
     for first, other in ((a, b), (b, a)):
         tol = LATERAL * r_max[other]
         for k in range(n_vertices[first]):
             p = (world[first, k, 0], world[first, k, 1], world[first, k, 2])
             along = n0 * p[0] + n1 * p[1] + n2 * p[2]
             depth = high_b - along if first == a else along - low_a
-            if depth <= 0.0 or not within(p, other, x, q, planes, tol):
+            if depth <= 0.0 or not within(p, other, x, q, hulls, tol):
                 if pair.stick:
                     ties[first, k, other, 3] = 0.0
                 continue
             found = True
             deepest = max(deepest, depth)
+            n_seen = _seen(p, along, n, seen, n_seen)
             if pair.stick:
                 spring_k, stored_k = _push_tied(a, b, first, k, p, depth, n, x, q, cu, cw, pair,
                                                 ties, fresh, force, torque)
@@ -579,7 +606,14 @@ def pair_contacts(a: int, b: int, overlap: float, n: tuple, ca: int, cb: int,
                 stored += stored_k
             else:
                 spring += _push(a, b, p, depth, n, x, cu, cw, pair, force, torque)
-    return spring, stored, deepest, found
+    gap2 = (LATERAL * min(r_max[a], r_max[b])) ** 2
+    for first, other in ((a, b), (b, a)):
+        spring_c, deepest_c, n_seen = _crossings(a, b, first, other, n, high_b, low_a, world,
+                                                 x, q, cu, cw, hulls, pair, seen, n_seen, gap2,
+                                                 force, torque)
+        spring += spring_c
+        deepest = max(deepest, deepest_c)
+    return spring, stored, deepest, found or n_seen > 0
 
 
 @njit(cache=True)
@@ -606,6 +640,7 @@ def simulate_group(g: int, dice: GroupDice, bodies: Bodies, hulls: Hulls, pair: 
     # likewise die against die (see _push_tied)
     die_ties = np.zeros((n_dice, n_v, n_dice, 4) if pair.stick else (0, 0, 0, 4))
     lowest = np.empty((n_dice, n_planes))  # each die's lowest vertex height over each plane
+    seen = np.empty((2 * n_v + 2 * hulls.edges.shape[1] * hulls.planes.shape[1], 3))
     force, torque = np.empty((n_dice, 3)), np.empty((n_dice, 3))
     kinetic, own = np.empty(n_dice), np.empty(n_dice)
     qa, inv_a = np.empty((3, 3)), np.empty((3, 3))
@@ -738,15 +773,15 @@ def simulate_group(g: int, dice: GroupDice, bodies: Bodies, hulls: Hulls, pair: 
                 touch_ab = False
                 if d0 * d0 + d1 * d1 + d2 * d2 < reach * reach:
                     apart = False
-                    depth, n, ca, cb, separating[a, b] = least_overlap(
+                    depth, n, separating[a, b] = least_overlap(
                         a, b, world, x, q, axes, directions, separating[a, b])
                     if depth > 0.0:
                         spring, stored, deepest, touch_ab = pair_contacts(
-                            a, b, depth, n, ca, cb, world, x, q, cu, cw, hulls, pair,
-                            die_ties, not met[a, b], force, torque)
+                            a, b, n, world, x, q, cu, cw, hulls, pair, die_ties,
+                            not met[a, b], seen, force, torque)
                         checked += spring
                         tangential += stored
-                        overlap = max(overlap, deepest)
+                        overlap = max(overlap, depth)
                 if touch_ab and not met[a, b]:
                     s0, s1, s2 = u[a, 0] - u[b, 0], u[a, 1] - u[b, 1], u[a, 2] - u[b, 2]
                     if s0 * s0 + s1 * s1 + s2 * s2 > v_rest2:
