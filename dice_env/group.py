@@ -128,7 +128,7 @@ class GroupResult:
     (:attr:`Scene.planes`: the floor, then the walls). Per throw (B,): ``settled`` (every die
     at rest), ``decided`` (no face can change any more), ``rest_time``, ``unstable`` (energy
     gain beyond the scene's tolerance, or a non-finite state), ``energy_rise``, ``overlap``
-    (deepest die–die contact, m), ``steps``; ``final`` the state at the end.
+    (deepest die–die overlap along separating axes, m), ``steps``; ``final`` the state at the end.
 
     The first die–die contact: ``meet_dice`` (B, 2) the pair (-1 where no dice touched),
     ``meet_steps`` (B, 2) the steps done when it starts and when it ends (-1: none, or the
@@ -399,8 +399,10 @@ def _edge_classes(vertices: np.ndarray, edges: np.ndarray,
 
 
 def _check_apart(dice: tuple[Die, ...], state: GroupState) -> None:
-    """Refuse dice that start inside each other (overlapping by more than :data:`TOUCH` of the
-    smaller die's size; touching counts as apart)."""
+    """Refuse dice that start inside each other.
+
+    Overlapping by more than :data:`TOUCH` of the smaller die's size; touching counts as apart.
+    """
     depth = overlaps(dice, state)
     for i in range(len(dice)):
         for j in range(i + 1, len(dice)):

@@ -214,8 +214,8 @@ class GroupOutcome(NamedTuple):
     """What each throw gives, and the abort flag.
 
     Per throw (G,) ``status``, ``unstable``, ``rest_time``, ``energy_rise``, ``steps``,
-    ``overlap`` (the deepest die–die contact); per die (G, N) ``impacts``, ``max_pen``
-    (deepest sink into a plane), ``contacts`` (vertices on the planes at the end),
+    ``overlap`` (the deepest die–die overlap, separating axes); per die (G, N) ``impacts``,
+    ``max_pen`` (deepest sink into a plane), ``contacts`` (vertices on the planes at the end),
     ``touching`` (in contact with another die at the end) and ``die_impacts`` (starts of a
     contact with another die whose centre moves faster than the rest speed relative to this
     one's); ``touched`` (G, N, P): the die had a corner in plane P at some step. The first
@@ -509,13 +509,13 @@ def _crossings(a: int, b: int, first: int, other: int, n: tuple, high_b: float,
     Each point inside ``other`` (to :data:`LATERAL` of its reach) and beyond its extent along
     ``n`` (``high_b`` of ``b``, ``low_a`` of ``a``), pushed by that depth as
     :func:`pair_contacts`' corners, unless within ``sqrt(gap2)`` across the axis of a point
-    already in ``seen`` (``n_seen`` of them). Returns the springs' energy, the deepest, and
-    the count in ``seen``.
+    already in ``seen`` (``n_seen`` of them). Returns the springs' energy and the count in
+    ``seen``.
     """
     n0, n1, n2 = n
     planes, edges = hulls.planes, hulls.edges
     tol = LATERAL * hulls.r_max[other]
-    spring, deepest = 0.0, 0.0
+    spring = 0.0
     for e in range(hulls.classes[first, hulls.classes.shape[1] - 1]):
         k0, k1 = edges[first, e, 0], edges[first, e, 1]
         p0 = (world[first, k0, 0], world[first, k0, 1], world[first, k0, 2])
@@ -545,9 +545,8 @@ def _crossings(a: int, b: int, first: int, other: int, n: tuple, high_b: float,
             if not fresh:
                 continue
             n_seen = _seen(p, along, n, seen, n_seen)
-            deepest = max(deepest, depth)
             spring += _push(a, b, p, depth, n, x, cu, cw, pair, force, torque)
-    return spring, deepest, n_seen
+    return spring, n_seen
 
 
 @njit(cache=True, inline="always")
@@ -578,14 +577,14 @@ def pair_contacts(a: int, b: int, n: tuple, world: np.ndarray, x: np.ndarray, q:
     regularised law. ``seen`` (M, 3): room for the contacts' points across the axis, so
     that a crossing where a corner already bears (an aligned stack's edges lie in the
     other's faces) is not pushed twice. Returns the normal springs' and the tangential
-    springs' energy, the deepest contact, and whether a contact bears.
+    springs' energy, and whether a contact bears.
     """
     n_vertices = hulls.n_vertices
     n0, n1, n2 = n
     low_a = _extent(a, n0, n1, n2, world)[0]
     high_b = _extent(b, n0, n1, n2, world)[1]
     r_max = hulls.r_max
-    spring, stored, deepest, found, n_seen = 0.0, 0.0, 0.0, False, 0
+    spring, stored, found, n_seen = 0.0, 0.0, False, 0
     for first, other in ((a, b), (b, a)):
         tol = LATERAL * r_max[other]
         for k in range(n_vertices[first]):
@@ -597,7 +596,6 @@ def pair_contacts(a: int, b: int, n: tuple, world: np.ndarray, x: np.ndarray, q:
                     ties[first, k, other, 3] = 0.0
                 continue
             found = True
-            deepest = max(deepest, depth)
             n_seen = _seen(p, along, n, seen, n_seen)
             if pair.stick:
                 spring_k, stored_k = _push_tied(a, b, first, k, p, depth, n, x, q, cu, cw, pair,
@@ -608,12 +606,11 @@ def pair_contacts(a: int, b: int, n: tuple, world: np.ndarray, x: np.ndarray, q:
                 spring += _push(a, b, p, depth, n, x, cu, cw, pair, force, torque)
     gap2 = (LATERAL * min(r_max[a], r_max[b])) ** 2
     for first, other in ((a, b), (b, a)):
-        spring_c, deepest_c, n_seen = _crossings(a, b, first, other, n, high_b, low_a, world,
+        spring_c, n_seen = _crossings(a, b, first, other, n, high_b, low_a, world,
                                                  x, q, cu, cw, hulls, pair, seen, n_seen, gap2,
                                                  force, torque)
         spring += spring_c
-        deepest = max(deepest, deepest_c)
-    return spring, stored, deepest, found or n_seen > 0
+    return spring, stored, found or n_seen > 0
 
 
 @njit(cache=True)
@@ -776,7 +773,7 @@ def simulate_group(g: int, dice: GroupDice, bodies: Bodies, hulls: Hulls, pair: 
                     depth, n, separating[a, b] = least_overlap(
                         a, b, world, x, q, axes, directions, separating[a, b])
                     if depth > 0.0:
-                        spring, stored, deepest, touch_ab = pair_contacts(
+                        spring, stored, touch_ab = pair_contacts(
                             a, b, n, world, x, q, cu, cw, hulls, pair, die_ties,
                             not met[a, b], seen, force, torque)
                         checked += spring

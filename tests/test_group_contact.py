@@ -28,11 +28,11 @@ def stacked(bottom_die, top_die, top_rot, offset=(0.0, 0.0), gap=1e-6):
     z_bottom = lowest(bottom_die, bottom_rot) + 1e-7
     z_top = z_bottom + highest(bottom_die, bottom_rot) + lowest(top_die, top_rot)
     centre = np.column_stack([np.full(b, offset[0]), np.full(b, offset[1]), z_top])
+    lifted = centre + np.array([0.0, 0.0, gap])
     start = GroupState.of([
         State.release(SCENE.with_(die=bottom_die), np.column_stack([np.zeros((b, 2)), z_bottom]),
                       np.zeros(3), None, bottom_rot),
-        State.release(SCENE.with_(die=top_die), centre + [0, 0, gap], np.zeros(3), None,
-                      top_rot)])
+        State.release(SCENE.with_(die=top_die), lifted, np.zeros(3), None, top_rot)])
     return start, centre
 
 
