@@ -25,6 +25,7 @@ from dice_env import group_kernel, kernel
 from dice_env.die import Die
 from dice_env.scene import MAX_STEPS, FrictionLaw, Scene, as_enum, critical_step
 from dice_env.simulate import (
+    MAX_RECORD_BYTES,
     UP,
     DiceArrays,
     State,
@@ -99,7 +100,8 @@ class GroupState(DiceArrays):
 
         Each a batch of B, e.g. from :meth:`State.release` with that die's scene.
         """
-        if not states or not all(isinstance(s, State) for s in states):
+        if not isinstance(states, Sequence) or not states \
+                or not all(isinstance(s, State) for s in states):
             raise TypeError("states must be a non-empty sequence of State")
         sizes = {s.batch_size for s in states}
         if len(sizes) > 1:
@@ -215,7 +217,8 @@ def simulate_group(
     face (see :mod:`dice_env.group_kernel`); ``stop_at_rest`` when every die is at rest.
     ``record_every`` > 0 records the centres (and with ``orientations`` the orientations).
     Refused: dice that overlap at the start, more than :data:`MAX_DICE` dice, a step count
-    above :data:`dice_env.scene.MAX_STEPS`.
+    above :data:`dice_env.scene.MAX_STEPS`, records above
+    :data:`dice_env.simulate.MAX_RECORD_BYTES`.
     """
     dice = _dice(dice)
     if not isinstance(scene, Scene):
@@ -229,6 +232,10 @@ def simulate_group(
     if not isinstance(record_every, (int, np.integer)) or isinstance(record_every, bool) \
             or record_every < 0:
         raise ValueError(f"record_every must be an int >= 0, got {record_every!r}")
+    for name, flag in (("stop_at_rest", stop_at_rest), ("stop_when_decided", stop_when_decided),
+                       ("free_flight", free_flight), ("orientations", orientations)):
+        if not isinstance(flag, (bool, np.bool_)):
+            raise TypeError(f"{name} must be a bool, got {flag!r}")
     threads = thread_count(num_threads)
     dt = group_step(scene, dice, contact)
     t_max = scene.t_max if t_max is None else t_max
@@ -262,6 +269,12 @@ def simulate_group(
         float(contact.tangential * contact.stiffness),
         float(contact.tangential * contact.damping), float(dt / reduced))
     n_rec = n_steps // record_every if record_every else 0
+    size = 8 * b * n_rec * n * (12 if orientations else 3)
+    if size > MAX_RECORD_BYTES:
+        raise ValueError(f"record_every={record_every} records {n_rec} states of {b} throws of "
+                         f"{n} dice ({size / 2**30:.3g} GiB), more than the limit of "
+                         f"{MAX_RECORD_BYTES / 2**30:g} GiB: record less often, fewer throws "
+                         "or a shorter t_max")
     records = group_kernel.GroupRecords(
         stride=max(1, record_every) if record_every else n_steps + 1,
         x=np.zeros((b, n_rec, n, 3)),
@@ -302,7 +315,7 @@ def simulate_group(
 
 def _dice(dice: Sequence[Die]) -> tuple[Die, ...]:
     """``dice`` as a tuple of 1 to :data:`MAX_DICE` dice."""
-    if isinstance(dice, Die) or not all(isinstance(d, Die) for d in dice):
+    if not isinstance(dice, Sequence) or not all(isinstance(d, Die) for d in dice):
         raise TypeError("dice must be a sequence of Die")
     if not 1 <= len(dice) <= MAX_DICE:
         raise ValueError(f"dice must hold 1 to {MAX_DICE} dice, got {len(dice)}")

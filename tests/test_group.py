@@ -180,6 +180,18 @@ def test_bad_arguments_are_refused():
             DieContact(tangential=tangential)
     assert DieContact().friction_law == FrictionLaw.STICK_SLIP  # the default
     assert DieContact(friction_law="regularized").friction_law == FrictionLaw.REGULARIZED
+    with pytest.raises(TypeError, match="dice must be a sequence of Die"):
+        simulate_group(scene, (d for d in (DIE,)), state)
+    with pytest.raises(TypeError, match="states must be a non-empty sequence of State"):
+        GroupState.of(hand(2, 0))
+    for flag in ("stop_when_decided", "stop_at_rest", "free_flight", "orientations"):
+        with pytest.raises(TypeError, match=f"{flag} must be a bool, got 'no'"):
+            simulate_group(scene, (DIE,), state, **{flag: "no"})
+    many = GroupState.of([State.release(scene, [x, 0.0, 0.08], np.zeros((64, 3)))
+                          for x in (-0.03, 0.03)])
+    with pytest.raises(ValueError, match=r"record_every=1 records .* GiB\), more than the limit"):
+        simulate_group(scene.with_(t_max=10.0), (DIE, DIE), many, record_every=1,
+                       orientations=True)
 
 
 def test_a_throw_alone_equals_the_same_throw_inside_a_batch():
