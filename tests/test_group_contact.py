@@ -6,6 +6,7 @@ import pytest
 from dice_env import Die, Scene, State
 from dice_env.group import GroupState, overlaps, simulate_group
 from dice_env.rotations import axis_angle, random_rotations, up_rotation
+from dice_env.surroundings import tray
 
 SCENE = Scene(t_max=2.0)
 YAWS = np.radians([0.0, 1.0, 10.0, 30.0, 45.0, 60.0, 89.0])
@@ -115,3 +116,26 @@ def test_overlap_reports_how_deep_the_dice_overlap():
     result = simulate_group(SCENE.with_(t_max=0.2), (die, die), start)
     depth = overlaps((die, die), result.final)[0, 0, 1]
     assert 0 < depth <= result.overlap[0] < 1e-5
+
+
+def pile(n, seed):
+    """``n`` throws of 18 d6 let go in two layers of nine into a 9 cm box."""
+    scene = Scene(walls=tray(0.09, 0.09), t_max=5.0)
+    rng = np.random.default_rng(seed)
+    states = [State.release(scene, [0.028 * i, 0.028 * j, z], rng.normal(0, 0.2, (n, 3)),
+                            rng.normal(0, 5, (n, 3)), random_rotations(rng, n))
+              for z in (0.03, 0.06) for i in (-1, 0, 1) for j in (-1, 0, 1)]
+    dice = (Die(),) * 18
+    result = simulate_group(scene, dice, GroupState.of(states))
+    assert overlaps(dice, result.final).max() < 1e-5
+    assert not result.unstable.any() and not result.sunk.any()
+    return result
+
+
+def test_a_pile_of_eighteen_dice_in_a_small_box_settles():
+    assert pile(2, seed=0).settled.all()
+
+
+@pytest.mark.slow
+def test_piles_of_eighteen_dice_settle_in_all_but_one_in_a_hundred():
+    assert pile(200, seed=1).settled.mean() >= 0.99
