@@ -253,18 +253,16 @@ class Scene:
             check_positive("dt", self.dt)
             if self.dt > self.critical_dt and not self.allow_unstable:
                 raise ValueError(
-                    f"dt must be <= the critical step {self.critical_dt:.6g} s for stiffness "
-                    f"{self.ground.stiffness:g}, damping {self.ground.damping:g} and effective "
-                    f"mass {self.effective_mass:.6g}, got {self.dt:g}; pass allow_unstable=True "
-                    "to run it anyway"
+                    f"dt must be <= the critical step {self.critical_dt:.6g} s of "
+                    f"{self.stiffest_plane()}, got {self.dt:g}; pass allow_unstable=True to run "
+                    "it anyway"
                 )
         step = self.step
         if not (math.isfinite(step) and 0.0 < step <= self.t_max):
             raise ValueError(
                 f"the step must be in (0, t_max = {self.t_max:g}] s, got {step:.6g} s from "
-                f"dt={self.dt}, safety={self.safety:g} and the critical step for stiffness "
-                f"{self.ground.stiffness:g}, damping {self.ground.damping:g} and mass "
-                f"{self.die.mass:g} (effective mass {self.effective_mass:.6g})"
+                f"dt={self.dt}, safety={self.safety:g} and the critical step of "
+                f"{self.stiffest_plane()} (die mass {self.die.mass:g})"
             )
         self.steps_for(self.t_max)
 
@@ -309,6 +307,15 @@ class Scene:
         """
         return min(self._critical_dt(plane) for plane in self.planes)
 
+    def stiffest_plane(self) -> str:
+        """The plane that sets :attr:`critical_dt`, named with its contact constants."""
+        steps = [self._critical_dt(plane) for plane in self.planes]
+        i = int(np.argmin(steps))
+        plane = self.planes[i]
+        name = "the table" if i == 0 else f"wall {i - 1}"
+        return (f"{name} (stiffness {plane.stiffness:g}, damping {plane.damping:g}, effective "
+                f"mass {self.effective_mass_on(plane):.6g})")
+
     def _critical_dt(self, plane: Plane) -> float:
         return critical_step(plane.stiffness, plane.damping, self.effective_mass_on(plane),
                              self.scheme)
@@ -330,9 +337,9 @@ class Scene:
         if count > MAX_STEPS:
             raise ValueError(
                 f"t_max / step must be <= {MAX_STEPS:.0e} steps, got {count:.3g} (t_max "
-                f"{t_max:g} s, step {self.step:.3g} s from stiffness {self.ground.stiffness:g}, "
-                f"damping {self.ground.damping:g}, mass {self.die.mass:g}, safety "
-                f"{self.safety:g}): shorten t_max or soften the contact"
+                f"{t_max:g} s, step {self.step:.3g} s from dt={self.dt}, safety "
+                f"{self.safety:g} and the critical step of {self.stiffest_plane()}, die mass "
+                f"{self.die.mass:g}): shorten t_max or soften the contact"
             )
         return max(1, round(count))
 

@@ -36,9 +36,17 @@ def check_range(
         raise ValueError(f"{name} must be in [{low}, {high}{bracket}, got {value!r}")
 
 
+def as_floats(name: str, value: object) -> np.ndarray:
+    """``value`` as a float64 array, or ``ValueError`` naming ``name`` if it holds no numbers."""
+    try:
+        return np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError) as error:
+        raise ValueError(f"{name} must be an array of numbers, got {value!r}") from error
+
+
 def as_batch(name: str, value: np.ndarray, tail: tuple[int, ...]) -> np.ndarray:
     """Return ``value`` as a finite float64 array of shape ``(B, *tail)`` (adds a batch axis)."""
-    array = np.asarray(value, dtype=np.float64)
+    array = as_floats(name, value)
     if array.shape == tail:
         array = array[None]
     if array.ndim != len(tail) + 1 or array.shape[1:] != tail:

@@ -250,6 +250,15 @@ def test_render_shows_every_die():
     assert [f.shape for f in venv.render()] == [(30, 40, 3)] * 2
 
 
+def test_frames_of_two_dice_come_at_render_fps():
+    env = make(num_dice=2, render_mode="rgb_array_list", render_width=32, render_height=24,
+               walls="tray")
+    env.reset(seed=1)
+    _, _, _, _, info = env.step(np.zeros(6))
+    frames = env.render()  # in the hand, every 1/fps s of the throw, at rest
+    assert abs(len(frames) - 2 - info["rest_time"] * env.metadata["render_fps"]) <= 2
+
+
 # --- bad input -----------------------------------------------------------------------------
 
 @pytest.mark.parametrize(("kwargs", "name"), [
@@ -286,6 +295,9 @@ def test_bad_actions_and_options_are_refused():
         env.step(np.zeros(6))
     with pytest.raises(ValueError, match=r"options\['orientation'\] must be 2 rotation"):
         env.reset(options={"orientation": np.eye(3)})
+    for one in (env, make()):
+        with pytest.raises(ValueError, match=r"options\['orientation'\] must be an array of "):
+            one.reset(options={"orientation": "eye"})
     obs, _ = env.reset(options={"orientation": np.stack([np.eye(3)] * 2), "target_sum": 12})
     assert obs[10] == 1.0
     assert isinstance(make_task(num_dice=2), GroupThrowTask)

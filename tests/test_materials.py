@@ -78,3 +78,14 @@ def test_study_sample_size_is_checked(tmp_path):
             study.run(tmp_path, throws=bad)
     studies_main(["materials", "--throws", "4", "--out", str(tmp_path)])
     assert "4 vigorous and 2 gentle throws" in (tmp_path / "materials.md").read_text()
+
+
+def test_a_quick_run_never_replaces_a_full_page(tmp_path, monkeypatch, capsys):
+    from dice_env.studies.__main__ import DOCS, QUICK
+
+    with pytest.raises(SystemExit):
+        studies_main(["materials", "--quick", "--out", str(DOCS)])
+    assert "may not write into" in capsys.readouterr().err
+    monkeypatch.chdir(tmp_path)
+    studies_main(["materials", "--quick", "--throws", "4"])
+    assert (tmp_path / QUICK / "materials.md").exists()

@@ -56,6 +56,11 @@ def test_the_stiffest_plane_sets_the_step():
     soft, stiff = Scene(), Scene(walls=(Wall(stiffness=1e7, offset=-1.0),))
     assert stiff.critical_dt < soft.critical_dt / 5
     assert Scene(walls=tray()).critical_dt == soft.critical_dt
+    wall = Wall(stiffness=1e12, offset=-1.0)  # the refusals name the wall that sets the step
+    with pytest.raises(ValueError, match=r"critical step .* of wall 1 \(stiffness 1e\+12"):
+        Scene(walls=(Wall(offset=-1.0), wall), dt=1e-5)
+    with pytest.raises(ValueError, match=r"of wall 0 \(stiffness 1e\+12.*soften the contact"):
+        Scene(walls=(wall,))
 
 
 def test_presets_and_bad_walls():

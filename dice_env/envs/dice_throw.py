@@ -19,6 +19,7 @@ from dice_env.envs.task import (
     check_task_keywords,
     make_task,
 )
+from dice_env.validation import as_floats
 
 RENDER_MODES = ("human", "rgb_array", "rgb_array_list")
 RENDER_FPS = 30
@@ -108,7 +109,7 @@ def check_hands(task: ThrowTask, name: str, value: object) -> np.ndarray:
     """``value`` as the hand's orientation: (3, 3) for one die, (N, 3, 3) for N dice."""
     if task.n_dice == 1:
         return check_rotation(name, value)
-    hands = np.asarray(value, dtype=np.float64)
+    hands = as_floats(name, value)
     if hands.shape != (task.n_dice, 3, 3):
         raise ValueError(f"{name} must be {task.n_dice} rotation matrices, shape "
                          f"({task.n_dice}, 3, 3), got {hands.shape}")
@@ -300,7 +301,7 @@ class DiceThrowEnv(gym.Env):
     def _record_every(self) -> int:
         if self.render_mode not in ("rgb_array_list", "human"):
             return 0
-        return max(1, round(1.0 / (RENDER_FPS * self.task.scene.step)))
+        return max(1, round(1.0 / (RENDER_FPS * self.task.step)))
 
     def _release_position(self) -> np.ndarray:
         """The centre of each die in the hand: (3,) for one die, (N, 3) for N."""

@@ -169,8 +169,7 @@ def _step_origin(scene: Scene) -> str:
     """Where the scene's step comes from, naming the keywords that set it."""
     if scene.dt is not None:
         return f"dt={scene.dt:g}"
-    return (f"safety={scene.safety:g} times the critical step of stiffness="
-            f"{scene.ground.stiffness:g}, damping={scene.ground.damping:g}, "
+    return (f"safety={scene.safety:g} times the critical step of {scene.stiffest_plane()}, "
             f"mass={scene.die.mass:g}")
 
 

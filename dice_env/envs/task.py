@@ -34,7 +34,7 @@ from dice_env.rotations import (
 )
 from dice_env.scene import Scene
 from dice_env.simulate import Result, State, lock_energy, simulate
-from dice_env.validation import check_nonnegative, check_positive, check_range
+from dice_env.validation import as_floats, check_nonnegative, check_positive, check_range
 
 ORIENTATION_DIM = 9  # the observation's orientation, row-major 3x3, after the target's one-hot
 ACTION_DIM = 6  # release velocity (3) + angular velocity (3), world frame, in [-1, 1]
@@ -125,6 +125,11 @@ class ThrowTask:
     def dice(self) -> tuple[Die, ...]:
         """The dice in the hand: the scene's die."""
         return (self.scene.die,)
+
+    @property
+    def step(self) -> float:
+        """The integration step of a throw (s)."""
+        return self.scene.step
 
     @property
     def die_scenes(self) -> tuple[Scene, ...]:
@@ -430,7 +435,7 @@ class GroupThrowTask(ThrowTask):
         if not isinstance(self.set_dice, bool):
             raise ValueError(f"set_dice must be True or False, got {self.set_dice!r}")
         super().__post_init__()
-        step = group_step(self.scene, self.dice)
+        step = self.step
         if self.scene.t_max / step > MAX_STEPS:
             raise ValueError(
                 f"t_max must be at most {MAX_STEPS:.0e} steps: t_max={self.scene.t_max:g} s over "
@@ -441,6 +446,11 @@ class GroupThrowTask(ThrowTask):
     def die_scenes(self) -> tuple[Scene, ...]:
         """The scene with each die of :attr:`dice`."""
         return tuple(self.scene.with_(die=die) for die in self.dice)
+
+    @cached_property
+    def step(self) -> float:
+        """The integration step of a throw (s): the dice's, die against die included."""
+        return group_step(self.scene, self.dice)
 
     @property
     def n_dice(self) -> int:
@@ -705,7 +715,7 @@ def check_orientation_mode(value: object) -> None:
 
 def check_rotation(name: str, value: object) -> np.ndarray:
     """``value`` as a (3, 3) rotation matrix, or ``ValueError`` naming ``name``."""
-    rot = np.asarray(value, dtype=np.float64)
+    rot = as_floats(name, value)
     if rot.shape != (3, 3) or not np.all(np.isfinite(rot)) or orthonormality_error(rot) > 1e-9:
         raise ValueError(f"{name} must be a 3x3 rotation matrix (R R^T = I, det R = +1)")
     return rot

@@ -1,7 +1,9 @@
 """The studies' command line.
 
 ``python -m dice_env.studies {all,<study>} [--quick] [--throws N] [--ray ADDR] [--chunks DIR]
-[--out DIR]``.
+[--out DIR]``. A full run writes its page into the repository's docs/; a ``--quick`` run writes
+into ./studies-quick unless ``--out`` is given, and never into docs/, so that a reduced run
+cannot replace a full page.
 """
 
 from __future__ import annotations
@@ -14,14 +16,20 @@ from pathlib import Path
 from dice_env.distributed import connected, hand_faces
 from dice_env.studies import CHUNKED, KEPT, SIZED, STUDIES, run
 
+DOCS = Path(__file__).resolve().parents[2] / "docs"
+QUICK = Path("studies-quick")
+
 
 def main(argv: list[str] | None = None) -> None:
     """Parse the command line and run the chosen studies."""
     parser = argparse.ArgumentParser(prog="python -m dice_env.studies", description=__doc__)
     parser.add_argument("study", choices=[*STUDIES, "all"])
-    parser.add_argument("--quick", action="store_true", help="reduced sizes (for the tests)")
-    parser.add_argument("--out", type=Path, default=Path(__file__).resolve().parents[2] / "docs",
-                        help="folder for the markdown; figures go to OUT/figures")
+    parser.add_argument("--quick", action="store_true",
+                        help=f"reduced sizes (for the tests), written to ./{QUICK} by default "
+                        "and never into docs/")
+    parser.add_argument("--out", type=Path, default=None,
+                        help=f"folder for the markdown; figures go to OUT/figures (default: "
+                        f"{DOCS}, or ./{QUICK} with --quick)")
     parser.add_argument("--throws", type=int, default=None,
                         help=f"sample size per die or per point ({', '.join(SIZED)} only; "
                         "default: the study's full size)")
@@ -32,6 +40,11 @@ def main(argv: list[str] | None = None) -> None:
                         help=f"throw in seeded chunks ({', '.join(CHUNKED + KEPT)} only), each "
                         "kept under DIR: run again, the study continues from the chunks done")
     args = parser.parse_args(argv)
+    if args.out is None:
+        args.out = QUICK if args.quick else DOCS
+    elif args.quick and args.out.resolve() == DOCS:
+        parser.error(f"--quick writes reduced pages: it may not write into {DOCS}, where the "
+                     "full pages are; give another --out")
     for flag, value, takers in (("--throws", args.throws, SIZED), ("--ray", args.ray, CHUNKED),
                                 ("--chunks", args.chunks, CHUNKED + KEPT)):
         if value is not None and args.study not in takers:
