@@ -1,0 +1,79 @@
+"""Reference results on fixed seeds: the faces and final states a refactor must keep.
+
+``python tests/reference_results.py`` rewrites ``tests/data/reference_results.npz`` from the
+code as it stands; do so only for a change meant to alter results, and say so in its commit.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from pathlib import Path
+
+import llvmlite.binding
+import numba
+import numpy as np
+
+from dice_env import Die, Scene, simulate
+from dice_env.group import simulate_group
+from dice_env.paper import paper_scene
+from dice_env.studies.fairness import vigorous_throws
+from dice_env.studies.pairs import hand_throws
+from dice_env.surroundings import tray
+
+PATH = Path(__file__).with_name("data") / "reference_results.npz"
+THROWS = 16
+
+
+def host() -> str:
+    """What the bits depend on besides the code: the CPU numba compiles for, numpy, numba."""
+    cpu = llvmlite.binding.get_host_cpu_name()
+    return f"{cpu}, numpy {np.__version__}, numba {numba.__version__}"
+
+
+def _single(scene: Scene, **run: object) -> Callable[[], dict[str, np.ndarray]]:
+    def case() -> dict[str, np.ndarray]:
+        state = vigorous_throws(scene, THROWS, np.random.default_rng(7))
+        result = simulate(scene, state, num_threads=1, **run)
+        final = result.final
+        return {"face": result.face, "steps": result.steps,
+                "state": np.concatenate([final.position, final.velocity,
+                                         final.angular_momentum,
+                                         final.orientation.reshape(THROWS, 9)], axis=1)}
+    return case
+
+
+def _group(n: int) -> Callable[[], dict[str, np.ndarray]]:
+    def case() -> dict[str, np.ndarray]:
+        scene, dice = Scene(walls=tray(), t_max=3.0), (Die(),) * n
+        state = hand_throws(scene, dice, 4, np.random.default_rng(11))
+        result = simulate_group(scene, dice, state, stop_when_decided=True, num_threads=1)
+        final = result.final
+        return {"face": result.face, "steps": result.steps,
+                "state": np.concatenate([final.position, final.velocity,
+                                         final.angular_momentum,
+                                         final.orientation.reshape(4, n, 9)], axis=2)}
+    return case
+
+
+CASES: dict[str, Callable[[], dict[str, np.ndarray]]] = {
+    "default_rest": _single(Scene()),
+    "default_decided": _single(Scene(), stop_when_decided=True),
+    "paper_vector": _single(paper_scene(t_max=3.0)),
+    "d20_tray": _single(Scene(die=Die.standard("d20"), walls=tray())),
+    "loaded": _single(Scene(die=Die.loaded())),
+    "drilled": _single(Scene(die=Die.standard("d6", pips="drilled16"))),
+    "two_d6": _group(2),
+    "twelve_d6": _group(12),
+}
+
+
+def compute() -> dict[str, np.ndarray]:
+    """Every case's arrays, keyed ``case/array``."""
+    return {f"{name}/{key}": value for name, case in CASES.items()
+            for key, value in case().items()}
+
+
+if __name__ == "__main__":
+    PATH.parent.mkdir(exist_ok=True)
+    np.savez_compressed(PATH, host=np.array(host()), **compute())
+    print(f"wrote {PATH}")
