@@ -72,11 +72,17 @@ class HandThrower:
     ``z`` about the axis ``n x z`` by the angle between them, at the constant rate that completes
     the turn in ``turn`` times the flight time of a toss at vertical speed ``toss`` (m/s) from
     the release height (the die then lands with the target near the top and settles there).
+    A one-die rule: a task of several dice is refused.
     """
 
     task: ThrowTask
     toss: float = 0.0
     turn: float = 1.0
+
+    def __post_init__(self) -> None:
+        if self.task.n_dice > 1:
+            raise ValueError(f"the hand-written thrower is a one-die rule; this task throws "
+                             f"{self.task.n_dice} dice (target {self.task.target!r})")
 
     def __call__(self, observations: np.ndarray) -> np.ndarray:
         """Actions (n, 6): a vertical toss and the spin that brings the target face up."""

@@ -33,7 +33,7 @@ def record_throw(task: ThrowTask, action: np.ndarray, target: Any, hand: np.ndar
     """
     from dice_env.envs.render import render_task
 
-    every = max(1, round(1.0 / (FPS * task.scene.step)))
+    every = max(1, round(1.0 / (FPS * task.step)))
     throw = task.throw(np.asarray(action)[None], np.asarray(target)[None],
                        np.asarray(hand)[None], np.asarray(noise)[None], record_every=every)
     result = throw.result
@@ -107,7 +107,7 @@ def replay(run: Path, throws: int, seed: int, target: int | None, thrower: str,
     elif thrower == "hand-written":
         act = HandThrower(task)
     else:
-        act = RandomThrower(seed)
+        act = RandomThrower(seed, task.action_dim)
     actions = np.asarray(act(batch.observations), np.float64)
     out = out or run / "replay"
     out.mkdir(parents=True, exist_ok=True)
@@ -131,7 +131,8 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--throws", type=int, default=4, help="throws to replay (>= 1)")
     parser.add_argument("--seed", type=int, default=0, help="seed of the episodes (>= 0)")
     parser.add_argument("--target", type=int, default=None, help="fix the target face")
-    parser.add_argument("--thrower", choices=("PPO", "hand-written", "random"), default="PPO")
+    parser.add_argument("--thrower", choices=("PPO", "hand-written", "random"), default="PPO",
+                        help="who throws (hand-written: one die only)")
     parser.add_argument("--out", type=Path, default=None, help="folder (default: RUN/replay)")
     args = parser.parse_args(argv)
     if not (args.run / "config.json").is_file():
@@ -142,8 +143,11 @@ def main(argv: list[str] | None = None) -> None:
         parser.error(f"argument --throws: must be an integer >= 1, got {args.throws}")
     if args.seed < 0:
         parser.error(f"argument --seed: must be an integer >= 0, got {args.seed}")
+    task = make_eval_task(Config.load(args.run / "config.json"))[0]
+    if args.thrower == "hand-written" and task.n_dice > 1:
+        parser.error(f"argument --thrower: hand-written is a one-die rule; the run throws "
+                     f"{task.n_dice} dice (target {task.target!r}; use PPO or random)")
     if args.target is not None:
-        task = make_eval_task(Config.load(args.run / "config.json"))[0]
         if task.n_dice > 1:
             parser.error("argument --target: fixes one die's face; the run throws "
                          f"{task.n_dice} dice (fix theirs with --env target_sum or target_face)")

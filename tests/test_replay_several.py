@@ -1,0 +1,42 @@
+"""agents.replay on several dice: the hand-written rule refused, actions of the env's size."""
+
+import pytest
+
+from agents.baselines import HandThrower
+from agents.config import Config
+from agents.replay import main
+from dice_env.envs.task import make_task
+
+RUNS = {"one die": [], "2d6": ["num_dice=2"], "2d6 sum 5": ["num_dice=2", "target_sum=5"],
+        "set_dice": ["num_dice=2", "set_dice=True"]}
+
+
+def make_run(path, name):
+    path.mkdir()
+    Config(preset="scratch", env=RUNS[name]).save(path / "config.json")
+    return path
+
+
+@pytest.mark.parametrize("name", ["2d6", "2d6 sum 5", "set_dice"])
+def test_hand_written_is_refused_for_several_dice(tmp_path, capsys, name):
+    run = make_run(tmp_path / "run", name)
+    with pytest.raises(SystemExit) as exit_info:
+        main([str(run), "--thrower", "hand-written", "--throws", "1"])
+    assert exit_info.value.code == 2
+    assert "--thrower: hand-written is a one-die rule; the run throws 2 dice" in \
+        capsys.readouterr().err
+    assert not (run / "replay").exists()
+
+
+def test_hand_thrower_refuses_a_task_of_several_dice():
+    with pytest.raises(ValueError, match="one-die rule; this task throws 3 dice"):
+        HandThrower(make_task(num_dice=3, num_threads=1))
+
+
+@pytest.mark.parametrize(("name", "thrower"), [("set_dice", "random"),
+                                               ("one die", "hand-written")])
+def test_replay_throws_with_the_env_s_actions(tmp_path, capsys, name, thrower):
+    run = make_run(tmp_path / "run", name)
+    main([str(run), "--thrower", thrower, "--throws", "1", "--out", str(tmp_path / "gifs")])
+    gifs = list((tmp_path / "gifs").glob(f"replay_s0_0_{thrower}_*.gif"))
+    assert len(gifs) == 1 and "throw 0: target" in capsys.readouterr().out
