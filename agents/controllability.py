@@ -21,9 +21,10 @@ import numpy as np
 
 from agents.baselines import HandThrower, Thrower
 from agents.episodes import Batch, PolicyThrower
-from agents.evaluate import clustered, wilson
+from agents.evaluate import clustered
 from agents.oracle import CEM, score, score_noise, search
 from dice_env.envs.task import ThrowTask, make_task
+from dice_env.intervals import wilson_bounds
 
 HEIGHTS = (0.015, 0.02, 0.03, 0.05, 0.15)  # release height of the die's centre (m)
 NOISES = (0.01, 0.03, 0.05, 0.1)  # hand noise level (0.05: the env default)
@@ -55,7 +56,7 @@ def controllability(
                 throwers["PPO"] = ppo
             for name, thrower in throwers.items():
                 s = batch.throw(task, thrower)["is_success"]
-                maps[name][i, j] = (s.mean(), *wilson(int(s.sum()), s.size))
+                maps[name][i, j] = (s.mean(), *wilson_bounds(int(s.sum()), s.size))
             obs = batch.observations[:oracle_observations]
             starts = {name: thrower(obs) for name, thrower in throwers.items()}
             success = score(task, obs, search(task, obs, rng, MAP_CEM, starts=starts),

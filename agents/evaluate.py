@@ -28,8 +28,8 @@ from agents.oracle import CEM, score, score_noise, search
 from agents.progress import announce_compile, bar
 from agents.report import headline_table, verdict, write_report
 from dice_env.envs.task import ThrowTask
+from dice_env.intervals import Z95, wilson_bounds
 
-Z95 = 1.959964  # two-sided 95% normal quantile
 ORACLE_SCORE_SAMPLES = 16  # fresh noise draws per oracle observation
 ROBUSTNESS = {  # keyword: multiples of the trained value (1: as trained)
     "hand_noise": [0.0, 0.5, 1.0, 2.0, 4.0],
@@ -39,17 +39,6 @@ ROBUSTNESS = {  # keyword: multiples of the trained value (1: as trained)
 }
 # How far the target face must turn: its angle from the table normal in the hand (degrees).
 TURN_CLASSES = {"already up": (0.0, 45.0), "on a side": (45.0, 135.0), "down": (135.0, 180.0)}
-
-
-def wilson(successes: float, n: float) -> tuple[float, float]:
-    """95% Wilson score interval of a binomial proportion (``n`` may be an effective size)."""
-    if n <= 0:
-        return (0.0, 1.0)
-    p = successes / n
-    centre = (p + Z95**2 / (2 * n)) / (1 + Z95**2 / n)
-    half = Z95 * math.sqrt(p * (1 - p) / n + Z95**2 / (4 * n * n)) / (1 + Z95**2 / n)
-    # The interval holds p; rounding must not put an end a hair inside it.
-    return (max(0.0, min(p, centre - half)), min(1.0, max(p, centre + half)))
 
 
 def clustered(success: np.ndarray) -> tuple[float, float]:
@@ -72,7 +61,7 @@ def clustered(success: np.ndarray) -> tuple[float, float]:
     else:
         effect = 1.0
     size = n * k / effect
-    return wilson(p * size, size)
+    return wilson_bounds(p * size, size)
 
 
 def summary(success: np.ndarray, targets: np.ndarray,
@@ -86,7 +75,8 @@ def summary(success: np.ndarray, targets: np.ndarray,
         if s.ndim == 2:
             return {"rate": float(s.mean()), "ci": clustered(s), "n": int(s.size),
                     "observations": len(s)}
-        return {"rate": float(s.mean()), "ci": wilson(int(s.sum()), s.size), "n": int(s.size)}
+        return {"rate": float(s.mean()), "ci": wilson_bounds(int(s.sum()), s.size),
+                "n": int(s.size)}
 
     values = range(1, faces + 1) if isinstance(faces, int) else faces
     return {**one(success), "per_target": {
@@ -175,7 +165,7 @@ def robustness(
                     s = batch.throw(task, thrower)["is_success"]
                     b.update(throws)
                     sweeps[key][name].append({"value": value, "rate": float(s.mean()),
-                                              "ci": wilson(int(s.sum()), s.size)})
+                                              "ci": wilson_bounds(int(s.sum()), s.size)})
     return sweeps
 
 
@@ -211,7 +201,7 @@ def by_turn(success: np.ndarray, angle: np.ndarray) -> dict[str, dict[str, Any]]
         s = success[classes == i]
         if len(s) == 0:
             continue
-        ci = clustered(s) if s.ndim == 2 else wilson(int(s.sum()), s.size)
+        ci = clustered(s) if s.ndim == 2 else wilson_bounds(int(s.sum()), s.size)
         out[name] = {"rate": float(s.mean()), "ci": ci, "n": int(s.size)}
     return out
 

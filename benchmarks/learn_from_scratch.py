@@ -26,7 +26,6 @@ import ast
 import importlib
 import inspect
 import json
-import math
 import sys
 import time
 from pathlib import Path
@@ -42,6 +41,7 @@ from agents.baselines import HandThrower
 from agents.hyperparams import NON_PPO_KEYS, PPO_HYPERPARAMS, ppo_kwargs
 from dice_env.envs.sb3 import make_sb3_env
 from dice_env.envs.task import ThrowTask, make_task
+from dice_env.intervals import wilson_bounds
 
 ENV_ID = "DiceThrow-v0"
 EVAL_SEED = 12345
@@ -134,14 +134,6 @@ def settings(overrides: list[str]) -> tuple[dict[str, Any], dict[str, Any], int]
     return ppo, env, n_envs
 
 
-def wilson(successes: int, n: int, z: float = 1.959964) -> tuple[float, float]:
-    """95% Wilson score interval."""
-    p = successes / n
-    centre = (p + z * z / (2 * n)) / (1 + z * z / n)
-    half = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / (1 + z * z / n)
-    return round(centre - half, 3), round(centre + half, 3)
-
-
 def run(seed: int, args: argparse.Namespace) -> dict[str, Any]:
     """Train one seed; its curve, final success (to rest) and wall time."""
     ppo, env_kwargs, n_envs = settings(args.set)
@@ -157,7 +149,8 @@ def run(seed: int, args: argparse.Namespace) -> dict[str, Any]:
     ppo_success = final.success(mean_action(model, final.observations))
     rule_success = final.success(HandThrower(final.task)(final.observations))
     result = {"seed": seed, "curve": curve.points, "seconds": round(train_s, 1),
-              "final": {name: {"success": float(s.mean()), "ci": wilson(int(s.sum()), s.size),
+              "final": {name: {"success": float(s.mean()),
+                               "ci": tuple(round(v, 3) for v in wilson_bounds(s.sum(), s.size)),
                                "n": int(s.size)}
                         for name, s in (("ppo", ppo_success), ("rule", rule_success))}}
     print(f"seed {seed}: to rest, PPO {result['final']['ppo']}, rule {result['final']['rule']}, "

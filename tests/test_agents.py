@@ -4,10 +4,11 @@ import pytest
 import agents.oracle as oracle_module
 from agents.baselines import HandThrower, RandomThrower, decode, n_faces
 from agents.config import Config, OptionError, parse_config
-from agents.evaluate import clustered, paired_difference, summary, turn_class, wilson
+from agents.evaluate import clustered, paired_difference, summary, turn_class
 from agents.oracle import CEM, score, score_noise, search
 from agents.replay import pick_throws
 from dice_env.envs import make_task
+from dice_env.intervals import wilson_bounds as wilson
 from dice_env.rotations import random_rotations
 
 

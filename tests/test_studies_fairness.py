@@ -4,14 +4,20 @@ import numpy as np
 import pytest
 
 from dice_env import Die, Scene
+from dice_env.intervals import wilson
 from dice_env.studies import fairness as fz
 
 
 def test_wilson_interval_known_value():
-    lo, hi = fz.wilson(50, 100)
+    lo, hi = wilson(50, 100)
     assert lo == pytest.approx(0.4038, abs=1e-4) and hi == pytest.approx(0.5962, abs=1e-4)
-    lo, hi = fz.wilson(0, 240)
-    assert lo == pytest.approx(0.0, abs=1e-12) and 0 < hi < 0.02
+    lo, hi = wilson(0, 240)
+    assert lo == 0.0 and 0 < hi < 0.02
+    both = wilson([0, 240, 7], [240, 240, 0])  # batched; no throws: (0, 1)
+    assert both.shape == (3, 2) and both[1, 1] == 1.0 and both[2].tolist() == [0.0, 1.0]
+    k = np.arange(11)  # every interval holds its proportion and lies in [0, 1]
+    low, high = wilson(k, 10).T
+    assert np.all((0 <= low) & (low <= k / 10) & (k / 10 <= high) & (high <= 1))
 
 
 def test_face_down_is_opposite_the_face_read():

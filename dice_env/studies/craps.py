@@ -28,9 +28,10 @@ from scipy import stats
 from dice_env import materials
 from dice_env.envs.task import GroupThrowTask, make_task
 from dice_env.group import GroupResult
+from dice_env.intervals import wilson
 from dice_env.rotations import axis_angle
 from dice_env.scene import Scene
-from dice_env.studies.fairness import random_orientations, wilson
+from dice_env.studies.fairness import random_orientations
 from dice_env.studies.pairs import TOTALS, simulate_in_batches, triangle, void_reasons
 from dice_env.studies.paper_figures import DOCS, checked_throws, progress, save_figure
 from dice_env.surroundings import CRAPS, craps

@@ -21,6 +21,7 @@ from scipy import stats
 from scipy.spatial.transform import Rotation
 
 from dice_env.die import Die
+from dice_env.intervals import wilson
 from dice_env.scene import Scene
 from dice_env.simulate import Result, State, simulate
 from dice_env.studies.paper_figures import DOCS, progress, save_figure
@@ -153,15 +154,6 @@ def throw_batches(scene: Scene, state: State, bar, batch: int = BATCH) -> Result
     final = State(*(np.concatenate([getattr(p.final, f.name) for p in parts])
                     for f in fields(State)))
     return Result(final=final, **joined)
-
-
-def wilson(count: np.ndarray, total: np.ndarray, z: float = 1.959964) -> np.ndarray:
-    """95% Wilson score intervals of ``count / total``, shape (..., 2)."""
-    count, total = np.asarray(count, float), np.asarray(total, float)
-    p = count / total
-    centre = (p + z * z / (2 * total)) / (1 + z * z / total)
-    half = z * np.sqrt(p * (1 - p) / total + z * z / (4 * total * total)) / (1 + z * z / total)
-    return np.clip(np.stack([centre - half, centre + half], axis=-1), 0.0, 1.0)
 
 
 @dataclass

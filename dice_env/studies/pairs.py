@@ -27,6 +27,7 @@ from scipy import stats
 
 from dice_env.die import Die
 from dice_env.group import DieContact, GroupResult, GroupState, group_step, simulate_group
+from dice_env.intervals import wilson
 from dice_env.scene import Scene
 from dice_env.simulate import State
 from dice_env.studies.chunks import kept_chunks, prepare
@@ -34,7 +35,6 @@ from dice_env.studies.fairness import (
     random_directions,
     random_orientations,
     toward_table,
-    wilson,
 )
 from dice_env.studies.paper_figures import DOCS, checked_throws, progress, save_figure
 from dice_env.surroundings import TRAY, tray

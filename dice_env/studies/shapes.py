@@ -28,6 +28,7 @@ import numpy as np
 from scipy import stats
 
 from dice_env.die import STANDARD_SIZES, Die
+from dice_env.intervals import wilson
 from dice_env.scene import Scene
 from dice_env.simulate import UP, Result, State, simulate
 from dice_env.studies.fairness import (
@@ -36,7 +37,6 @@ from dice_env.studies.fairness import (
     random_directions,
     random_orientations,
     vigorous_throws,
-    wilson,
 )
 from dice_env.studies.paper_figures import DOCS, checked_throws, progress, save_figure
 from dice_env.table import DIE_EDGE

@@ -26,11 +26,12 @@ import numpy as np
 
 from dice_env import table
 from dice_env.calibration import measured_restitution
+from dice_env.intervals import wilson
 from dice_env.rotations import up_rotation
 from dice_env.scene import Scene
 from dice_env.simulate import UP, State, simulate
 from dice_env.studies import cuboids, weldon
-from dice_env.studies.fairness import energy_throws, face_down, throw_energy, wilson
+from dice_env.studies.fairness import energy_throws, face_down, throw_energy
 from dice_env.studies.paper_figures import DOCS
 
 COMMAND = "python -m dice_env.studies validation"
