@@ -12,8 +12,11 @@ Ray worker or on many.
 With ``ray`` an address (``"auto"``, ``"ray://host:10001"``, or ``"local"`` for a fresh local
 instance) each chunk is a Ray task on one CPU; a worker that dies loses its chunk only, and Ray
 runs it again (``max_retries``). With ``out`` a folder, ``spec.json`` records what is thrown
-and each finished chunk's per-throw outcomes go to ``chunk_NNNNNN.npz``: a run interrupted and
-started again on the same folder computes only the missing chunks.
+and each finished chunk's per-throw outcomes go to ``chunk_NNNNNN.npz``, with what the chunk is
+(its spec's identity, seed, index and throws): a run interrupted and started again on the same
+folder computes only the missing chunks. A chunk that is not this run's, a corrupt file, or
+chunks without ``spec.json`` are refused by name (:class:`~dice_env.studies.chunks.FolderError`,
+a ValueError), never merged.
 
 Command line (prints the chi-square summary)::
 
@@ -27,13 +30,16 @@ from __future__ import annotations
 import argparse
 import contextlib
 import dataclasses
+import functools
 import json
 import math
+import re
+import sys
 import time
+import types
 from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
-from types import ModuleType
 
 import numpy as np
 from tqdm import tqdm
@@ -41,7 +47,7 @@ from tqdm import tqdm
 from dice_env.die import STANDARD_SIZES, Die
 from dice_env.scene import Scene
 from dice_env.simulate import State, simulate
-from dice_env.studies.chunks import prepare, write_atomically
+from dice_env.studies.chunks import FolderError, identity, load, prepare, write_atomically
 from dice_env.studies.shapes import Faces, counted, hand_throws
 
 # Per-throw outcomes a chunk keeps (``chunk_NNNNNN.npz`` holds these arrays).
@@ -64,7 +70,10 @@ class Spec:
 
     ``scene``; ``throws`` in all; ``chunk`` throws per chunk (the last one takes the rest);
     ``seed`` of the chunks' seed sequences; ``draw(scene, n, rng)`` the throws of a chunk (a
-    module-level function or a picklable callable: Ray ships it to the workers).
+    module-level function or a picklable callable: Ray ships it to the workers). A run folder
+    records ``draw`` by its name (a ``functools.partial`` by its function's name and its
+    arguments, another callable by its repr): a lambda or local function has none and is
+    refused there.
     """
 
     scene: Scene
@@ -100,12 +109,52 @@ class Spec:
         return np.random.default_rng(np.random.SeedSequence(self.seed, spawn_key=(index,)))
 
     def record(self) -> dict:
-        """The spec as JSON data (the scene field by field, ``draw`` by its name)."""
-        name = getattr(self.draw, "__qualname__", None)
-        draw = f"{self.draw.__module__}.{name}" if name else repr(self.draw)
+        """The spec as JSON data (the scene field by field, ``draw`` by its name).
+
+        Raises ValueError for a ``draw`` that no name identifies (a lambda, a local function,
+        an object whose repr shows its address).
+        """
+        try:
+            draw = _named(self.draw)
+        except ValueError as error:
+            raise ValueError(f"draw={self.draw!r} cannot be recorded in a run folder: {error}; "
+                             "pass a module-level function or a functools.partial of one") \
+                from None
         data = {"scene": dataclasses.asdict(self.scene), "throws": self.throws,
                 "chunk": self.chunk, "seed": self.seed, "draw": draw}
         return json.loads(json.dumps(data))
+
+    @functools.cached_property
+    def identity(self) -> str:
+        """A hash of :meth:`record`: the spec a chunk file belongs to."""
+        return identity(self.record())
+
+    def chunk_record(self, index: int) -> dict:
+        """What chunk ``index``'s file records of itself: the spec, seed, index and throws."""
+        return {"spec": self.identity, "seed": self.seed, "index": index,
+                "throws": self.size(index)}
+
+
+def _named(value: object) -> str:
+    """``value`` by its importable name or its repr; ValueError when neither identifies it."""
+    if isinstance(value, functools.partial):
+        return "functools.partial({})".format(", ".join(
+            [_named(value.func), *map(_named, value.args),
+             *(f"{k}={_named(v)}" for k, v in value.keywords.items())]))
+    if isinstance(value, types.MethodType):
+        return f"{_named(value.__self__)}.{value.__func__.__name__}"
+    if isinstance(value, (types.FunctionType, types.BuiltinFunctionType, type)):
+        found = sys.modules.get(value.__module__)
+        for part in value.__qualname__.split("."):
+            found = getattr(found, part, None)
+        if found is not value:
+            raise ValueError(f"{value.__qualname__} is no module-level name (a lambda or a "
+                             "local function is not identified by its name)")
+        return f"{value.__module__}.{value.__qualname__}"
+    shown = repr(value)
+    if re.search(r" at 0x[0-9a-fA-F]+", shown):
+        raise ValueError(f"{shown} is not identified by its repr (it shows an address)")
+    return shown
 
 
 @dataclass(frozen=True)
@@ -212,7 +261,8 @@ def run_throws(scene: Scene | str, throws: int, *, chunk: int = CHUNK, seed: int
     instance, stopped at the end). A process already connected to Ray uses that connection.
     ``workers``: at most this many chunks at once on Ray (default: the cluster's CPUs).
     ``max_retries``: Ray runs a chunk again this many times when its worker dies.
-    ``out``: the run folder (see the module's docstring); refused if it holds another spec.
+    ``out``: the run folder (see the module's docstring); refused (FolderError) if it holds
+    another spec, a chunk of another run, a corrupt file, or chunks without ``spec.json``.
     ``progress``: a tqdm bar in throws (throws/s). The result does not depend on ``ray``,
     ``workers``, ``out`` or on interruptions.
     """
@@ -239,7 +289,7 @@ def run_throws(scene: Scene | str, throws: int, *, chunk: int = CHUNK, seed: int
 
     def done(index: int, outcomes: dict[str, np.ndarray]) -> None:
         if folder is not None:
-            _save_chunk(folder, index, outcomes)
+            _save_chunk(folder, spec, index, outcomes)
         tallies[index] = Tally.of(spec.scene, outcomes)
         bar.update(spec.size(index))
 
@@ -268,7 +318,7 @@ def hand_faces(scene: Scene, n: int, seed: int, *, ray: str | None = None,
 
 
 @contextlib.contextmanager
-def connected(address: str) -> Iterator[ModuleType]:
+def connected(address: str) -> Iterator[types.ModuleType]:
     """Ray, connected to ``address`` for the block; a process already connected stays so.
 
     ``"local"`` starts a fresh local instance (without its dashboard), stopped at the end.
@@ -315,18 +365,47 @@ def _chunk_path(folder: Path, index: int) -> Path:
 
 
 def _saved_tallies(folder: Path, spec: Spec) -> dict[int, Tally]:
-    """The tallies of the chunks already in ``folder``, by index."""
+    """The tallies of the chunks already in ``folder``, by index; FolderError for another's."""
     tallies = {}
-    for index in range(spec.n_chunks):
-        path = _chunk_path(folder, index)
-        if path.exists():
-            with np.load(path) as saved:
-                tallies[index] = Tally.of(spec.scene, {name: saved[name] for name in OUTCOMES})
+    for path in sorted(folder.glob("chunk_*.npz")):
+        match = re.fullmatch(r"chunk_(\d+)\.npz", path.name)
+        index = int(match[1]) if match else -1
+        if not 0 <= index < spec.n_chunks or path != _chunk_path(folder, index):
+            raise FolderError(f"{str(path)!r} is not a chunk of this run (of chunks 0 to "
+                              f"{spec.n_chunks - 1}): delete it, or pass another folder")
+        tallies[index] = Tally.of(spec.scene, _read_chunk(path, spec, index))
     return tallies
 
 
-def _save_chunk(folder: Path, index: int, outcomes: dict[str, np.ndarray]) -> None:
-    write_atomically(_chunk_path(folder, index), lambda f: np.savez(f, **outcomes))
+def _read_chunk(path: Path, spec: Spec, index: int) -> dict[str, np.ndarray]:
+    """The outcomes at ``path``, checked to be chunk ``index`` of ``spec``; else FolderError."""
+    saved, asked = load(path), spec.chunk_record(index)
+    if "chunk" not in saved:
+        raise FolderError(f"{str(path)!r} records no spec, seed or index (an older version's "
+                          "chunk?): it is not known to be this run's; delete it to throw it "
+                          "again, or pass another folder")
+    try:
+        found = json.loads(str(saved.pop("chunk")))
+        differ = [key for key in asked if found[key] != asked[key]]
+    except (ValueError, TypeError, KeyError) as error:
+        raise FolderError(f"{str(path)!r} is corrupt (its record of the chunk is unreadable): "
+                          "delete it to throw it again") from error
+    if differ:
+        shown = "; ".join("another spec" if k == "spec" else f"{k} {found[k]!r} there, "
+                          f"{asked[k]!r} here" for k in differ)
+        raise FolderError(f"{str(path)!r} is not chunk {index} of this run ({shown}): delete "
+                          "it to throw it again, or pass another folder")
+    if sorted(saved) != sorted(OUTCOMES) or \
+            any(saved[name].shape != (asked["throws"],) for name in OUTCOMES):
+        raise FolderError(f"{str(path)!r} is corrupt (its outcomes are not {OUTCOMES} of "
+                          f"{asked['throws']} throws each): delete it to throw it again")
+    return saved
+
+
+def _save_chunk(folder: Path, spec: Spec, index: int, outcomes: dict[str, np.ndarray]) -> None:
+    record = np.array(json.dumps(spec.chunk_record(index)))
+    write_atomically(_chunk_path(folder, index),
+                     lambda f: np.savez(f, chunk=record, **outcomes))
 
 
 def summary(tally: Tally, title: str) -> str:
@@ -350,6 +429,24 @@ Steps {tally.mean('steps'):.0f} ± {tally.std('steps'):.0f}; time to the decided
 ± {tally.std('impacts'):.2f} (mean ± standard deviation)."""
 
 
+def at_least(low: int) -> Callable[[str], int]:
+    """An argparse type: an int >= ``low``."""
+    def parse(text: str) -> int:
+        with contextlib.suppress(ValueError):
+            if int(text) >= low:
+                return int(text)
+        raise argparse.ArgumentTypeError(f"must be an int >= {low}, got {text!r}")
+    return parse
+
+
+def ray_address(text: str) -> str:
+    """An argparse type: a Ray address, not empty."""
+    if not text.strip():
+        raise argparse.ArgumentTypeError(f"must be a Ray address (auto, local, "
+                                         f"ray://host:port), got {text!r}")
+    return text
+
+
 def main(argv: list[str] | None = None) -> None:
     """Throw a standard die many times (optionally on Ray) and print the summary."""
     parser = argparse.ArgumentParser(
@@ -357,20 +454,23 @@ def main(argv: list[str] | None = None) -> None:
         description="Many vigorous hand throws of a standard die to a decided face, in seeded "
         "chunks, in this process or on a Ray cluster; prints the faces and their chi-square.")
     parser.add_argument("--die", choices=tuple(STANDARD_SIZES), default="d6")
-    parser.add_argument("--throws", type=int, default=100_000)
-    parser.add_argument("--chunk", type=int, default=CHUNK, help="throws per chunk")
-    parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--ray", metavar="ADDRESS", default=None,
+    parser.add_argument("--throws", type=at_least(1), default=100_000)
+    parser.add_argument("--chunk", type=at_least(1), default=CHUNK, help="throws per chunk")
+    parser.add_argument("--seed", type=at_least(0), default=0)
+    parser.add_argument("--ray", metavar="ADDRESS", type=ray_address, default=None,
                         help="run on Ray: auto, ray://host:10001, or local (a fresh local "
                         "instance); default: in this process")
-    parser.add_argument("--workers", type=int, default=None,
+    parser.add_argument("--workers", type=at_least(1), default=None,
                         help="chunks at once on Ray (default: the cluster's CPUs)")
     parser.add_argument("--out", type=Path, default=None,
                         help="run folder: per-chunk outcomes, resumed when run again")
     args = parser.parse_args(argv)
     start = time.perf_counter()
-    tally = run_throws(args.die, args.throws, chunk=args.chunk, seed=args.seed, ray=args.ray,
-                       out=args.out, workers=args.workers)
+    try:
+        tally = run_throws(args.die, args.throws, chunk=args.chunk, seed=args.seed,
+                           ray=args.ray, out=args.out, workers=args.workers)
+    except FolderError as error:
+        parser.error(f"argument --out: {error}")
     seconds = time.perf_counter() - start
     where = f"on Ray ({args.ray})" if args.ray else "in this process"
     print(summary(tally, f"## {args.die}: {args.throws} throws in chunks of {args.chunk}, seed "

@@ -1,6 +1,10 @@
 """Many throws in seeded chunks: exact merges, resumable run folders, the same tally on Ray."""
 
+import functools
+import json
 import os
+import re
+import shutil
 import sys
 from dataclasses import dataclass
 
@@ -14,6 +18,7 @@ from dice_env.scene import Scene
 from dice_env.studies import run as run_study
 from dice_env.studies import shapes as sh
 from dice_env.studies.__main__ import main as studies_main
+from dice_env.studies.chunks import FolderError, kept_chunks, prepare
 
 THROWS, CHUNK, SEED = 120, 30, 7  # four chunks of default-d6 throws: about 0.3 s in all
 
@@ -142,6 +147,14 @@ def test_the_shapes_study_throws_through_faces_of(tmp_path, monkeypatch):
             studies_main(["fairness", flag, value, "--out", str(tmp_path)])
 
 
+@pytest.mark.parametrize("args", [["shapes", "--throws", "0"], ["shapes", "--ray", " "],
+                                  ["shapes", "--quick", "--throws", "3"]])
+def test_studies_command_line_gives_usage_errors(args, tmp_path, capsys):
+    with pytest.raises(SystemExit) as stop:
+        studies_main([*args, "--out", str(tmp_path)])
+    assert stop.value.code == 2 and "error:" in capsys.readouterr().err
+
+
 def test_kept_chunks_let_a_study_continue_where_it_stopped(tmp_path):
     scene = Scene(die=Die.standard("d20"))
     first = hand_faces(scene, 40, 7, chunk=20, keep=tmp_path)
@@ -151,6 +164,164 @@ def test_kept_chunks_let_a_study_continue_where_it_stopped(tmp_path):
     again = hand_faces(scene, 40, 7, chunk=20, keep=tmp_path)
     np.testing.assert_array_equal(again.counts, first.counts)
     np.testing.assert_array_equal(first.counts, hand_faces(scene, 40, 7, chunk=20).counts)
+
+
+# ---- run folders trust no file they cannot check -------------------------------------------
+
+@pytest.fixture(scope="module")
+def finished(tmp_path_factory):
+    """A run folder of the four chunks of :func:`throws`."""
+    folder = tmp_path_factory.mktemp("finished")
+    throws(out=folder)
+    return folder
+
+
+@pytest.fixture
+def folder(finished, tmp_path):
+    """A copy of the finished run folder, to spoil."""
+    return shutil.copytree(finished, tmp_path / "run")
+
+
+def rewrite(path, record=None, size=None, keep_record=True):
+    """The chunk at ``path`` saved again: its record updated by ``record``, cut to ``size``."""
+    with np.load(path) as saved:
+        arrays = {k: v[:size] for k, v in saved.items() if k != "chunk"}
+        found = json.loads(str(saved["chunk"]))
+    extra = {"chunk": np.array(json.dumps(found | (record or {})))} if keep_record else {}
+    np.savez(path, **arrays, **extra)
+
+
+def test_each_chunk_records_what_it_is(finished):
+    spec = dist.Spec(Scene(), THROWS, CHUNK, SEED)
+    with np.load(finished / "chunk_000002.npz") as saved:
+        assert json.loads(str(saved["chunk"])) == {"spec": spec.identity, "seed": SEED,
+                                                   "index": 2, "throws": CHUNK}
+    assert spec.identity != dist.Spec(Scene(), THROWS, CHUNK, SEED + 1).identity
+
+
+@pytest.mark.parametrize(("spoil", "match"), [
+    (lambda f: rewrite(f / "chunk_000001.npz", {"seed": 8}),
+     r"chunk_000001.npz' is not chunk 1 of this run \(seed 8 there, 7 here\)"),
+    (lambda f: rewrite(f / "chunk_000001.npz", {"spec": "0123456789abcdef"}),
+     r"chunk_000001.npz' is not chunk 1 of this run \(another spec\)"),
+    (lambda f: rewrite(f / "chunk_000001.npz", {"throws": 20}, 20),
+     r"chunk_000001.npz' is not chunk 1 of this run \(throws 20 there, 30 here\)"),
+    (lambda f: rewrite(f / "chunk_000001.npz", size=20),  # header 30 throws, body 20
+     r"chunk_000001.npz' is corrupt \(its outcomes are not .* of 30 throws each\)"),
+    (lambda f: shutil.copy(f / "chunk_000001.npz", f / "chunk_000002.npz"),
+     r"chunk_000002.npz' is not chunk 2 of this run \(index 1 there, 2 here\)"),
+    (lambda f: shutil.copy(f / "chunk_000001.npz", f / "chunk_000004.npz"),
+     r"chunk_000004.npz' is not a chunk of this run \(of chunks 0 to 3\)"),
+    (lambda f: rewrite(f / "chunk_000001.npz", keep_record=False),
+     r"chunk_000001.npz' records no spec, seed or index")])
+def test_a_chunk_that_is_not_this_runs_is_refused_by_name(folder, spoil, match):
+    spoil(folder)
+    with pytest.raises(FolderError, match=match):
+        throws(out=folder)
+
+
+def test_deleting_the_refused_chunk_throws_it_again(folder, reference):
+    rewrite(folder / "chunk_000001.npz", {"seed": 8})
+    with pytest.raises(FolderError, match="delete it to throw it again"):
+        throws(out=folder)
+    (folder / "chunk_000001.npz").unlink()
+    assert throws(out=folder).same_as(reference)
+
+
+def test_chunks_without_their_spec_are_not_adopted(folder):
+    (folder / "spec.json").unlink()
+    with pytest.raises(FolderError, match=r"holds 4 chunks \(chunk_000000.npz, chunk_000001.npz, "
+                       r"chunk_000002.npz, \.\.\.\) but no spec.json"):
+        throws(out=folder, seed=SEED + 1)
+    assert not (folder / "spec.json").exists()
+
+
+@pytest.mark.parametrize("spoil", [
+    lambda data: b"", lambda data: data[: len(data) // 2], lambda data: b"garbage" * 20,
+    lambda data: data[:300] + bytes(100) + data[400:]])
+def test_a_corrupt_chunk_is_refused_by_name(folder, spoil):
+    path = folder / "chunk_000001.npz"
+    path.write_bytes(spoil(path.read_bytes()))
+    with pytest.raises(FolderError, match=r"chunk_000001.npz' is corrupt") as error:
+        throws(out=folder)
+    assert error.value.__cause__ is not None
+
+
+@pytest.mark.parametrize("text", [b"{not json", b"\xff\xfe\x00", b"[1, 2]"])
+def test_a_corrupt_spec_is_refused_by_name(folder, text):
+    (folder / "spec.json").write_bytes(text)
+    with pytest.raises(FolderError, match=r"spec.json' is corrupt .*: delete out="):
+        throws(out=folder)
+
+
+def test_kept_chunks_refuse_corrupt_and_orphaned_files(tmp_path):
+    def throw(i, size):
+        return {"i": np.full(size, i)}
+
+    prepare(tmp_path, {"chunk": 2})
+    parts = kept_chunks(throw, 3, 2, tmp_path, "x")
+    (tmp_path / "x-00001-1.npz").write_bytes(b"garbage")
+    with pytest.raises(FolderError, match=r"x-00001-1.npz' is corrupt"):
+        kept_chunks(throw, 3, 2, tmp_path, "x")
+    (tmp_path / "spec.json").unlink()
+    with pytest.raises(FolderError, match=r"holds 2 chunks .* but no spec.json"):
+        prepare(tmp_path, {"chunk": 2})
+    assert [p["i"].tolist() for p in parts] == [[0, 0], [1]]
+
+
+def local_draw(scene, n, rng):
+    return sh.hand_throws(scene, n, rng)
+
+
+def test_draws_are_recorded_by_a_name_that_identifies_them(tmp_path, reference):
+    def record(draw):
+        return dist.Spec(Scene(), 10, 10, 0, draw).record()["draw"]
+
+    assert record(sh.hand_throws) == "dice_env.studies.shapes.hand_throws"
+    assert record(functools.partial(sh.hand_throws, unit=0.02)) \
+        == "functools.partial(dice_env.studies.shapes.hand_throws, unit=0.02)"
+    assert record(DieOnce("m")) == "DieOnce(marker='m')"
+
+    def local(scene, n, rng):
+        return sh.hand_throws(scene, n, rng)
+
+    anonymous = lambda scene, n, rng: sh.hand_throws(scene, n, rng)  # noqa: E731
+    for draw in (anonymous, local, functools.partial(local), object.__new__(Opaque)):
+        with pytest.raises(ValueError, match=r"draw=.* cannot be recorded in a run folder.*"
+                           "pass a module-level function or a functools.partial of one"):
+            throws(out=tmp_path, draw=draw)
+    assert not tmp_path.joinpath("spec.json").exists()
+    assert throws(draw=anonymous).same_as(reference)  # no folder: no name needed
+
+
+class Opaque:
+    """A draw whose repr shows only its address."""
+
+    def __call__(self, scene, n, rng):
+        return sh.hand_throws(scene, n, rng)
+
+
+@pytest.mark.parametrize(("argv", "match"), [
+    (["--throws", "0"], "argument --throws: must be an int >= 1, got '0'"),
+    (["--chunk", "-5"], "argument --chunk: must be an int >= 1, got '-5'"),
+    (["--seed", "x"], "argument --seed: must be an int >= 0, got 'x'"),
+    (["--workers", "0"], "argument --workers: must be an int >= 1, got '0'"),
+    (["--ray", ""], "argument --ray: must be a Ray address"),
+    (["--out", "{corrupt}"], "argument --out: .*spec.json' is corrupt"),
+    (["--out", "{other}"], "argument --out: out=.* holds a run of another spec"),
+    (["--out", "{file}"], "argument --out: out=.* is a file, not a folder")])
+def test_command_line_gives_usage_errors_for_bad_values(tmp_path, capsys, argv, match):
+    for name, text in (("corrupt", "{"), ("other", '{"throws": 1}')):
+        (tmp_path / name).mkdir()
+        (tmp_path / name / "spec.json").write_text(text)
+    (tmp_path / "file").write_text("")
+    argv = [a.format(corrupt=tmp_path / "corrupt", other=tmp_path / "other",
+                     file=tmp_path / "file") for a in argv]
+    with pytest.raises(SystemExit) as exit_:
+        dist.main(argv)
+    err = capsys.readouterr().err
+    assert exit_.value.code == 2 and err.startswith("usage: python -m dice_env.distributed")
+    assert any(re.search(match, line) for line in err.splitlines()), err
 
 
 # ---- on a local Ray instance ---------------------------------------------------------------

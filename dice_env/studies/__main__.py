@@ -13,7 +13,7 @@ import contextlib
 import functools
 from pathlib import Path
 
-from dice_env.distributed import connected, hand_faces
+from dice_env.distributed import at_least, connected, hand_faces, ray_address
 from dice_env.studies import CHUNKED, KEPT, SIZED, STUDIES, run
 
 DOCS = Path(__file__).resolve().parents[2] / "docs"
@@ -30,15 +30,16 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--out", type=Path, default=None,
                         help=f"folder for the markdown; figures go to OUT/figures (default: "
                         f"{DOCS}, or ./{QUICK} with --quick)")
-    parser.add_argument("--throws", type=int, default=None,
+    parser.add_argument("--throws", type=at_least(1), default=None,
                         help=f"sample size per die or per point ({', '.join(SIZED)} only; "
                         "default: the study's full size)")
-    parser.add_argument("--ray", metavar="ADDRESS", default=None,
+    parser.add_argument("--ray", metavar="ADDRESS", type=ray_address, default=None,
                         help=f"throw in seeded chunks on Ray ({', '.join(CHUNKED)} only): "
                         "auto, ray://host:10001, or local (a fresh local instance)")
     parser.add_argument("--chunks", metavar="DIR", type=Path, default=None,
                         help=f"throw in seeded chunks ({', '.join(CHUNKED + KEPT)} only), each "
-                        "kept under DIR: run again, the study continues from the chunks done")
+                        "kept under DIR (DIR/<study> for all): run again, the study continues "
+                        "from the chunks done")
     args = parser.parse_args(argv)
     if args.out is None:
         args.out = QUICK if args.quick else DOCS
@@ -55,7 +56,12 @@ def main(argv: list[str] | None = None) -> None:
     with contextlib.nullcontext() if args.ray is None else connected(args.ray):
         for name in STUDIES if args.study == "all" else [args.study]:
             keep = args.chunks if name in KEPT else None
-            numbers = run(name, args.out, args.quick, args.throws, faces_of, keep)
+            if keep is not None and args.study == "all":
+                keep = keep / name
+            try:
+                numbers = run(name, args.out, args.quick, args.throws, faces_of, keep)
+            except ValueError as error:  # a bad value or a folder not this run's
+                parser.error(f"{name}: {error}")
             print(f"{name}: " + ", ".join(f"{k}={v:.4g}" for k, v in numbers.items()))
 
 

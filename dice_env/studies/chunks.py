@@ -2,14 +2,17 @@
 
 A run folder holds ``spec.json`` (what the run throws, as JSON data) and one ``.npz`` of arrays
 per finished chunk, each written atomically (never half a file). A folder holding another
-spec is refused rather than mixed in. The caller seeds each chunk from its index alone, so a
-run's result does not depend on which chunks were read back and which were thrown.
+spec, or chunks without a spec, is refused rather than mixed in; a corrupt file is refused
+by name (:class:`FolderError`). The caller seeds each chunk from its index alone, so a run's
+result does not depend on which chunks were read back and which were thrown.
 """
 
 from __future__ import annotations
 
+import hashlib
 import json
 import os
+import zipfile
 from collections.abc import Callable
 from pathlib import Path
 
@@ -20,23 +23,48 @@ SPEC_FILE = "spec.json"
 Arrays = dict[str, np.ndarray]
 
 
+class FolderError(ValueError):
+    """A run folder that cannot be used as it is: another spec's, or a foreign or corrupt file."""
+
+
+def identity(record: dict) -> str:
+    """A hash of ``record``'s JSON data: the spec a chunk records it belongs to."""
+    return hashlib.sha256(json.dumps(record, sort_keys=True).encode()).hexdigest()[:16]
+
+
 def prepare(folder: Path, record: dict, name: str = "keep") -> Path:
     """``folder`` made ready for a run of ``record``: created with its spec, or checked against it.
 
-    ``name``: the parameter that passed ``folder``, for the error.
+    ``name``: the parameter that passed ``folder``, for the error. Raises :class:`FolderError`
+    for a folder of another spec, a corrupt ``spec.json``, or chunks (``.npz``) without one.
     """
     record = json.loads(json.dumps(record))
     path = folder / SPEC_FILE
+    if folder.exists() and not folder.is_dir():
+        raise FolderError(f"{name}={str(folder)!r} is a file, not a folder: pass a folder")
     if path.exists():
-        saved = json.loads(path.read_text())
+        try:
+            saved = json.loads(path.read_text())
+        except ValueError as error:  # not JSON, or not text
+            raise FolderError(f"{str(path)!r} is corrupt ({error}): delete {name}="
+                              f"{str(folder)!r}, or pass another folder") from error
+        if not isinstance(saved, dict):
+            raise FolderError(f"{str(path)!r} is corrupt (JSON {type(saved).__name__}, not an "
+                              f"object): delete {name}={str(folder)!r}, or pass another folder")
         differ = [key for key in record | saved if saved.get(key) != record.get(key)]
         if differ:
             shown = "; ".join("another scene" if k == "scene" else
                               f"{k} {saved.get(k)!r} there, {record.get(k)!r} asked"
                               for k in differ)
-            raise ValueError(f"{name}={str(folder)!r} holds a run of another spec ({shown}): "
-                             "pass the same set-up, or another folder")
+            raise FolderError(f"{name}={str(folder)!r} holds a run of another spec ({shown}): "
+                              "pass the same set-up, or another folder")
     else:
+        orphans = sorted(p.name for p in folder.glob("*.npz"))
+        if orphans:
+            shown = ", ".join(orphans[:3]) + (", ..." if len(orphans) > 3 else "")
+            raise FolderError(f"{name}={str(folder)!r} holds {len(orphans)} chunks ({shown}) but "
+                              f"no {SPEC_FILE}: they are not known to be this run's; delete "
+                              "them, or pass another folder")
         folder.mkdir(parents=True, exist_ok=True)
         write_atomically(path, lambda f: f.write(json.dumps(record, indent=1).encode()))
     return folder
@@ -48,6 +76,19 @@ def write_atomically(path: Path, write: Callable) -> None:
     with open(partial, "wb") as f:
         write(f)
     os.replace(partial, path)
+
+
+def load(path: Path) -> Arrays:
+    """All the arrays of the ``.npz`` at ``path``; :class:`FolderError` naming it if corrupt."""
+    try:
+        saved = np.load(path)
+        if not isinstance(saved, np.lib.npyio.NpzFile):
+            raise ValueError("an array, not an .npz archive")
+        with saved:
+            return {name: saved[name] for name in saved.files}
+    except (OSError, EOFError, ValueError, zipfile.BadZipFile) as error:
+        raise FolderError(f"{str(path)!r} is corrupt (not a readable .npz archive): delete it "
+                          "to throw its chunk again") from error
 
 
 def kept_chunks(throw: Callable[[int, int], Arrays], throws: int, chunk: int,
@@ -64,8 +105,7 @@ def kept_chunks(throw: Callable[[int, int], Arrays], throws: int, chunk: int,
         size = min(chunk, throws - start)
         path = None if folder is None else folder / f"{prefix}-{i:05d}-{size}.npz"
         if path is not None and path.exists():
-            with np.load(path) as saved:
-                part = dict(saved)
+            part = load(path)
         else:
             part = throw(i, size)
             if path is not None:
