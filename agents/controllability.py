@@ -103,7 +103,7 @@ def write_markdown(path: Path, maps: dict[str, np.ndarray], heights: tuple[float
                    seconds: float) -> Path:
     """The map as tables (rate [95% CI]) with how it was made; ``task``: the lowest cell's."""
     die, faces = task.scene.die, task.n_faces
-    reach = float(np.linalg.norm(die.vertices_body, axis=1).max())
+    reach = die.reach
     lines = ["# How controllable is a die?", "",
              "Success (target face read at rest) of a thrower that sees the target and the "
              "die's orientation in the hand, over the release height (of the die's centre above "

@@ -285,6 +285,11 @@ class Die:
         return np.array(self.vertices) - np.asarray(self.com)
 
     @cached_property
+    def reach(self) -> float:
+        """The largest distance of a corner from the centre of mass (m)."""
+        return float(np.sqrt((self.vertices_body**2).sum(axis=1)).max())
+
+    @cached_property
     def face_normals(self) -> np.ndarray:
         """Outward unit normals (F, 3), body frame, in label order (read-only)."""
         return _frozen(polyhedra.face_normals(np.array(self.vertices), self.faces))

@@ -315,7 +315,7 @@ def pack_scene(scene: Scene) -> tuple[kernel.Body, kernel.Contact]:
         vertices=vertices, mass=float(die.mass), inv_inertia=np.linalg.inv(inertia),
         inv_iso=1.0 / float(inertia[0, 0]) if die.is_isotropic else 0.0,
         inv_i_min=float(1.0 / np.linalg.eigvalsh(inertia)[0]),
-        r_max=float(np.sqrt((vertices**2).sum(axis=1)).max()),
+        r_max=die.reach,
         faces=np.ascontiguousarray(die.face_normals), reads_down=bool(die.reads_down))
     contact = kernel.Contact(
         planes=np.array([[*plane.normal, plane.offset, plane.stiffness, plane.damping,
@@ -491,8 +491,7 @@ def _rest_energy(scene: Scene, early_rest: bool) -> tuple[float, float]:
         return -math.inf, 0.0
     weight = die.mass * scene.gravity
     lift = weight**2 / (2.0 * corners.pop() * ground.stiffness)
-    r_max2 = float((die.vertices_body**2).sum(axis=1).max())
-    move = scene.rest.speed**2 / (2.0 * (1.0 / die.mass + r_max2 / die.inertia_body[0, 0]))
+    move = scene.rest.speed**2 / (2.0 * (1.0 / die.mass + die.reach**2 / die.inertia_body[0, 0]))
     return weight * float(die.resting_heights.min()) - lift, 0.5 * min(lift, move)
 
 

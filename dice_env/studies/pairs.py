@@ -93,7 +93,7 @@ def layout(n_dice: int, hand: Hand = HAND) -> np.ndarray:
 def hand_throws(scene: Scene, dice: tuple[Die, ...], n: int, rng: np.random.Generator,
                 hand: Hand = HAND) -> GroupState:
     """``n`` throws of ``dice`` from one ``hand`` (see :class:`Hand`) in ``scene``."""
-    reach = max(float(np.linalg.norm(d.vertices_body, axis=1).max()) for d in dice)
+    reach = max(d.reach for d in dice)
     height = rng.uniform(*hand.clearance, n) + reach
     velocity = (toward_table(scene, random_directions(rng, n))
                 * rng.uniform(*hand.speed, n)[:, None])
