@@ -181,11 +181,18 @@ def group_step(scene: Scene, dice: Sequence[Die], contact: DieContact = DieConta
     ``scene.dt``, or ``scene.safety`` times the least critical step of every die on every
     plane and of every pair of dice against each other. A pair's contact moves the reduced
     mass of the two dice's effective masses (:meth:`Scene.effective_mass_on`, the floor's).
+    A contact whose step comes out as 0 (a damping so large that it underflows) is refused.
     """
     critical = min(scene.with_(die=die).critical_dt for die in _dice(dice))
     if len(dice) > 1:
-        critical = min(critical, critical_step(contact.stiffness, contact.damping,
-                                               pair_mass(scene, dice), scene.scheme))
+        reduced = pair_mass(scene, dice)
+        pair = critical_step(contact.stiffness, contact.damping, reduced, scene.scheme)
+        if not scene.safety * pair > 0:  # a damping so large that the step underflows
+            raise ValueError(f"the step of die against die comes out as {pair:g} s from the "
+                             f"contact's stiffness {contact.stiffness:g} N/m and damping "
+                             f"{contact.damping:g} N s/m (DieContact) on the dice's reduced "
+                             f"mass {reduced:.3g} kg: bring them nearer the defaults")
+        critical = min(critical, pair)
     if scene.dt is None:
         return scene.safety * critical
     if scene.dt > critical and not scene.allow_unstable:
@@ -218,7 +225,8 @@ def simulate_group(
     ``record_every`` > 0 records the centres (and with ``orientations`` the orientations).
     Refused: dice that overlap at the start, more than :data:`MAX_DICE` dice, a step count
     above :data:`dice_env.scene.MAX_STEPS`, records above
-    :data:`dice_env.simulate.MAX_RECORD_BYTES`.
+    :data:`dice_env.simulate.MAX_RECORD_BYTES`, a die-die step that underflows
+    (:func:`group_step`), with ``stop_when_decided`` a gravity whose energies overflow.
     """
     dice = _dice(dice)
     if not isinstance(scene, Scene):
@@ -257,7 +265,7 @@ def simulate_group(
     options, _ = pack_run(scenes[0], n_steps=n_steps, free_flight=free_flight)
     stops = group_kernel.GroupStops(
         n_steps=n_steps, at_rest=bool(stop_at_rest), v_rest=float(scene.rest.speed),
-        hold_steps=math.ceil(scene.rest.hold / dt), decide=bool(stop_when_decided),
+        hold_steps=_hold_steps(scene.rest.hold / dt, n_steps), decide=bool(stop_when_decided),
         energy_scale=float(sum(d.mass * scene.gravity * d.size for d in dice)))
     bodies = _bodies(scenes, stop_when_decided)
     hulls = _hulls(scenes, bodies)
@@ -275,8 +283,8 @@ def simulate_group(
                          f"{n} dice ({size / 2**30:.3g} GiB), more than the limit of "
                          f"{MAX_RECORD_BYTES / 2**30:g} GiB: record less often, fewer throws "
                          "or a shorter t_max")
-    records = group_kernel.GroupRecords(
-        stride=max(1, record_every) if record_every else n_steps + 1,
+    records = group_kernel.GroupRecords(  # a stride beyond the run records nothing
+        stride=int(record_every) if 0 < record_every <= n_steps else n_steps + 1,
         x=np.zeros((b, n_rec, n, 3)),
         orientation=np.zeros((b, n_rec if orientations else 0, n, 3, 3)))
     outcome = group_kernel.GroupOutcome(
@@ -294,6 +302,9 @@ def simulate_group(
                (group, bodies, hulls, pair, contact_planes, options, stops, records, outcome),
                outcome.abort, batch=b, threads=threads, work=b * n * n_steps)
     energy_rise = outcome.energy_rise / scene.energy_tol
+    # The kernel checks the centres, velocities and momenta; a rotation that overflows in the
+    # last step (a spin near 1e300 rad/s) leaves a non-finite orientation it did not see.
+    finite = np.all([np.isfinite(a).reshape(b, -1).all(axis=1) for a in out._arrays()], axis=0)
     read = ~(outcome.touching & (outcome.contacts < 3))
     face = np.stack([die.face_read(out.orientation[:, i], UP) for i, die in enumerate(dice)],
                     axis=1)
@@ -305,12 +316,20 @@ def simulate_group(
     return GroupResult(
         face=np.where(read, face, 0), read=read, settled=outcome.status == kernel.SETTLED,
         decided=outcome.status == kernel.DECIDED, rest_time=outcome.rest_time,
-        impacts=outcome.impacts, unstable=outcome.unstable | (energy_rise > 1.0),
+        impacts=outcome.impacts, unstable=outcome.unstable | (energy_rise > 1.0) | ~finite,
         energy_rise=energy_rise, max_penetration=outcome.max_pen, overlap=outcome.overlap,
         sunk=(outcome.max_pen > limit) | (outcome.overlap[:, None] > limit),
         steps=outcome.steps, final=out, die_impacts=outcome.die_impacts,
         touched=outcome.touched, meet_dice=outcome.meet_dice, meet_steps=outcome.meet_steps,
         meet_velocity=outcome.meet[..., :3], meet_spin=outcome.meet[..., 3:], **recorded)
+
+
+def _hold_steps(hold: float, n_steps: int) -> int:
+    """Quiet steps before rest, ``ceil(hold)``; a hold beyond the run (never rest) as ``n_steps``.
+
+    A hold of 1e20 s would not fit the kernel's integer.
+    """
+    return n_steps if hold >= n_steps else math.ceil(hold)
 
 
 def _dice(dice: Sequence[Die]) -> tuple[Die, ...]:
@@ -335,11 +354,18 @@ def _bodies(scenes: list[Scene], decide: bool) -> group_kernel.Bodies:
         body, _ = pack_scene(scene)
         vertices[i, :len(die.vertices)] = body.vertices
         faces[i, :die.n_faces] = die.face_normals
-        if decide:
-            lock[i, :die.n_faces] = lock_energy(scene)
+        if not decide:  # the locks and floors serve the decision rule alone
+            continue
         weight = die.mass * scene.gravity
-        floor[i] = weight * float(die.resting_heights.min()) - weight**2 / (
-            2.0 * scene.ground.stiffness)
+        try:
+            lock[i, :die.n_faces] = lock_energy(scene)
+            floor[i] = weight * float(die.resting_heights.min()) - weight**2 / (
+                2.0 * scene.ground.stiffness)
+        except OverflowError as error:  # (m g)^2 beyond floats: a gravity near 1e300
+            raise ValueError(f"gravity={scene.gravity:g} m/s^2 overflows the energies of "
+                             f"stop_when_decided for die {i} ((m g)^2 / 2 S, mass "
+                             f"{die.mass:g} kg): lower gravity, or pass "
+                             "stop_when_decided=False") from error
     packed = [pack_scene(s)[0] for s in scenes]
     return group_kernel.Bodies(
         vertices=vertices, n_vertices=np.array([len(d.vertices) for d in dice]),
