@@ -40,3 +40,13 @@ def test_replay_throws_with_the_env_s_actions(tmp_path, capsys, name, thrower):
     main([str(run), "--thrower", thrower, "--throws", "1", "--out", str(tmp_path / "gifs")])
     gifs = list((tmp_path / "gifs").glob(f"replay_s0_0_{thrower}_*.gif"))
     assert len(gifs) == 1 and "throw 0: target" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize(("name", "message"), [
+    ("one die", "--target: must be a face of the run's die, in [1, 6], got 99"),
+    ("2d6", "--target: fixes one die's face; the run throws 2 dice")])
+def test_a_target_face_not_on_the_die_is_a_usage_error(tmp_path, capsys, name, message):
+    run = make_run(tmp_path / "run", name)
+    with pytest.raises(SystemExit) as exit_info:
+        main([str(run), "--thrower", "random", "--throws", "1", "--target", "99"])
+    assert exit_info.value.code == 2 and message in capsys.readouterr().err
