@@ -90,7 +90,7 @@ class ThrowTask:
     def __post_init__(self) -> None:
         if not isinstance(self.scene, Scene):
             raise ValueError(f"scene must be a Scene, got {type(self.scene).__name__}")
-        clearance = max(_reach(die) for die in self.dice)
+        clearance = max(die.reach for die in self.dice)
         if self.release_height is None:
             object.__setattr__(self, "release_height",
                                max(RELEASE_HEIGHT, round(clearance + RELEASE_GAP, 4),
@@ -146,10 +146,10 @@ class ThrowTask:
         for i, (centre, die) in enumerate(zip(self.release_positions, self.dice, strict=True)):
             for wall in self.scene.walls:
                 gap = float(np.asarray(wall.normal) @ centre - wall.offset)
-                if gap <= _reach(die):
+                if gap <= die.reach:
                     raise ValueError(
                         f"die {i} in the hand (centre {centre.round(4)} m) would reach through "
-                        f"a wall (walls) by {_reach(die) - gap:.3g} m; use fewer or smaller "
+                        f"a wall (walls) by {die.reach - gap:.3g} m; use fewer or smaller "
                         "dice (num_dice, size) or other walls")
 
     @property
@@ -494,7 +494,7 @@ class GroupThrowTask(ThrowTask):
 
         The largest die's diameter across corners plus :data:`HAND_GAP`.
         """
-        return 2.0 * max(_reach(die) for die in self.dice) + HAND_GAP
+        return 2.0 * max(die.reach for die in self.dice) + HAND_GAP
 
     @property
     def hand_offsets(self) -> np.ndarray:
@@ -858,11 +858,6 @@ def _orientations(mode: str, draws: np.ndarray, die: Die) -> np.ndarray:
         return np.stack([_z_turn(turn) @ face_up_rotation(die, int(f) + 1)
                          for f, turn, _ in draws])
     return np.tile(np.eye(3), (len(draws), 1, 1))
-
-
-def _reach(die: Die) -> float:
-    """Distance (m) of the die's farthest corner from its centre of mass."""
-    return float(np.linalg.norm(die.vertices_body, axis=1).max())
 
 
 def _z_turn(angle: float) -> np.ndarray:
