@@ -983,8 +983,9 @@ def simulate_groups(dice: GroupDice, bodies: Bodies, hulls: Hulls, pair: Pair,
     Throws are independent: the results do not depend on the batch or the threads. The kernel
     releases the GIL, so another thread can set ``out.abort``.
     """
-    for g in prange(dice.x.shape[0]):
-        simulate_group(g, dice, bodies, hulls, pair, contact, options, stops, records, out)
+    for g in prange(dice.x.shape[0]):  # prange's index is unsigned: one signature for both
+        simulate_group(np.int64(g), dice, bodies, hulls, pair, contact, options, stops, records,
+                       out)
 
 
 @njit(cache=True, nogil=True)

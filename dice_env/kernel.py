@@ -775,8 +775,8 @@ def simulate_batch(dice: Dice, body: Body, contact: Contact, options: Options, s
     depend on the batch or the threads. The kernel releases the GIL, so another thread can
     set ``out.abort``.
     """
-    for i in prange(dice.x.shape[0]):
-        simulate_one(i, dice, body, contact, options, stops, records, out)
+    for i in prange(dice.x.shape[0]):  # prange's index is unsigned: one signature for both
+        simulate_one(np.int64(i), dice, body, contact, options, stops, records, out)
 
 
 @njit(cache=True, nogil=True)

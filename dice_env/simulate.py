@@ -71,8 +71,12 @@ class DiceArrays:
         return self.position.shape[0]
 
     def copy(self) -> Self:
-        """An independent copy (checked again, so changes made to this one are caught)."""
-        return type(self)(*(np.array(a) for a in self._arrays()))
+        """An independent copy (checked again, so changes made to this one are caught).
+
+        Its arrays are C-contiguous whatever the layout of these, so that the kernels, which
+        take them as they are, compile for one layout.
+        """
+        return type(self)(*(np.array(a, order="C") for a in self._arrays()))
 
     def _arrays(self) -> tuple[np.ndarray, ...]:
         return (self.position, self.velocity, self.angular_momentum, self.orientation,
@@ -339,7 +343,8 @@ def _records(record: tuple[str, ...], record_every: int, b: int, n_steps: int,
                          f"{MAX_RECORD_BYTES / 2**30:g} GiB: record less often, fewer dice or "
                          "a shorter t_max")
     return kernel.Records(
-        stride=int(record_every or n_steps + 1), x=np.zeros((b, n_rec, 3)),
+        stride=int(record_every) if 0 < record_every <= n_steps else n_steps + 1,
+        x=np.zeros((b, n_rec, 3)),
         energy=np.zeros((b, n_rec if "energy" in record else 0)),
         orientation=np.zeros((b, n_rec if "orientations" in record else 0, 3, 3)),
         nodes=np.zeros((b, n_rec if "nodes" in record else 0, n_vertices, 3)))
