@@ -15,7 +15,8 @@ from typing import ClassVar, Self
 import numba
 import numpy as np
 
-from dice_env import kernel, vector_kernel
+from dice_env import group_kernel, kernel, vector_kernel
+from dice_env.compile_notice import announce
 from dice_env.rotations import orthonormality_error
 from dice_env.scene import ContactLaw, FrictionLaw, Scene, Scheme
 from dice_env.validation import as_batch, check_finite, check_range
@@ -356,6 +357,15 @@ RECORDS = ("energy", "orientations", "nodes")
 RELEASE_SINK = 1e-3  # deepest corner of a release, as a fraction of the die's size
 MAX_RECORD_BYTES = 4 * 2**30  # records larger than this are refused before any work
 ROTATION_TOL = 1e-6  # State.orientation's allowed orthonormality error (a long run drifts)
+# Each CPU kernel (by its parallel loop): its costly functions, its name for a user and its
+# cold compile time on two cores (s, about; benchmarks/cold_start.py), said on stderr before
+# they compile (dice_env.compile_notice).
+COMPILES = {
+    kernel.simulate_batch: ((kernel.simulate_one,), "the die's kernel", 200.0),
+    vector_kernel.simulate_batch: ((vector_kernel._run_tile,), "the paper scene's kernel", 60.0),
+    group_kernel.simulate_groups: ((group_kernel.simulate_group,), "the kernel of several dice",
+                                   150.0),
+}
 _LONG_RUN = 2_000_000  # die-steps (about 0.1 s) from which a run goes on a worker thread
 _after_fork = False  # set in a child forked after the parent's kernel started threads
 
@@ -420,8 +430,10 @@ def run_kernel(parallel: Callable, serial: Callable, args: tuple, abort: np.ndar
 
     On the calling thread for a batch of one, one thread, or in a process forked after its
     parent ran threads (:func:`_forked`); in parallel otherwise. A run of more than
-    ``_LONG_RUN`` die-steps of ``work`` can be interrupted (:func:`_run_interruptibly`).
+    ``_LONG_RUN`` die-steps of ``work`` can be interrupted (:func:`_run_interruptibly`). A
+    kernel about to compile is said on stderr first (:data:`COMPILES`).
     """
+    announce(*COMPILES[parallel])
     serial_run = batch == 1 or threads == 1 or _after_fork
     _run_interruptibly(serial if serial_run else parallel, args, abort, threads,
                        long=work > _LONG_RUN)

@@ -1,0 +1,59 @@
+"""The compile notice: one line on stderr when a kernel compiles, none when numba's cache is warm."""
+
+import os
+import subprocess
+import sys
+import textwrap
+
+import pytest
+
+from dice_env.compile_notice import QUIET
+from dice_env.simulate import COMPILES
+
+KERNEL = textwrap.dedent("""
+    from numba import njit
+
+    @njit(cache=True)
+    def double(x):
+        return 2 * x
+""")
+CALL = textwrap.dedent("""
+    import sys
+    sys.path.insert(0, sys.argv[1])
+    from dice_env.compile_notice import announce
+    from tiny_kernel import double
+    for _ in range(2):  # said once per process
+        announce((double,), "the tiny kernel", 120.0)
+        assert double(3) == 6
+    announce((double,), "the tiny kernel, compiled", 120.0)  # compiled here: quiet
+""")
+
+
+def first_calls(folder, cache, **env):
+    """stderr of a fresh process that announces and calls a cached kernel in ``folder``."""
+    done = subprocess.run([sys.executable, "-c", CALL, str(folder)], capture_output=True,
+                          text=True, check=True, env={
+                              **os.environ, "NUMBA_CACHE_DIR": str(cache), QUIET: "", **env})
+    return done.stderr
+
+
+def test_a_kernel_is_announced_once_when_it_compiles_and_not_when_cached(tmp_path):
+    (tmp_path / "tiny_kernel.py").write_text(KERNEL)
+    cold = first_calls(tmp_path, tmp_path / "cache")
+    assert cold.count("dice_env: compiling") == 1, cold
+    assert "compiling the tiny kernel (first use with this numba cache: about 2 min on 2 " \
+           f"cores, then cached; {QUIET}=1 silences this)" in cold
+    assert first_calls(tmp_path, tmp_path / "cache") == ""  # the cache is warm
+
+
+@pytest.mark.parametrize("quiet", ["1", "yes"])
+def test_the_notice_is_silenced_by_the_environment(tmp_path, quiet):
+    (tmp_path / "tiny_kernel.py").write_text(KERNEL)
+    assert first_calls(tmp_path, tmp_path / "cache", **{QUIET: quiet}) == ""
+
+
+def test_every_cpu_kernel_names_cached_functions_and_a_time():
+    for parallel, (dispatchers, what, seconds) in COMPILES.items():
+        assert parallel.py_func.__module__.startswith("dice_env.")
+        assert all(d._cache._cache_file is not None for d in dispatchers), what
+        assert what and seconds > 2.0
