@@ -1,4 +1,4 @@
-"""The compile notice: one line on stderr when a kernel compiles, none when numba's cache is warm."""
+"""The compile notice: a line on stderr when a kernel compiles, none when the cache is warm."""
 
 import os
 import subprocess

@@ -1,0 +1,102 @@
+"""A user's first throws: import and each entry point's first call, cold and warm.
+
+    python benchmarks/cold_start.py             # cold (an empty numba cache), then warm
+    python benchmarks/cold_start.py --warm-only # the cache as it is
+
+Each run is a fresh process that imports ``dice_env`` and calls, one after another, the entry
+points below, timing each first call; the cold run gets an empty ``NUMBA_CACHE_DIR`` (every
+kernel a call needs compiles then), the warm run the cache the cold run left. Prints a table
+and writes ``benchmarks/results/cold_start.json`` (``--out`` to change).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+
+# (name, code) run in order in one process; each code may use what the earlier ones set
+ENTRY_POINTS = (
+    ("import dice_env", "import numpy as np; import dice_env; from dice_env import Scene, "
+     "State, simulate; scene = Scene(); rng = np.random.default_rng(0); "
+     "hand = State.release(scene, np.tile([0.0, 0.0, 0.1], (64, 1)), "
+     "rng.normal(0, 0.5, (64, 3)), rng.normal(0, 30, (64, 3)))"),
+    ("simulate to rest (64 throws)", "simulate(scene, hand)"),
+    ("simulate to a decided face", "simulate(scene, hand, stop_when_decided=True)"),
+    ("the paper scene (vector kernel)", "from dice_env.paper import paper_scene; "
+     "ps = paper_scene(t_max=1.0); simulate(ps, State.release(ps, np.tile([0.0, 0.0, 3.0], "
+     "(64, 1)), rng.normal(0, 1, (64, 3)), rng.normal(0, 3, (64, 3))))"),
+    ("gym.make + env.step", "import gymnasium as gym; env = gym.make('DiceThrow-v0'); "
+     "env.reset(seed=0); env.step(env.action_space.sample())"),
+    ("make_vec + step (8 envs)", "venv = gym.make_vec('DiceThrow-v0', num_envs=8, "
+     "vectorization_mode=None); venv.reset(seed=0); venv.step(venv.action_space.sample())"),
+    ("simulate_group (two d6 in the tray)", "from dice_env.group import GroupState, "
+     "simulate_group; from dice_env.surroundings import tray; ts = Scene(walls=tray(), "
+     "t_max=2.0); simulate_group(ts, (dice_env.Die(),) * 2, GroupState.of([State.release("
+     "ts, np.tile([0.0, y, 0.1], (4, 1)), rng.normal(0, 0.5, (4, 3)), rng.normal(0, 30, "
+     "(4, 3))) for y in (-0.015, 0.015)]), stop_when_decided=True)"),
+)
+
+PROBE = """
+import json, sys, time
+times = []
+for name, code in json.loads(sys.argv[1]):
+    start = time.perf_counter()
+    exec(code)
+    times.append(time.perf_counter() - start)
+print(json.dumps(times))
+"""
+
+
+def run(cache: Path) -> tuple[list[float], list[str]]:
+    """Seconds of each entry point's first call in a fresh process with ``cache``.
+
+    Also the compile notices the process wrote on stderr (:mod:`dice_env.compile_notice`).
+    """
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(cache), "DICE_ENV_QUIET_COMPILE": ""}
+    done = subprocess.run([sys.executable, "-c", PROBE, json.dumps(ENTRY_POINTS)], cwd=ROOT,
+                          env=env, capture_output=True, text=True, check=True)
+    notices = [line for line in done.stderr.splitlines() if line.startswith("dice_env: ")]
+    return json.loads(done.stdout.strip().splitlines()[-1]), notices
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--warm-only", action="store_true",
+                        help="time with the cache as it is (NUMBA_CACHE_DIR or numba's own)")
+    parser.add_argument("--out", type=Path, default=ROOT / "benchmarks/results/cold_start.json")
+    args = parser.parse_args()
+    runs, notices = {}, {}
+    started = time.time()
+    if args.warm_only:
+        cache = Path(os.environ.get("NUMBA_CACHE_DIR", ROOT / "dice_env" / "__pycache__"))
+        runs["warm"], notices["warm"] = run(cache)
+    else:
+        with tempfile.TemporaryDirectory(prefix="numba-cache-") as folder:
+            runs["cold"], notices["cold"] = run(Path(folder))
+            runs["warm"], notices["warm"] = run(Path(folder))
+    names = [name for name, _ in ENTRY_POINTS]
+    print(f"{'entry point':40s}" + "".join(f"{kind:>10s}" for kind in runs))
+    for i, name in enumerate(names):
+        print(f"{name:40s}" + "".join(f"{times[i]:9.1f}s" for times in runs.values()))
+    print(f"{'all, one after another':40s}" + "".join(f"{sum(t):9.1f}s" for t in runs.values()))
+    for kind, lines in notices.items():
+        print(f"{kind}: {len(lines)} compile notice(s)" + "".join(f"\n  {line}" for line in lines))
+    record = {"entry_points": names, "seconds": runs, "notices": notices, "cpus": os.cpu_count(),
+              "load_average": os.getloadavg(), "python": platform.python_version(),
+              "started": time.strftime("%Y-%m-%d %H:%M", time.gmtime(started))}
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    args.out.write_text(json.dumps(record, indent=2) + "\n")
+    print(f"wrote {args.out}")
+
+
+if __name__ == "__main__":
+    main()
