@@ -7,7 +7,8 @@ import textwrap
 
 import pytest
 
-from dice_env.compile_notice import QUIET
+from dice_env import group_kernel, kernel, precompile, vector_kernel
+from dice_env.compile_notice import QUIET, _cached
 from dice_env.simulate import COMPILES
 
 KERNEL = textwrap.dedent("""
@@ -57,3 +58,16 @@ def test_every_cpu_kernel_names_cached_functions_and_a_time():
         assert parallel.py_func.__module__.startswith("dice_env.")
         assert all(d._cache._cache_file is not None for d in dispatchers), what
         assert what and seconds > 2.0
+
+
+def test_precompile_compiles_every_cpu_kernel_parallel_and_serial():
+    for compile_kernel in precompile.KERNELS.values():
+        compile_kernel()
+    loops = (kernel.simulate_serial, vector_kernel.simulate_serial,
+             group_kernel.simulate_groups_serial, *COMPILES)
+    if precompile.THREADS < 2:
+        loops = loops[:3]  # one thread never starts the parallel loops
+    for loop in loops:
+        assert loop.overloads, loop
+    for dispatchers, what, _ in COMPILES.values():  # a callee loaded with its caller from
+        assert all(d.overloads or _cached(d) for d in dispatchers), what  # the cache: on disk

@@ -1,0 +1,77 @@
+"""Compile the CPU kernels into numba's cache ahead of use, two at a time.
+
+    python -m dice_env.precompile          # every kernel; quiet when the cache is warm
+
+numba compiles a kernel at its first call, one at a time in a process. This runs a tiny
+throw through each kernel in its own process, as many at once as there are cores (at most
+:data:`KERNELS`), so that a cold cache fills in the time of the longest compile rather than
+the sum of them. ``.ci/setup`` runs it before the tests.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+import time
+from concurrent.futures import ProcessPoolExecutor
+
+import numba
+import numpy as np
+
+from dice_env.group import GroupState, simulate_group
+from dice_env.paper import paper_scene
+from dice_env.scene import Scene
+from dice_env.simulate import State, simulate
+from dice_env.surroundings import tray
+from dice_env.vector_kernel import TILE
+
+THREADS = min(2, numba.config.NUMBA_NUM_THREADS)  # 2 runs the parallel loop, 1 the serial
+
+
+def _die() -> None:
+    """The one-die kernel, parallel and serial (every scene that is not the paper's)."""
+    scene = Scene(t_max=0.01)
+    for n in (2, 1):
+        simulate(scene, State.release(scene, np.tile([0.0, 0.0, 0.05], (n, 1)), [1.0, 0, 0]),
+                 num_threads=THREADS)
+
+
+def _paper() -> None:
+    """The paper scene's vector kernel, parallel and serial (a tile of dice)."""
+    scene = paper_scene(t_max=0.01)
+    for threads in (THREADS, 1):
+        simulate(scene, State.release(scene, np.tile([0.0, 0.0, 3.0], (TILE, 1)),
+                                      [1.0, 0, 0]), num_threads=threads)
+
+
+def _group() -> None:
+    """The kernel of several dice, parallel and serial."""
+    scene = Scene(walls=tray(), t_max=0.01)
+    for n in (2, 1):
+        state = GroupState.of([State.release(scene, np.tile([0.0, y, 0.05], (n, 1)),
+                                             [1.0, 0, 0]) for y in (-0.02, 0.02)])
+        simulate_group(scene, (scene.die, scene.die), state, num_threads=THREADS)
+
+
+KERNELS = {"die": _die, "several dice": _group, "paper": _paper}  # the longest first
+
+
+def _compile(name: str) -> tuple[str, float]:
+    start = time.perf_counter()
+    KERNELS[name]()
+    return name, time.perf_counter() - start
+
+
+def main() -> None:
+    """Fill numba's cache with every CPU kernel, in parallel processes; print the times."""
+    workers = max(1, min(len(KERNELS), os.cpu_count() or 1))
+    start = time.perf_counter()
+    with ProcessPoolExecutor(workers) as pool:
+        times = dict(pool.map(_compile, KERNELS))
+    print("dice_env.precompile: " + ", ".join(f"{k} {s:.0f} s" for k, s in times.items())
+          + f"; {time.perf_counter() - start:.0f} s in all on {workers} process(es)",
+          file=sys.stderr)
+
+
+if __name__ == "__main__":
+    main()
