@@ -26,16 +26,15 @@ import itertools
 import math
 from dataclasses import dataclass
 from functools import cache, cached_property
-from typing import TYPE_CHECKING, NamedTuple
+from typing import NamedTuple
 
 import numpy as np
 
+from dice_env import pips as drilled
 from dice_env import polyhedra
+from dice_env.pips import Pips
 from dice_env.table import DIE_EDGE, DIE_MASS
 from dice_env.validation import check_finite, check_positive, check_range
-
-if TYPE_CHECKING:
-    from dice_env.pips import Pips
 
 # The d6's corner signs in the order of the paper's cube.m (node k = row k).
 _CORNER_SIGNS = np.array(
@@ -159,8 +158,6 @@ class Die:
             raise ValueError(f"name must be one of {', '.join(map(repr, STANDARD_SIZES))}, "
                              f"got {name!r}")
         if pips is not None:
-            from dice_env import pips as drilled  # only when asked (python -m dice_env.pips)
-
             pips, size, mass = drilled.with_defaults(name, pips, size, mass)
         size = STANDARD_SIZES[name] if size is None else size
         check_positive("size", size)
@@ -171,7 +168,8 @@ class Die:
             vertices, shape.faces)[0]
         die = cls._make(name, vertices, shape.faces, size, _mass(mass, volume),
                         shape.reads_down)
-        return die if pips is None else drilled.drill(die, pips)
+        mass_properties = None if pips is None else drilled.drill(size, die.mass, pips)
+        return die if mass_properties is None else die._with_mass(die.mass, *mass_properties)
 
     @classmethod
     def cuboid(cls, sides: tuple[float, float, float], mass: float | None = None) -> Die:

@@ -45,14 +45,11 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, NamedTuple
+from typing import NamedTuple
 
 import numpy as np
 
 from dice_env.validation import check_nonnegative, check_positive, check_range
-
-if TYPE_CHECKING:
-    from dice_env.die import Die
 
 SHAPES = ("spherical cap",)
 # Cellulose acetate, the body of casino dice (kg/m^3): AZoM, "Cellulose Acetate" (Plascams
@@ -199,39 +196,37 @@ def with_defaults(name: str, pips: Pips | str, size: float | None, mass: float |
     return preset.pips, size, mass
 
 
-def drill(die: Die, pips: Pips) -> Die:
-    """The d6 ``die`` (uniform, its ``mass`` as weighed) with ``pips``: exact com and inertia.
+def drill(size: float, mass: float, pips: Pips) -> tuple[np.ndarray, np.ndarray] | None:
+    """The centre of mass and the inertia about it of a d6 of ``size`` drilled with ``pips``.
 
-    Raises ValueError when the pips overlap each other (``2 radius > offset size/2``, the
-    spacing of the 6's rows) or come nearer the face's edge than their depth
+    ``mass`` is the die's mass as weighed; None when the paint is as dense as the body (the
+    uniform die's). Raises ValueError when the pips overlap each other (``2 radius > offset
+    size/2``, the spacing of the 6's rows) or come nearer the face's edge than their depth
     (``offset size/2 + radius + depth > size/2``; this also keeps cavities on neighbouring
     faces apart), or when the paint alone would outweigh ``mass``.
     """
-    if die.name != "d6" or die != type(die).standard("d6", die.size, die.mass):
-        raise ValueError(f"die must be a uniform d6 (Die.standard(\"d6\", size, mass)), "
-                         f"got {die!r}")
-    half = die.size / 2
+    half = size / 2
     _check_fit(pips, half)
     volume, below, axial, transverse = cap_properties(pips.radius, pips.depth)
     centres = np.concatenate(list(layout(pips.offset).values()))
     normals = np.where(np.abs(centres) == 1.0, centres, 0.0)  # offset < 1: one coordinate ±1
     centroids = centres * half - below * normals
     n = len(centroids)
-    outer = die.size**3
+    outer = size**3
     paint = pips.paint_density or 0.0
-    density = (die.mass - paint * n * volume) / (outer - n * volume)
+    density = (mass - paint * n * volume) / (outer - n * volume)
     if density <= 0:
         raise ValueError(f"paint_density {paint} kg/m^3 fills the pips with more than the die's "
-                         f"mass {die.mass} kg; the paint must weigh less than the die")
+                         f"mass {mass} kg; the paint must weigh less than the die")
     change = paint - density
     if abs(change) <= SAME_DENSITY * density:
-        return die
-    com = change * volume * centroids.sum(axis=0) / die.mass
+        return None
+    com = change * volume * centroids.sum(axis=0) / mass
     along = np.einsum("ki,kj->ij", normals, normals)
-    about_centre = (density * outer * die.size**2 / 6 * np.eye(3)
+    about_centre = (density * outer * size**2 / 6 * np.eye(3)
                     + change * (volume * sum(_shift(c) for c in centroids)
                                 + transverse * (n * np.eye(3) - along) + axial * along))
-    return die._with_mass(die.mass, com, about_centre - die.mass * _shift(com))
+    return com, about_centre - mass * _shift(com)
 
 
 def _check_fit(pips: Pips, half: float) -> None:

@@ -166,12 +166,20 @@ def test_presets_build_and_are_documented():
 
 def test_drill_keeps_the_geometry():
     plain = Die.standard("d6")
-    drilled = drill(plain, DRILLED)
+    drilled = Die.standard("d6", pips=DRILLED)
     assert drilled.vertices == plain.vertices and drilled.faces == plain.faces
     assert drilled.mass == plain.mass
-    for other in (Die.loaded(), drilled, Die.standard("d8")):
-        with pytest.raises(ValueError, match="die must be a uniform d6"):
-            drill(other, DRILLED)
+    com, inertia = drill(plain.size, plain.mass, DRILLED)
+    assert drilled.com == tuple(com) and np.array_equal(drilled.inertia_body, inertia)
+
+
+def test_paint_as_dense_as_the_body_leaves_the_uniform_die():
+    plain = Die.standard("d6")
+    body = plain.mass / plain.size**3
+    assert drill(plain.size, plain.mass, Pips(DRILLED.radius, DRILLED.depth,
+                                              paint_density=body)) is None
+    assert Die.standard("d6", pips=Pips(DRILLED.radius, DRILLED.depth,
+                                        paint_density=body)) == plain
 
 
 @pytest.mark.parametrize(("kwargs", "match"), [
