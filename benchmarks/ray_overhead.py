@@ -3,7 +3,7 @@
     python benchmarks/ray_overhead.py                     # 20,000 d6 throws, a few minutes
     python benchmarks/ray_overhead.py --throws 8000 --chunk 1000
 
-The same throws each time: ``dice_env.distributed.run_throws`` of the default scene's d6
+The same throws each time: ``dice_env.studies.distributed.run_throws`` of the default scene's d6
 (vigorous hand throws, each until its face is decided), ``--throws`` in chunks of ``--chunk``.
 Rows: the chunks one after the other in this process on one thread (``throw_chunk(...,
 num_threads=1)``, the work of one Ray task) and on all numba threads (``run_throws`` without
@@ -27,8 +27,8 @@ import numba
 import numpy as np
 import ray
 
-from dice_env.distributed import Spec, Tally, run_throws, throw_chunk
 from dice_env.scene import Scene
+from dice_env.studies.distributed import Spec, Tally, run_throws, throw_chunk
 
 ROOT = Path(__file__).resolve().parents[1]
 

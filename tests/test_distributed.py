@@ -11,14 +11,14 @@ from dataclasses import dataclass
 import numpy as np
 import pytest
 
-from dice_env import distributed as dist
 from dice_env.die import Die
-from dice_env.distributed import hand_faces
 from dice_env.scene import Scene
+from dice_env.studies import distributed as dist
 from dice_env.studies import run as run_study
 from dice_env.studies import shapes as sh
 from dice_env.studies.__main__ import main as studies_main
 from dice_env.studies.chunks import FolderError, kept_chunks, prepare
+from dice_env.studies.distributed import hand_faces
 
 THROWS, CHUNK, SEED = 120, 30, 7  # four chunks of default-d6 throws: about 0.3 s in all
 
@@ -320,7 +320,7 @@ def test_command_line_gives_usage_errors_for_bad_values(tmp_path, capsys, argv, 
     with pytest.raises(SystemExit) as exit_:
         dist.main(argv)
     err = capsys.readouterr().err
-    assert exit_.value.code == 2 and err.startswith("usage: python -m dice_env.distributed")
+    assert exit_.value.code == 2 and err.startswith("usage: python -m dice_env.studies.distributed")
     assert any(re.search(match, line) for line in err.splitlines()), err
 
 

@@ -234,7 +234,7 @@ def run(out: Path = DOCS, quick: bool = False, seed: int = 2026,
     ``quick``); the loaded dice then get half as many (at least the quick size).
     ``faces_of(scene, n, seed)``: the faces of ``n`` hand throws of ``scene`` from ``seed``
     (each die, fair and loaded, gets its own seed from ``SeedSequence(seed)``), e.g.
-    :func:`dice_env.distributed.hand_faces` in seeded chunks on Ray; default: thrown here,
+    :func:`dice_env.studies.distributed.hand_faces` in seeded chunks on Ray; default: thrown here,
     every die's throws drawn in turn from one generator.
     """
     sizes = dict(QUICK if quick else FULL)
@@ -347,8 +347,8 @@ def _markdown(fair: dict[str, Faces], loaded: dict[str, Loaded], flight: dict,
     note = ("" if sizes["fair"] >= full else
             f"\nThis page was made with {sizes['fair']} fair throws per die (the command's "
             f"default is {full}).\n") + (
-        "\nEach die's throws ran in seeded chunks (`dice_env.distributed`, one seed per die "
-        "from the study's seed; `--chunks DIR` keeps them, `--ray ADDRESS` runs them on Ray): "
+        "\nEach die's throws ran in seeded chunks (`dice_env.studies.distributed`, one seed per "
+        "die from the study's seed; `--chunks DIR` keeps them, `--ray ADDRESS` runs them on Ray): "
         "the same numbers here or on any Ray cluster, not those of a run without chunks.\n"
         if chunked else "")
     return f"""# Every standard die: fairness, loaded dice, free flight

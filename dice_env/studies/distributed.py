@@ -20,7 +20,7 @@ a ValueError), never merged.
 
 Command line (prints the chi-square summary)::
 
-    python -m dice_env.distributed --die d20 --throws 1000000 --ray auto --out runs/d20
+    python -m dice_env.studies.distributed --die d20 --throws 1000000 --ray auto --out runs/d20
 
 Ray is an optional extra (``pip install 'dice_env[ray]'``); without it the local path works.
 """
@@ -450,7 +450,7 @@ def ray_address(text: str) -> str:
 def main(argv: list[str] | None = None) -> None:
     """Throw a standard die many times (optionally on Ray) and print the summary."""
     parser = argparse.ArgumentParser(
-        prog="python -m dice_env.distributed",
+        prog="python -m dice_env.studies.distributed",
         description="Many vigorous hand throws of a standard die to a decided face, in seeded "
         "chunks, in this process or on a Ray cluster; prints the faces and their chi-square.")
     parser.add_argument("--die", choices=tuple(STANDARD_SIZES), default="d6")
@@ -478,8 +478,8 @@ def main(argv: list[str] | None = None) -> None:
 
 
 if __name__ == "__main__":
-    # run the imported module's main, so Ray ships ``dice_env.distributed.throw_chunk`` by
+    # run the imported module's main, so Ray ships ``dice_env.studies.distributed.throw_chunk`` by
     # reference and not this ``__main__`` copy by value
-    from dice_env.distributed import main as imported_main
+    from dice_env.studies.distributed import main as imported_main
 
     imported_main()
