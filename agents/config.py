@@ -23,12 +23,10 @@ import textwrap
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 from agents.hyperparams import NON_PPO_KEYS, PPO_HYPERPARAMS, learning_rate
-
-if TYPE_CHECKING:
-    from dice_env.die import Die
+from dice_env.die import Die
 
 # PPO for a one-step task (a contextual bandit): every episode ends after one throw, so the
 # advantage is the reward minus the value (gamma and lambda do not matter); large batches of

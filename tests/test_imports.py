@@ -1,4 +1,7 @@
-"""The import graph of the package and the agents points one way: no cycle, lazy imports too."""
+"""The import graph of the package and the agents points one way: no cycle, no edge upward.
+
+Every import counts: at the top, inside functions, and under ``if TYPE_CHECKING``.
+"""
 
 import ast
 import graphlib
@@ -8,8 +11,9 @@ ROOT = Path(__file__).resolve().parent.parent
 
 
 def _modules() -> dict[str, Path]:
-    """Module name -> file, for agents/ and dice_env/ (a package under its own name)."""
-    files = [*ROOT.glob("agents/*.py"), *ROOT.glob("dice_env/**/*.py")]
+    """Module name -> file, for agents/, benchmarks/ and dice_env/ (a package: its name)."""
+    files = [*ROOT.glob("agents/*.py"), *ROOT.glob("benchmarks/*.py"),
+             *ROOT.glob("dice_env/**/*.py")]
     names = {}
     for path in files:
         parts = path.relative_to(ROOT).with_suffix("").parts
@@ -18,15 +22,11 @@ def _modules() -> dict[str, Path]:
 
 
 def _imports(path: Path, module: str, modules: dict[str, Path]) -> set[str]:
-    """The modules of ``modules`` that ``path`` imports at run time (functions included)."""
+    """The modules of ``modules`` that ``path`` imports anywhere (functions, type hints)."""
     package = module if path.name == "__init__.py" else module.rpartition(".")[0]
     names = set()
     tree = ast.parse(path.read_text())
-    typing_only = {id(n) for block in ast.walk(tree) if isinstance(block, ast.If)
-                   and ast.unparse(block.test) == "TYPE_CHECKING" for n in ast.walk(block)}
     for node in ast.walk(tree):
-        if id(node) in typing_only:  # imports for type hints only: no runtime edge
-            continue
         if isinstance(node, ast.Import):
             names |= {alias.name for alias in node.names}
         elif isinstance(node, ast.ImportFrom):
@@ -55,3 +55,14 @@ def test_the_table_is_the_bottom_layer():
     modules = _modules()
     assert _imports(modules["dice_env.table"], "dice_env.table", modules) == {
         "dice_env.validation"}
+
+
+def test_the_core_imports_no_study_agent_or_benchmark():
+    # the model, the physics, the simulation and the envs sit below the studies and agents
+    modules = _modules()
+    for module, path in modules.items():
+        if not module.startswith("dice_env") or module.startswith("dice_env.studies"):
+            continue
+        above = {m for m in _imports(path, module, modules)
+                 if m.startswith(("dice_env.studies", "agents", "benchmarks"))}
+        assert not above, f"{module} imports {above}"
