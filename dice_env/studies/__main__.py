@@ -14,9 +14,9 @@ import functools
 from pathlib import Path
 
 from dice_env.studies import CHUNKED, KEPT, SIZED, STUDIES, run
+from dice_env.studies.common import DOCS
 from dice_env.studies.distributed import at_least, connected, hand_faces, ray_address
 
-DOCS = Path(__file__).resolve().parents[2] / "docs"
 QUICK = Path("studies-quick")
 
 

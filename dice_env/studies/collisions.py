@@ -35,8 +35,8 @@ from dice_env.die import Die
 from dice_env.group import DieContact, GroupResult, GroupState, group_step, simulate_group
 from dice_env.intervals import wilson
 from dice_env.scene import Scene
+from dice_env.studies.common import DOCS, checked_throws, progress, save_figure
 from dice_env.studies.pairs import HAND, hand_throws, simulate_in_batches, void_reasons
-from dice_env.studies.paper_figures import DOCS, checked_throws, progress, save_figure
 from dice_env.surroundings import TRAY, tray
 
 # Every run takes each step (no flight jumps: a group's jumps depend on all its dice), so that

@@ -31,9 +31,9 @@ from dice_env.group import GroupResult
 from dice_env.intervals import wilson
 from dice_env.rotations import axis_angle
 from dice_env.scene import Scene
+from dice_env.studies.common import DOCS, checked_throws, progress, save_figure
 from dice_env.studies.fairness import random_orientations
 from dice_env.studies.pairs import TOTALS, simulate_in_batches, triangle, void_reasons
-from dice_env.studies.paper_figures import DOCS, checked_throws, progress, save_figure
 from dice_env.surroundings import CRAPS, craps
 
 # Throws per cell in the full and the quick run; the fewest a run takes per cell.

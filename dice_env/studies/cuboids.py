@@ -27,8 +27,8 @@ import numpy as np
 from dice_env.die import Die
 from dice_env.intervals import wilson
 from dice_env.scene import Ground, Scene
+from dice_env.studies.common import DOCS, checked_throws, progress, save_figure
 from dice_env.studies.fairness import VIGOROUS, Vigour
-from dice_env.studies.paper_figures import DOCS, checked_throws, progress, save_figure
 from dice_env.studies.shapes import Faces, hand_throws, throw_faces
 from dice_env.table import DIE_EDGE, RESTITUTION, damping_for_restitution
 

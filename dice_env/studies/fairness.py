@@ -24,7 +24,7 @@ from dice_env.die import Die
 from dice_env.intervals import wilson
 from dice_env.scene import Scene
 from dice_env.simulate import Result, State, simulate
-from dice_env.studies.paper_figures import DOCS, progress, save_figure
+from dice_env.studies.common import DOCS, progress, save_figure
 
 # Batch size of one kernel call (the kernel runs the batch in parallel over dice).
 BATCH = 2048

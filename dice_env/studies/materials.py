@@ -27,9 +27,9 @@ from scipy import stats
 from dice_env import materials
 from dice_env.intervals import wilson
 from dice_env.simulate import UP, State, simulate
+from dice_env.studies.common import DOCS, checked_throws, progress, save_figure
 from dice_env.studies.cuboids import GENTLE
 from dice_env.studies.fairness import VIGOROUS, Vigour, throw_energy, vigorous_throws
-from dice_env.studies.paper_figures import DOCS, checked_throws, progress, save_figure
 from dice_env.studies.shapes import BATCH, Faces
 
 # Throws per material: (vigorous, gentle) in the full and the quick run.

@@ -31,12 +31,12 @@ from dice_env.intervals import wilson
 from dice_env.scene import Scene
 from dice_env.simulate import State
 from dice_env.studies.chunks import kept_chunks, prepare
+from dice_env.studies.common import DOCS, checked_throws, progress, save_figure
 from dice_env.studies.fairness import (
     random_directions,
     random_orientations,
     toward_table,
 )
-from dice_env.studies.paper_figures import DOCS, checked_throws, progress, save_figure
 from dice_env.surroundings import TRAY, tray
 
 # Throws of the pair in the full and the quick run; throws per kernel call; throws per seeded

@@ -20,12 +20,11 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
-from tqdm import tqdm
 
 from dice_env.paper import PaperRun, ground_cube, paper_scene, real_throw_cube
 from dice_env.scene import ContactLaw
+from dice_env.studies.common import DOCS, progress, save_figure
 
-DOCS = Path(__file__).resolve().parents[2] / "docs"
 # Seed of the real throw's random initial angular momentum (the listing's rand(3,1)*0.75+1e-6).
 THROW_SEED = 0
 # Ground-cube variants of Figures 6–12: (figure label, keyword overrides of ground_cube).
@@ -38,26 +37,6 @@ VARIANTS = {
     "fig11_S1e6_20000": ("Figures 11–12: S = 1e6, clockmax 20000",
                          {"S": 1e6, "clockmax": 20000}),
 }
-
-
-def save_figure(fig: plt.Figure, path: Path) -> None:
-    """Write ``fig`` as a PNG (creating the folder) and close it."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=110, bbox_inches="tight")
-    plt.close(fig)
-
-
-def progress(total: int, desc: str) -> tqdm:
-    """The studies' progress bar."""
-    return tqdm(total=total, desc=desc, unit="run", dynamic_ncols=True)
-
-
-def checked_throws(throws: object, least: int) -> int | None:
-    """A study's ``throws`` checked: None (the study's own size) or an int >= ``least``."""
-    if throws is not None and (not isinstance(throws, (int, np.integer))
-                               or isinstance(throws, bool) or throws < least):
-        raise ValueError(f"throws must be an int >= {least}, got {throws!r}")
-    return None if throws is None else int(throws)
 
 
 # ---- the claims, each as the number it rests on -------------------------------------------

@@ -12,8 +12,7 @@ import numpy as np
 
 from dice_env.die import Die
 from dice_env.pips import PRESETS, SOURCES, Pips, cap_properties
-
-DOCS = Path(__file__).resolve().parents[2] / "docs"
+from dice_env.studies.common import DOCS
 
 
 def run(out: Path = DOCS, quick: bool = False) -> dict[str, float]:

@@ -31,6 +31,7 @@ from dice_env.die import STANDARD_SIZES, Die
 from dice_env.intervals import wilson
 from dice_env.scene import Scene
 from dice_env.simulate import UP, Result, State, simulate
+from dice_env.studies.common import DOCS, checked_throws, progress, save_figure
 from dice_env.studies.fairness import (
     VIGOROUS,
     Vigour,
@@ -38,7 +39,6 @@ from dice_env.studies.fairness import (
     random_orientations,
     vigorous_throws,
 )
-from dice_env.studies.paper_figures import DOCS, checked_throws, progress, save_figure
 from dice_env.table import DIE_EDGE
 
 DICE = tuple(STANDARD_SIZES)

@@ -31,8 +31,8 @@ from dice_env.die import Die
 from dice_env.paper import paper_scene
 from dice_env.scene import ContactLaw, Ground, Scene
 from dice_env.simulate import Result, State, simulate
+from dice_env.studies.common import DOCS, progress, save_figure
 from dice_env.studies.fairness import Vigour, vigorous_throws
-from dice_env.studies.paper_figures import DOCS, progress, save_figure
 
 STABLE, DRIFTING, BLOWUP = 0, 1, 2
 CLASS_NAMES = ("stable", "drifting", "blowing up")

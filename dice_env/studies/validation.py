@@ -31,8 +31,8 @@ from dice_env.rotations import up_rotation
 from dice_env.scene import Scene
 from dice_env.simulate import UP, State, simulate
 from dice_env.studies import cuboids, weldon
+from dice_env.studies.common import DOCS
 from dice_env.studies.fairness import energy_throws, face_down, throw_energy
-from dice_env.studies.paper_figures import DOCS
 
 COMMAND = "python -m dice_env.studies validation"
 SEED = 2026

@@ -44,8 +44,8 @@ from dice_env.pips import Pips
 from dice_env.scene import Scene
 from dice_env.simulate import State
 from dice_env.studies.chunks import kept_chunks, prepare
+from dice_env.studies.common import DOCS, checked_throws, progress, save_figure
 from dice_env.studies.fairness import random_directions, random_orientations
-from dice_env.studies.paper_figures import DOCS, checked_throws, progress, save_figure
 from dice_env.studies.shapes import Faces, throw_faces
 
 # Weldon's data (Pearson 1900, Kemp & Kemp 1991): throws of twelve dice with 0..12 dice

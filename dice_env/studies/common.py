@@ -1,0 +1,34 @@
+"""What every study shares: the docs folder, its figures, its progress bar, its throw count."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt
+import numpy as np
+from tqdm import tqdm
+
+DOCS = Path(__file__).resolve().parents[2] / "docs"  # where the full studies write their pages
+
+
+def save_figure(fig: plt.Figure, path: Path) -> None:
+    """Write ``fig`` as a PNG (creating the folder) and close it."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=110, bbox_inches="tight")
+    plt.close(fig)
+
+
+def progress(total: int, desc: str) -> tqdm:
+    """The studies' progress bar."""
+    return tqdm(total=total, desc=desc, unit="run", dynamic_ncols=True)
+
+
+def checked_throws(throws: object, least: int) -> int | None:
+    """A study's ``throws`` checked: None (the study's own size) or an int >= ``least``."""
+    if throws is not None and (not isinstance(throws, (int, np.integer))
+                               or isinstance(throws, bool) or throws < least):
+        raise ValueError(f"throws must be an int >= {least}, got {throws!r}")
+    return None if throws is None else int(throws)
