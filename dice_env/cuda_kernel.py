@@ -6,7 +6,7 @@ function that a CUDA kernel calls again as a device function, and so on down the
 each piece (:func:`~dice_env.kernel.vertex_on_plane`, :func:`~dice_env.kernel.rotate`, ...)
 has one definition and two targets. What the CPU kernel allocates per die lies here in each
 thread's local memory, of a size fixed when the kernel is compiled: up to
-:data:`MAX_VERTICES` vertices and :data:`MAX_PLANES` planes.
+:data:`GPU_MAX_VERTICES` vertices and :data:`MAX_PLANES` planes.
 
 The same step in the same double precision, but not bit for bit: the GPU's compiler fuses a
 multiply and an add into one operation with a single rounding (FMA), and its ``sin`` comes
@@ -41,7 +41,7 @@ from dice_env.kernel import (
     advance,
 )
 
-MAX_VERTICES = 32  # the most vertices of a die on the GPU (a d12 has 20)
+GPU_MAX_VERTICES = 32  # the most vertices of a die on the GPU (a d12 has 20)
 MAX_PLANES = 8  # the most planes (a tray has 5)
 BLOCK = 128  # threads per block
 
@@ -54,10 +54,10 @@ def simulate_cuda(dice: Dice, body: Body, contact: Contact, options: Options, st
     if i < dice.x.shape[0]:
         advance(i, dice, body, contact, options, stops, records, out, Scratch(
             cuda.local.array((3, 3), np.float64), cuda.local.array((3, 3), np.float64),
-            cuda.local.array((MAX_VERTICES, 3), np.float64),
-            cuda.local.array((MAX_PLANES, MAX_VERTICES), np.float64),
-            cuda.local.array((MAX_PLANES, MAX_VERTICES, 3), np.float64),
-            cuda.local.array((MAX_PLANES, MAX_VERTICES), np.bool_),
+            cuda.local.array((GPU_MAX_VERTICES, 3), np.float64),
+            cuda.local.array((MAX_PLANES, GPU_MAX_VERTICES), np.float64),
+            cuda.local.array((MAX_PLANES, GPU_MAX_VERTICES, 3), np.float64),
+            cuda.local.array((MAX_PLANES, GPU_MAX_VERTICES), np.bool_),
             cuda.local.array(MAX_PLANES, np.float64)))
 
 
@@ -66,15 +66,15 @@ def run(dice: Dice, body: Body, contact: Contact, options: Options, stops: Stops
     """Advance a batch of dice on the GPU, in place in the host arrays of ``dice`` and ``out``.
 
     The groups are :func:`dice_env.kernel.simulate_batch`'s. Refused (``ValueError``): records,
-    a die of more than :data:`MAX_VERTICES` vertices, more than :data:`MAX_PLANES` planes.
+    a die of more than :data:`GPU_MAX_VERTICES` vertices, more than :data:`MAX_PLANES` planes.
     """
     if records.x.shape[1] > 0:
         raise ValueError("record_every must be 0 with device='cuda': records are kept on the "
                          "CPU only")
     n_vertices, n_planes = body.vertices.shape[0], contact.planes.shape[0]
-    if n_vertices > MAX_VERTICES or n_planes > MAX_PLANES:
-        raise ValueError(f"scene must have a die of at most {MAX_VERTICES} vertices and at most "
-                         f"{MAX_PLANES} planes with device='cuda', got {n_vertices} vertices "
+    if n_vertices > GPU_MAX_VERTICES or n_planes > MAX_PLANES:
+        raise ValueError(f"scene must have a die of at most {GPU_MAX_VERTICES} vertices and at "
+                         f"most {MAX_PLANES} planes with device='cuda', got {n_vertices} vertices "
                          f"and {n_planes} planes")
     on_device = [_to_device(group) for group in (dice, body, contact, options, stops, records,
                                                   out)]
