@@ -10,6 +10,7 @@ import math
 
 import numpy as np
 
+from dice_env.checks import check_positive
 from dice_env.die import Die
 from dice_env.rotations import up_rotation
 from dice_env.scene import Ground, Scene
@@ -23,7 +24,6 @@ from dice_env.table import (
     damping_for_restitution,
     rebound,
 )
-from dice_env.validation import check_positive
 
 
 def table_scene(

@@ -32,9 +32,9 @@ import numpy as np
 
 from dice_env import pips as drilled
 from dice_env import polyhedra
+from dice_env.checks import check_finite, check_positive, check_range
 from dice_env.pips import Pips
 from dice_env.table import DIE_EDGE, DIE_MASS
-from dice_env.validation import check_finite, check_positive, check_range
 
 # The d6's corner signs in the order of the paper's cube.m (node k = row k).
 _CORNER_SIGNS = np.array(

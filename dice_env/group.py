@@ -22,6 +22,7 @@ from typing import ClassVar
 import numpy as np
 
 from dice_env import group_kernel, kernel
+from dice_env.checks import check_nonnegative, check_positive, check_range
 from dice_env.die import Die
 from dice_env.scene import MAX_STEPS, FrictionLaw, Scene, as_enum, critical_step
 from dice_env.simulate import (
@@ -36,7 +37,6 @@ from dice_env.simulate import (
     thread_count,
 )
 from dice_env.table import DIE_MASS, STIFFNESS, damping_for_restitution
-from dice_env.validation import check_nonnegative, check_positive, check_range
 
 # Die against die: plastic on plastic. Estimates: no measurement of dice striking dice is
 # known to us. Restitution 0.5, about the die's on a hard table; friction 0.4, within the

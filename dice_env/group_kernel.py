@@ -614,7 +614,7 @@ def pair_contacts(a: int, b: int, n: tuple, world: np.ndarray, x: np.ndarray, q:
 
 
 @njit(cache=True)
-def simulate_group(g: int, dice: GroupDice, bodies: Bodies, hulls: Hulls, pair: Pair,
+def advance_group(g: int, dice: GroupDice, bodies: Bodies, hulls: Hulls, pair: Pair,
                    contact: Contact, options: Options, stops: GroupStops, records: GroupRecords,
                    out: GroupOutcome) -> None:
     """Advance throw ``g`` (its N dice) in place; see :func:`simulate_groups`."""
@@ -984,8 +984,8 @@ def simulate_groups(dice: GroupDice, bodies: Bodies, hulls: Hulls, pair: Pair,
     releases the GIL, so another thread can set ``out.abort``.
     """
     for g in prange(dice.x.shape[0]):  # prange's index is unsigned: one signature for both
-        simulate_group(np.int64(g), dice, bodies, hulls, pair, contact, options, stops, records,
-                       out)
+        advance_group(np.int64(g), dice, bodies, hulls, pair, contact, options, stops, records,
+                      out)
 
 
 @njit(cache=True, nogil=True)
@@ -994,4 +994,4 @@ def simulate_groups_serial(dice: GroupDice, bodies: Bodies, hulls: Hulls, pair: 
                            records: GroupRecords, out: GroupOutcome) -> None:
     """:func:`simulate_groups` on the calling thread, with the same results."""
     for g in range(dice.x.shape[0]):
-        simulate_group(g, dice, bodies, hulls, pair, contact, options, stops, records, out)
+        advance_group(g, dice, bodies, hulls, pair, contact, options, stops, records, out)

@@ -55,10 +55,10 @@ from dataclasses import dataclass
 
 from dice_env import table
 from dice_env.calibration import measured_restitution
+from dice_env.checks import check_positive, check_range
 from dice_env.die import Die
 from dice_env.scene import Ground, Scene
 from dice_env.table import damping_for_restitution
-from dice_env.validation import check_positive, check_range
 
 
 @dataclass(frozen=True)

@@ -49,7 +49,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from dice_env.validation import check_nonnegative, check_positive, check_range
+from dice_env.checks import check_nonnegative, check_positive, check_range
 
 SHAPES = ("spherical cap",)
 # Cellulose acetate, the body of casino dice (kg/m^3): AZoM, "Cellulose Acetate" (Plascams

@@ -14,8 +14,8 @@ from enum import IntEnum
 import numpy as np
 
 from dice_env import table
+from dice_env.checks import check_finite, check_nonnegative, check_positive, check_range
 from dice_env.die import Die
-from dice_env.validation import check_finite, check_nonnegative, check_positive, check_range
 
 MAX_STEPS = 10**9  # steps of one throw to t_max: more is refused (about a minute a die)
 

@@ -16,10 +16,10 @@ import numba
 import numpy as np
 
 from dice_env import group_kernel, kernel, vector_kernel
+from dice_env.checks import as_batch, check_finite, check_range
 from dice_env.compile_notice import announce
 from dice_env.rotations import orthonormality_error
 from dice_env.scene import ContactLaw, FrictionLaw, Scene, Scheme
-from dice_env.validation import as_batch, check_finite, check_range
 
 
 @dataclass
@@ -363,7 +363,7 @@ ROTATION_TOL = 1e-6  # State.orientation's allowed orthonormality error (a long 
 COMPILES = {
     kernel.simulate_batch: ((kernel.simulate_one,), "the die's kernel", 35.0),
     vector_kernel.simulate_batch: ((vector_kernel._run_tile,), "the paper scene's kernel", 50.0),
-    group_kernel.simulate_groups: ((group_kernel.simulate_group,), "the kernel of several dice",
+    group_kernel.simulate_groups: ((group_kernel.advance_group,), "the kernel of several dice",
                                    55.0),
 }
 _LONG_RUN = 2_000_000  # die-steps (about 0.1 s) from which a run goes on a worker thread

@@ -7,8 +7,8 @@ the table's material unless given other ``stiffness``, ``damping``, ``friction``
 
 from __future__ import annotations
 
+from dice_env.checks import check_positive
 from dice_env.scene import Wall
-from dice_env.validation import check_positive
 
 # A common felt-lined dice tray: 30 cm x 20 cm inside.
 TRAY = (0.30, 0.20)

@@ -23,7 +23,7 @@ gives that exact value (Schwager & Pöschel 2007) and :func:`damping_for_restitu
 it, so the default damping gives the target restitution;
 :func:`dice_env.calibration.measured_restitution` measures what the simulator actually produces.
 This module is the package's bottom layer: it imports nothing from the rest of it but
-:mod:`dice_env.validation`.
+:mod:`dice_env.checks`.
 """
 
 from __future__ import annotations
@@ -32,7 +32,7 @@ import math
 
 import numpy as np
 
-from dice_env.validation import check_positive, check_range
+from dice_env.checks import check_positive, check_range
 
 # A common 16 mm game die (m, kg).
 DIE_EDGE = 0.016

@@ -54,7 +54,7 @@ def test_no_import_cycle():
 def test_the_table_is_the_bottom_layer():
     modules = _modules()
     assert _imports(modules["dice_env.table"], "dice_env.table", modules) == {
-        "dice_env.validation"}
+        "dice_env.checks"}
 
 
 def test_the_core_imports_no_study_agent_or_benchmark():

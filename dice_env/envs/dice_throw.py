@@ -9,6 +9,7 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
+from dice_env.checks import as_floats
 from dice_env.envs.task import (
     ACTION_DIM,
     ORIENTATION_DIM,
@@ -19,7 +20,6 @@ from dice_env.envs.task import (
     check_task_keywords,
     make_task,
 )
-from dice_env.validation import as_floats
 
 RENDER_MODES = ("human", "rgb_array", "rgb_array_list")
 RENDER_FPS = 30

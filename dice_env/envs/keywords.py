@@ -19,11 +19,11 @@ from enum import IntEnum
 
 import numpy as np
 
+from dice_env.checks import check_nonnegative, check_positive, check_range
 from dice_env.die import STANDARD_SIZES, Die
 from dice_env.scene import ContactLaw, FrictionLaw, Ground, Rest, Scene, Scheme, Wall
 from dice_env.surroundings import PRESETS
 from dice_env.surroundings import walls as preset_walls
-from dice_env.validation import check_nonnegative, check_positive, check_range
 
 DEFAULT_T_MAX = 5.0  # s, without a base scene: gentle throws settle in well under 2 s
 MAX_STEPS = 10**7  # steps per throw: about 2.5 s for one die that never settles, on one core

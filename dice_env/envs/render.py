@@ -28,12 +28,12 @@ from functools import lru_cache
 
 import numpy as np
 
+from dice_env.checks import check_finite, check_positive, check_range
 from dice_env.die import Die
 from dice_env.envs.task import ThrowTask
 from dice_env.rotations import axis_angle
 from dice_env.scene import Scene
 from dice_env.surroundings import walls
-from dice_env.validation import check_finite, check_positive, check_range
 
 # In-face axes (u, v) of the d6's pip faces, body frame, so that u x v is the outward normal.
 FACE_U = np.array([[1, 0, 0], [0, 1, 0], [0, 0, 1], [0, 0, 1], [0, 0, 1], [0, 1, 0]], float)

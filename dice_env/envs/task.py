@@ -23,6 +23,7 @@ from typing import Any
 import numba
 import numpy as np
 
+from dice_env.checks import as_floats, check_nonnegative, check_positive, check_range
 from dice_env.die import Die
 from dice_env.envs.keywords import MAX_STEPS, build_scene, check_face, check_scene
 from dice_env.group import GroupResult, GroupState, group_step, simulate_group
@@ -34,7 +35,6 @@ from dice_env.rotations import (
 )
 from dice_env.scene import Scene
 from dice_env.simulate import Result, State, lock_energy, simulate
-from dice_env.validation import as_floats, check_nonnegative, check_positive, check_range
 
 ORIENTATION_DIM = 9  # the observation's orientation, row-major 3x3, after the target's one-hot
 ACTION_DIM = 6  # release velocity (3) + angular velocity (3), world frame, in [-1, 1]
