@@ -9,7 +9,7 @@ from __future__ import annotations
 import functools
 import math
 from dataclasses import dataclass, field, replace
-from enum import IntEnum
+from enum import Enum, IntEnum
 
 import numpy as np
 
@@ -21,12 +21,15 @@ MAX_STEPS = 10**9  # steps of one throw to t_max: more is refused (about a minut
 
 
 def as_enum(name: str, kind: type[IntEnum], value: object) -> IntEnum:
-    """``value`` as a member of ``kind``: a member, its name (any case) or its int value."""
+    """``value`` as a member of ``kind``: a member, its name (any case) or its int value.
+
+    A member of another enum is refused, whatever its value.
+    """
     if isinstance(value, kind):
         return value
     if isinstance(value, str) and value.upper() in kind.__members__:
         return kind[value.upper()]
-    if isinstance(value, (int, np.integer)) and not isinstance(value, bool) \
+    if isinstance(value, (int, np.integer)) and not isinstance(value, (bool, Enum)) \
             and value in kind._value2member_map_:
         return kind(value)
     names = ", ".join(repr(m.name.lower()) for m in kind)

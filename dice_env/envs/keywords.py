@@ -15,13 +15,12 @@ from __future__ import annotations
 
 import math
 from dataclasses import replace
-from enum import IntEnum
 
 import numpy as np
 
 from dice_env.checks import check_nonnegative, check_positive, check_range
 from dice_env.die import STANDARD_SIZES, Die
-from dice_env.scene import ContactLaw, FrictionLaw, Ground, Rest, Scene, Scheme, Wall
+from dice_env.scene import ContactLaw, FrictionLaw, Ground, Rest, Scene, Scheme, Wall, as_enum
 from dice_env.surroundings import PRESETS
 from dice_env.surroundings import walls as preset_walls
 
@@ -84,7 +83,7 @@ def build_scene(
     for name, value, kind in (("scheme", scheme, Scheme),
                               ("friction_law", friction_law, FrictionLaw)):
         if value is not None:
-            changes[name] = _choice(name, value, kind)
+            changes[name] = as_enum(name, kind, value)
     built = scene.with_(
         die=_die(_base_die(scene.die, die), _size(die, size, edge), mass, load_face,
                  load_fraction, load_depth, size_name="size" if edge is None else "edge"),
@@ -263,7 +262,7 @@ def _ground(
     """``base`` with the table keywords given."""
     changes = _given(stiffness=stiffness, damping=damping, friction=friction)
     if contact_law is not None:
-        changes["contact_law"] = _choice("contact_law", contact_law, ContactLaw)
+        changes["contact_law"] = as_enum("contact_law", ContactLaw, contact_law)
     if tilt_deg is not None:
         check_range("tilt_deg", tilt_deg, 0.0, 90.0, high_open=True)
         changes["normal"] = Ground.tilted(tilt_deg).normal
@@ -278,17 +277,6 @@ def _rest(base: Rest, speed: float | None, hold: float | None) -> Rest:
         check_nonnegative("rest_hold", hold)
     changes = _given(speed=speed, hold=hold)
     return replace(base, **changes) if changes else base
-
-
-def _choice(name: str, value: object, kind: type[IntEnum]) -> IntEnum:
-    """``value`` as a member of ``kind``: a member itself or its name in any case."""
-    if isinstance(value, kind):
-        return value
-    members = {member.name.lower(): member for member in kind}
-    if isinstance(value, str) and value.lower() in members:
-        return members[value.lower()]
-    raise ValueError(f"{name} must be one of {sorted(members)} or a {kind.__name__} member, "
-                     f"got {value!r}")
 
 
 def _given(**values: object) -> dict[str, object]:

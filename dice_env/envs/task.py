@@ -20,7 +20,6 @@ from dataclasses import dataclass, replace
 from functools import cached_property
 from typing import Any
 
-import numba
 import numpy as np
 
 from dice_env.checks import as_floats, check_nonnegative, check_positive, check_range
@@ -34,7 +33,7 @@ from dice_env.rotations import (
     up_rotation,
 )
 from dice_env.scene import Scene
-from dice_env.simulate import Result, State, lock_energy, simulate
+from dice_env.simulate import Result, State, lock_energy, simulate, thread_count
 
 ORIENTATION_DIM = 9  # the observation's orientation, row-major 3x3, after the target's one-hot
 ACTION_DIM = 6  # release velocity (3) + angular velocity (3), world frame, in [-1, 1]
@@ -116,7 +115,7 @@ class ThrowTask:
                                                for s in self.die_scenes):
             raise ValueError("until='decided' needs a horizontal table with gravity (no energy "
                              "bound decides the face on a slope); use until='rest'")
-        check_num_threads(self.num_threads)
+        thread_count(self.num_threads)  # refuses a count numba does not have
         for scene in self.die_scenes:
             check_scene(scene, self.release_height)
         self._check_walls()
@@ -784,15 +783,6 @@ def check_num_dice(num_dice: object, die: object) -> tuple[Any, ...]:
     if num_dice is not None and len(die) != num_dice:
         raise ValueError(f"die must hold num_dice={num_dice} dice, got {len(die)}: {die!r}")
     return tuple(die)
-
-
-def check_num_threads(value: object) -> None:
-    """``ValueError`` unless ``value`` is None or an int in [1, numba's thread count]."""
-    limit = numba.config.NUMBA_NUM_THREADS
-    if value is not None and (isinstance(value, bool) or not isinstance(
-            value, (int, np.integer)) or not 1 <= value <= limit):
-        raise ValueError(f"num_threads must be None or an int in [1, {limit}] "
-                         f"(numba.config.NUMBA_NUM_THREADS), got {value!r}")
 
 
 def check_task_keywords(keywords: dict[str, object]) -> dict[str, object]:
