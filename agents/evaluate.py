@@ -25,7 +25,7 @@ from agents.baselines import HandThrower, RandomThrower, Thrower, decode
 from agents.config import Config, field_docs
 from agents.episodes import Batch, PolicyThrower, make_eval_task, throw_impacts
 from agents.oracle import CEM, score, score_noise, search
-from agents.progress import announce_compile, bar
+from agents.progress import bar
 from agents.report import headline_table, verdict, write_report
 from dice_env.envs.task import ThrowTask
 from dice_env.intervals import Z95, wilson_bounds
@@ -292,7 +292,6 @@ def evaluate_run(
     seed = config.seed + 2 * 10**6
     start = time.perf_counter()
     log(f"evaluating {run}: {throws} throws per thrower")
-    announce_compile(log)
     result = compare(task, throwers, throws, oracle_observations, seed, episode=episode,
                      progress=progress, log=log)
     batch, raw = result["batch"], result["throws"]

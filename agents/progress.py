@@ -1,16 +1,14 @@
-"""No silent waits: progress bars that can be turned off, a notice before the kernel compiles."""
+"""No silent waits: progress bars that can be turned off.
+
+A kernel about to compile says so itself (:mod:`dice_env.compile_notice`).
+"""
 
 from __future__ import annotations
 
 import sys
 from collections.abc import Iterator
 from contextlib import contextmanager
-from pathlib import Path
 from typing import Any
-
-# The first simulation in a checkout compiles the kernel (numba caches it next to the source).
-COMPILE_NOTICE = ("compiling the simulation kernel (first run in this checkout, cached "
-                  "afterwards): about 30 s on a free machine, up to 3 min on a busy one")
 
 
 class Bar:
@@ -48,20 +46,3 @@ def bar(total: int, desc: str, unit: str, enabled: bool = True) -> Iterator[Bar]
         yield b
     finally:
         b.close()
-
-
-def kernel_cached() -> bool:
-    """Whether numba's cache already holds the simulation kernel (index files next to it)."""
-    from dice_env import kernel
-
-    try:
-        folder = Path(kernel.simulate_batch._cache.cache_path)
-    except AttributeError:  # numba without a file cache: assume a compile
-        return False
-    return any(folder.glob("kernel.simulate_*.nbi"))
-
-
-def announce_compile(log: Any = print) -> None:
-    """Say that the kernel will compile (and how long it takes) when it is not cached yet."""
-    if not kernel_cached():
-        log(COMPILE_NOTICE)

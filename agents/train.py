@@ -38,7 +38,6 @@ import time
 from pathlib import Path
 from typing import Any
 
-import gymnasium as gym
 import numpy as np
 from stable_baselines3 import PPO
 from stable_baselines3.common.callbacks import (
@@ -47,11 +46,12 @@ from stable_baselines3.common.callbacks import (
     CheckpointCallback,
     EvalCallback,
 )
-from stable_baselines3.common.vec_env import VecEnv, VecMonitor
+from stable_baselines3.common.vec_env import VecEnv
 
 import dice_env  # noqa: F401  (registers DiceThrow-v0)
 from agents.config import Config, is_run_folder, parse_config
-from agents.progress import Bar, announce_compile
+from agents.progress import Bar
+from dice_env.envs.sb3 import make_sb3_env
 
 CHECKPOINT_PREFIX = "ppo"
 INTERRUPTED = 130  # exit status after Ctrl-C (128 + SIGINT), as shells report it
@@ -64,16 +64,6 @@ class Interrupted(Exception):
         super().__init__(f"{stage} of {run} interrupted")
         self.run = run
         self.stage = stage
-
-
-def make_vec_env(env_id: str, n_envs: int, seed: int, **env_kwargs: Any) -> VecEnv:
-    """``n_envs`` envs as one SB3 VecEnv over the native batch (one kernel call per step)."""
-    from dice_env.envs.sb3 import DiceThrowSB3VecEnv
-
-    env = VecMonitor(DiceThrowSB3VecEnv(gym.make_vec(env_id, num_envs=n_envs,
-                                                     vectorization_mode=None, **env_kwargs)))
-    env.seed(seed)
-    return env
 
 
 def rollout_end(start: int, total: int, rollout: int) -> int:
@@ -228,9 +218,10 @@ def train(config: Config, run: Path | None = None) -> Path:
     params = config.hyperparams()
     n_envs = params["n_envs"]
     env_kwargs = {**config.env_kwargs(), **config.num_threads_kwargs()}
-    env = make_vec_env(config.env_id, n_envs, config.seed, **{**env_kwargs, **params["train_env"]})
-    eval_env = make_vec_env(config.env_id, min(n_envs, config.eval_episodes), config.seed + 10**6,
-                            **env_kwargs)
+    env = make_sb3_env(n_envs, config.seed, env_id=config.env_id,
+                       **{**env_kwargs, **params["train_env"]})
+    eval_env = make_sb3_env(min(n_envs, config.eval_episodes), config.seed + 10**6,
+                            env_id=config.env_id, **env_kwargs)
     tensorboard = run / "tb" if importlib.util.find_spec("tensorboard") else None
     if tensorboard is None:
         print("tensorboard is not installed: no TensorBoard logs", file=sys.stderr)
@@ -238,7 +229,6 @@ def train(config: Config, run: Path | None = None) -> Path:
     fresh = model is None
     if fresh and resuming:
         print(f"{run} has no readable checkpoint: training starts over", file=sys.stderr)
-    announce_compile()
     if model is None:
         model = PPO("MlpPolicy", env, seed=config.seed, tensorboard_log=tensorboard,
                     device="cpu", verbose=0, **config.ppo_kwargs(env.get_attr("task")[0].scene.die))
