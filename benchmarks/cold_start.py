@@ -2,11 +2,14 @@
 
     python benchmarks/cold_start.py             # cold (an empty numba cache), then warm
     python benchmarks/cold_start.py --warm-only # the cache as it is
+    python benchmarks/cold_start.py --suite     # also: precompile, then the README's tests
 
 Each run is a fresh process that imports ``dice_env`` and calls, one after another, the entry
 points below, timing each first call; the cold run gets an empty ``NUMBA_CACHE_DIR`` (every
-kernel a call needs compiles then), the warm run the cache the cold run left. Prints a table
-and writes ``benchmarks/results/cold_start.json`` (``--out`` to change).
+kernel a call needs compiles then), the warm run the cache the cold run left. ``--suite``
+then times, in a second empty cache, ``python -m dice_env.precompile`` and the README's test
+command after it (``pytest -n auto``). Prints a table and writes
+``benchmarks/results/cold_start.json`` (``--out`` to change).
 """
 
 from __future__ import annotations
@@ -68,10 +71,25 @@ def run(cache: Path) -> tuple[list[float], list[str]]:
     return json.loads(done.stdout.strip().splitlines()[-1]), notices
 
 
+def suite(cache: Path) -> dict[str, object]:
+    """Seconds of ``python -m dice_env.precompile`` and then the tests, with ``cache`` empty."""
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(cache)}
+    seconds = {}
+    for name, command in (("precompile", ["-m", "dice_env.precompile"]),
+                          ("tests", ["-m", "pytest", "-n", "auto", "-p", "no:cacheprovider"])):
+        start = time.perf_counter()
+        done = subprocess.run([sys.executable, *command], cwd=ROOT, env=env,
+                              capture_output=True, text=True, check=True)
+        seconds[name] = time.perf_counter() - start
+    return {"seconds": seconds, "summary": done.stdout.strip().splitlines()[-1]}
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--warm-only", action="store_true",
                         help="time with the cache as it is (NUMBA_CACHE_DIR or numba's own)")
+    parser.add_argument("--suite", action="store_true",
+                        help="also time precompile and the test suite in an empty cache")
     parser.add_argument("--out", type=Path, default=ROOT / "benchmarks/results/cold_start.json")
     args = parser.parse_args()
     runs, notices = {}, {}
@@ -83,6 +101,10 @@ def main() -> None:
         with tempfile.TemporaryDirectory(prefix="numba-cache-") as folder:
             runs["cold"], notices["cold"] = run(Path(folder))
             runs["warm"], notices["warm"] = run(Path(folder))
+    tests = None
+    if args.suite:
+        with tempfile.TemporaryDirectory(prefix="numba-cache-") as folder:
+            tests = suite(Path(folder))
     names = [name for name, _ in ENTRY_POINTS]
     print(f"{'entry point':40s}" + "".join(f"{kind:>10s}" for kind in runs))
     for i, name in enumerate(names):
@@ -90,7 +112,15 @@ def main() -> None:
     print(f"{'all, one after another':40s}" + "".join(f"{sum(t):9.1f}s" for t in runs.values()))
     for kind, lines in notices.items():
         print(f"{kind}: {len(lines)} compile notice(s)" + "".join(f"\n  {line}" for line in lines))
-    record = {"entry_points": names, "seconds": runs, "notices": notices, "cpus": os.cpu_count(),
+    if tests is not None:
+        print(f"{'precompile, empty cache':40s}{tests['seconds']['precompile']:9.1f}s")
+        print(f"{'then pytest -n auto':40s}{tests['seconds']['tests']:9.1f}s  "
+              f"({tests['summary']})")
+    commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT,
+                            capture_output=True, text=True).stdout.strip()
+    record = {"command": " ".join(["python", "benchmarks/cold_start.py", *sys.argv[1:]]),
+              "commit": commit, "entry_points": names, "seconds": runs, "notices": notices,
+              "suite": tests, "cpus": os.cpu_count(),
               "load_average": os.getloadavg(), "python": platform.python_version(),
               "started": time.strftime("%Y-%m-%d %H:%M", time.gmtime(started))}
     args.out.parent.mkdir(parents=True, exist_ok=True)
