@@ -193,13 +193,7 @@ def group_step(scene: Scene, dice: Sequence[Die], contact: DieContact = DieConta
                              f"{contact.damping:g} N s/m (DieContact) on the dice's reduced "
                              f"mass {reduced:.3g} kg: bring them nearer the defaults")
         critical = min(critical, pair)
-    if scene.dt is None:
-        return scene.safety * critical
-    if scene.dt > critical and not scene.allow_unstable:
-        raise ValueError(f"scene.dt must be <= the dice's critical step {critical:.6g} s "
-                         f"(die against die included), got {scene.dt:g}; pass "
-                         "allow_unstable=True to run it anyway")
-    return scene.dt
+    return scene.step_within(critical, "the dice on the planes and against each other")
 
 
 def simulate_group(

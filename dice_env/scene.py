@@ -254,13 +254,7 @@ class Scene:
                            as_enum("friction_law", FrictionLaw, self.friction_law))
         if self.dt is not None:
             check_positive("dt", self.dt)
-            if self.dt > self.critical_dt and not self.allow_unstable:
-                raise ValueError(
-                    f"dt must be <= the critical step {self.critical_dt:.6g} s of "
-                    f"{self.stiffest_plane()}, got {self.dt:g}; pass allow_unstable=True to run "
-                    "it anyway"
-                )
-        step = self.step
+        step = self.step_within(self.critical_dt, self.stiffest_plane())
         if not (math.isfinite(step) and 0.0 < step <= self.t_max):
             raise ValueError(
                 f"the step must be in (0, t_max = {self.t_max:g}] s, got {step:.6g} s from "
@@ -327,6 +321,19 @@ class Scene:
     def step(self) -> float:
         """The step used: ``dt`` if given, else ``safety * critical_dt``."""
         return self.dt if self.dt is not None else self.safety * self.critical_dt
+
+    def step_within(self, critical: float, of: str) -> float:
+        """The step of a run whose critical step is ``critical`` (s), set by ``of``.
+
+        ``safety * critical``, or ``dt`` when given: refused above ``critical`` unless
+        ``allow_unstable``.
+        """
+        if self.dt is None:
+            return self.safety * critical
+        if self.dt > critical and not self.allow_unstable:
+            raise ValueError(f"dt must be <= the critical step {critical:.6g} s of {of}, got "
+                             f"{self.dt:g}; pass allow_unstable=True to run it anyway")
+        return self.dt
 
     @property
     def n_steps(self) -> int:
