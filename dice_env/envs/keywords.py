@@ -7,7 +7,7 @@ die) or that would have no effect (``safety`` with a fixed ``dt``) is refused, n
 
 :func:`check_scene` refuses scenes the env cannot run as throws, whether built from keywords or
 passed as ``scene``: a die whose weight alone sinks it into the table, ``t_max`` or a rest hold
-of more than :data:`MAX_STEPS` steps, and the paper's contact law with a damping whose
+of more than :data:`ENV_MAX_STEPS` steps, and the paper's contact law with a damping whose
 air drag keeps the die from falling.
 """
 
@@ -25,7 +25,7 @@ from dice_env.surroundings import PRESETS
 from dice_env.surroundings import walls as preset_walls
 
 DEFAULT_T_MAX = 5.0  # s, without a base scene: gentle throws settle in well under 2 s
-MAX_STEPS = 10**7  # steps per throw: about 2.5 s for one die that never settles, on one core
+ENV_MAX_STEPS = 10**7  # steps of an env throw (scene.MAX_STEPS bounds any run): about 2.5 s
 MAX_SINK = 0.1  # the weight's sink of a flat die's corners into the table, in die sizes
 
 
@@ -124,7 +124,7 @@ def _check_sink(scene: Scene) -> None:
 
 
 def _check_steps(scene: Scene) -> None:
-    """A throw may take at most :data:`MAX_STEPS` steps of a computable step."""
+    """A throw may take at most :data:`ENV_MAX_STEPS` steps of a computable step."""
     with np.errstate(all="ignore"):
         try:
             step = scene.step
@@ -134,9 +134,9 @@ def _check_steps(scene: Scene) -> None:
         raise ValueError(f"the step comes out as {step:g} s for {_step_origin(scene)}, "
                          f"size={scene.die.size:g}: bring them nearer the defaults")
     for name, value in (("t_max", scene.t_max), ("rest_hold", scene.rest.hold)):
-        if value / step > MAX_STEPS:
+        if value / step > ENV_MAX_STEPS:
             raise ValueError(
-                f"{name} must be at most {MAX_STEPS:.0e} steps: {name}={value:g} s over a step "
+                f"{name} must be at most {ENV_MAX_STEPS:.0e} steps: {name}={value:g} s over a step "
                 f"of {step:.3g} s is {value / step:.3g} steps ({_step_origin(scene)}); lower "
                 f"{name}, or make the step longer")
 

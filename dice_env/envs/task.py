@@ -24,7 +24,7 @@ import numpy as np
 
 from dice_env.checks import as_floats, check_nonnegative, check_positive, check_range
 from dice_env.die import Die
-from dice_env.envs.keywords import MAX_STEPS, build_scene, check_face, check_scene
+from dice_env.envs.keywords import ENV_MAX_STEPS, build_scene, check_face, check_scene
 from dice_env.group import GroupResult, GroupState, group_step, simulate_group
 from dice_env.rotations import (
     orthonormality_error,
@@ -435,10 +435,10 @@ class GroupThrowTask(ThrowTask):
             raise ValueError(f"set_dice must be True or False, got {self.set_dice!r}")
         super().__post_init__()
         step = self.step
-        if self.scene.t_max / step > MAX_STEPS:
+        if self.scene.t_max / step > ENV_MAX_STEPS:
             raise ValueError(
-                f"t_max must be at most {MAX_STEPS:.0e} steps: t_max={self.scene.t_max:g} s over "
-                f"the {self.n_dice} dice's step of {step:.3g} s (die against die included) is "
+                f"t_max must be at most {ENV_MAX_STEPS:.0e} steps: t_max={self.scene.t_max:g} s "
+                f"over the {self.n_dice} dice's step of {step:.3g} s (die against die included) is "
                 f"{self.scene.t_max / step:.3g} steps; lower t_max or num_dice")
 
     @cached_property
