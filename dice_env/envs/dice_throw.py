@@ -206,24 +206,7 @@ class DiceThrowEnv(gym.Env):
     | ``render_width``, ``render_height`` | 320, 240 | frame size (pixels) |
 
     ## Version History
-    * v0: initial version. Default release 1.5 cm above the table (centre height; the die's
-      half diagonal is 1.39 cm): measured there, a hand-written thrower lands the target 0.73,
-      an oracle search 0.98, PPO 0.98; at 5 cm all three sat at 0.77-0.80 (hand noise sets the
-      ceiling), too easy to tell a learned thrower from the rule (docs/environment.md).
-    * v0, physics revision: the default scene moved to stick-slip friction,
-      the midpoint step at 0.15 of its critical step, and a rest test that needs three corners
-      on the table, so that landed faces converge in the step; at 1.5 cm the rule now lands
-      0.71, the oracle and PPO 0.975. ``friction_law="regularized", scheme="paper",
-      safety=0.1`` restores the earlier physics (rest test aside).
-    * v0: keyword ``until`` ("decided" ends throws when their face is decided);
-      the default, "rest", is unchanged.
-    * v0: keywords ``die``, ``size`` and ``walls`` (any standard die, a tray or a craps table);
-      the observation's one-hot has one entry per face. The default (a d6, no walls) is
-      unchanged.
-    * v0: several dice in one throw (``num_dice``, a ``die`` tuple, ``target``, ``target_sum``,
-      ``set_dice``; docs/environment.md). One die, the default, is unchanged.
-    * v0: dice meet with the table's stick-slip friction (``DieContact``), so a die leaning on
-      another stays put; throws of several dice change, one die is unchanged.
+    See ``CHANGELOG.md``: what each version of ``dice_env`` changed in DiceThrow-v0.
     """
 
     metadata: ClassVar[dict[str, Any]] = {"render_modes": list(RENDER_MODES),
