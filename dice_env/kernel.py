@@ -51,15 +51,16 @@ Dice are independent: each die steps until its time limit, rest, or a non-finite
 results are bit-identical for any batch size or thread count (``prange`` over the batch).
 
 The die is data: any number of vertices (the contact nodes) and face normals; so are its
-surroundings: any number of planes (a floor and walls), each with its own material. The
-kernel takes a few named groups (:class:`Body`, :class:`Contact`, :class:`Options`,
-:class:`Stops`, :class:`Records`, :class:`Dice`, :class:`Outcome`), built by
-:func:`dice_env.simulate.pack`; each piece of the physics is one small inlined function:
-a vertex on a plane (:func:`vertex_on_plane`, :func:`stick_slip`), the contact-free jump
-(:func:`free_steps`, :func:`torque_free`), the face read and the decided-face test
-(:func:`face_read`, :func:`decided`), the rotation (:func:`rotate`); :func:`advance` loops
-them for one die in scratch arrays its caller gives, :func:`simulate_one` on the CPU and
-:mod:`dice_env.cuda_kernel` on a GPU, where numba-cuda compiles the same functions again.
+surroundings: any number of planes (a floor and walls), each with its own material. The kernel
+takes a few named groups (:class:`Body`, :class:`Contact`, :class:`Options`, :class:`Stops`,
+:class:`Records`, :class:`Dice`, :class:`Outcome`), built by
+:func:`dice_env.simulate.pack_scene` and :func:`dice_env.simulate.pack_run`; each piece of the
+physics is one small inlined function: a vertex on a plane (:func:`vertex_on_plane`,
+:func:`stick_slip`), the contact-free jump (:func:`free_steps`, :func:`torque_free`), the face
+read and the decided-face test (:func:`face_read`, :func:`decided`), the rotation
+(:func:`rotate`); :func:`advance` loops them for one die in scratch arrays its caller gives,
+:func:`simulate_one` on the CPU and :mod:`dice_env.cuda_kernel` on a GPU, where numba-cuda
+compiles the same functions again.
 The hot loop hands those pieces numbers, not arrays: in numba each array handed on costs an
 atomic reference count, which cost the loop more than its arithmetic. This module imports
 nothing else from the package.

@@ -90,7 +90,7 @@ def test_vigorous_outcome_statistics_agree_between_dt_and_dt_over_4():
 
 @pytest.mark.slow
 def test_gentle_faces_converge_at_the_default_step():
-    # the criterion is >= 98 % (2000 throws in the study: 98.2 %); 600 throws here
+    # the criterion is >= 98 % (2000 throws in the study: 98.2 %); 600 throws here
     scene = Scene()
     start = cv.RELEASES[0].sample(scene, 600, np.random.default_rng(6))
     agreement = cv.face_agreement(scene, start)

@@ -485,8 +485,7 @@ def write_report(out: Path, numbers: dict[str, object], quick: bool) -> dict[str
         "The difference from 0.45 at dt is the step's own error (it shrinks at dt/4); "
         "gravity, which the relation neglects, makes e depend on the impact speed [6]. (The "
         "landing starts up to 1 mm above the plane: a landing that starts on it puts the "
-        "contact onset exactly on a step, an error of its own that an earlier version of this "
-        "page reported as e = 0.46.)",
+        "contact onset exactly on a step, an error of its own.)",
         "",
         f"**Corner sink.** Over the {pen.size} spread throws below (3–30 cm, hand speeds and "
         f"spins), the deepest corner sink is {100 * np.median(pen):.2f} % of the edge "

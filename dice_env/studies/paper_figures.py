@@ -356,7 +356,7 @@ single clean threshold: near the critical step the energy kick of each impact de
 the steps fall within the contact, so a few runs just above the first pass still fail).
 
 Theory: the modified Euler step of `m x'' = -S x - D x'` is stable iff
-`dt < (sqrt(D^2 + 4 S m) - D) / S`. Two masses: the node mass m/8 (what the issue names) and
+`dt < (sqrt(D^2 + 4 S m) - D) / S`. Two masses: the node mass m/8 (the paper's) and
 the effective mass per corner m/4 (`Scene.critical_dt` with `rotation=False`: the die keeps
 its orientation, so its four bottom corners always land together and share the whole mass).
 

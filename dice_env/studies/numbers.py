@@ -1,0 +1,159 @@
+"""Numbers in hand-written pages, filled from the result JSONs they come from.
+
+A hand-written page (the README, ``docs/*.md``) quotes a measured figure only inside a block::
+
+    <!-- numbers env=benchmarks/results/env.json
+    the vector env runs {{ env.rest.vector_env_throws_per_s | ,.0f }} throws/s
+    -->
+    the vector env runs 1,399 throws/s
+    <!-- /numbers -->
+
+The comment holds the template, hidden where the page is shown; each
+``{{ expression | format }}`` is a Python expression over the named JSONs (keys by ``.name`` or
+``["key"]``; ``min``, ``max``, ``len``, ``sum``, ``abs``, ``round``, ``sorted``, ``all`` and
+``any`` available), written with the format spec.
+``python -m dice_env.studies.numbers`` rewrites every block from its JSONs; ``--check`` lists
+the blocks whose text differs instead (``tests/test_docs.py`` runs it), so a number changed by
+hand, or a JSON regenerated without the pages, fails the tests.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import re
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[2]
+BLOCK = re.compile(r"<!-- numbers (?P<sources>[^\n]*)\n(?P<template>.*?)-->\n(?P<text>.*?)"
+                   r"<!-- /numbers -->", re.S)
+FIELD = re.compile(r"\{\{(.+?)\}\}", re.S)
+HELPERS = {f.__name__: f for f in (min, max, len, sum, abs, round, sorted, all, any)}
+
+
+class Tree(dict):
+    """A JSON object whose keys read as attributes too (``env.rest.batch``)."""
+
+    def __getattr__(self, name: str) -> object:
+        try:
+            return wrap(self[name])
+        except KeyError:
+            raise AttributeError(name) from None
+
+    def __getitem__(self, key: str) -> object:
+        return wrap(dict.__getitem__(self, key))
+
+
+def wrap(value: object) -> object:
+    """JSON objects as :class:`Tree`, lists element-wise; numbers and strings as they are."""
+    if isinstance(value, dict) and not isinstance(value, Tree):
+        return Tree(value)
+    if isinstance(value, list):
+        return [wrap(v) for v in value]
+    return value
+
+
+@dataclass(frozen=True)
+class Block:
+    """One filled block of a page: where it is, its sources, its template and its text."""
+
+    page: Path
+    line: int
+    sources: dict[str, Path]
+    template: str
+    text: str
+
+    def render(self) -> str:
+        """The block's text as its JSONs give it."""
+        names = dict(HELPERS)
+        for name, path in self.sources.items():
+            if not path.is_file():
+                raise FileNotFoundError(f"{self.where}: {name}={_shown(path)} is not in the "
+                                        "repository")
+            names[name] = wrap(json.loads(path.read_text()))
+
+        def field(match: re.Match) -> str:
+            expression, _, spec = match.group(1).partition("|")
+            try:
+                value = eval(expression, {"__builtins__": {}}, names)
+            except Exception as error:
+                raise ValueError(f"{self.where}: {{{{{match.group(1)}}}}}: {error!r}") from None
+            return format(value, spec.strip())
+
+        return FIELD.sub(field, self.template)
+
+    @property
+    def where(self) -> str:
+        """``page:line`` of the block."""
+        return f"{_shown(self.page)}:{self.line}"
+
+
+def _shown(path: Path) -> str:
+    return str(path.relative_to(ROOT) if path.is_relative_to(ROOT) else path)
+
+
+def _block(page: Path, text: str, match: re.Match) -> Block:
+    sources = {}
+    for item in match.group("sources").split():
+        name, sep, path = item.partition("=")
+        if not sep or not name.isidentifier():
+            raise ValueError(f"{page}: a numbers block names its JSONs as NAME=PATH, not "
+                             f"{item!r}")
+        sources[name] = ROOT / path
+    return Block(page, text.count("\n", 0, match.start()) + 1, sources, match.group("template"),
+                 match.group("text"))
+
+
+def blocks(page: Path) -> list[Block]:
+    """The filled blocks of a page."""
+    text = page.read_text()
+    return [_block(page, text, match) for match in BLOCK.finditer(text)]
+
+
+def pages() -> list[Path]:
+    """The pages that may hold blocks: the README and ``docs/``."""
+    return [ROOT / "README.md", *sorted((ROOT / "docs").glob("**/*.md"))]
+
+
+def stale() -> list[str]:
+    """``page:line`` of every block whose text is not what its JSONs give."""
+    return [b.where for page in pages() for b in blocks(page) if b.render() != b.text]
+
+
+def fill(page: Path) -> bool:
+    """Rewrite the page's blocks from their JSONs; whether anything changed."""
+    text = page.read_text()
+
+    def filled(match: re.Match) -> str:
+        start, end = match.span("text")
+        return (match.group(0)[:start - match.start()] + _block(page, text, match).render()
+                + match.group(0)[end - match.start():])
+
+    new = BLOCK.sub(filled, text)
+    if new != text:
+        page.write_text(new)
+    return new != text
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Fill every page's blocks, or with ``--check`` list the stale ones (exit 1 if any)."""
+    parser = argparse.ArgumentParser(prog="python -m dice_env.studies.numbers",
+                                     description=__doc__.split("\n\n")[0])
+    parser.add_argument("--check", action="store_true",
+                        help="change nothing; list the blocks that differ from their JSONs")
+    args = parser.parse_args(argv)
+    if args.check:
+        differ = stale()
+        for where in differ:
+            print(f"{where}: differs from its JSONs (python -m dice_env.studies.numbers)")
+        return 1 if differ else 0
+    for page in pages():
+        if fill(page):
+            print(f"filled {_shown(page)}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,93 @@
+"""The README and docs/: numbers from their JSONs, cited files present, examples that run,
+docstring references that resolve, and pages that describe rather than narrate."""
+
+import re
+import sys
+from pathlib import Path
+
+import pytest
+
+from dice_env.studies import numbers
+
+ROOT = Path(__file__).resolve().parents[1]
+PAGES = [ROOT / "README.md", *sorted((ROOT / "docs").glob("**/*.md"))]
+HISTORY = re.compile(
+    r"\b(reverted|the issue|issue's|used to|formerly|previously|an earlier (run|version)|"
+    r"earlier figures|now (sticks|flagged|gives|runs|takes|costs|passes|fails|rests|reads)|"
+    r"no longer (flagged|sticks|fails|counted|needed)|was (changed|fixed|removed|added)|"
+    r"the kernel before|commit `?[0-9a-f]{7})\b", re.I)
+BLOCK = """<!-- numbers env=benchmarks/results/env.json
+batch {{ env.rest.batch }}, {{ env.rest.vector_env_throws_per_s | ,.0f }} throws/s
+-->
+TEXT<!-- /numbers -->
+"""
+
+
+def test_every_filled_block_is_what_its_json_gives():
+    assert numbers.stale() == []
+    assert sum(len(numbers.blocks(page)) for page in PAGES) >= 4
+
+
+def test_a_number_changed_by_hand_or_a_missing_json_is_found(tmp_path, monkeypatch):
+    page = tmp_path / "page.md"
+    page.write_text(BLOCK.replace("TEXT", ""))
+    assert numbers.fill(page)
+    (block,) = numbers.blocks(page)
+    assert block.text.startswith("batch 256, ") and block.render() == block.text
+    page.write_text(page.read_text().replace("batch 256", "batch 512"))
+    (block,) = numbers.blocks(page)
+    assert block.render() != block.text
+    monkeypatch.setattr(numbers, "pages", lambda: [page])
+    assert numbers.main(["--check"]) == 1
+    page.write_text(BLOCK.replace("env.json", "gone.json"))
+    with pytest.raises(FileNotFoundError, match=r"gone\.json is not in the repository"):
+        numbers.blocks(page)[0].render()
+
+
+@pytest.mark.parametrize("page", PAGES, ids=lambda p: p.name)
+def test_every_cited_json_is_in_the_repository(page):
+    for cited in set(re.findall(r"[\w./-]+\.json\b", page.read_text())):
+        if cited.startswith(("runs/", "eval/")) or ("/" not in cited and cited in (
+                "config.json", "hyperparams.json", "evaluation.json", "start.json")):
+            continue  # a run folder's own files, written by train.py
+        assert (ROOT / cited).is_file() or (page.parent / cited).is_file(), \
+            f"{page.relative_to(ROOT)} cites {cited}, which is not in the repository"
+
+
+def test_every_docstring_reference_names_something():
+    sys.path.insert(0, str(ROOT / "docs" / "hooks"))
+    try:
+        import references
+    finally:
+        sys.path.pop(0)
+    assert references.unresolved(ROOT) == []
+
+
+@pytest.mark.parametrize("path", [*PAGES, *sorted((ROOT / "dice_env").glob("**/*.py")),
+                                  *sorted((ROOT / "agents").glob("**/*.py"))],
+                         ids=lambda p: str(p.relative_to(ROOT)))
+def test_pages_and_code_describe_rather_than_narrate(path):
+    if path.name == "changelog.md":
+        return
+    found = [m.group(0) for m in HISTORY.finditer(path.read_text())]
+    assert found == [], f"{path.relative_to(ROOT)}: history belongs in git and CHANGELOG.md"
+
+
+def test_the_readme_fits_a_front_door():
+    text = (ROOT / "README.md").read_text()
+    assert len(text.splitlines()) <= 150
+    head = text[:text.index("## Three starts")]
+    assert "bash .ci/setup && .venv/bin/python train.py" in head
+    assert "bash .ci/setup && .venv/bin/python -m pytest" in head
+
+
+def test_the_readme_starts_run(monkeypatch):
+    """The README's three examples, as written (PPO for one rollout instead of its budget)."""
+    blocks = re.findall(r"```python\n(.*?)```", (ROOT / "README.md").read_text(), re.S)
+    assert len(blocks) == 3
+    code = "\n".join(blocks).replace('model.learn(hp["n_timesteps"])', 'model.learn(1)')
+    monkeypatch.setattr("builtins.print", lambda *a, **k: None)
+    scope: dict = {}
+    exec(compile(code, "README.md", "exec"), scope)
+    assert scope["result"].face.shape == (100,) and scope["both"].face.shape == (100, 2)
+    assert scope["model"].num_timesteps > 0
