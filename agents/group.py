@@ -57,11 +57,13 @@ def _title(config: Config) -> str:
 
 
 def write_group_report(group: Path) -> Path:
-    """Write ``group/report.md`` and ``group/learning.png``.
+    """Write ``group/report.md``, ``group/learning.png`` and ``group/summary.json``.
 
-    Success per setting (mean and spread over seeds), the verdicts, every run's learning curve.
+    Success per setting (mean and spread over seeds), the verdicts, every run's learning curve;
+    the summary keeps each seed's rates, the config and the code version in a small JSON.
     """
     from agents import plots
+    from dice_env.studies.common import code_version
 
     config = Config.load(group / "config.json")
     results = _member_results(config)
@@ -115,4 +117,13 @@ def write_group_report(group: Path) -> Path:
               ""]
     path = group / "report.md"
     path.write_text("\n".join(lines))
+    summary = {"config": json.loads((group / "config.json").read_text()),
+               "commit": code_version(), "settings": [
+                   {"setting": setting,
+                    "rates": {n: [_rate(e, n) for e in evaluations] for n in THROWERS},
+                    "ppo_on_oracle_throws": [e["common"]["PPO"]["rate"] for e in evaluations
+                                             if e["common"]],
+                    "evaluation_seconds": [e["seconds"] for e in evaluations]}
+                   for setting, evaluations in by_setting.values()]}
+    (group / "summary.json").write_text(json.dumps(summary, indent=1) + "\n")
     return path

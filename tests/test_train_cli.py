@@ -156,5 +156,8 @@ def test_seeds_write_one_table_with_mean_and_spread(tmp_path):
     report = (tmp_path / "group" / "report.md").read_text()
     assert "## PPO over 2 seeds (0–1)" in report and " ± " in report
     assert (tmp_path / "group" / "learning.png").exists()
+    summary = json.loads((tmp_path / "group" / "summary.json").read_text())
+    (setting,) = summary["settings"]
+    assert len(setting["rates"]["PPO"]) == 2 and summary["config"]["seeds"] == 2
     for seed in (0, 1):
         assert (tmp_path / "group" / f"seed{seed}" / "report.md").exists()

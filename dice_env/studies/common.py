@@ -1,7 +1,8 @@
-"""What every study shares: the docs folder, its figures, its progress bar, its throw count."""
+"""What every study shares: the docs folder, figures, progress bar, throw count, code version."""
 
 from __future__ import annotations
 
+import subprocess
 from pathlib import Path
 
 import matplotlib
@@ -32,3 +33,13 @@ def checked_throws(throws: object, least: int) -> int | None:
                                or isinstance(throws, bool) or throws < least):
         raise ValueError(f"throws must be an int >= {least}, got {throws!r}")
     return None if throws is None else int(throws)
+
+
+def code_version() -> str:
+    """The checkout's commit (``git describe --always --dirty``), or ``"unknown"`` outside git."""
+    try:
+        done = subprocess.run(["git", "describe", "--always", "--dirty"], cwd=DOCS.parent,
+                              capture_output=True, text=True, timeout=10)
+    except (OSError, subprocess.TimeoutExpired):
+        return "unknown"
+    return done.stdout.strip() or "unknown"
