@@ -48,7 +48,7 @@ def test_a_number_changed_by_hand_or_a_missing_json_is_found(tmp_path, monkeypat
 def test_every_cited_json_is_in_the_repository(page):
     for cited in set(re.findall(r"[\w./-]+\.json\b", page.read_text())):
         if cited.startswith(("runs/", "eval/")) or ("/" not in cited and cited in (
-                "config.json", "hyperparams.json", "evaluation.json", "start.json")):
+                "config.json", "hyperparams.json", "evaluation.json", "start.json", "summary.json")):
             continue  # a run folder's own files, written by train.py
         assert (ROOT / cited).is_file() or (page.parent / cited).is_file(), \
             f"{page.relative_to(ROOT)} cites {cited}, which is not in the repository"
