@@ -16,6 +16,7 @@ HISTORY = re.compile(
     r"earlier figures|now (sticks|flagged|gives|runs|takes|costs|passes|fails|rests|reads)|"
     r"no longer (flagged|sticks|fails|counted|needed)|was (changed|fixed|removed|added)|"
     r"the kernel before|commit `?[0-9a-f]{7})\b", re.I)
+RUN_FILES = ("config.json", "hyperparams.json", "evaluation.json", "start.json", "summary.json")
 BLOCK = """<!-- numbers env=benchmarks/results/env.json
 batch {{ env.rest.batch }}, {{ env.rest.vector_env_throws_per_s | ,.0f }} throws/s
 -->
@@ -47,8 +48,7 @@ def test_a_number_changed_by_hand_or_a_missing_json_is_found(tmp_path, monkeypat
 @pytest.mark.parametrize("page", PAGES, ids=lambda p: p.name)
 def test_every_cited_json_is_in_the_repository(page):
     for cited in set(re.findall(r"[\w./-]+\.json\b", page.read_text())):
-        if cited.startswith(("runs/", "eval/")) or ("/" not in cited and cited in (
-                "config.json", "hyperparams.json", "evaluation.json", "start.json", "summary.json")):
+        if cited.startswith(("runs/", "eval/")) or cited in RUN_FILES:
             continue  # a run folder's own files, written by train.py
         assert (ROOT / cited).is_file() or (page.parent / cited).is_file(), \
             f"{page.relative_to(ROOT)} cites {cited}, which is not in the repository"
