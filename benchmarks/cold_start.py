@@ -24,6 +24,8 @@ import tempfile
 import time
 from pathlib import Path
 
+from dice_env.studies.common import code_version
+
 ROOT = Path(__file__).resolve().parents[1]
 
 # (name, code) run in order in one process; each code may use what the earlier ones set
@@ -116,8 +118,7 @@ def main() -> None:
         print(f"{'precompile, empty cache':40s}{tests['seconds']['precompile']:9.1f}s")
         print(f"{'then pytest -n auto':40s}{tests['seconds']['tests']:9.1f}s  "
               f"({tests['summary']})")
-    commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT,
-                            capture_output=True, text=True).stdout.strip()
+    commit = code_version()
     record = {"command": " ".join(["python", "benchmarks/cold_start.py", *sys.argv[1:]]),
               "commit": commit, "entry_points": names, "seconds": runs, "notices": notices,
               "suite": tests, "cpus": os.cpu_count(),

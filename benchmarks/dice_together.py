@@ -46,6 +46,7 @@ from dice_env import Scene, simulate
 from dice_env.die import Die
 from dice_env.group import DieContact, GroupState, group_step, simulate_group
 from dice_env.simulate import UP, lock_energy
+from dice_env.studies.common import code_version
 from dice_env.studies.pairs import hand_throws
 from dice_env.surroundings import tray
 from dice_env.table import RESTITUTION, damping_ratio
@@ -263,7 +264,8 @@ def main() -> None:
         "command": "python benchmarks/dice_together.py " + " ".join(
             f"--{k.replace('_', '-')} {' '.join(map(str, v)) if isinstance(v, list) else v}"
             for k, v in vars(args).items() if k != "out"),
-        "threads": 1, "timer": "process CPU time", "repeats": args.repeats,
+        "commit": code_version(), "threads": 1, "timer": "process CPU time",
+        "repeats": args.repeats,
         "die_friction": contact.law,
         "load_average": os.getloadavg()[0], "cpu_count": os.cpu_count(),
         "numba": numba.__version__, "python": platform.python_version(), "rows": rows},

@@ -17,6 +17,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import sys
 import time
 from pathlib import Path
 
@@ -25,6 +26,7 @@ import numpy as np
 
 import dice_env  # noqa: F401  (registers DiceThrow-v0)
 from dice_env import State, simulate
+from dice_env.studies.common import code_version
 
 
 def measure(until: str, n: int, repeats: int, n_single: int,
@@ -98,6 +100,8 @@ def main() -> None:
     print(f"until='decided': {rows['decided_over_rest_vector_env']:.2f}x the vector env's "
           f"throws/s, the same faces: {rows['same_faces']}")
     args.out.parent.mkdir(parents=True, exist_ok=True)
+    rows.update(command=" ".join(["python", "benchmarks/env.py", *sys.argv[1:]]),
+                commit=code_version())
     args.out.write_text(json.dumps(rows, indent=2) + "\n")
 
 

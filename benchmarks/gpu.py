@@ -20,6 +20,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import sys
 import time
 from collections.abc import Callable
 from functools import partial
@@ -31,6 +32,7 @@ import numpy as np
 from dice_env import Scene, State, simulate
 from dice_env.paper import paper_scene
 from dice_env.rotations import random_rotations
+from dice_env.studies.common import code_version
 
 ROOT = Path(__file__).resolve().parents[1]
 PAPER_T = 0.5  # s of the paper throw
@@ -145,6 +147,8 @@ def main() -> None:
             print(f"| {label} | {device} | " + " | ".join(cells) + " |")
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text(json.dumps({
+        "command": " ".join(["python", "benchmarks/gpu.py", *sys.argv[1:]]),
+        "commit": code_version(),
         "cpu_threads": numba.config.NUMBA_NUM_THREADS, "gpu": device_name,
         "no_gpu_reason": missing, "figures": FIGURES,
         "rates": {device: {name: {str(n): r for n, r in rows.items()}

@@ -32,6 +32,8 @@ from pathlib import Path
 
 import numpy as np
 
+from dice_env.studies.common import code_version
+
 ROOT = Path(__file__).resolve().parents[1]
 CHILD = r"""
 import json, time
@@ -163,7 +165,9 @@ def main() -> None:
         print(f"| {label} | {_rate(np.median(base))} | {_rate(np.median(this))} | "
               f"{', '.join(f'{x:.3f}' for x in ratios)} |")
     out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(json.dumps({"base": str(args.base), "this": str(args.this),
+    out.write_text(json.dumps({"command": " ".join(["python", "benchmarks/kernel_ab.py",
+                                                    *sys.argv[1:]]), "commit": code_version(),
+                               "base": str(args.base), "this": str(args.this),
                                "same_faces" if not args.groups else "bit_identical": same,
                                "figures": table}, indent=1))
 

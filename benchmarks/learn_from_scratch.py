@@ -42,6 +42,7 @@ from agents.hyperparams import NON_PPO_KEYS, PPO_HYPERPARAMS, ppo_kwargs
 from dice_env.envs.sb3 import make_sb3_env
 from dice_env.envs.task import ThrowTask, make_task
 from dice_env.intervals import wilson_bounds
+from dice_env.studies.common import code_version
 
 ENV_ID = "DiceThrow-v0"
 EVAL_SEED = 12345
@@ -176,7 +177,8 @@ def main() -> None:
     settings(args.set)  # refuse a bad --set before any work
     torch.set_num_threads(args.torch_threads)
     report: dict[str, Any] = {
-        "command": " ".join(["python", *sys.argv]), "throws": args.throws, "set": args.set,
+        "command": " ".join(["python", *sys.argv]), "commit": code_version(),
+        "throws": args.throws, "set": args.set,
         "hyperparams": {k: repr(v) for k, v in PPO_HYPERPARAMS[ENV_ID].items()}, "runs": []}
     for seed in args.seeds:  # written after each seed, so a long run keeps what it has done
         report["runs"].append(run(seed, args))

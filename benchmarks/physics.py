@@ -37,6 +37,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import importlib.util
 import json
 import os
 import platform
@@ -55,6 +56,7 @@ from dice_env.die import STANDARD_SIZES, Die
 from dice_env.paper import paper_scene
 from dice_env.rotations import quaternion_to_matrix, random_rotations
 from dice_env.simulate import lock_energy
+from dice_env.studies.common import code_version
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))
@@ -251,16 +253,14 @@ def mujoco_model(scene: Scene, dt: float = 0.002, contact: str = ""):
     return mujoco.MjModel.from_xml_string(xml.replace("<geom ", f"<geom {contact} "))
 
 
-def mujoco_to_rest(scene: Scene, start: State, horizon: float, model=None) -> dict | None:
+def mujoco_to_rest(scene: Scene, start: State, horizon: float, model=None) -> dict:
     """MuJoCo on the same die and throws: steps until the scene's rest rule holds, CPU time.
 
     ``model`` defaults to :func:`mujoco_model` at MuJoCo's default step and contact.
     """
-    try:
-        import mujoco
-        from mujoco import rollout
-    except ImportError:
-        return None
+    import mujoco
+    from mujoco import rollout
+
     die = scene.die
     model = mujoco_model(scene) if model is None else model
     data = mujoco.MjData(model)
@@ -469,6 +469,9 @@ def main() -> None:
     parser.add_argument("--per-shape", action="store_true",
                         help="only the per-shape figures, updated in the existing JSON")
     args = parser.parse_args()
+    if not args.no_mujoco and importlib.util.find_spec("mujoco") is None:
+        parser.error("mujoco is not installed (pip install -e '.[bench]'); --no-mujoco leaves "
+                     "the MuJoCo comparison out")
     if args.per_shape:
         report = json.loads(args.out.read_text()) if args.out.exists() else {}
         report["per_shape_decided"] = {"command": "python benchmarks/physics.py --per-shape",
@@ -478,6 +481,7 @@ def main() -> None:
         print(json.dumps(report["per_shape_decided"], indent=1))
         return
     report = {"command": "python benchmarks/physics.py" + (" --quick" if args.quick else ""),
+              "commit": code_version(),
               "machine": {"cpu": _cpu_name(), "cores": os.cpu_count(),
                           "python": platform.python_version(), "numba": numba.__version__,
                           "numpy": np.__version__, "load_average_start": os.getloadavg()}}
@@ -494,13 +498,12 @@ def main() -> None:
             report["cost_vs_simulated_time"] = time_scaling(scene, start, args.quick)
         if not args.no_mujoco:
             mj = mujoco_to_rest(scene, subset(start, slice(0, 128 if args.quick else 512)), 6.0)
-            if mj is not None:
-                # each mode against MuJoCo run to the same end: rest, or the decided face
-                mj["ratios"] = {mode: _ratios(row, (mj["decided"] if mode == DECIDED else mj)[
-                    "throws_per_s_1thread"]) for mode, row in rest["modes"].items()}
-                mj["vectorised_ceiling_vs_mujoco_per_core"] = (
-                    rest["step_budget"]["vectorised_ceiling_throws_per_s_2cores"]
-                    / (2 * mj["throws_per_s_1thread"]))
+            # each mode against MuJoCo run to the same end: rest, or the decided face
+            mj["ratios"] = {mode: _ratios(row, (mj["decided"] if mode == DECIDED else mj)[
+                "throws_per_s_1thread"]) for mode, row in rest["modes"].items()}
+            mj["vectorised_ceiling_vs_mujoco_per_core"] = (
+                rest["step_budget"]["vectorised_ceiling_throws_per_s_2cores"]
+                / (2 * mj["throws_per_s_1thread"]))
             rest["mujoco"] = mj
     report["per_shape_decided"] = {"command": report["command"],
                                    "load_average": os.getloadavg(),

@@ -28,6 +28,7 @@ import numpy as np
 import ray
 
 from dice_env.scene import Scene
+from dice_env.studies.common import code_version
 from dice_env.studies.distributed import Spec, Tally, run_throws, throw_chunk
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -82,7 +83,8 @@ def main() -> None:
     result = {
         "command": f"python benchmarks/ray_overhead.py --throws {args.throws} --chunk "
                    f"{args.chunk} --seed {args.seed}",
-        "timer": "wall clock", "ray_start_s": start_s, "ray": ray.__version__,
+        "commit": code_version(), "timer": "wall clock", "ray_start_s": start_s,
+        "ray": ray.__version__,
         "numba_threads": numba.config.NUMBA_NUM_THREADS, "cpu_count": os.cpu_count(),
         "load_average": os.getloadavg()[0], "numba": numba.__version__,
         "numpy": np.__version__, "python": platform.python_version(), "rows": rows,

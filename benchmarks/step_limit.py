@@ -22,6 +22,7 @@ Prints two tables and writes ``benchmarks/results/step_limit.json`` (``--out`` t
 from __future__ import annotations
 
 import argparse
+import importlib.util
 import json
 import math
 import os
@@ -32,6 +33,7 @@ from physics import ROOT, best_time, hand_throws, mujoco_model, mujoco_to_rest, 
 
 from dice_env import Scene, State, simulate
 from dice_env.calibration import measured_restitution
+from dice_env.studies.common import code_version
 from dice_env.studies.convergence import RELEASES, face_agreement
 from dice_env.table import RESTITUTION, damping_ratio, rebound
 
@@ -165,7 +167,11 @@ def main() -> None:
     parser.add_argument("--out", type=Path, default=ROOT / "benchmarks/results/step_limit.json")
     parser.add_argument("--no-mujoco", action="store_true", help="skip the MuJoCo comparison")
     args = parser.parse_args()
+    if not args.no_mujoco and importlib.util.find_spec("mujoco") is None:
+        parser.error("mujoco is not installed (pip install -e '.[bench]'); --no-mujoco leaves "
+                     "the MuJoCo comparison out")
     report = {"command": "python benchmarks/step_limit.py" + (" --quick" if args.quick else ""),
+              "commit": code_version(),
               "load_average_start": os.getloadavg(), "step_sweep": step_sweep(args.quick)}
     if not args.no_mujoco:
         report["contact"] = contact_comparison(args.quick)
