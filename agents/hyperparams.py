@@ -21,7 +21,7 @@ throws after 800k throws: ``--seeds 1`` (benchmarks/results/learn_from_scratch.j
 100k, 0.77 at 150k, 0.90 at 250k, 0.92 at 350k, 0.94 at 650k-800k on 2000 throws, then 0.934
 [0.922, 0.944] on 2000 throws to rest, against 0.70 for the hand-written thrower on the same
 throws, in 11 min of training on a busy 2-core machine; seed 0: 0.928 and 0.942 on two sets of
-1000 throws to rest. About 0.96 of the oracle's 0.975 (README). Variants, each changing one
+1000 throws to rest; the oracle's success is in docs/agents.md. Variants, each changing one
 value (``--set KEY=VALUE``), on 512 fixed throws (``--eval-throws 512``; this set reads
 0.02-0.03 above larger ones near the top):
 

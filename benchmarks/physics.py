@@ -71,10 +71,11 @@ def best_time(fn, repeats: int, threads: int = 1) -> float:
 def timed(fn, repeats: int, threads: int = 1) -> tuple[float, object]:
     """Smallest time of ``repeats`` calls of ``fn`` (s), and the last call's result.
 
-    Work on the calling thread alone (``threads=1``) is timed by that thread's CPU time, which
-    other processes on shared cores do not inflate; parallel work by the wall clock.
+    Work on one thread (``threads=1``) is timed by this process's CPU time, which other
+    processes on shared cores do not inflate (not the calling thread's: a long ``simulate``
+    runs its kernel on a worker thread while the caller waits); parallel work by the wall clock.
     """
-    clock = time.thread_time if threads == 1 else time.perf_counter
+    clock = time.process_time if threads == 1 else time.perf_counter
     times = []
     for _ in range(repeats):
         start = clock()

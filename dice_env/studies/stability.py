@@ -29,7 +29,7 @@ from matplotlib.colors import ListedColormap
 
 from dice_env.die import Die
 from dice_env.paper import paper_scene
-from dice_env.scene import ContactLaw, Ground, Scene
+from dice_env.scene import MAX_STEPS, ContactLaw, Ground, Scene
 from dice_env.simulate import Result, State, simulate
 from dice_env.studies.common import DOCS, progress, save_figure
 from dice_env.studies.fairness import Vigour, vigorous_throws
@@ -139,6 +139,7 @@ def run_case(case: Case, throws: int, rng: np.random.Generator) -> dict[str, flo
         "max_penetration": float(result.max_penetration.max() / scene.die.size),
         "energy_drift": float(result.energy_rise.max() * scene.energy_tol),
         "unstable": float(result.unstable.mean()),
+        "sunk": float(result.sunk.mean()),
         "rest_time": float(np.median(result.rest_time[settled])) if settled.any() else np.nan,
         "nan": float(not all(np.isfinite(a).all() for a in arrays)),
         "dt": scene.step,
@@ -159,6 +160,8 @@ def safety_sweep(cases: list[Case], safeties: tuple[float, ...], throws: int,
     for i, case in enumerate(cases):
         for j, safety in enumerate(safeties):
             scene = case.scene.with_(safety=safety)
+            if scene.t_max > MAX_STEPS * scene.step:  # the stiffest table's smallest step
+                scene = scene.with_(t_max=MAX_STEPS * scene.step)
             state = vigorous_throws(scene, throws, np.random.default_rng(seed), case.vigour)
             result = simulate(scene, state)
             out[i, j] = result.energy_rise.max() * scene.energy_tol, result.unstable.mean()
@@ -251,6 +254,7 @@ def _markdown(stiffnesses: np.ndarray, ratios: np.ndarray, maps: dict, rows: lis
     table = "\n".join(
         f"| {c.group} | {c.label} | {100 * r['settled']:.0f}% | {100 * r['max_penetration']:.2f}% |"
         f" {100 * r['energy_drift']:+.2f}% | {100 * r['unstable']:.0f}% | "
+        f"{100 * r['sunk']:.0f}% | "
         f"{r['rest_time']:.2f} | {'NaN!' if r['nan'] else 'none'} | {r['dt']:.2g} | "
         f"{r['wall']:.2f} | {r['warnings'] or '-'} |"
         for c, r in rows)
@@ -261,6 +265,7 @@ def _markdown(stiffnesses: np.ndarray, ratios: np.ndarray, maps: dict, rows: lis
         for i, c in enumerate(sweep_cases))
     flagged = [f"{c.group} {c.label} ({100 * r['unstable']:.0f}%)" for c, r in rows
                if r["unstable"] > 0]
+    sunk = [f"{c.group} {c.label} ({100 * r['sunk']:.0f}%)" for c, r in rows if r["sunk"] > 0]
     nan_cases = [f"{c.group} {c.label}" for c, r in rows if r["nan"]]
     stiff = [(c, r) for c, r in rows if c.group == "stiffness"]
     slip = float(np.degrees(np.arctan(g.friction)))
@@ -313,19 +318,24 @@ Default scene: die {base.die.size * 1e3:g} mm, {base.die.mass * 1e3:g} g; table
 S = {g.stiffness:g} N/m, D = {g.damping:.4g} N s/m, mu = {g.friction:g},
 {g.contact_law.name.lower()} law; automatic step = {base.safety:g} x critical =
 {base.step:.3g} s; up to {base.t_max:g} s per throw. Each row: {throws} random throws
-(uniform orientation, centre 3–10 edges above touching, 10–30 edges/s toward the table,
-10–30 rad/s) with one thing changed. Max pen. = deepest corner in % of the edge; drift =
-largest rise of total energy above its start as a fraction of KE0 + m g (h0 + edge); unstable =
-share of throws flagged; rest = median rest time of the settled throws; wall = seconds for the
-batch on this machine (2 cores, shared); warn = warnings raised. The last two columns of
-the map table are the smallest dt/bound where any stiffness is not stable / blows up.
+(uniform orientation, centre 3–10 edges above touching, 10–30 edges/s toward the table, 10–30
+rad/s) with one thing changed. Max pen. = deepest corner in % of the edge; drift = largest rise
+of total energy above its start as a fraction of KE0 + m g (h0 + edge); unstable = share of
+throws flagged; sunk = share whose deepest corner passed `Scene.sink_limit`
+({base.sink_limit:g} of the die's size: `Result.sunk`, voided by the env); rest = median rest
+time of the settled throws; wall = seconds for the batch on this machine (2 cores, shared);
+warn = warnings raised. The last two columns of the map table are the smallest dt/bound where
+any stiffness is not stable / blows up.
 
-| group | case | settled | max pen. | drift | unstable | rest (s) | NaN | dt (s) | wall (s) | warn |
-|---|---|---|---|---|---|---|---|---|---|---|
+| group | case | settled | max pen. | drift | unstable | sunk | rest (s) | NaN | dt (s) | wall (s) \
+| warn |
+|---|---|---|---|---|---|---|---|---|---|---|---|
 {table}
 
 - NaN or infinite values: {', '.join(nan_cases) if nan_cases else 'none in any case'}.
 - Flagged unstable at the automatic step: {', '.join(flagged) if flagged else 'none'}.
+- Flagged sunk (deepest corner beyond {base.sink_limit:g} of the die's size, `Result.sunk`):
+  {', '.join(sunk) if sunk else 'none'}.
   The drift shrinks fast with the step (same throws, drift / share flagged):
 
   | case | safety {SAFETIES[0]:g} | safety {SAFETIES[1]:g} | safety {SAFETIES[2]:g} |
