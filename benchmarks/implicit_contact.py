@@ -26,7 +26,8 @@ Onset (an extra variant, not in the brief's two): a corner is felt only from the
 that starts below the plane, so the step in which it crosses misses its force; with
 ``onset`` that missed impulse is added explicitly at the next step (see :func:`_advance`).
 
-Printed: validation against the repo's simulator at ``scene.step / 4``, then the table: per
+Written to ``benchmarks/results/implicit_contact.json`` (``--out``) and printed: validation
+against the repo's simulator at ``scene.step / 4``, then the table: per
 theta and step ``f * critical_dt``, flat-drop restitution at 1 m/s, gentle-throw face
 agreement between ``dt`` and ``dt/4`` of the same scheme, agreement with the repo's explicit
 simulator at its default step, mean steps (and contact steps) per throw, single-thread CPU
@@ -36,8 +37,11 @@ microseconds per throw, and the fractions settled and non-finite.
 from __future__ import annotations
 
 import argparse
+import json
 import math
+import sys
 import time
+from pathlib import Path
 
 import numpy as np
 from numba import njit
@@ -46,8 +50,11 @@ from dice_env.calibration import measured_restitution
 from dice_env.kernel import rotate
 from dice_env.scene import Scene
 from dice_env.simulate import State, simulate
+from dice_env.studies.common import code_version
 from dice_env.studies.convergence import RELEASES, T_THROW
 from dice_env.table import rebound
+
+ROOT = Path(__file__).resolve().parents[1]
 
 FACTORS = (0.15, 0.3, 0.6, 1.2, 2.4, 4.8)
 # (theta, onset): backward Euler and trapezoid as briefed, then each with the onset impulse
@@ -329,6 +336,8 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--quick", action="store_true", help="60 throws instead of 300")
     parser.add_argument("-n", type=int, default=None, help="number of gentle throws")
+    parser.add_argument("--out", type=Path,
+                        default=ROOT / "benchmarks/results/implicit_contact.json")
     args = parser.parse_args()
     n = args.n or (60 if args.quick else 300)
     scene = Scene()
@@ -349,6 +358,11 @@ def main() -> None:
           f"faces at step vs step/{REFINE}: {np.mean(ref.face == fine_ref.face):.1%}; "
           f"{ref.steps.mean():.0f} steps and {1e6 * ref_cpu / n:.0f} us per throw "
           f"(with its free-flight jumps), settled {ref.settled.mean():.1%}")
+    report = {"command": " ".join(["python", "benchmarks/implicit_contact.py", *sys.argv[1:]]),
+              "commit": code_version(), "throws": n, "critical_dt_s": crit,
+              "default_safety": scene.safety, "timer": "process CPU time, one thread",
+              "explicit_restitution_1mps": measured_restitution(scene),
+              "validation": [], "rows": []}
 
     # every step f * crit and f * crit / REFINE, once per variant
     factors = sorted({*FACTORS, *(f / REFINE for f in FACTORS)})
@@ -361,6 +375,10 @@ def main() -> None:
     for theta, onset in VARIANTS:
         run = runs[theta, onset, scene.safety / REFINE]
         e = drop_restitution(scene, scene.step / REFINE, theta, onset)
+        report["validation"].append({
+            "theta": theta, "onset": onset, "restitution_1mps": e,
+            "faces_vs_explicit": float(np.mean(run["face"] == ref.face)),
+            "faces_vs_explicit_refined": float(np.mean(run["face"] == fine_ref.face))})
         print(f"  theta {theta}{' + onset' if onset else ''}: restitution {e:.4f} (repo 0.447); "
               f"faces vs repo explicit at its step {np.mean(run['face'] == ref.face):.1%}, "
               f"vs repo explicit at step/{REFINE} {np.mean(run['face'] == fine_ref.face):.1%}")
@@ -380,6 +398,13 @@ def main() -> None:
         for f in FACTORS:
             run, fine = runs[theta, onset, f], runs[theta, onset, f / REFINE]
             e = drop_restitution(scene, f * crit, theta, onset)
+            report["rows"].append({
+                "scheme": f"theta {theta:g}" + (" + onset" if onset else ""), "safety": f,
+                "restitution_1mps": e,
+                "faces_dt_vs_dt4": float(np.mean(run["face"] == fine["face"])),
+                "faces_vs_explicit": float(np.mean(run["face"] == ref.face)),
+                "us_per_throw": 1e6 * run["cpu_s"] / n, "settled": float(run["settled"].mean()),
+                "nonfinite": float(1.0 - run["finite"].mean())})
             print(f"{theta:5.2f} {'yes' if onset else 'no':>5} {f:5.2f} {f * crit:9.3g} {e:7.4f} "
                   f"{np.mean(run['face'] == fine['face']):8.1%} "
                   f"{np.mean(run['face'] == ref.face):8.1%} {run['steps'].mean():8.0f} "
@@ -389,17 +414,28 @@ def main() -> None:
     for f in FACTORS:
         if f > 1.0:
             print(f"expl. {'-':>5} {f:5.2f} {f * crit:9.3g}  (above the critical step)")
+            report["rows"].append({"scheme": "explicit", "safety": f, "stable": False})
             continue
         coarse = scene.with_(safety=f, t_max=T_THROW)
         start = time.process_time()
         run = simulate(coarse, gentle, num_threads=1)
         cpu = time.process_time() - start
         fine = simulate(coarse.with_(dt=coarse.step / REFINE), gentle, num_threads=1)
+        report["rows"].append({
+            "scheme": "explicit", "safety": f, "stable": True,
+            "restitution_1mps": measured_restitution(coarse),
+            "faces_dt_vs_dt4": float(np.mean(run.face == fine.face)),
+            "faces_vs_explicit": float(np.mean(run.face == ref.face)),
+            "us_per_throw": 1e6 * cpu / n, "settled": float(run.settled.mean()),
+            "unstable": float(run.unstable.mean())})
         print(f"expl. {'-':>5} {f:5.2f} {coarse.step:9.3g} {measured_restitution(coarse):7.4f} "
               f"{np.mean(run.face == fine.face):8.1%} {np.mean(run.face == ref.face):8.1%} "
               f"{run.steps.mean():8.0f} {'-':>8} {1e6 * cpu / n:9.0f} "
               f"{run.settled.mean():8.1%} {run.unstable.mean():7.1%}")
     print(f"\nwall time {time.perf_counter() - wall:.0f} s")
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    args.out.write_text(json.dumps(report, indent=1) + "\n")
+    print(f"wrote {args.out}")
 
 
 if __name__ == "__main__":

@@ -165,9 +165,10 @@ def main() -> None:
         print(f"| {label} | {_rate(np.median(base))} | {_rate(np.median(this))} | "
               f"{', '.join(f'{x:.3f}' for x in ratios)} |")
     out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(json.dumps({"command": " ".join(["python", "benchmarks/kernel_ab.py",
-                                                    *sys.argv[1:]]), "commit": code_version(),
-                               "base": str(args.base), "this": str(args.this),
+    command = " ".join(["python", "benchmarks/kernel_ab.py", *sys.argv[1:]])
+    out.write_text(json.dumps({"command": command, "commit": code_version(args.this),
+                               "base": str(args.base), "base_commit": code_version(args.base),
+                               "this": str(args.this),
                                "same_faces" if not args.groups else "bit_identical": same,
                                "figures": table}, indent=1))
 

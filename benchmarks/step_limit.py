@@ -29,7 +29,7 @@ import os
 from pathlib import Path
 
 import numpy as np
-from physics import ROOT, best_time, hand_throws, mujoco_model, mujoco_to_rest, timed
+from physics import ROOT, hand_throws, mujoco_model, mujoco_to_rest, timed
 
 from dice_env import Scene, State, simulate
 from dice_env.calibration import measured_restitution
@@ -102,7 +102,7 @@ def contact_comparison(quick: bool) -> dict | None:
         return None
     scene = Scene()
     throws = hand_throws(scene, 32 if quick else 128)
-    ours = best_time(lambda: simulate(scene, throws, early_rest=True, num_threads=1), 2)
+    ours, result = timed(lambda: simulate(scene, throws, early_rest=True, num_threads=1), 2)
     # our flat-landing mode, (m/4) x'' = -S x - D x': its period and damping ratio
     zeta = damping_ratio(RESTITUTION)
     omega = math.sqrt(4 * scene.ground.stiffness / scene.die.mass)
@@ -113,7 +113,8 @@ def contact_comparison(quick: bool) -> dict | None:
         settings[f"stiff contact, dt timeconst/{divisor}"] = (time_constant / divisor, stiff)
     out = {"version": mujoco.__version__, "throws": throws.batch_size,
            "ours": {"landing": {v: our_landing(scene, v) for v in DROP_SPEEDS},
-                    "throws_per_s_1thread": throws.batch_size / ours},
+                    "throws_per_s_1thread": throws.batch_size / ours, "dt_s": scene.step,
+                    "mean_rest_time_s": float(result.rest_time.mean())},
            "stiff_solref": {"timeconst_s": time_constant, "dampratio": zeta}, "mujoco": {}}
     for name, (dt, contact) in settings.items():
         model = mujoco_model(scene, dt, contact)

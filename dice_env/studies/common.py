@@ -35,10 +35,13 @@ def checked_throws(throws: object, least: int) -> int | None:
     return None if throws is None else int(throws)
 
 
-def code_version() -> str:
-    """The checkout's commit (``git describe --always --dirty``), or ``"unknown"`` outside git."""
+def code_version(tree: Path = DOCS.parent) -> str:
+    """The commit of the checkout at ``tree`` (this one by default), or ``"unknown"``.
+
+    ``git describe --always --dirty``: a tree with uncommitted changes ends in ``-dirty``.
+    """
     try:
-        done = subprocess.run(["git", "describe", "--always", "--dirty"], cwd=DOCS.parent,
+        done = subprocess.run(["git", "describe", "--always", "--dirty"], cwd=tree,
                               capture_output=True, text=True, timeout=10)
     except (OSError, subprocess.TimeoutExpired):
         return "unknown"

@@ -1,4 +1,4 @@
-"""Numbers in hand-written pages, filled from the result JSONs they come from.
+r"""Numbers in hand-written pages, filled from the result JSONs they come from.
 
 A hand-written page (the README, ``docs/*.md``) quotes a measured figure only inside a block::
 
@@ -11,7 +11,10 @@ A hand-written page (the README, ``docs/*.md``) quotes a measured figure only in
 The comment holds the template, hidden where the page is shown; each
 ``{{ expression | format }}`` is a Python expression over the named JSONs (keys by ``.name`` or
 ``["key"]``; ``min``, ``max``, ``len``, ``sum``, ``abs``, ``round``, ``sorted``, ``all`` and
-``any`` available), written with the format spec.
+``any`` available; comprehensions and ``str`` methods such as ``"\n".join`` work), written
+with the format spec.
+A source may name a part of its JSON, keys joined by ``/``:
+``rest=benchmarks/results/physics.json#throws_to_rest/Scene()`` binds ``rest`` to that object.
 ``python -m dice_env.studies.numbers`` rewrites every block from its JSONs; ``--check`` lists
 the blocks whose text differs instead (``tests/test_docs.py`` runs it), so a number changed by
 hand, or a JSON regenerated without the pages, fails the tests.
@@ -61,23 +64,30 @@ class Block:
 
     page: Path
     line: int
-    sources: dict[str, Path]
+    sources: dict[str, tuple[Path, tuple[str, ...]]]  # name -> (JSON file, keys into it)
     template: str
     text: str
 
     def render(self) -> str:
         """The block's text as its JSONs give it."""
-        names = dict(HELPERS)
-        for name, path in self.sources.items():
+        names = {"__builtins__": {}, **HELPERS}
+        for name, (path, keys) in self.sources.items():
             if not path.is_file():
                 raise FileNotFoundError(f"{self.where}: {name}={_shown(path)} is not in the "
                                         "repository")
-            names[name] = wrap(json.loads(path.read_text()))
+            value = json.loads(path.read_text())
+            for key in keys:
+                try:
+                    value = value[key]
+                except (KeyError, TypeError):
+                    raise KeyError(f"{self.where}: {name}: {_shown(path)} has no "
+                                   f"{'/'.join(keys)}") from None
+            names[name] = wrap(value)
 
         def field(match: re.Match) -> str:
             expression, _, spec = match.group(1).partition("|")
             try:
-                value = eval(expression, {"__builtins__": {}}, names)
+                value = eval(expression, names)  # globals: comprehensions see the names
             except Exception as error:
                 raise ValueError(f"{self.where}: {{{{{match.group(1)}}}}}: {error!r}") from None
             return format(value, spec.strip())
@@ -101,7 +111,8 @@ def _block(page: Path, text: str, match: re.Match) -> Block:
         if not sep or not name.isidentifier():
             raise ValueError(f"{page}: a numbers block names its JSONs as NAME=PATH, not "
                              f"{item!r}")
-        sources[name] = ROOT / path
+        path, _, pointer = path.partition("#")
+        sources[name] = ROOT / path, tuple(pointer.split("/")) if pointer else ()
     return Block(page, text.count("\n", 0, match.start()) + 1, sources, match.group("template"),
                  match.group("text"))
 

@@ -159,9 +159,10 @@ def safety_sweep(cases: list[Case], safeties: tuple[float, ...], throws: int,
     out = np.empty((len(cases), len(safeties), 2))
     for i, case in enumerate(cases):
         for j, safety in enumerate(safeties):
-            scene = case.scene.with_(safety=safety)
-            if scene.t_max > MAX_STEPS * scene.step:  # the stiffest table's smallest step
-                scene = scene.with_(t_max=MAX_STEPS * scene.step)
+            step = case.scene.dt or safety * case.scene.critical_dt
+            # the stiffest table at the smallest safety would need more than MAX_STEPS steps
+            scene = case.scene.with_(safety=safety, t_max=min(case.scene.t_max,
+                                                              0.999 * MAX_STEPS * step))
             state = vigorous_throws(scene, throws, np.random.default_rng(seed), case.vigour)
             result = simulate(scene, state)
             out[i, j] = result.energy_rise.max() * scene.energy_tol, result.unstable.mean()
