@@ -1,6 +1,7 @@
 """The default task's reward is physics, not step-size noise: gentle throws converge in dt.
 
-``pytest tests/test_env_convergence.py -s`` prints the figures quoted in docs/environment.md.
+``pytest tests/test_env_convergence.py -s`` prints the share whose bound docs/environment.md
+states.
 """
 
 import numpy as np

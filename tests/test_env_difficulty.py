@@ -1,6 +1,6 @@
 """How much control DiceThrow-v0 leaves: learnable at the defaults, chance when vigorous and fair.
 
-Slow (about a minute on 2 cores); prints the numbers quoted in docs/environment.md:
+Slow (about a minute on 2 cores); prints the figures whose bounds docs/environment.md states:
 
     .venv/bin/pytest -m slow tests/test_env_difficulty.py -s
 

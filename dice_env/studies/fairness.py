@@ -163,6 +163,7 @@ class FaceCounts:
     counts: np.ndarray
     unsettled: float
     unstable: int
+    sunk: int
     chi2: float
     p_value: float
     p_without_unstable: float
@@ -177,7 +178,7 @@ class FaceCounts:
         chi2, p = stats.chisquare(counts)
         clean = np.bincount(result.face[result.settled & ~result.unstable], minlength=7)[1:]
         return cls(counts, float(1 - result.settled.mean()), int(result.unstable.sum()),
-                   float(chi2), float(p), float(stats.chisquare(clean)[1]))
+                   int(result.sunk.sum()), float(chi2), float(p), float(stats.chisquare(clean)[1]))
 
     @property
     def total(self) -> int:
@@ -383,7 +384,8 @@ uniform axis (median energy {n['fair_energy_median']:.1f} m g a).
 - Settled: {fair.total} of {sizes['fair']}; not settled within {T_MAX:g} s:
   {100 * fair.unsettled:.3f}%. Flagged unstable (energy rose by more than the scene's
   tolerance at the automatic step, see `stability.md`): {fair.unstable}; leaving them out the
-  chi-square p-value is {fair.p_without_unstable:.3g}.
+  chi-square p-value is {fair.p_without_unstable:.3g}. Sunk deeper than `Scene.sink_limit`
+  ({scene.sink_limit:g} of the edge, `Result.sunk`): {fair.sunk}.
 - Chi-square test of uniformity (5 degrees of freedom): chi2 = {fair.chi2:.2f},
   **p = {fair.p_value:.3g}**. Largest deviation of a face from 1/6: {n['fair_max_dev']:.4f}.
 
@@ -400,7 +402,8 @@ face 1 at 0.8 of the half edge; centre of mass offset {np.linalg.norm(loaded_die
 toward face 1 ({100 * np.linalg.norm(loaded_die.com) / scene.die.size:.1f}% of the edge),
 inertia from the mass distribution. Same throws as the fair die.
 
-- Settled: {loaded.total}; not settled: {100 * loaded.unsettled:.3f}%.
+- Settled: {loaded.total}; not settled: {100 * loaded.unsettled:.3f}%; flagged unstable:
+  {loaded.unstable}; sunk: {loaded.sunk}.
 - Face 6 (opposite the weight) up: **{n['loaded_p6']:.4f}**
   [{loaded.intervals[5, 0]:.4f}, {loaded.intervals[5, 1]:.4f}], a bias of
   {n['loaded_p6'] - 1 / 6:+.4f} over 1/6; face 1 (the heavy face) up: {n['loaded_p1']:.4f}

@@ -10,9 +10,9 @@ A hand-written page (the README, ``docs/*.md``) quotes a measured figure only in
 
 The comment holds the template, hidden where the page is shown; each
 ``{{ expression | format }}`` is a Python expression over the named JSONs (keys by ``.name`` or
-``["key"]``; ``min``, ``max``, ``len``, ``sum``, ``abs``, ``round``, ``sorted``, ``all`` and
-``any`` available; comprehensions and ``str`` methods such as ``"\n".join`` work), written
-with the format spec.
+``["key"]``; ``min``, ``max``, ``len``, ``sum``, ``abs``, ``round``, ``sorted``, ``all``,
+``any``, ``enumerate``, ``zip`` and ``range`` available; comprehensions and ``str`` methods
+such as ``"\n".join`` work), written with the format spec.
 A source may name a part of its JSON, keys joined by ``/``:
 ``rest=benchmarks/results/physics.json#throws_to_rest/Scene()`` binds ``rest`` to that object.
 ``python -m dice_env.studies.numbers`` rewrites every block from its JSONs; ``--check`` lists
@@ -33,7 +33,9 @@ ROOT = Path(__file__).resolve().parents[2]
 BLOCK = re.compile(r"<!-- numbers (?P<sources>[^\n]*)\n(?P<template>.*?)-->\n(?P<text>.*?)"
                    r"<!-- /numbers -->", re.S)
 FIELD = re.compile(r"\{\{(.+?)\}\}", re.S)
-HELPERS = {f.__name__: f for f in (min, max, len, sum, abs, round, sorted, all, any)}
+SPEC = re.compile(r"[\w ,.%+<>=^#-]*")  # what may follow the last "|" of a field: a format spec
+HELPERS = {f.__name__: f for f in (min, max, len, sum, abs, round, sorted, all, any, enumerate,
+                                   zip, range)}
 
 
 class Tree(dict):
@@ -47,6 +49,18 @@ class Tree(dict):
 
     def __getitem__(self, key: str) -> object:
         return wrap(dict.__getitem__(self, key))
+
+    def get(self, key: str, default: object = None) -> object:
+        """``dict.get``, the value wrapped."""
+        return wrap(dict.get(self, key, default))
+
+    def values(self) -> list:
+        """The values, wrapped."""
+        return [wrap(v) for v in dict.values(self)]
+
+    def items(self) -> list[tuple[str, object]]:
+        """The (key, value) pairs, values wrapped."""
+        return [(k, wrap(v)) for k, v in dict.items(self)]
 
 
 def wrap(value: object) -> object:
@@ -85,7 +99,9 @@ class Block:
             names[name] = wrap(value)
 
         def field(match: re.Match) -> str:
-            expression, _, spec = match.group(1).partition("|")
+            expression, sep, spec = match.group(1).rpartition("|")
+            if not sep or not SPEC.fullmatch(spec.strip()):  # a "|" inside the expression
+                expression, spec = match.group(1), ""
             try:
                 value = eval(expression, names)  # globals: comprehensions see the names
             except Exception as error:
