@@ -1,0 +1,77 @@
+r"""rl-zoo3 hyperparameter files, written from :mod:`agents.hyperparams` (their one source).
+
+    python -m agents.zoo              # rewrites agents/zoo_configs/ppo.yml
+    python -m agents.zoo --check      # exit 1 if the file differs from the table
+
+The file is rl-zoo3's format (keyed by env id; ``policy_kwargs`` as the Python expression rl-zoo3
+evaluates), so a user trains and replays with rl-zoo3's own commands::
+
+    python -m rl_zoo3.train --algo ppo --env DiceThrow-v0 --gym-packages dice_env \
+        --conf-file agents/zoo_configs/ppo.yml -f logs
+    python -m rl_zoo3.enjoy --algo ppo --env DiceThrow-v0 --gym-packages dice_env -f logs \
+        --no-render -n 1000
+
+rl-zoo3 steps ``n_envs`` separate Gymnasium envs (one throw per env per step) where
+``train.py`` steps them as one batched kernel call; the policy and hyperparameters are the same.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from agents.hyperparams import PPO_HYPERPARAMS
+
+ZOO = Path(__file__).resolve().parent / "zoo_configs"
+HEADER = "# Written by `python -m agents.zoo` from agents/hyperparams.py; do not edit by hand.\n"
+
+
+def _python(value: Any) -> str:
+    """``value`` as the Python literal rl-zoo3 evaluates for ``policy_kwargs``."""
+    if isinstance(value, dict):
+        return "dict(" + ", ".join(f"{k}={_python(v)}" for k, v in value.items()) + ")"
+    return repr(value)
+
+
+def zoo_entry(entry: dict[str, Any]) -> dict[str, Any]:
+    """One env's rl-zoo3 hyperparameters from its :data:`PPO_HYPERPARAMS` entry."""
+    out = dict(entry)
+    out["n_timesteps"] = float(entry["n_timesteps"])
+    if "policy_kwargs" in entry:
+        out["policy_kwargs"] = _python(entry["policy_kwargs"])
+    return out
+
+
+def ppo_yaml() -> str:
+    """The text of ``agents/zoo_configs/ppo.yml``."""
+    table = {env_id: zoo_entry(entry) for env_id, entry in PPO_HYPERPARAMS.items()}
+    return HEADER + yaml.safe_dump(table, sort_keys=False)
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Write ``agents/zoo_configs/ppo.yml``, or with ``--check`` report whether it is current."""
+    parser = argparse.ArgumentParser(prog="python -m agents.zoo",
+                                     description=__doc__.split("\n")[0])
+    parser.add_argument("--check", action="store_true",
+                        help="change nothing; exit 1 if the file differs from the table")
+    args = parser.parse_args(argv)
+    path = ZOO / "ppo.yml"
+    text = ppo_yaml()
+    if args.check:
+        current = path.read_text() if path.exists() else ""
+        if current != text:
+            print(f"{path} differs from agents/hyperparams.py (python -m agents.zoo)")
+            return 1
+        return 0
+    ZOO.mkdir(exist_ok=True)
+    path.write_text(text)
+    print(f"wrote {path}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
