@@ -16,14 +16,12 @@ one-hot and hand orientation).
 
 Where DiceThrow-v0's values come from: ``python benchmarks/learn_from_scratch.py`` (default task:
 1.5 cm release, 5 % hand noise; success of the policy's mean action on fixed random throws; one
-kernel thread and one PyTorch thread). With them PPO lands the target face in 0.93-0.94 of
-throws after 800k throws: ``--seeds 1`` (benchmarks/results/learn_from_scratch.json) 0.52 at
-100k, 0.77 at 150k, 0.90 at 250k, 0.92 at 350k, 0.94 at 650k-800k on 2000 throws, then 0.934
-[0.922, 0.944] on 2000 throws to rest, against 0.70 for the hand-written thrower on the same
-throws, in 11 min of training on a busy 2-core machine; seed 0: 0.928 and 0.942 on two sets of
-1000 throws to rest; the oracle's success is in docs/agents.md. Variants, each changing one
-value (``--set KEY=VALUE``), on 512 fixed throws (``--eval-throws 512``; this set reads
-0.02-0.03 above larger ones near the top):
+kernel thread and one PyTorch thread). Its learning curve and final success with them, against
+the hand-written thrower on the same throws, are kept in
+``benchmarks/results/learn_from_scratch.json`` and shown in docs/agents.md with the oracle's.
+Variants, each changing one
+value (``--set KEY=VALUE``), single runs on 512 fixed throws (``--eval-throws 512``; this set
+reads 0.02-0.03 above larger ones near the top), their results not kept:
 
 * Every episode is one throw, so the advantage is the reward minus the value whatever ``gamma``
   and ``gae_lambda`` are; they stay at SB3's defaults.
@@ -31,7 +29,7 @@ value (``--set KEY=VALUE``), on 512 fixed throws (``--eval-throws 512``; this se
   throws 0.52 at -1, 0.84 at -2, 0.63 at -2.5 (less exploration, a later start).
 * The learning rate decays linearly to 0: a constant 3e-4 peaked at 0.93 after 325k throws and
   drifted to 0.90-0.92 by 525k; a constant 1e-3 stalled at 0.84 (175k), one decaying from 1e-3
-  over 400k at 0.89 (325k); 20 epochs per update instead of 10: 0.93 after 400k, against 0.94.
+  over 400k at 0.89 (325k); 20 epochs per update instead of 10: 0.93 after 400k, no better than 10.
 * ``shaping=0.5`` (``0.5 n_target . n_table`` added to the reward) and ``until="decided"`` (each
   throw ends when its face is decided: the same faces, about 3x faster) as agents/train.py
   trains; not varied here.

@@ -1,6 +1,7 @@
 """The README and docs/: numbers from their JSONs, cited files present, examples that run,
 docstring references that resolve, and pages that describe rather than narrate."""
 
+import json
 import re
 import sys
 from pathlib import Path
@@ -52,6 +53,14 @@ def test_every_cited_json_is_in_the_repository(page):
             continue  # a run folder's own files, written by train.py
         assert (ROOT / cited).is_file() or (page.parent / cited).is_file(), \
             f"{page.relative_to(ROOT)} cites {cited}, which is not in the repository"
+
+
+@pytest.mark.parametrize("path", sorted((ROOT / "benchmarks/results").glob("*.json")),
+                         ids=lambda p: p.name)
+def test_every_result_json_records_its_command_and_commit(path):
+    report = json.loads(path.read_text())
+    assert report.get("command", "").startswith("python "), path.name
+    assert report.get("commit") not in (None, "", "unknown"), path.name
 
 
 def test_every_docstring_reference_names_something():
