@@ -398,6 +398,16 @@ class Die:
                     self.name, np.array(self.vertices), self.faces, self.size,
                     self.mass).tolist()))
 
+    @classmethod
+    def from_fields(cls, name: str, vertices: tuple, faces: tuple, size: float, mass: float,
+                    com: tuple, inertia: tuple, reads_down: bool) -> Die:
+        """The die whose fields are these (as :func:`dataclasses.asdict` gives them), checked."""
+        die = object.__new__(cls)
+        faces = tuple(tuple(int(k) for k in face) for face in faces)
+        die._set(str(name), np.asarray(vertices, dtype=np.float64), faces, size, mass, com,
+                 _as_tuple(np.asarray(inertia, dtype=np.float64)), bool(reads_down))
+        return die
+
     # --- internals ------------------------------------------------------------------------
 
     def __repr__(self) -> str:

@@ -1,4 +1,4 @@
-"""Rotation matrices: uniform random draws, axis-angle, one turning a direction up, a check."""
+"""Rotation matrices: uniform draws, quaternions, axis-angle, turning a direction up, a check."""
 
 from __future__ import annotations
 
@@ -30,6 +30,32 @@ def quaternion_to_matrix(quat: np.ndarray) -> np.ndarray:
         np.stack([2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)], -1),
         np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], -1),
     ], -2)
+
+
+def matrix_to_quaternion(rot: np.ndarray) -> np.ndarray:
+    """Unit quaternions (..., 4) (w, x, y, z), w >= 0, of rotation matrices (..., 3, 3).
+
+    The inverse of :func:`quaternion_to_matrix`; each from the largest of the four squared
+    components (Shepperd 1978), so no division comes near zero.
+    """
+    r = np.asarray(rot, dtype=np.float64)
+    trace = r[..., 0, 0] + r[..., 1, 1] + r[..., 2, 2]
+    squares = np.stack([1 + trace, 1 + 2 * r[..., 0, 0] - trace, 1 + 2 * r[..., 1, 1] - trace,
+                        1 + 2 * r[..., 2, 2] - trace], axis=-1)  # 4 w^2, 4 x^2, 4 y^2, 4 z^2
+    pairs = np.stack([  # 4 w x, 4 w y, 4 w z, 4 x y, 4 x z, 4 y z
+        r[..., 2, 1] - r[..., 1, 2], r[..., 0, 2] - r[..., 2, 0], r[..., 1, 0] - r[..., 0, 1],
+        r[..., 1, 0] + r[..., 0, 1], r[..., 0, 2] + r[..., 2, 0], r[..., 2, 1] + r[..., 1, 2],
+    ], axis=-1)
+    wx, wy, wz, xy, xz, yz = np.moveaxis(pairs, -1, 0)
+    products = np.stack([  # row k: 4 q_k q_j for j = w, x, y, z
+        np.stack([squares[..., 0], wx, wy, wz], -1), np.stack([wx, squares[..., 1], xy, xz], -1),
+        np.stack([wy, xy, squares[..., 2], yz], -1), np.stack([wz, xz, yz, squares[..., 3]], -1),
+    ], axis=-2)
+    k = squares.argmax(axis=-1)
+    row = np.take_along_axis(products, k[..., None, None], axis=-2)[..., 0, :]
+    quat = row / np.sqrt(np.take_along_axis(squares, k[..., None], axis=-1))
+    quat = quat / np.linalg.norm(quat, axis=-1, keepdims=True)
+    return np.where(quat[..., :1] < 0, -quat, quat)
 
 
 def axis_angle(axis: np.ndarray, angle: float) -> np.ndarray:

@@ -100,7 +100,7 @@ GLYPHS = _glyphs()
 
 
 @dataclass(frozen=True)
-class _FaceArt:
+class FaceArt:
     """What is drawn on one face, in its own frame (metres).
 
     ``centre`` (3,) body frame; ``axes`` (2, 3): the in-face unit axes u, v (u x v the
@@ -415,7 +415,7 @@ def _draw_die(image: np.ndarray, depth: np.ndarray, nearest: np.ndarray, die: Di
     t = np.where(t < front, t, np.inf)  # behind a die drawn before: hidden
     np.minimum(front, t, out=front)
     px, py = np.meshgrid(xs[cols], ys[rows])
-    for k, art in enumerate(_face_art(die)):
+    for k, art in enumerate(face_art(die)):
         hit = np.isfinite(t) & (entry == k)
         if not hit.any():
             continue
@@ -432,7 +432,7 @@ def _draw_die(image: np.ndarray, depth: np.ndarray, nearest: np.ndarray, die: Di
     nearest[rows, cols] = front
 
 
-def _face_colour(art: _FaceArt, uv: np.ndarray, shade: float, rim: float,
+def _face_colour(art: FaceArt, uv: np.ndarray, shade: float, rim: float,
                  scale: float) -> np.ndarray:
     """Colour (M, 3) of the face at points ``uv`` (M, 2): shaded, darker near the rim, inked."""
     edge = (uv @ art.edges[:, :2].T - art.edges[:, 2]).min(axis=1)
@@ -474,7 +474,7 @@ def has_pips(die: Die) -> bool:
 
 
 @lru_cache(maxsize=64)
-def _face_art(die: Die) -> tuple[_FaceArt, ...]:
+def face_art(die: Die) -> tuple[FaceArt, ...]:
     """What each face of ``die`` carries, in label order (computed once per die)."""
     vertices = np.asarray(die.vertices)
     polygons = [vertices[list(face)] for face in die.faces]
@@ -495,12 +495,12 @@ def _face_art(die: Die) -> tuple[_FaceArt, ...]:
     return tuple(art)
 
 
-def _pip_face(polygon: np.ndarray, k: int) -> _FaceArt:
+def _pip_face(polygon: np.ndarray, k: int) -> FaceArt:
     """Face ``k`` of a d6-like die: pips of face ``k + 1`` on its own axes FACE_U, FACE_V."""
     centre, axes = polygon.mean(axis=0), np.array([FACE_U[k], FACE_V[k]])
     flat = _flat(polygon, centre, axes)
     half = float(np.ptp(flat, axis=0).min()) / 2
-    return _FaceArt(centre, axes, _edge_lines(flat), np.array(PIPS[k], float) * half,
+    return FaceArt(centre, axes, _edge_lines(flat), np.array(PIPS[k], float) * half,
                     PIP_RADIUS * half, np.zeros((0, 2, 2)), np.zeros(0), 0.0)
 
 
@@ -571,7 +571,7 @@ def _text_radius(text: str, texts: list[str]) -> float:
 
 def _numeral_face(centre: np.ndarray, axes: np.ndarray, flat: np.ndarray,
                   placed: list[tuple[str, np.ndarray, np.ndarray, float]],
-                  texts: list[str]) -> _FaceArt:
+                  texts: list[str]) -> FaceArt:
     """A face with numerals: ``placed`` (text, centre, up, height) in face coordinates."""
     strokes, widths = [], []
     for text, middle, up, height in placed:
@@ -581,7 +581,7 @@ def _numeral_face(centre: np.ndarray, axes: np.ndarray, flat: np.ndarray,
         widths.append(np.full(len(glyph), STROKE * height))
     strokes, widths = np.concatenate(strokes), np.concatenate(widths)
     reach = float(np.linalg.norm(strokes, axis=-1).max() + widths.max())
-    return _FaceArt(centre, axes, _edge_lines(flat), np.zeros((0, 2)), 0.0, strokes, widths,
+    return FaceArt(centre, axes, _edge_lines(flat), np.zeros((0, 2)), 0.0, strokes, widths,
                     reach)
 
 

@@ -1,0 +1,60 @@
+"""Scenes, dice and die contacts as JSON data, and back, exactly.
+
+:func:`to_data` turns a :class:`~dice_env.scene.Scene`, a :class:`~dice_env.die.Die`, a
+:class:`~dice_env.group.DieContact` (or any of their parts: planes, rest thresholds) into
+plain JSON data: ``{"type": name, field: value, ...}``, floats as Python writes them (which
+JSON reads back to the same double), enums by name. :func:`from_data` builds the object
+again through its own checks, so a file edited into nonsense is refused as the constructor
+would refuse it. Round trips are exact: ``from_data(to_data(x)) == x``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from enum import Enum
+from typing import Any
+
+from dice_env.die import Die
+from dice_env.group import DieContact
+from dice_env.scene import Ground, Rest, Scene, Wall
+
+TYPES: dict[str, type] = {kind.__name__: kind
+                          for kind in (Scene, Die, Ground, Wall, Rest, DieContact)}
+
+
+def to_data(value: Any) -> Any:
+    """``value`` (one of :data:`TYPES`, or a tuple, enum or number of theirs) as JSON data."""
+    if type(value).__name__ in TYPES and dataclasses.is_dataclass(value):
+        fields = {f.name: to_data(getattr(value, f.name)) for f in dataclasses.fields(value)}
+        return {"type": type(value).__name__, **fields}
+    if isinstance(value, Enum):
+        return value.name
+    if isinstance(value, (tuple, list)):
+        return [to_data(v) for v in value]
+    if value is None or isinstance(value, (bool, int, float, str)):
+        return value
+    raise TypeError(f"value must be one of {', '.join(TYPES)} or their fields' values, got "
+                    f"{type(value).__name__}")
+
+
+def from_data(data: Any) -> Any:
+    """The object that :func:`to_data` wrote as ``data``; lists come back as tuples.
+
+    Raises ``ValueError`` for a type it does not know or fields its type does not have,
+    and whatever the type's own checks raise for values out of range.
+    """
+    if isinstance(data, dict):
+        fields = dict(data)
+        name = fields.pop("type", None)
+        if name not in TYPES:
+            raise ValueError(f"data's type must be one of {', '.join(TYPES)}, got {name!r}")
+        kind = TYPES[name]
+        known = {f.name for f in dataclasses.fields(kind)}
+        if set(fields) != known:
+            raise ValueError(f"a {name}'s data must hold the fields {sorted(known)}, got "
+                             f"{sorted(fields)}")
+        values = {key: from_data(value) for key, value in fields.items()}
+        return kind.from_fields(**values) if kind is Die else kind(**values)
+    if isinstance(data, list):
+        return tuple(from_data(v) for v in data)
+    return data

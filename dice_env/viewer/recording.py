@@ -1,0 +1,257 @@
+"""A recorded throw: its scene, dice, release state and frames, as data that replays exactly.
+
+:func:`record` simulates throws and keeps, for each, what a viewer draws (every die's centre
+and orientation at a fixed frame rate, the outcome) and what :func:`replay` needs to throw it
+again (the scene, the dice and their contact as :mod:`dice_env.codec` data, the release state
+to the last bit, the run's keywords, the library version). The simulator is deterministic,
+so a replay lands the same faces; :func:`replay` checks that it does.
+"""
+
+from __future__ import annotations
+
+import importlib.metadata
+import json
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from dice_env.codec import from_data, to_data
+from dice_env.die import Die
+from dice_env.envs.task import UNTIL
+from dice_env.group import DieContact, GroupState, group_step, simulate_group
+from dice_env.rotations import matrix_to_quaternion, quaternion_to_matrix
+from dice_env.scene import Scene
+from dice_env.simulate import State, simulate
+
+FORMAT = "dice_env.throw"  # what a file holding recordings says it holds
+FPS = 60.0  # frames per simulated second, by default
+MAX_FRAMES = 100_000  # frames of one throw (all dice), against a page or an export too large
+STATE_FIELDS = ("position", "velocity", "angular_momentum", "orientation", "angular_velocity")
+
+
+class ReplayError(ValueError):
+    """A replayed throw that did not land as recorded (another version, another machine)."""
+
+
+@dataclass(frozen=True)
+class Recording:
+    """One throw of one or more dice, as recorded.
+
+    ``scene``, ``dice``, ``contact`` (between dice) and ``release`` (a :class:`GroupState` of
+    one throw) are what was thrown, ``run`` the keywords it ran with (``t_max``,
+    ``stop_when_decided``, ``early_rest``) and ``fps`` its frame rate. Frames: ``t`` (n,)
+    from 0 (the release) to the end of the throw, ``position`` (n, N, 3) and ``orientation``
+    (n, N, 3, 3) (body to world). ``outcome``: ``faces`` and ``read`` (per die: the label
+    read, and False for a die left leaning on another), ``settled``, ``decided``,
+    ``unstable``, ``sunk``, ``time`` (s simulated) and ``void`` (why the throw does not
+    count: ``""``, ``"unstable"``, ``"sunk"``, ``"not_settled"``, ``"not_decided"``,
+    ``"leaning"``, or the caller's, e.g. a task's ``"foul"``). ``title``: a caption.
+    """
+
+    scene: Scene
+    dice: tuple[Die, ...]
+    contact: DieContact
+    release: GroupState
+    run: dict[str, Any]
+    fps: float
+    t: np.ndarray
+    position: np.ndarray
+    orientation: np.ndarray
+    outcome: dict[str, Any]
+    title: str = ""
+    version: str = field(default_factory=lambda: library_version())
+
+    @property
+    def n_dice(self) -> int:
+        """Dice in the throw."""
+        return len(self.dice)
+
+    def to_data(self) -> dict[str, Any]:
+        """JSON data of the recording: the frames as quaternions (w, x, y, z), the rest exact."""
+        return {
+            "format": FORMAT, "version": self.version, "title": self.title,
+            "scene": to_data(self.scene), "dice": to_data(self.dice),
+            "contact": to_data(self.contact), "run": dict(self.run), "fps": self.fps,
+            "release": {name: getattr(self.release, name)[0].tolist() for name in STATE_FIELDS},
+            "t": self.t.tolist(), "position": self.position.tolist(),
+            "quaternion": matrix_to_quaternion(self.orientation).tolist(),
+            "outcome": self.outcome,
+        }
+
+    @classmethod
+    def from_data(cls, data: dict[str, Any]) -> Recording:
+        """The recording :meth:`to_data` wrote (its orientations from the quaternions)."""
+        if not isinstance(data, dict) or data.get("format") != FORMAT:
+            raise ValueError(f"data must be a recording ({{'format': {FORMAT!r}, ...}}), got "
+                             f"{str(data)[:80]!r}")
+        release = GroupState(*(np.array(data["release"][name], dtype=np.float64)[None]
+                               for name in STATE_FIELDS))
+        return cls(scene=from_data(data["scene"]), dice=from_data(data["dice"]),
+                   contact=from_data(data["contact"]), release=release, run=dict(data["run"]),
+                   fps=float(data["fps"]), t=np.array(data["t"], dtype=np.float64),
+                   position=np.array(data["position"], dtype=np.float64),
+                   orientation=quaternion_to_matrix(np.array(data["quaternion"])),
+                   outcome=dict(data["outcome"]), title=str(data["title"]),
+                   version=str(data["version"]))
+
+
+def library_version() -> str:
+    """The installed dice_env's version."""
+    return importlib.metadata.version("dice_env")
+
+
+def record(scene: Scene, dice: Die | Sequence[Die], state: State | GroupState, *,
+           fps: float = FPS, contact: DieContact = DieContact(), t_max: float | None = None,
+           stop_when_decided: bool = False, early_rest: bool = False,
+           titles: Sequence[str] | None = None,
+           voids: Sequence[str] | None = None) -> list[Recording]:
+    """Simulate the throws of ``state`` and record each at ``fps`` frames per simulated second.
+
+    ``dice``: one die (``state`` a :class:`State` of B throws, the die in ``scene`` replaced
+    by it) or several (``state`` a :class:`GroupState`). One die runs in
+    :func:`dice_env.simulate` (``early_rest`` as there), several in
+    :func:`dice_env.group.simulate_group` with ``contact``; ``t_max`` and
+    ``stop_when_decided`` as there. Frames run from the release to the end of the throw.
+    ``titles`` and ``voids`` (one per throw) caption the throws and override the void reason
+    (e.g. a task's ``"foul"``; ``""`` keeps the simulation's). Returns one recording a throw.
+    """
+    single = isinstance(dice, Die)
+    dice = (dice,) if single else tuple(dice)
+    if not (isinstance(fps, (int, float)) and math.isfinite(fps) and fps > 0):
+        raise ValueError(f"fps must be a finite number > 0, got {fps!r}")
+    if not isinstance(state, State if single else GroupState):
+        raise TypeError("state must be a State for one die and a GroupState for several, got "
+                        f"a {type(state).__name__} for {len(dice)} dice")
+    if early_rest and not single:
+        raise ValueError("early_rest applies to one die only (simulate), got several dice")
+    release = GroupState.of([state]) if single else state.copy()
+    dt = group_step(scene, dice, contact)
+    stride = max(1, round(1.0 / (fps * dt)))
+    limit = scene.t_max if t_max is None else t_max
+    if limit / (stride * dt) * len(dice) > MAX_FRAMES:
+        raise ValueError(f"t_max={limit:g} s at fps={fps:g} records more than {MAX_FRAMES} "
+                         "die frames a throw: lower fps or t_max")
+    run = {"t_max": t_max, "stop_when_decided": bool(stop_when_decided),
+           "early_rest": bool(early_rest)}
+    result, outcomes = _simulate(scene, dice, release, contact, stride, run)
+    count = release.batch_size
+    titles = [""] * count if titles is None else list(titles)
+    voids = [""] * count if voids is None else list(voids)
+    if len(titles) != count or len(voids) != count:
+        raise ValueError(f"titles and voids must hold one entry per throw ({count}), got "
+                         f"{len(titles)} and {len(voids)}")
+    recordings = []
+    for b in range(count):
+        frames = min(result.x_cm.shape[1], -(-int(result.steps[b]) // stride))
+        outcome = outcomes[b] | ({"void": voids[b]} if voids[b] else {})
+        recordings.append(Recording(
+            scene=scene.with_(die=dice[0]) if single else scene, dice=dice, contact=contact,
+            release=GroupState(*(getattr(release, name)[b:b + 1] for name in STATE_FIELDS)),
+            run=run, fps=float(fps), t=np.arange(frames + 1) * (stride * dt),
+            position=np.concatenate([release.position[b:b + 1],
+                                     _per_die(result.x_cm[b, :frames], single)]),
+            orientation=np.concatenate([release.orientation[b:b + 1],
+                                        _per_die(result.orientations[b, :frames], single)]),
+            outcome=outcome, title=titles[b]))
+    return recordings
+
+
+def replay(source: Recording | str | Path) -> list[Recording]:
+    """Throw again what ``source`` (a recording, or a file of them) recorded, and check it.
+
+    Returns the new recordings; raises :class:`ReplayError` naming each throw whose faces
+    differ from the recorded ones.
+    """
+    recorded = [source] if isinstance(source, Recording) else load(source)
+    again, wrong = [], []
+    for k, old in enumerate(recorded):
+        dice = old.dice[0] if old.n_dice == 1 else old.dice
+        state = old.release.die(0) if old.n_dice == 1 else old.release
+        voids = [old.outcome["void"]] if old.outcome["void"] not in _OWN_VOIDS else None
+        new = record(old.scene, dice, state, fps=old.fps, contact=old.contact,
+                     t_max=old.run["t_max"], stop_when_decided=old.run["stop_when_decided"],
+                     early_rest=old.run["early_rest"], titles=[old.title], voids=voids)[0]
+        if new.outcome["faces"] != old.outcome["faces"]:
+            wrong.append(f"throw {k}: faces {old.outcome['faces']} recorded (dice_env "
+                         f"{old.version}), {new.outcome['faces']} now (dice_env {new.version})")
+        again.append(new)
+    if wrong:
+        raise ReplayError("the replay landed other faces: " + "; ".join(wrong))
+    return again
+
+
+def load(path: str | Path) -> list[Recording]:
+    """The recordings in ``path``: a page, a ``.glb`` export or a ``.json`` of :func:`save`.
+
+    Pages are those of :func:`dice_env.viewer.write_html`, exports those of
+    :func:`dice_env.viewer.write_glb`.
+    """
+    path = Path(path)
+    suffix = path.suffix.lower()
+    if suffix in (".html", ".htm"):
+        from dice_env.viewer.html import read_html
+        data = read_html(path)
+    elif suffix == ".glb":
+        from dice_env.viewer.gltf import read_glb
+        data = read_glb(path)
+    elif suffix == ".json":
+        data = json.loads(path.read_text())
+    else:
+        raise ValueError(f"path must end in .html, .glb or .json, got {path.name!r}")
+    return [Recording.from_data(item) for item in data]
+
+
+def save(recordings: Recording | Sequence[Recording], path: str | Path) -> Path:
+    """Write ``recordings`` to ``path`` as JSON (a list of :meth:`Recording.to_data`)."""
+    path = Path(path)
+    path.write_text(json.dumps(as_data(recordings)))
+    return path
+
+
+def as_data(recordings: Recording | Sequence[Recording]) -> list[dict[str, Any]]:
+    """JSON data of one recording or several (a list, in order)."""
+    items = [recordings] if isinstance(recordings, Recording) else list(recordings)
+    if not items or not all(isinstance(r, Recording) for r in items):
+        raise TypeError("recordings must be a Recording or a non-empty sequence of them")
+    return [r.to_data() for r in items]
+
+
+_OWN_VOIDS = ("", "unstable", "sunk", "leaning", *UNTIL.values())
+
+
+def _simulate(scene: Scene, dice: tuple[Die, ...], release: GroupState, contact: DieContact,
+              stride: int, run: dict[str, Any]) -> tuple[Any, list[dict[str, Any]]]:
+    """The recorded run and each throw's outcome."""
+    until = UNTIL["decided" if run["stop_when_decided"] else "rest"]
+    if len(dice) == 1:
+        result = simulate(scene.with_(die=dice[0]), release.die(0), t_max=run["t_max"],
+                          record_every=stride, record=("orientations",),
+                          early_rest=run["early_rest"],
+                          stop_when_decided=run["stop_when_decided"])
+        faces, read, sunk = result.face[:, None], np.ones((len(result.face), 1), bool), \
+            result.sunk[:, None]
+    else:
+        result = simulate_group(scene, dice, release, contact=contact, t_max=run["t_max"],
+                                stop_when_decided=run["stop_when_decided"],
+                                record_every=stride, orientations=True)
+        faces, read, sunk = result.face, result.read, result.sunk
+    ended = result.decided if run["stop_when_decided"] else result.settled
+    outcomes = []
+    for b in range(len(faces)):
+        void = ("unstable" if result.unstable[b] else "sunk" if sunk[b].any()
+                else until if not ended[b] else "leaning" if not read[b].all() else "")
+        outcomes.append({
+            "faces": faces[b].tolist(), "read": read[b].tolist(),
+            "settled": bool(result.settled[b]), "decided": bool(result.decided[b]),
+            "unstable": bool(result.unstable[b]), "sunk": bool(sunk[b].any()),
+            "time": float(result.steps[b] * (result.t[0] / stride)), "void": void})
+    return result, outcomes
+
+
+def _per_die(frames: np.ndarray, single: bool) -> np.ndarray:
+    """Frames of one die (n, ...) given a die axis (n, 1, ...); several dice's as they are."""
+    return frames[:, None] if single else frames
