@@ -1,0 +1,92 @@
+"""Write a page (and a glTF export) of random throws, or replay a recorded file.
+
+    python -m dice_env.viewer --die d20 --walls tray --seed 0 --out throw.html
+    python -m dice_env.viewer --num-dice 2 --throws 3 --layout side --glb throw.glb
+    python -m dice_env.viewer --replay throw.html
+
+A throw's action (release velocity and spin) is drawn uniformly, its hand as the env draws
+it (``gym.make("DiceThrow-v0", die=..., walls=..., num_dice=...)``); ``--replay`` throws a
+page's or an export's throws again and checks that the faces are the ones recorded.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from dice_env.die import STANDARD_SIZES
+from dice_env.envs.task import MAX_NUM_DICE, make_task
+from dice_env.surroundings import PRESETS
+from dice_env.viewer.recording import FPS, ReplayError, replay
+from dice_env.viewer.throws import random_throws
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Command line: ``python -m dice_env.viewer``; returns the exit status."""
+    parser = argparse.ArgumentParser(prog="python -m dice_env.viewer", description=__doc__,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--die", choices=sorted(STANDARD_SIZES), default="d6",
+                        help="the die (default d6)")
+    parser.add_argument("--walls", choices=sorted(PRESETS), default="none",
+                        help="walls around the table (default none)")
+    parser.add_argument("--num-dice", type=int, default=1,
+                        help=f"dice thrown together (1 to {MAX_NUM_DICE})")
+    parser.add_argument("--throws", type=int, default=1, help="throws on the page (>= 1)")
+    parser.add_argument("--seed", type=int, default=0, help="seed of the throws (>= 0)")
+    parser.add_argument("--fps", type=float, default=FPS, help="frames per simulated second")
+    parser.add_argument("--layout", choices=("sequence", "side"), default="sequence",
+                        help="several throws one after another or side by side")
+    parser.add_argument("--out", type=Path, default=Path("throw.html"), help="the page")
+    parser.add_argument("--glb", type=Path, default=None,
+                        help="also export the first throw as binary glTF to this path")
+    parser.add_argument("--replay", type=Path, default=None, metavar="FILE",
+                        help="replay a page, .glb or .json of recordings and check its faces")
+    args = parser.parse_args(argv)
+    if args.replay is not None:
+        return _replay(parser, args.replay)
+    if not 1 <= args.num_dice <= MAX_NUM_DICE:
+        parser.error(f"argument --num-dice: must be in [1, {MAX_NUM_DICE}], got {args.num_dice}")
+    if args.throws < 1:
+        parser.error(f"argument --throws: must be an integer >= 1, got {args.throws}")
+    if args.seed < 0:
+        parser.error(f"argument --seed: must be an integer >= 0, got {args.seed}")
+    if not 0 < args.fps <= 1000:
+        parser.error(f"argument --fps: must be in (0, 1000], got {args.fps:g}")
+    if args.out.suffix.lower() != ".html":
+        parser.error(f"argument --out: must end in .html, got {args.out.name!r}")
+    if args.glb is not None and args.glb.suffix.lower() != ".glb":
+        parser.error(f"argument --glb: must end in .glb, got {args.glb.name!r}")
+    from dice_env.viewer.html import write_html
+
+    task = make_task(die=args.die, walls=args.walls,
+                     num_dice=args.num_dice if args.num_dice > 1 else None)
+    recordings = random_throws(task, args.throws, args.seed, fps=args.fps)
+    for k, rec in enumerate(recordings):
+        ending = rec.outcome["void"] or "counts"
+        print(f"throw {k}: faces {rec.outcome['faces']} after {rec.outcome['time']:.2f} s "
+              f"({ending})")
+    print(f"page: {write_html(recordings, args.out, layout=args.layout)}")
+    if args.glb is not None:
+        from dice_env.viewer.gltf import write_glb
+
+        print(f"glTF: {write_glb(recordings[0], args.glb)}")
+    return 0
+
+
+def _replay(parser: argparse.ArgumentParser, path: Path) -> int:
+    """Replay ``path``'s throws; 0 when every face is the recorded one, 1 when one is not."""
+    if not path.is_file():
+        parser.error(f"argument --replay: no file {path}")
+    try:
+        again = replay(path)
+    except ReplayError as error:
+        print(error, file=sys.stderr)
+        return 1
+    for k, rec in enumerate(again):
+        print(f"throw {k}: faces {rec.outcome['faces']}, as recorded")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

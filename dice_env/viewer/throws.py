@@ -1,0 +1,45 @@
+"""Recordings of a task's throws: the env's releases, scored as the env scores them."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from dice_env.envs.task import ThrowTask
+from dice_env.viewer.recording import FPS, Recording, record
+
+
+def task_throws(task: ThrowTask, actions: np.ndarray, targets: Any, hands: np.ndarray,
+                noise: np.ndarray, *, fps: float = FPS,
+                titles: list[str] | None = None) -> list[Recording]:
+    """The recordings of ``task.throw(actions, targets, hands, noise)``, one per throw.
+
+    Each is the same throw as the task's (its release, its run keywords), recorded; the
+    task's void reason (e.g. ``"foul"``) is kept, and ``titles`` default to the target and
+    the outcome.
+    """
+    throw = task.throw(actions, targets, hands, noise)
+    state, _ = task.release(actions, hands, noise)
+    decided = task.until == "decided"
+    info = throw.info
+    targets = info.get("target_sum", info.get("target_face"))
+    if titles is None:
+        titles = [f"target {np.asarray(target).tolist()}: "
+                  f"{'success' if success else 'failure'}"
+                  for target, success in zip(targets, info["is_success"], strict=True)]
+    dice = task.scene.die if task.n_dice == 1 else task.dice
+    return record(task.scene, dice, state, fps=fps, stop_when_decided=decided,
+                  early_rest=task.n_dice == 1 and not decided, titles=titles,
+                  voids=[str(v) for v in info["void_reason"]])
+
+
+def random_throws(task: ThrowTask, count: int, seed: int, *, fps: float = FPS) -> list[Recording]:
+    """``count`` throws of uniformly random actions from hands drawn as the env draws them."""
+    if not isinstance(count, int) or count < 1:
+        raise ValueError(f"count must be an int >= 1, got {count!r}")
+    rng = np.random.default_rng(seed)
+    rngs = [np.random.default_rng([seed, k]) for k in range(count)]
+    targets, hands = task.sample_hands(rngs)
+    actions = rng.uniform(-1.0, 1.0, (count, task.action_dim))
+    return task_throws(task, actions, targets, hands, task.sample_noise(rng, count), fps=fps)
