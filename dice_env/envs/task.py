@@ -752,17 +752,19 @@ def make_task(
     """
     check_task_keywords(physics)
     dice = check_num_dice(num_dice, physics.pop("die", None))
-    common = (release_height, max_speed, max_spin, hand_noise, orientation_noise, min_speed,
-              min_spin, shaping, num_threads, until)
+    common = {"release_height": release_height, "max_speed": max_speed, "max_spin": max_spin,
+              "hand_noise": hand_noise, "orientation_noise": orientation_noise,
+              "min_speed": min_speed, "min_spin": min_spin, "shaping": shaping,
+              "num_threads": num_threads, "until": until}
     if len(dice) == 1:
         if target not in (None, "faces"):
             raise ValueError(f"target must be 'faces' for one die (target='sum' needs "
                              f"num_dice >= 2), got {target!r}")
         if set_dice is not False:
             raise ValueError(f"set_dice needs num_dice >= 2, got set_dice={set_dice!r}")
-        return ThrowTask(build_scene(scene, die=dice[0], **physics), *common)
+        return ThrowTask(build_scene(scene, die=dice[0], **physics), **common)
     scenes = [build_scene(scene, die=die, **physics) for die in dice]
-    return GroupThrowTask(scenes[0], *common, dice=tuple(s.die for s in scenes),
+    return GroupThrowTask(scenes[0], **common, dice=tuple(s.die for s in scenes),
                           target="sum" if target is None else target, set_dice=set_dice)
 
 
