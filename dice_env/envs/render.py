@@ -425,15 +425,15 @@ def _draw_die(image: np.ndarray, depth: np.ndarray, nearest: np.ndarray, die: Di
         uv = np.linalg.solve(screen @ axes.T, np.stack([px[hit], py[hit]]) -
                              (screen @ origin)[:, None]).T
         shade = 0.45 + 0.55 * max(0.0, float(planes[k, :3] @ light))
-        colour = _face_colour(art, uv, shade, RIM_WIDTH * die.size, scale)
+        colour = face_colour(art, uv, shade, RIM_WIDTH * die.size, scale)
         ahead = (t[hit] < behind[hit])[:, None]
         crop[hit] = np.where(ahead, colour, WALL_ALPHA * crop[hit] + (1 - WALL_ALPHA) * colour)
     image[rows, cols] = crop
     nearest[rows, cols] = front
 
 
-def _face_colour(art: FaceArt, uv: np.ndarray, shade: float, rim: float,
-                 scale: float) -> np.ndarray:
+def face_colour(art: FaceArt, uv: np.ndarray, shade: float, rim: float,
+                scale: float) -> np.ndarray:
     """Colour (M, 3) of the face at points ``uv`` (M, 2): shaded, darker near the rim, inked."""
     edge = (uv @ art.edges[:, :2].T - art.edges[:, 2]).min(axis=1)
     face = FACE_COLOUR * np.where(edge < rim, 0.8 * shade, shade)[:, None]

@@ -1,0 +1,311 @@
+"""A recorded throw as binary glTF 2.0 (``.glb``), for Blender, Godot, three.js and the like.
+
+:func:`write_glb` writes one :class:`~dice_env.viewer.recording.Recording` with pygltflib:
+every die a flat-shaded mesh textured with its faces' labels
+(:func:`~dice_env.viewer.textures.face_atlas`), on a node that the animation ``"throw"``
+moves (its centre of mass and orientation at every frame, linear); equal dice share one
+mesh. The floor and the walls are finite quads in the colours of
+:mod:`dice_env.envs.render`: the floor :data:`MARGIN` beyond where the dice go and the
+walls' corners, each wall :data:`WALL_HEIGHT` high and as long as the other walls let it
+be. The simulation's z-up world hangs below a root node turned -90 degrees about x (glTF is
+y up). The recording's data rides in ``asset.extras["recordings"]`` as JSON text (a list
+of :meth:`~dice_env.viewer.recording.Recording.to_data`; text, since pygltflib drops the
+nulls and empty values of JSON objects, which the data holds), so :func:`read_glb`,
+:func:`dice_env.viewer.load` and :func:`dice_env.viewer.replay` get it back.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pygltflib as gl
+
+from dice_env.die import Die
+from dice_env.envs.render import TABLE_COLOUR, WALL_COLOUR
+from dice_env.rotations import matrix_to_quaternion
+from dice_env.scene import Plane
+from dice_env.viewer.recording import Recording, library_version
+from dice_env.viewer.textures import face_atlas, png_bytes
+
+MARGIN = 0.05  # m of floor beyond the dice's farthest corners and the walls' corners
+WALL_HEIGHT = 0.05  # m: a wall's quad above the floor
+Z_UP = [-math.sqrt(0.5), 0.0, 0.0, math.sqrt(0.5)]  # root rotation (x, y, z, w): z up to y up
+EXTRAS = "recordings"  # asset.extras[EXTRAS]: the recordings' data, JSON text of a list
+ANIMATION = "throw"
+_COMPONENTS = {np.dtype(np.float32): gl.FLOAT, np.dtype(np.uint16): gl.UNSIGNED_SHORT,
+               np.dtype(np.uint32): gl.UNSIGNED_INT}
+_TYPES = {1: gl.SCALAR, 2: gl.VEC2, 3: gl.VEC3, 4: gl.VEC4}
+
+
+def write_glb(recording: Recording, path: str | os.PathLike[str]) -> Path:
+    """Write ``recording`` as a binary glTF to ``path`` (ending in ``.glb``); returns the path."""
+    if not isinstance(recording, Recording):
+        raise TypeError(f"recording must be a Recording, got {type(recording).__name__}")
+    path = _glb_path(path)
+    gltf = gl.GLTF2(asset=gl.Asset(generator=f"dice_env {library_version()}",
+                                   extras={EXTRAS: json.dumps([recording.to_data()])}),
+                    samplers=[gl.Sampler(magFilter=gl.LINEAR, minFilter=gl.LINEAR_MIPMAP_LINEAR,
+                                         wrapS=gl.CLAMP_TO_EDGE, wrapT=gl.CLAMP_TO_EDGE)])
+    blob = _Blob(gltf)
+    meshes: dict[Die, int] = {}
+    for i, die in enumerate(recording.dice):
+        if die not in meshes:
+            meshes[die] = _die_mesh(blob, die)
+        gltf.nodes.append(gl.Node(name=f"die {i} ({die.name})", mesh=meshes[die]))
+    _animate(blob, recording)
+    _surroundings(blob, recording)
+    gltf.nodes.append(gl.Node(name="dice_env (z up)", rotation=Z_UP,
+                              children=list(range(len(gltf.nodes)))))
+    gltf.scenes = [gl.Scene(name=recording.title or "throw", nodes=[len(gltf.nodes) - 1])]
+    gltf.scene = 0
+    gltf.buffers = [gl.Buffer(byteLength=len(blob.data))]
+    gltf.set_binary_blob(bytes(blob.data))
+    gltf.save_binary(str(path))
+    return path
+
+
+def read_glb(path: str | os.PathLike[str]) -> list[dict[str, Any]]:
+    """The recordings' data (a list of :meth:`Recording.to_data`) in a :func:`write_glb` file."""
+    path = _glb_path(path)
+    extras = gl.GLTF2.load_binary(str(path)).asset.extras
+    if not isinstance(extras, dict) or not isinstance(extras.get(EXTRAS), str):
+        raise ValueError(f"path {str(path)!r} holds no dice_env recording "
+                         f"(asset.extras[{EXTRAS!r}])")
+    return json.loads(extras[EXTRAS])
+
+
+def _glb_path(path: str | os.PathLike[str]) -> Path:
+    """``path`` as a Path, checked to end in ``.glb``."""
+    if not isinstance(path, (str, os.PathLike)):
+        raise TypeError(f"path must be a str or a path, got {type(path).__name__}")
+    path = Path(path)
+    if path.suffix.lower() != ".glb":
+        raise ValueError(f"path must end in .glb, got {path.name!r}")
+    return path
+
+
+class _Blob:
+    """The binary buffer of a glTF being built, with its buffer views and accessors."""
+
+    def __init__(self, gltf: gl.GLTF2) -> None:
+        self.gltf = gltf
+        self.data = bytearray()
+
+    def view(self, data: bytes, target: int | None = None) -> int:
+        """A buffer view of ``data`` (appended, 4-byte aligned); returns its index."""
+        self.data.extend(b"\0" * (-len(self.data) % 4))
+        self.gltf.bufferViews.append(gl.BufferView(buffer=0, byteOffset=len(self.data),
+                                                   byteLength=len(data), target=target))
+        self.data.extend(data)
+        return len(self.gltf.bufferViews) - 1
+
+    def accessor(self, array: np.ndarray, target: int | None = None,
+                 bounds: bool = False) -> int:
+        """An accessor of ``array`` (M,) or (M, K) in its own view; returns its index.
+
+        With its ``min`` and ``max`` if ``bounds``.
+        """
+        columns = 1 if array.ndim == 1 else array.shape[1]
+        flat = array.reshape(len(array), columns)
+        self.gltf.accessors.append(gl.Accessor(
+            bufferView=self.view(array.tobytes(), target),
+            componentType=_COMPONENTS[array.dtype], count=len(array), type=_TYPES[columns],
+            min=flat.min(axis=0).tolist() if bounds else None,
+            max=flat.max(axis=0).tolist() if bounds else None))
+        return len(self.gltf.accessors) - 1
+
+    def mesh(self, name: str, positions: np.ndarray, normals: np.ndarray,
+             triangles: np.ndarray, material: int, uv: np.ndarray | None = None) -> int:
+        """A mesh of one primitive; returns its index.
+
+        ``positions`` (M, 3), ``normals`` (M, 3), ``triangles`` (T, 3) corner indices, ``uv``
+        (M, 2) texture coordinates if any.
+        """
+        attributes = gl.Attributes(
+            POSITION=self.accessor(positions.astype(np.float32), gl.ARRAY_BUFFER, bounds=True),
+            NORMAL=self.accessor(normals.astype(np.float32), gl.ARRAY_BUFFER),
+            TEXCOORD_0=None if uv is None else self.accessor(uv.astype(np.float32),
+                                                             gl.ARRAY_BUFFER))
+        index = np.uint16 if len(positions) < 2**16 - 1 else np.uint32
+        indices = self.accessor(triangles.astype(index).ravel(), gl.ELEMENT_ARRAY_BUFFER)
+        self.gltf.meshes.append(gl.Mesh(name=name, primitives=[gl.Primitive(
+            attributes=attributes, indices=indices, material=material)]))
+        return len(self.gltf.meshes) - 1
+
+    def material(self, name: str, colour: np.ndarray | None = None,
+                 texture: bytes | None = None) -> int:
+        """A matte material of an sRGB ``colour`` (3,) 0-255 or a PNG ``texture``; its index.
+
+        Plain colours (the floor, the walls) are double-sided.
+        """
+        pbr = gl.PbrMetallicRoughness(metallicFactor=0.0, roughnessFactor=0.7)
+        if texture is None:
+            pbr.baseColorFactor = [*_linear(colour), 1.0]
+        else:
+            self.gltf.images.append(gl.Image(bufferView=self.view(texture),
+                                             mimeType="image/png"))
+            self.gltf.textures.append(gl.Texture(sampler=0, source=len(self.gltf.images) - 1))
+            pbr.baseColorTexture = gl.TextureInfo(index=len(self.gltf.textures) - 1)
+        self.gltf.materials.append(gl.Material(name=name, pbrMetallicRoughness=pbr,
+                                               doubleSided=texture is None))
+        return len(self.gltf.materials) - 1
+
+
+def _linear(colour: np.ndarray) -> list[float]:
+    """An sRGB colour (3,) 0-255 in glTF's linear base colour factors."""
+    c = np.asarray(colour) / 255.0
+    return np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4).tolist()
+
+
+def _die_mesh(blob: _Blob, die: Die) -> int:
+    """The die's mesh, textured with its atlas; returns its index.
+
+    Each face has its own corners (about the centre of mass), normal and texture
+    coordinates, fanned into triangles.
+    """
+    image, uv = face_atlas(die)
+    vertices = np.asarray(die.vertices) - np.asarray(die.com)
+    starts = np.cumsum([0, *(len(face) for face in die.faces)])
+    triangles = np.array([(start, start + i, start + i + 1)
+                          for start, face in zip(starts, die.faces, strict=False)
+                          for i in range(1, len(face) - 1)])
+    return blob.mesh(
+        die.name, vertices[np.concatenate(die.faces)],
+        np.repeat(die.face_normals, [len(face) for face in die.faces], axis=0), triangles,
+        blob.material(f"{die.name} faces", texture=png_bytes(image)),
+        np.concatenate([coords[:len(face)] for coords, face in zip(uv, die.faces,
+                                                                     strict=True)]))
+
+
+def _animate(blob: _Blob, recording: Recording) -> None:
+    """The animation "throw": each die node's translation and rotation at every frame."""
+    times = blob.accessor(recording.t.astype(np.float32), bounds=True)
+    quaternions = matrix_to_quaternion(recording.orientation)[..., [1, 2, 3, 0]]  # x, y, z, w
+    flips = np.einsum("nki,nki->nk", quaternions[1:], quaternions[:-1]) < 0
+    quaternions[1:] *= np.where(np.cumsum(flips, axis=0) % 2, -1.0, 1.0)[..., None]  # short way
+    samplers, channels = [], []
+    for i in range(recording.n_dice):
+        for path, values in (("translation", recording.position[:, i]),
+                             ("rotation", quaternions[:, i])):
+            samplers.append(gl.AnimationSampler(
+                input=times, output=blob.accessor(values.astype(np.float32)),
+                interpolation=gl.ANIM_LINEAR))
+            channels.append(gl.AnimationChannel(
+                sampler=len(samplers) - 1, target=gl.AnimationChannelTarget(node=i, path=path)))
+        blob.gltf.nodes[i].translation = recording.position[0, i].tolist()
+        blob.gltf.nodes[i].rotation = quaternions[0, i].tolist()
+    blob.gltf.animations.append(gl.Animation(name=ANIMATION, samplers=samplers,
+                                             channels=channels))
+
+
+def _surroundings(blob: _Blob, recording: Recording) -> None:
+    """Nodes of the floor and of each wall as quads around where the dice go.
+
+    The floor covers the dice's corners, the walls' corners and each wall's point nearest
+    the dice, :data:`MARGIN` beyond.
+    """
+    floor, walls = recording.scene.ground, recording.scene.walls
+    normal = np.asarray(floor.normal)
+    side = _unit(np.cross(normal, [1.0, 0.0, 0.0]))
+    axes = np.array([np.cross(side, normal), side])  # in the floor, axes[0] x axes[1] = normal
+    origin = normal * floor.offset
+    lines = [_floor_line(wall, axes, origin) for wall in walls]
+    dice = (_corners(recording) - origin) @ axes.T
+    middle = (dice.min(axis=0) + dice.max(axis=0)) / 2
+    feet = [middle + (line[2] - line[:2] @ middle) * line[:2] / (line[:2] @ line[:2])
+            for line in lines if line[:2] @ line[:2] > 1e-18]  # the walls' nearest points
+    flat = np.concatenate([dice, _wall_corners(lines), np.reshape(feet, (-1, 2))])
+    low, high = flat.min(axis=0) - MARGIN, flat.max(axis=0) + MARGIN
+    rectangle = np.array([(low[0], low[1]), (high[0], low[1]), (high[0], high[1]),
+                       (low[0], high[1])])
+    _quad(blob, "floor", origin + rectangle @ axes, normal,
+          blob.material("floor", colour=TABLE_COLOUR))
+    if not walls:
+        return
+    material = blob.material("wall", colour=WALL_COLOUR)
+    for k, (wall, line) in enumerate(zip(walls, lines, strict=True)):
+        ends = _wall_ends(line, [other for j, other in enumerate(lines) if j != k], low, high)
+        if ends is None:
+            continue
+        up = _unit(normal - (normal @ wall.normal) * np.asarray(wall.normal)) * WALL_HEIGHT
+        bottom = origin + ends @ axes
+        _quad(blob, f"wall {k}", np.array([*bottom, bottom[1] + up, bottom[0] + up]),
+              np.asarray(wall.normal), material)
+
+
+def _quad(blob: _Blob, name: str, corners: np.ndarray, normal: np.ndarray,
+          material: int) -> None:
+    """A node of the flat quad ``corners`` (4, 3), wound counter-clockwise about ``normal``."""
+    if np.cross(corners[1] - corners[0], corners[2] - corners[0]) @ normal < 0:
+        corners = corners[::-1]
+    mesh = blob.mesh(name, corners, np.tile(normal, (4, 1)), np.array([(0, 1, 2), (0, 2, 3)]),
+                     material)
+    blob.gltf.nodes.append(gl.Node(name=name, mesh=mesh))
+
+
+def _corners(recording: Recording) -> np.ndarray:
+    """Every die's corners at every frame, world frame (M, 3)."""
+    return np.concatenate([
+        (recording.position[:, i, None] + np.einsum("nij,vj->nvi", recording.orientation[:, i],
+                                                     die.vertices_body)).reshape(-1, 3)
+        for i, die in enumerate(recording.dice)])
+
+
+def _floor_line(wall: Plane, axes: np.ndarray, origin: np.ndarray) -> np.ndarray:
+    """Where ``wall`` meets the floor, in floor coordinates: a row (m_u, m_v, d).
+
+    The points of the floor with ``m . (u, v) >= d`` are on the wall's free side.
+    """
+    n = np.asarray(wall.normal)
+    return np.append(axes @ n, wall.offset - n @ origin)
+
+
+def _wall_corners(lines: list[np.ndarray]) -> np.ndarray:
+    """The corners (K, 2) where two walls meet on the floor on every wall's free side."""
+    corners = []
+    for i, first in enumerate(lines):
+        for second in lines[i + 1:]:
+            matrix = np.array([first[:2], second[:2]])
+            if abs(np.linalg.det(matrix)) < 1e-9:
+                continue
+            point = np.linalg.solve(matrix, [first[2], second[2]])
+            if all(line[:2] @ point >= line[2] - 1e-9 for line in lines):
+                corners.append(point)
+    return np.array(corners).reshape(-1, 2)
+
+
+def _wall_ends(line: np.ndarray, others: list[np.ndarray], low: np.ndarray,
+               high: np.ndarray) -> np.ndarray | None:
+    """The ends (2, 2) of a wall's ``line`` on the floor, or None where none of it is left.
+
+    The line is cut to the rectangle from ``low`` to ``high`` and to the ``others``' free
+    sides.
+    """
+    m, d = line[:2], line[2]
+    scale = m @ m
+    if scale < 1e-18:  # the wall is parallel to the floor
+        return None
+    base, along = m * d / scale, np.array([-m[1], m[0]]) / math.sqrt(scale)
+    start, stop = -np.inf, np.inf
+    bounds = [np.array([1.0, 0.0, low[0]]), np.array([0.0, 1.0, low[1]]),
+              np.array([-1.0, 0.0, -high[0]]), np.array([0.0, -1.0, -high[1]]), *others]
+    for other in bounds:  # keep base + s along with other[:2] . x >= other[2]
+        rate, gap = other[:2] @ along, other[2] - other[:2] @ base
+        if abs(rate) < 1e-12:
+            if gap > 0:
+                return None
+        elif rate > 0:
+            start = max(start, gap / rate)
+        else:
+            stop = min(stop, gap / rate)
+    return np.array([base + start * along, base + stop * along]) if start < stop else None
+
+
+def _unit(v: np.ndarray) -> np.ndarray:
+    v = np.asarray(v, dtype=np.float64)
+    return v / np.linalg.norm(v)
