@@ -1,9 +1,12 @@
-"""Replay throws of a trained run and save them as GIFs.
+"""Replay throws of a trained run and save them as GIFs, or as one interactive 3D page.
 
     python -m agents.replay RUN [--throws 4] [--seed 0] [--target 3] [--thrower hand-written]
+    python -m agents.replay RUN --html
 
 Draws fresh episodes of the run's evaluation task (its ``--env`` keywords), throws them with the
-run's saved model (or a baseline), prints each outcome and writes ``RUN/replay/*.gif``. The
+run's saved model (or a baseline), prints each outcome and writes ``RUN/replay/*.gif``, or with
+``--html`` the page ``RUN/replay/throws.html`` of them, failures first (:mod:`dice_env.viewer`;
+the page replays exactly: ``python -m dice_env.viewer --replay PAGE``). The
 evaluation uses the same code for its GIFs (:func:`save_throws`), replaying its own throws
 exactly: the same hand, target and hand noise.
 """
@@ -91,8 +94,11 @@ def save_throws(run: Path, task: ThrowTask, batch: Batch, throws: dict[str, np.n
 
 
 def replay(run: Path, throws: int, seed: int, target: int | None, thrower: str,
-           out: Path | None = None) -> list[Path]:
-    """Throw ``throws`` fresh episodes with the run's model (or a baseline); write GIFs."""
+           out: Path | None = None, html: bool = False) -> list[Path]:
+    """Throw ``throws`` fresh episodes with the run's model (or a baseline); write GIFs.
+
+    ``html``: one page of them instead, failures first.
+    """
     from stable_baselines3 import PPO
 
     from dice_env.envs.video import save_video
@@ -111,6 +117,8 @@ def replay(run: Path, throws: int, seed: int, target: int | None, thrower: str,
     actions = np.asarray(act(batch.observations), np.float64)
     out = out or run / "replay"
     out.mkdir(parents=True, exist_ok=True)
+    if html:
+        return [write_page(task, batch, actions, thrower, out / "throws.html")]
     paths = []
     for i in range(throws):
         frames, info = record_throw(task, actions[i], batch.targets[i], batch.hands[i],
@@ -121,6 +129,30 @@ def replay(run: Path, throws: int, seed: int, target: int | None, thrower: str,
               f"({'success' if info['is_success'] else 'failure'}) -> {path}")
         paths.append(path)
     return paths
+
+
+def write_page(task: ThrowTask, batch: Batch, actions: np.ndarray, thrower: str,
+               path: Path) -> Path:
+    """The page of ``batch``'s throws by ``thrower`` (its ``actions``), failures first."""
+    from dice_env.viewer.html import write_html
+    from dice_env.viewer.throws import task_throws
+
+    recordings = task_throws(task, actions, batch.targets, batch.hands, batch.noise)
+    success = np.array([rec.outcome["success"] for rec in recordings])
+    ordered = [recordings[i] for i in pick_throws(success, len(recordings))]
+    for k, rec in enumerate(ordered):
+        print(f"throw {k}: target {rec.outcome['target']}, landed {rec.outcome['faces']} "
+              f"({'success' if rec.outcome['success'] else 'failure'})")
+    path = write_html(ordered, path, title=f"{thrower}: {run_title(task)}")
+    print(f"page: {path}")
+    return path
+
+
+def run_title(task: ThrowTask) -> str:
+    """A caption of the task: its dice and walls."""
+    dice = ", ".join(die.name for die in task.dice)
+    walls = f", {len(task.scene.walls)} walls" if task.scene.walls else ""
+    return f"{dice}{walls}"
 
 
 def main(argv: list[str] | None = None) -> None:
@@ -134,6 +166,8 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--thrower", choices=("PPO", "hand-written", "random"), default="PPO",
                         help="who throws (hand-written: one die only)")
     parser.add_argument("--out", type=Path, default=None, help="folder (default: RUN/replay)")
+    parser.add_argument("--html", action="store_true",
+                        help="one interactive 3D page of the throws, failures first")
     args = parser.parse_args(argv)
     if not (args.run / "config.json").is_file():
         parser.error(f"argument run: {args.run} is not a run folder (no config.json)")
@@ -155,7 +189,7 @@ def main(argv: list[str] | None = None) -> None:
         if not 1 <= args.target <= faces:
             parser.error(f"argument --target: must be a face of the run's die, in [1, {faces}], "
                          f"got {args.target}")
-    replay(args.run, args.throws, args.seed, args.target, args.thrower, args.out)
+    replay(args.run, args.throws, args.seed, args.target, args.thrower, args.out, args.html)
 
 
 if __name__ == "__main__":

@@ -6,6 +6,7 @@ from agents.baselines import HandThrower
 from agents.config import Config
 from agents.replay import main
 from dice_env.envs.task import make_task
+from dice_env.viewer import load
 
 RUNS = {"one die": [], "2d6": ["num_dice=2"], "2d6 sum 5": ["num_dice=2", "target_sum=5"],
         "set_dice": ["num_dice=2", "set_dice=True"]}
@@ -50,3 +51,13 @@ def test_a_target_face_not_on_the_die_is_a_usage_error(tmp_path, capsys, name, m
     with pytest.raises(SystemExit) as exit_info:
         main([str(run), "--thrower", "random", "--throws", "1", "--target", "99"])
     assert exit_info.value.code == 2 and message in capsys.readouterr().err
+
+
+def test_replay_writes_one_page_of_the_throws_failures_first(tmp_path, capsys):
+    run = make_run(tmp_path / "run", "2d6")
+    main([str(run), "--thrower", "random", "--throws", "3", "--html"])
+    recordings = load(run / "replay" / "throws.html")
+    success = [rec.outcome["success"] for rec in recordings]
+    assert len(recordings) == 3 and (not success[0] or all(success))
+    assert all(rec.n_dice == 2 for rec in recordings)
+    assert "page: " in capsys.readouterr().out and not list((run / "replay").glob("*.gif"))

@@ -3,6 +3,7 @@
     python -m dice_env.viewer --die d20 --walls tray --seed 0 --out throw.html
     python -m dice_env.viewer --num-dice 2 --throws 3 --layout side --glb throw.glb
     python -m dice_env.viewer --replay throw.html
+    python -m dice_env.viewer --num-dice 2 --walls tray --screenshot throw.png --at 0.2
 
 A throw's action (release velocity and spin) is drawn uniformly, its hand as the env draws
 it (``gym.make("DiceThrow-v0", die=..., walls=..., num_dice=...)``); ``--replay`` throws a
@@ -18,6 +19,7 @@ from pathlib import Path
 from dice_env.die import STANDARD_SIZES
 from dice_env.envs.task import MAX_NUM_DICE, make_task
 from dice_env.surroundings import PRESETS
+from dice_env.viewer.files import load
 from dice_env.viewer.recording import FPS, ReplayError, replay
 from dice_env.viewer.throws import random_throws
 
@@ -40,6 +42,10 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--out", type=Path, default=Path("throw.html"), help="the page")
     parser.add_argument("--glb", type=Path, default=None,
                         help="also export the first throw as binary glTF to this path")
+    parser.add_argument("--screenshot", type=Path, default=None, metavar="PNG",
+                        help="also a picture of the page, in headless Chromium")
+    parser.add_argument("--at", type=float, default=None, metavar="T",
+                        help="the screenshot's simulated time in s (default: the end)")
     parser.add_argument("--replay", type=Path, default=None, metavar="FILE",
                         help="replay a page, .glb or .json of recordings and check its faces")
     args = parser.parse_args(argv)
@@ -57,6 +63,8 @@ def main(argv: list[str] | None = None) -> int:
         parser.error(f"argument --out: must end in .html, got {args.out.name!r}")
     if args.glb is not None and args.glb.suffix.lower() != ".glb":
         parser.error(f"argument --glb: must end in .glb, got {args.glb.name!r}")
+    if args.screenshot is not None and args.screenshot.suffix.lower() != ".png":
+        parser.error(f"argument --screenshot: must end in .png, got {args.screenshot.name!r}")
     from dice_env.viewer.html import write_html
 
     task = make_task(die=args.die, walls=args.walls,
@@ -66,11 +74,16 @@ def main(argv: list[str] | None = None) -> int:
         ending = rec.outcome["void"] or "counts"
         print(f"throw {k}: faces {rec.outcome['faces']} after {rec.outcome['time']:.2f} s "
               f"({ending})")
-    print(f"page: {write_html(recordings, args.out, layout=args.layout)}")
+    page = write_html(recordings, args.out, layout=args.layout)
+    print(f"page: {page}")
     if args.glb is not None:
         from dice_env.viewer.gltf import write_glb
 
         print(f"glTF: {write_glb(recordings[0], args.glb)}")
+    if args.screenshot is not None:
+        from dice_env.viewer.browser import screenshot
+
+        print(f"screenshot: {screenshot(page, args.screenshot, t=args.at)}")
     return 0
 
 
@@ -79,7 +92,11 @@ def _replay(parser: argparse.ArgumentParser, path: Path) -> int:
     if not path.is_file():
         parser.error(f"argument --replay: no file {path}")
     try:
-        again = replay(path)
+        recorded = load(path)
+    except ValueError as error:
+        parser.error(f"argument --replay: {error}")
+    try:
+        again = replay(recorded)
     except ReplayError as error:
         print(error, file=sys.stderr)
         return 1

@@ -10,11 +10,9 @@ so a replay lands the same faces; :func:`replay` checks that it does.
 from __future__ import annotations
 
 import importlib.metadata
-import json
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -160,13 +158,14 @@ def record(scene: Scene, dice: Die | Sequence[Die], state: State | GroupState, *
     return recordings
 
 
-def replay(source: Recording | str | Path) -> list[Recording]:
-    """Throw again what ``source`` (a recording, or a file of them) recorded, and check it.
+def replay(recordings: Recording | Sequence[Recording]) -> list[Recording]:
+    """Throw again what ``recordings`` recorded, and check that the faces are the same.
 
     Returns the new recordings; raises :class:`ReplayError` naming each throw whose faces
-    differ from the recorded ones.
+    differ from the recorded ones. A file's: ``replay(load(path))``
+    (:func:`dice_env.viewer.files.load`).
     """
-    recorded = [source] if isinstance(source, Recording) else load(source)
+    recorded = [recordings] if isinstance(recordings, Recording) else list(recordings)
     again, wrong = [], []
     for k, old in enumerate(recorded):
         dice = old.dice[0] if old.n_dice == 1 else old.dice
@@ -182,34 +181,6 @@ def replay(source: Recording | str | Path) -> list[Recording]:
     if wrong:
         raise ReplayError("the replay landed other faces: " + "; ".join(wrong))
     return again
-
-
-def load(path: str | Path) -> list[Recording]:
-    """The recordings in ``path``: a page, a ``.glb`` export or a ``.json`` of :func:`save`.
-
-    Pages are those of :func:`dice_env.viewer.write_html`, exports those of
-    :func:`dice_env.viewer.write_glb`.
-    """
-    path = Path(path)
-    suffix = path.suffix.lower()
-    if suffix in (".html", ".htm"):
-        from dice_env.viewer.html import read_html
-        data = read_html(path)
-    elif suffix == ".glb":
-        from dice_env.viewer.gltf import read_glb
-        data = read_glb(path)
-    elif suffix == ".json":
-        data = json.loads(path.read_text())
-    else:
-        raise ValueError(f"path must end in .html, .glb or .json, got {path.name!r}")
-    return [Recording.from_data(item) for item in data]
-
-
-def save(recordings: Recording | Sequence[Recording], path: str | Path) -> Path:
-    """Write ``recordings`` to ``path`` as JSON (a list of :meth:`Recording.to_data`)."""
-    path = Path(path)
-    path.write_text(json.dumps(as_data(recordings)))
-    return path
 
 
 def as_data(recordings: Recording | Sequence[Recording]) -> list[dict[str, Any]]:

@@ -16,8 +16,8 @@ def task_throws(task: ThrowTask, actions: np.ndarray, targets: Any, hands: np.nd
     """The recordings of ``task.throw(actions, targets, hands, noise)``, one per throw.
 
     Each is the same throw as the task's (its release, its run keywords), recorded; the
-    task's void reason (e.g. ``"foul"``) is kept, and ``titles`` default to the target and
-    the outcome.
+    task's void reason (e.g. ``"foul"``) is kept, its ``target`` and ``success`` join the
+    outcome, and ``titles`` default to the target and the outcome.
     """
     throw = task.throw(actions, targets, hands, noise)
     state, _ = task.release(actions, hands, noise)
@@ -29,9 +29,12 @@ def task_throws(task: ThrowTask, actions: np.ndarray, targets: Any, hands: np.nd
                   f"{'success' if success else 'failure'}"
                   for target, success in zip(targets, info["is_success"], strict=True)]
     dice = task.scene.die if task.n_dice == 1 else task.dice
-    return record(task.scene, dice, state, fps=fps, stop_when_decided=decided,
-                  early_rest=task.n_dice == 1 and not decided, titles=titles,
-                  voids=[str(v) for v in info["void_reason"]])
+    recordings = record(task.scene, dice, state, fps=fps, stop_when_decided=decided,
+                        early_rest=task.n_dice == 1 and not decided, titles=titles,
+                        voids=[str(v) for v in info["void_reason"]])
+    for rec, target, success in zip(recordings, targets, info["is_success"], strict=True):
+        rec.outcome.update(target=np.asarray(target).tolist(), success=bool(success))
+    return recordings
 
 
 def random_throws(task: ThrowTask, count: int, seed: int, *, fps: float = FPS) -> list[Recording]:

@@ -1,0 +1,211 @@
+"""A self-contained HTML page of recorded throws, drawn in 3D by three.js.
+
+:func:`write_html` writes one file that opens offline (from ``file://``): the viewer's bundle
+(``viewer.bundle.js``, three.js inside; rebuilt from ``js/`` as its README says) inlined in a
+script, and the recordings as JSON, with what the viewer draws prepared here: every die's
+triangles and face texture (:func:`dice_env.viewer.textures.face_atlas`, a PNG data URL),
+each throw's walls (bounded quads), floor plane and extent. :func:`read_html` gives the
+recordings' data back (:func:`dice_env.viewer.load` turns it into recordings).
+"""
+
+from __future__ import annotations
+
+import base64
+import html
+import json
+import re
+from collections.abc import Sequence
+from importlib.resources import files
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from dice_env.die import Die
+from dice_env.scene import Scene
+from dice_env.viewer.recording import Recording, as_data
+from dice_env.viewer.textures import face_atlas, png_bytes
+
+LAYOUTS = ("sequence", "side")  # several throws one after another, or side by side on a grid
+DATA_ID = "dice-env-throws"  # the id of the page's script of JSON data
+TEXTURE_PIXELS = 128  # texture pixels a side of one face
+
+_DATA = re.compile(rf'<script type="application/json" id="{DATA_ID}">(.*?)</script>', re.S)
+
+
+def write_html(recordings: Recording | Sequence[Recording], path: str | Path, *,
+               layout: str = "sequence", title: str | None = None) -> Path:
+    """Write a page of ``recordings`` to ``path`` (``.html``) and return the path.
+
+    ``layout``: ``"sequence"`` (one throw at a time, playing on to the next) or ``"side"``
+    (all at once, side by side); the page can switch. ``title``: the page's caption (default
+    a single recording's title, else ``"dice_env throws"``).
+    """
+    if isinstance(recordings, Recording):
+        items = [recordings]
+    elif _sequence(recordings) and all(isinstance(r, Recording) for r in recordings):
+        items = list(recordings)
+    else:
+        raise TypeError("recordings must be a Recording or a sequence of them, got "
+                        f"{_describe(recordings)}")
+    if not items:
+        raise ValueError("recordings must not be empty: give at least one Recording")
+    if layout not in LAYOUTS:
+        raise ValueError(f"layout must be one of {LAYOUTS}, got {layout!r}")
+    path = Path(path)
+    if path.suffix.lower() != ".html":
+        raise ValueError(f"path must end in .html, got {path.name!r}")
+    if title is not None and not isinstance(title, str):
+        raise TypeError(f"title must be a str or None, got {type(title).__name__}")
+    if title is None:
+        title = items[0].title if len(items) == 1 and items[0].title else "dice_env throws"
+    shapes: dict[Die, int] = {}
+    throws = [_throw_view(r, shapes) for r in items]
+    data = {"title": title, "layout": layout, "recordings": as_data(items), "throws": throws,
+            "shapes": [_shape(die) for die in shapes]}
+    try:
+        text = json.dumps(data, separators=(",", ":"), allow_nan=False)
+    except ValueError as error:  # JSON.parse in the page reads no NaN nor infinity
+        raise ValueError(f"recordings must hold finite numbers only to be shown: {error}") \
+            from None
+    # JSON strings may hold "<" only as an escape: no "</script>" or "<!--" ends the script.
+    text = text.replace("<", "\\u003c")
+    path.write_text(
+        "<!doctype html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n"
+        "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n"
+        f"<title>{html.escape(title)}</title>\n</head>\n<body>\n"
+        f"<script type=\"application/json\" id=\"{DATA_ID}\">{text}</script>\n"
+        f"<script>\n{_bundle()}\n</script>\n</body>\n</html>\n", encoding="utf-8")
+    return path
+
+
+def read_html(path: str | Path) -> list[dict[str, Any]]:
+    """The recordings' data embedded in a page of :func:`write_html` (a list, in order)."""
+    path = Path(path)
+    match = _DATA.search(path.read_text(encoding="utf-8"))
+    if match is None:
+        raise ValueError(f"path {str(path)!r} is not a page of dice_env.viewer.write_html (no "
+                         f"script {DATA_ID!r})")
+    return json.loads(match.group(1))["recordings"]
+
+
+def _bundle() -> str:
+    """The viewer's script (three.js in it), checked to be safe inside a ``<script>``."""
+    text = files("dice_env.viewer").joinpath("viewer.bundle.js").read_text(encoding="utf-8")
+    if re.search(r"</script|<!--", text, re.I):
+        raise RuntimeError("viewer.bundle.js holds '</script' or '<!--', which would end or "
+                           "break its script in the page")
+    return text
+
+
+def _sequence(value: Any) -> bool:
+    """Whether ``value`` is a sequence of items (a list, a tuple; not a string)."""
+    return isinstance(value, Sequence) and not isinstance(value, (str, bytes))
+
+
+def _describe(value: Any) -> str:
+    """A short description of a bad argument."""
+    if isinstance(value, (list, tuple)):
+        return f"a {type(value).__name__} of {len(value)}: {[type(v).__name__ for v in value][:4]}"
+    return f"a {type(value).__name__}"
+
+
+def _shape(die: Die) -> dict[str, Any]:
+    """A die's triangles about its centre of mass, flat normals, texture coordinates, atlas."""
+    image, uv = face_atlas(die, TEXTURE_PIXELS)
+    corners = np.asarray(die.vertices) - np.asarray(die.com)
+    normals = np.asarray(die.face_normals)
+    position, normal, coordinates = [], [], []
+    for k, face in enumerate(die.faces):
+        for i in range(1, len(face) - 1):  # a convex face as a fan of triangles
+            for c in (0, i, i + 1):
+                position.extend(corners[face[c]])
+                normal.extend(normals[k])
+                coordinates.extend(uv[k, c])
+    png = base64.b64encode(png_bytes(image)).decode("ascii")
+    return {"position": _rounded(position), "normal": _rounded(normal),
+            "uv": _rounded(coordinates), "texture": f"data:image/png;base64,{png}"}
+
+
+def _throw_view(recording: Recording, shapes: dict[Die, int]) -> dict[str, Any]:
+    """What the page draws of a throw besides its dice' frames: shapes, extent, floor, walls.
+
+    ``centre``: the middle of the dice' path on the floor; ``radius``: the horizontal reach
+    of the path (and of the walls near it) from there; ``size``: the largest die's.
+    """
+    dice = [shapes.setdefault(die, len(shapes)) for die in recording.dice]
+    size = max(die.size for die in recording.dice)
+    points = recording.position.reshape(-1, 3)
+    low, high = points.min(axis=0), points.max(axis=0)
+    floor, *walls = recording.scene.planes
+    centre = _onto(floor, (low + high) / 2)
+    reach = float(np.linalg.norm(points[:, :2] - centre[:2], axis=1).max()) + 2 * size
+    near = [abs(float(np.dot(w.normal, centre)) - w.offset) for w in walls]
+    radius = max([reach, 6 * size] + [d + size for d in near if d < 4 * reach])
+    height = max(3 * size, min(float(high[2]) + size, radius / 2))
+    return {"dice": dice, "size": size, "centre": _rounded(centre), "radius": radius,
+            "floor": _floor(floor, centre), "walls": _walls(recording.scene, centre, radius,
+                                                           height)}
+
+
+def _onto(plane: Any, point: np.ndarray) -> np.ndarray:
+    """The point of ``plane`` nearest ``point``."""
+    normal = np.asarray(plane.normal, dtype=np.float64)
+    return point + (plane.offset - normal @ point) * normal
+
+
+def _basis(normal: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Two unit vectors spanning the plane of ``normal``: the first horizontal if it can be."""
+    u = np.cross(normal, (0.0, 0.0, 1.0))
+    u = u if np.linalg.norm(u) > 1e-9 else np.cross(normal, (0.0, 1.0, 0.0))
+    u /= np.linalg.norm(u)
+    w = np.cross(normal, u)
+    return u, (w if w[2] >= 0 else -w)
+
+
+def _floor(plane: Any, centre: np.ndarray) -> dict[str, list[float]]:
+    """The floor plane as the page draws it: a point (under ``centre``) and two axes in it."""
+    u, w = _basis(np.asarray(plane.normal, dtype=np.float64))
+    return {"point": _rounded(centre), "u": _rounded(u), "w": _rounded(w)}
+
+
+def _walls(scene: Scene, centre: np.ndarray, radius: float,
+           height: float) -> list[list[list[float]]]:
+    """Each wall as a bounded polygon (its corners), ``height`` up from the floor.
+
+    The part of the wall within ``radius`` of ``centre`` along x and y, cut where it passes
+    behind the floor or another wall (so a tray's sides meet at its corners).
+    """
+    floor, *walls = scene.planes
+    box = [(np.array(axis), float(np.dot(axis, centre)) - radius)
+           for axis in ((1.0, 0, 0), (-1.0, 0, 0), (0, 1.0, 0), (0, -1.0, 0))]
+    polygons = []
+    for k, wall in enumerate(walls):
+        foot = _onto(wall, centre)
+        u, w = _basis(np.asarray(wall.normal, dtype=np.float64))
+        polygon = [foot + a * 4 * radius * u + b * height * w
+                   for a, b in ((-1, -1), (1, -1), (1, 1), (-1, 1))]
+        others = [(np.asarray(p.normal, dtype=np.float64), p.offset)
+                  for p in (floor, *walls[:k], *walls[k + 1:])]
+        for normal, offset in others + box:
+            polygon = _clip(polygon, normal, offset)
+        if len(polygon) >= 3:
+            polygons.append([_rounded(p) for p in polygon])
+    return polygons
+
+
+def _clip(polygon: list[np.ndarray], normal: np.ndarray, offset: float) -> list[np.ndarray]:
+    """The part of a convex polygon on the side of ``normal . p >= offset`` (Sutherland-Hodgman)."""
+    kept = []
+    for a, b in zip(polygon, polygon[1:] + polygon[:1], strict=True):
+        da, db = normal @ a - offset, normal @ b - offset
+        if da >= 0:
+            kept.append(a)
+        if (da >= 0) != (db >= 0):
+            kept.append(a + da / (da - db) * (b - a))
+    return kept
+
+
+def _rounded(values: Any) -> list[float]:
+    """Floats to 7 significant digits (float32 precision, what the page draws with)."""
+    return [float(f"{v:.7g}") for v in np.ravel(values)]
