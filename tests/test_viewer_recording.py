@@ -85,7 +85,7 @@ def test_several_dice_are_recorded_saved_and_replayed(tmp_path):
     assert back.scene == scene and back.dice == rec.dice and back.contact == rec.contact
     assert np.array_equal(back.release.position, rec.release.position)
     assert np.allclose(back.orientation, rec.orientation, atol=1e-9)  # R drifts ~1e-13
-    assert replay(load(path))[0].outcome["faces"] == rec.outcome["faces"]
+    assert replay(path)[0].outcome["faces"] == rec.outcome["faces"]
 
 
 def test_a_replay_that_lands_elsewhere_is_refused(tmp_path):
@@ -95,7 +95,7 @@ def test_a_replay_that_lands_elsewhere_is_refused(tmp_path):
     path = tmp_path / "edited.json"
     path.write_text(json.dumps([data]))
     with pytest.raises(ReplayError, match="throw 0: faces"):
-        replay(load(path))
+        replay(path)
 
 
 def test_task_throws_keep_the_task_s_outcome():

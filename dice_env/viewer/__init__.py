@@ -3,15 +3,15 @@
 :func:`record` simulates and records throws; :func:`write_html` writes a self-contained page
 of them (three.js bundled in; play, pause, slider, slow motion, orbit camera),
 :func:`write_glb` a binary glTF 2.0 of one (meshes with their labels, the motion as an
-animation); both carry the recording, so ``replay(load(path))`` throws it again and
-checks the faces. ``python -m dice_env.viewer --help`` writes a page from the command line.
+animation); both carry the recording, so :func:`replay` throws it again and checks
+the faces. ``python -m dice_env.viewer --help`` writes a page from the command line.
 """
 
 from pathlib import Path
 
-from dice_env.viewer.files import load, save
+from dice_env.viewer.files import ReplayError, load, replay, save
 from dice_env.viewer.html import write_html
-from dice_env.viewer.recording import FPS, Recording, ReplayError, record, replay
+from dice_env.viewer.recording import FPS, Recording, record
 
 
 def write_glb(recording: Recording, path: str | Path) -> Path:

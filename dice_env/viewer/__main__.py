@@ -19,8 +19,8 @@ from pathlib import Path
 from dice_env.die import STANDARD_SIZES
 from dice_env.envs.task import MAX_NUM_DICE, make_task
 from dice_env.surroundings import PRESETS
-from dice_env.viewer.files import load
-from dice_env.viewer.recording import FPS, ReplayError, replay
+from dice_env.viewer.files import ReplayError, load, replay
+from dice_env.viewer.recording import FPS
 from dice_env.viewer.throws import random_throws
 
 

@@ -1,4 +1,8 @@
-"""Recordings in files: JSON of their data, read back from a page, an export or JSON alike."""
+"""Recordings kept and thrown again: :func:`save`, :func:`load` and :func:`replay`.
+
+Saved as JSON; loaded from a page, a glTF export or JSON alike; replayed with the installed
+version and checked to land the same faces.
+"""
 
 from __future__ import annotations
 
@@ -6,8 +10,16 @@ import json
 from collections.abc import Sequence
 from pathlib import Path
 
+from dice_env.envs.task import UNTIL
 from dice_env.viewer.html import read_html
-from dice_env.viewer.recording import Recording, as_data
+from dice_env.viewer.recording import Recording, as_data, record
+
+# Void reasons a replay makes itself (the rest, e.g. a task's "foul", are carried over).
+_OWN_VOIDS = ("", "unstable", "sunk", "leaning", *UNTIL.values())
+
+
+class ReplayError(ValueError):
+    """A replayed throw that did not land as recorded (another version, another machine)."""
 
 
 def load(path: str | Path) -> list[Recording]:
@@ -36,3 +48,33 @@ def save(recordings: Recording | Sequence[Recording], path: str | Path) -> Path:
     path = Path(path)
     path.write_text(json.dumps(as_data(recordings)))
     return path
+
+
+def replay(source: Recording | Sequence[Recording] | str | Path) -> list[Recording]:
+    """Throw again what ``source`` recorded and check that the dice land the same faces.
+
+    ``source``: a recording, several, or a file of them (as :func:`load` reads). Returns the
+    new recordings; raises :class:`ReplayError` naming each throw whose faces differ from the
+    recorded ones.
+    """
+    if isinstance(source, (str, Path)):
+        recorded = load(source)
+    elif isinstance(source, Recording):
+        recorded = [source]
+    else:
+        recorded = list(source)
+    again, wrong = [], []
+    for k, old in enumerate(recorded):
+        dice = old.dice[0] if old.n_dice == 1 else old.dice
+        state = old.release.die(0) if old.n_dice == 1 else old.release
+        voids = [old.outcome["void"]] if old.outcome["void"] not in _OWN_VOIDS else None
+        new = record(old.scene, dice, state, fps=old.fps, contact=old.contact,
+                     t_max=old.run["t_max"], stop_when_decided=old.run["stop_when_decided"],
+                     early_rest=old.run["early_rest"], titles=[old.title], voids=voids)[0]
+        if new.outcome["faces"] != old.outcome["faces"]:
+            wrong.append(f"throw {k}: faces {old.outcome['faces']} recorded (dice_env "
+                         f"{old.version}), {new.outcome['faces']} now (dice_env {new.version})")
+        again.append(new)
+    if wrong:
+        raise ReplayError("the replay landed other faces: " + "; ".join(wrong))
+    return again

@@ -10,8 +10,8 @@ walls' corners, each wall :data:`WALL_HEIGHT` high and as long as the other wall
 be. The simulation's z-up world hangs below a root node turned -90 degrees about x (glTF is
 y up). The recording's data rides in ``asset.extras["recordings"]`` as JSON text (a list
 of :meth:`~dice_env.viewer.recording.Recording.to_data`; text, since pygltflib drops the
-nulls and empty values of JSON objects, which the data holds), so :func:`read_glb` and
-:func:`dice_env.viewer.load` get it back and :func:`dice_env.viewer.replay` throws it again.
+nulls and empty values of JSON objects, which the data holds), so :func:`read_glb`,
+:func:`dice_env.viewer.load` and :func:`dice_env.viewer.replay` get it back.
 """
 
 from __future__ import annotations

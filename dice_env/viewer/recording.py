@@ -1,10 +1,10 @@
 """A recorded throw: its scene, dice, release state and frames, as data that replays exactly.
 
 :func:`record` simulates throws and keeps, for each, what a viewer draws (every die's centre
-and orientation at a fixed frame rate, the outcome) and what :func:`replay` needs to throw it
-again (the scene, the dice and their contact as :mod:`dice_env.codec` data, the release state
-to the last bit, the run's keywords, the library version). The simulator is deterministic,
-so a replay lands the same faces; :func:`replay` checks that it does.
+and orientation at a fixed frame rate, the outcome) and what a replay needs to throw it again
+(the scene, the dice and their contact as :mod:`dice_env.codec` data, the release state to
+the last bit, the run's keywords, the library version). The simulator is deterministic, so a
+replay lands the same faces; :func:`dice_env.viewer.files.replay` checks that it does.
 """
 
 from __future__ import annotations
@@ -29,10 +29,6 @@ FORMAT = "dice_env.throw"  # what a file holding recordings says it holds
 FPS = 60.0  # frames per simulated second, by default
 MAX_FRAMES = 100_000  # frames of one throw (all dice), against a page or an export too large
 STATE_FIELDS = ("position", "velocity", "angular_momentum", "orientation", "angular_velocity")
-
-
-class ReplayError(ValueError):
-    """A replayed throw that did not land as recorded (another version, another machine)."""
 
 
 @dataclass(frozen=True)
@@ -158,40 +154,12 @@ def record(scene: Scene, dice: Die | Sequence[Die], state: State | GroupState, *
     return recordings
 
 
-def replay(recordings: Recording | Sequence[Recording]) -> list[Recording]:
-    """Throw again what ``recordings`` recorded, and check that the faces are the same.
-
-    Returns the new recordings; raises :class:`ReplayError` naming each throw whose faces
-    differ from the recorded ones. A file's: ``replay(load(path))``
-    (:func:`dice_env.viewer.files.load`).
-    """
-    recorded = [recordings] if isinstance(recordings, Recording) else list(recordings)
-    again, wrong = [], []
-    for k, old in enumerate(recorded):
-        dice = old.dice[0] if old.n_dice == 1 else old.dice
-        state = old.release.die(0) if old.n_dice == 1 else old.release
-        voids = [old.outcome["void"]] if old.outcome["void"] not in _OWN_VOIDS else None
-        new = record(old.scene, dice, state, fps=old.fps, contact=old.contact,
-                     t_max=old.run["t_max"], stop_when_decided=old.run["stop_when_decided"],
-                     early_rest=old.run["early_rest"], titles=[old.title], voids=voids)[0]
-        if new.outcome["faces"] != old.outcome["faces"]:
-            wrong.append(f"throw {k}: faces {old.outcome['faces']} recorded (dice_env "
-                         f"{old.version}), {new.outcome['faces']} now (dice_env {new.version})")
-        again.append(new)
-    if wrong:
-        raise ReplayError("the replay landed other faces: " + "; ".join(wrong))
-    return again
-
-
 def as_data(recordings: Recording | Sequence[Recording]) -> list[dict[str, Any]]:
     """JSON data of one recording or several (a list, in order)."""
     items = [recordings] if isinstance(recordings, Recording) else list(recordings)
     if not items or not all(isinstance(r, Recording) for r in items):
         raise TypeError("recordings must be a Recording or a non-empty sequence of them")
     return [r.to_data() for r in items]
-
-
-_OWN_VOIDS = ("", "unstable", "sunk", "leaning", *UNTIL.values())
 
 
 def _simulate(scene: Scene, dice: tuple[Die, ...], release: GroupState, contact: DieContact,
