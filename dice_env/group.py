@@ -26,15 +26,17 @@ from dice_env.checks import check_nonnegative, check_positive, check_range
 from dice_env.die import Die
 from dice_env.scene import MAX_STEPS, FrictionLaw, Scene, as_enum, critical_step
 from dice_env.simulate import (
-    MAX_RECORD_BYTES,
     UP,
     DiceArrays,
     State,
+    check_record_bytes,
+    check_run,
     lock_energy,
     pack_run,
     pack_scene,
+    record_stride,
+    record_times,
     run_kernel,
-    thread_count,
 )
 from dice_env.table import DIE_MASS, STIFFNESS, damping_for_restitution
 
@@ -223,22 +225,13 @@ def simulate_group(
     (:func:`group_step`), with ``stop_when_decided`` a gravity whose energies overflow.
     """
     dice = _dice(dice)
-    if not isinstance(scene, Scene):
-        raise TypeError(f"scene must be a Scene, got {type(scene).__name__}")
-    if not isinstance(state, GroupState):
-        raise TypeError(f"state must be a GroupState, got {type(state).__name__}")
+    threads = check_run(scene, state, GroupState, record_every, num_threads,
+                        stop_at_rest=stop_at_rest, stop_when_decided=stop_when_decided,
+                        free_flight=free_flight, orientations=orientations)
     if not isinstance(contact, DieContact):
         raise TypeError(f"contact must be a DieContact, got {type(contact).__name__}")
     if state.n_dice != len(dice):
         raise ValueError(f"state holds {state.n_dice} dice per throw, dice {len(dice)}")
-    if not isinstance(record_every, (int, np.integer)) or isinstance(record_every, bool) \
-            or record_every < 0:
-        raise ValueError(f"record_every must be an int >= 0, got {record_every!r}")
-    for name, flag in (("stop_at_rest", stop_at_rest), ("stop_when_decided", stop_when_decided),
-                       ("free_flight", free_flight), ("orientations", orientations)):
-        if not isinstance(flag, (bool, np.bool_)):
-            raise TypeError(f"{name} must be a bool, got {flag!r}")
-    threads = thread_count(num_threads)
     dt = group_step(scene, dice, contact)
     t_max = scene.t_max if t_max is None else t_max
     check_positive("t_max", t_max)
@@ -271,14 +264,10 @@ def simulate_group(
         float(contact.tangential * contact.stiffness),
         float(contact.tangential * contact.damping), float(dt / reduced))
     n_rec = n_steps // record_every if record_every else 0
-    size = 8 * b * n_rec * n * (12 if orientations else 3)
-    if size > MAX_RECORD_BYTES:
-        raise ValueError(f"record_every={record_every} records {n_rec} states of {b} throws of "
-                         f"{n} dice ({size / 2**30:.3g} GiB), more than the limit of "
-                         f"{MAX_RECORD_BYTES / 2**30:g} GiB: record less often, fewer throws "
-                         "or a shorter t_max")
-    records = group_kernel.GroupRecords(  # a stride beyond the run records nothing
-        stride=int(record_every) if 0 < record_every <= n_steps else n_steps + 1,
+    check_record_bytes(8 * b * n_rec * n * (12 if orientations else 3), record_every, n_rec,
+                       f"{b} throws of {n} dice")
+    records = group_kernel.GroupRecords(
+        stride=record_stride(record_every, n_steps),
         x=np.zeros((b, n_rec, n, 3)),
         orientation=np.zeros((b, n_rec if orientations else 0, n, 3, 3)))
     outcome = group_kernel.GroupOutcome(
@@ -305,7 +294,7 @@ def simulate_group(
     limit = scene.sink_limit * min(d.size for d in dice)
     recorded = {}
     if record_every:
-        recorded = {"t": np.arange(1, n_rec + 1) * (records.stride * dt), "x_cm": records.x,
+        recorded = {"t": record_times(records, dt), "x_cm": records.x,
                     "orientations": records.orientation if orientations else None}
     return GroupResult(
         face=np.where(read, face, 0), read=read, settled=outcome.status == kernel.SETTLED,

@@ -222,21 +222,12 @@ def simulate(
     starting deeper in the table than the scene's sink limit. Ctrl-C ends a long run within
     milliseconds and raises ``KeyboardInterrupt``.
     """
-    if not isinstance(scene, Scene):
-        raise TypeError(f"scene must be a Scene, got {type(scene).__name__}")
-    if not isinstance(state, State):
-        raise TypeError(f"state must be a State, got {type(state).__name__}")
+    threads = check_run(scene, state, State, record_every, num_threads,
+                        stop_at_rest=stop_at_rest, free_flight=free_flight,
+                        early_rest=early_rest, stop_when_decided=stop_when_decided)
     record = _record_names(record)
-    if not isinstance(record_every, (int, np.integer)) or isinstance(record_every, bool) \
-            or record_every < 0:
-        raise ValueError(f"record_every must be an int >= 0, got {record_every!r}")
-    threads = thread_count(num_threads)
     if device not in DEVICES:
         raise ValueError(f"device must be one of {', '.join(map(repr, DEVICES))}, got {device!r}")
-    for name, flag in (("stop_at_rest", stop_at_rest), ("free_flight", free_flight),
-                       ("early_rest", early_rest), ("stop_when_decided", stop_when_decided)):
-        if not isinstance(flag, (bool, np.bool_)):
-            raise TypeError(f"{name} must be a bool, got {flag!r}")
     body, contact = _packed_scene(scene)
     dt = scene.step
     n_steps = scene.steps_for(scene.t_max if t_max is None else t_max)
@@ -271,11 +262,10 @@ def simulate(
     unstable |= energy_rise > 1.0
     recorded = {}
     if record_every:
-        n_rec = records.x.shape[1]
-        recorded = {"t": np.arange(1, n_rec + 1) * (records.stride * dt), "x_cm": records.x}
         fields = {"energy": records.energy, "orientations": records.orientation,
                   "nodes": records.nodes}
-        recorded.update({name: fields[name] for name in record})
+        recorded = {"t": record_times(records, dt), "x_cm": records.x,
+                    **{name: fields[name] for name in record}}
     max_pen = outcome.max_pen
     return Result(
         face=scene.die.face_read(out.orientation, UP),
@@ -337,18 +327,53 @@ def _records(record: tuple[str, ...], record_every: int, b: int, n_steps: int,
     """Empty records for ``b`` dice every ``record_every`` steps (0: none), size-checked."""
     n_rec = n_steps // record_every if record_every else 0
     sizes = {"energy": 1, "orientations": 9, "nodes": 3 * n_vertices}
-    floats = b * n_rec * (3 + sum(sizes[name] for name in record))
-    if floats * 8 > MAX_RECORD_BYTES:
-        raise ValueError(f"record_every={record_every} records {n_rec} states of {b} dice "
-                         f"({floats * 8 / 2**30:.3g} GiB), more than the limit of "
-                         f"{MAX_RECORD_BYTES / 2**30:g} GiB: record less often, fewer dice or "
-                         "a shorter t_max")
+    check_record_bytes(8 * b * n_rec * (3 + sum(sizes[name] for name in record)), record_every,
+                       n_rec, f"{b} dice")
     return kernel.Records(
-        stride=int(record_every) if 0 < record_every <= n_steps else n_steps + 1,
+        stride=record_stride(record_every, n_steps),
         x=np.zeros((b, n_rec, 3)),
         energy=np.zeros((b, n_rec if "energy" in record else 0)),
         orientation=np.zeros((b, n_rec if "orientations" in record else 0, 3, 3)),
         nodes=np.zeros((b, n_rec if "nodes" in record else 0, n_vertices, 3)))
+
+
+def check_run(scene: Scene, state: object, kind: type, record_every: object,
+              num_threads: int | None, **flags: object) -> int:
+    """Check the keywords :func:`simulate` and :func:`dice_env.group.simulate_group` share.
+
+    ``state`` must be a ``kind``, ``record_every`` an int >= 0, each of ``flags`` a bool;
+    returns the run's thread count (:func:`thread_count`).
+    """
+    if not isinstance(scene, Scene):
+        raise TypeError(f"scene must be a Scene, got {type(scene).__name__}")
+    if not isinstance(state, kind):
+        raise TypeError(f"state must be a {kind.__name__}, got {type(state).__name__}")
+    if not isinstance(record_every, (int, np.integer)) or isinstance(record_every, bool) \
+            or record_every < 0:
+        raise ValueError(f"record_every must be an int >= 0, got {record_every!r}")
+    for name, flag in flags.items():
+        if not isinstance(flag, (bool, np.bool_)):
+            raise TypeError(f"{name} must be a bool, got {flag!r}")
+    return thread_count(num_threads)
+
+
+def check_record_bytes(size: int, record_every: int, n_rec: int, what: str) -> None:
+    """Refuse ``size`` bytes of records (``n_rec`` states of ``what``) above the limit."""
+    if size > MAX_RECORD_BYTES:
+        raise ValueError(f"record_every={record_every} records {n_rec} states of {what} "
+                         f"({size / 2**30:.3g} GiB), more than the limit of "
+                         f"{MAX_RECORD_BYTES / 2**30:g} GiB: record less often, fewer throws "
+                         "or a shorter t_max")
+
+
+def record_stride(record_every: int, n_steps: int) -> int:
+    """The kernel's record stride: ``record_every``, or beyond the run (nothing recorded)."""
+    return int(record_every) if 0 < record_every <= n_steps else n_steps + 1
+
+
+def record_times(records: kernel.Records | group_kernel.GroupRecords, dt: float) -> np.ndarray:
+    """The times (s) of the states in ``records``: every ``stride`` steps from the first."""
+    return np.arange(1, records.x.shape[1] + 1) * (records.stride * dt)
 
 
 DEVICES = ("cpu", "cuda")  # where simulate runs

@@ -326,13 +326,10 @@ class ThrowTask:
         spin = np.linalg.norm(state.angular_velocity, axis=1)
         fair = (speed >= self.min_speed) & (spin >= self.min_spin)
         ended = result.decided if decided else result.settled
-        void = np.where(~fair, "foul", np.where(
-            result.unstable, "unstable", np.where(
-                result.sunk, "sunk", np.where(ended, "", UNTIL[self.until]))))
+        void = void_reasons(fair, result.unstable, result.sunk, ended, self.until)
         counts = void == ""
         success = counts & (result.face == targets)
-        alignment = np.einsum("bij,bj,i->b", result.final.orientation,
-                              self.scene.die.reading[targets - 1], normal)
+        alignment = target_alignment(result.final.orientation, self.scene.die, targets, normal)
         shaping = np.where(counts, self.shaping * alignment, 0.0)
         outcome = {"face": result.face, "settled": result.settled, "unstable": result.unstable,
                    "sunk": result.sunk, "max_sink": result.max_penetration}
@@ -666,17 +663,15 @@ class GroupThrowTask(ThrowTask):
         fair = np.all((speed >= self.min_speed) & (spin >= self.min_spin), axis=1)
         ended = result.decided if decided else result.settled
         leaning = ~result.read
-        void = np.where(~fair, "foul", np.where(
-            result.unstable, "unstable", np.where(
-                result.sunk.any(axis=1), "sunk", np.where(
-                    ~ended, UNTIL[self.until], np.where(leaning.any(axis=1), "leaning", "")))))
+        void = void_reasons(fair, result.unstable, result.sunk.any(axis=1), ended, self.until,
+                            leaning.any(axis=1))
         counts = void == ""
         total = result.face.sum(axis=1)
         if by_face:
             hit = np.all(result.face == targets, axis=1)
             normal = np.asarray(self.scene.ground.normal)
-            alignment = np.mean([np.einsum("bij,bj,i->b", result.final.orientation[:, i],
-                                           die.reading[targets[:, i] - 1], normal)
+            alignment = np.mean([target_alignment(result.final.orientation[:, i], die,
+                                                  targets[:, i], normal)
                                  for i, die in enumerate(self.dice)], axis=0)
         else:
             hit, alignment = total == targets, np.zeros(len(targets))
@@ -688,6 +683,27 @@ class GroupThrowTask(ThrowTask):
                    "max_sink": result.max_penetration.max(axis=1)}
         return self._scored(("target_face" if by_face else "target_sum", targets), outcome,
                             success, fair, void, shaping, state, clipped, result)
+
+
+def void_reasons(fair: np.ndarray, unstable: np.ndarray, sunk: np.ndarray, ended: np.ndarray,
+                 until: str, leaning: np.ndarray | None = None) -> np.ndarray:
+    """Why each throw does not count, (n,) strings, ``""`` where it counts.
+
+    The first that applies of "foul" (not ``fair``), "unstable", "sunk", not ended
+    (:data:`UNTIL` of ``until``) and "leaning" (a die left leaning on another).
+    """
+    counted = np.where(leaning, "leaning", "") if leaning is not None else ""
+    return np.where(~fair, "foul", np.where(unstable, "unstable", np.where(
+        sunk, "sunk", np.where(~ended, UNTIL[until], counted))))
+
+
+def target_alignment(orientation: np.ndarray, die: Die, targets: np.ndarray,
+                     normal: np.ndarray) -> np.ndarray:
+    """``n_target . n_table`` of each throw, (n,): 1 with the target up, -1 with it down.
+
+    ``orientation`` (n, 3, 3) the die's at the end, ``targets`` (n,) its target faces.
+    """
+    return np.einsum("bij,bj,i->b", orientation, die.reading[np.asarray(targets) - 1], normal)
 
 
 def check_actions(actions: np.ndarray, dim: int = ACTION_DIM) -> np.ndarray:
