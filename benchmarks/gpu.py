@@ -27,11 +27,10 @@ from functools import partial
 from pathlib import Path
 
 import numba
-import numpy as np
+from physics import hand_throws, paper_throws
 
 from dice_env import Scene, State, simulate
 from dice_env.paper import paper_scene
-from dice_env.rotations import random_rotations
 from dice_env.studies.common import code_version
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -40,30 +39,21 @@ FIGURES = {"paper": "paper scene (die-steps/s)", "decided": "default scene to a 
                                                            "(throws/s)"}
 
 
-def paper_throws(n: int, seed: int = 0) -> tuple[Scene, State, int]:
-    """The paper scene, ``n`` listing throws, and the die-steps of a run."""
+def paper_case(n: int) -> tuple[Scene, State, int]:
+    """The paper scene, ``n`` of its throws (physics.paper_throws), the die-steps of a run."""
     scene = paper_scene()
-    rng = np.random.default_rng(seed)
-    spin = (rng.random((n, 3)) * 0.75 + 1e-6) / scene.die.inertia_body[0, 0]
-    start = State.release(scene, [0.0, 0.0, 3.0], [5.0, 0.0, 5.0], spin)
-    return scene, start, n * round(PAPER_T / scene.step)
+    return scene, paper_throws(n), n * round(PAPER_T / scene.step)
 
 
-def hand_throws(n: int, seed: int = 1) -> tuple[Scene, State, int]:
-    """The default scene, ``n`` throws from the hand (5–15 cm up), and the throws."""
+def decided_case(n: int) -> tuple[Scene, State, int]:
+    """The default scene, ``n`` hand throws (physics.hand_throws), and the throws."""
     scene = Scene()
-    rng = np.random.default_rng(seed)
-    d = rng.normal(size=(2, n, 3))
-    d /= np.linalg.norm(d, axis=2, keepdims=True)
-    start = State.release(scene, np.column_stack([np.zeros((n, 2)), rng.uniform(0.05, 0.15, n)]),
-                          d[0] * rng.uniform(0.5, 1.0, (n, 1)), d[1] * rng.uniform(0, 30, (n, 1)),
-                          random_rotations(rng, n))
-    return scene, start, n
+    return scene, hand_throws(scene, n, seed=1), n
 
 
 CASES: dict[str, tuple[Callable, dict]] = {
-    "paper": (paper_throws, {"t_max": PAPER_T, "stop_at_rest": False}),
-    "decided": (hand_throws, {"stop_when_decided": True}),
+    "paper": (paper_case, {"t_max": PAPER_T, "stop_at_rest": False}),
+    "decided": (decided_case, {"stop_when_decided": True}),
 }
 
 
@@ -98,7 +88,7 @@ def measure(device: str, batches: list[int], repeats: int, budget: float) -> dic
 
 def gpu_missing() -> str | None:
     """Why ``device="cuda"`` cannot run here, or None when it can."""
-    scene, start, _ = hand_throws(1)
+    scene, start, _ = decided_case(1)
     try:
         simulate(scene, start, t_max=scene.step, device="cuda")
     except (ImportError, RuntimeError) as error:
