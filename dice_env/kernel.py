@@ -297,7 +297,7 @@ def angular_velocity(q: np.ndarray, inv_body: np.ndarray, inv_iso: float, l0: fl
     )
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def face_read(q: np.ndarray, faces: np.ndarray, reads_down: bool, n0: float, n1: float,
               n2: float) -> int:
     """Index (into ``faces`` (F, 3), outward normals) of the face read.
@@ -352,13 +352,11 @@ def torque_free(q: np.ndarray, inv_body: np.ndarray, inv_iso: float, l0: float, 
     Any other takes the ``n`` plain steps (``w`` follows ``I_world``).
     """
     w0, w1, w2 = angular_velocity(q, inv_body, inv_iso, l0, l1, l2)
-    if inv_iso > 0.0:
-        rotate(q, w0, w1, w2, n * dt)
-        return w0, w1, w2
-    rotate(q, w0, w1, w2, dt)
-    for _ in range(n - 1):
-        w0, w1, w2 = angular_velocity(q, inv_body, inv_iso, l0, l1, l2)
-        rotate(q, w0, w1, w2, dt)
+    turns, h = (1, n * dt) if inv_iso > 0.0 else (n, dt)
+    for k in range(turns):
+        if k > 0:
+            w0, w1, w2 = angular_velocity(q, inv_body, inv_iso, l0, l1, l2)
+        rotate(q, w0, w1, w2, h)
     return w0, w1, w2
 
 
@@ -454,7 +452,7 @@ def stick_slip(plane: tuple, height: float, before: float, position: tuple, ut: 
     return ft0, ft1, ft2, 0.5 * kt * (e0 * e0 + e1 * e1 + e2 * e2), (a0, a1, a2)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def decided(lock: np.ndarray, faces: np.ndarray, reads_down: bool, q: np.ndarray, up: tuple,
             energy: float) -> bool:
     """Whether the die's total ``energy`` is below the ``lock`` (F,) of the face it reads.
@@ -464,7 +462,7 @@ def decided(lock: np.ndarray, faces: np.ndarray, reads_down: bool, q: np.ndarray
     return energy < lock[face_read(q, faces, reads_down, up[0], up[1], up[2])]
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def relative_rise(e_max: float, e_start: float, e_tol: float) -> float:
     """The largest energy gain ``e_max - e_start`` over the scale ``e_tol``.
 
@@ -487,7 +485,7 @@ def simulate_one(i: int, dice: Dice, body: Body, contact: Contact, options: Opti
         np.empty((n_planes, n_vertices), np.bool_), np.empty(n_planes)))
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def advance(i: int, dice: Dice, body: Body, contact: Contact, options: Options, stops: Stops,
             records: Records, out: Outcome, scratch: Scratch) -> None:
     """:func:`simulate_one` in the :class:`Scratch` arrays given by the caller, for any target.
@@ -654,22 +652,9 @@ def advance(i: int, dice: Dice, body: Body, contact: Contact, options: Options, 
             jump = flight_jump(planes, lowest, (u0, u1, u2), spin, body.r_max, (dv0, dv1, dv2),
                                dt, n_steps - step + 1)
         if jump > 1:
-            # records falling inside the jump, from the same closed form (the jump itself does
-            # not depend on the recording)
-            for s in range((step + stride - 1) // stride * stride, step + jump - 1, stride):
-                if s // stride > n_rec:
-                    break
-                j = s - step + 1
-                half = 0.5 * j * (j + 1)
-                for a in range(3):
-                    for c in range(3):
-                        qj[a, c] = qi[a, c]
-                if rotation:
-                    torque_free(qj, inv_body, inv_iso, l0, l1, l2, dt, j)
-                _record(records, s // stride - 1, i,
-                        (x0 + dt * (j * u0 + half * dv0), x1 + dt * (j * u1 + half * dv1),
-                         x2 + dt * (j * u2 + half * dv2)),
-                        (u0 + j * dv0, u1 + j * dv1, u2 + j * dv2), (l0, l1, l2), qj, body, g)
+            if n_rec > 0:  # the records falling inside the jump (it does not depend on them)
+                _record_jump(records, i, step, jump, (x0, x1, x2), (u0, u1, u2), (l0, l1, l2),
+                             (dv0, dv1, dv2), qi, qj, body, options)
             # `jump` flight steps in closed form: u_j = u + j dv, x_j = x + dt (j u + dv j(j+1)/2)
             half = 0.5 * jump * (jump + 1)
             nx0 = x0 + dt * (jump * u0 + half * dv0)
@@ -737,7 +722,37 @@ def flight_jump(planes: np.ndarray, lowest: np.ndarray, u: tuple, spin: float, r
     return max(1, free - 1)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
+def _record_jump(records: Records, i: int, step: int, jump: int, x: tuple, u: tuple,
+                 ang: tuple, dv: tuple, qi: np.ndarray, qj: np.ndarray, body: Body,
+                 options: Options) -> None:
+    """Record the states that fall inside a jump of ``jump`` flight steps from ``step``.
+
+    From the jump's own closed form: ``u_j = u + j dv``, ``x_j = x + dt (j u + dv j(j+1)/2)``
+    and ``j`` torque-free rotation steps of ``qi`` (in the scratch ``qj``).
+    """
+    stride, n_rec, dt = records.stride, records.x.shape[1], options.dt
+    x0, x1, x2 = x
+    u0, u1, u2 = u
+    l0, l1, l2 = ang
+    dv0, dv1, dv2 = dv
+    for s in range((step + stride - 1) // stride * stride, step + jump - 1, stride):
+        if s // stride > n_rec:
+            break
+        j = s - step + 1
+        half = 0.5 * j * (j + 1)
+        for a in range(3):
+            for c in range(3):
+                qj[a, c] = qi[a, c]
+        if options.rotation:
+            torque_free(qj, body.inv_inertia, body.inv_iso, l0, l1, l2, dt, j)
+        _record(records, s // stride - 1, i,
+                (x0 + dt * (j * u0 + half * dv0), x1 + dt * (j * u1 + half * dv1),
+                 x2 + dt * (j * u2 + half * dv2)),
+                (u0 + j * dv0, u1 + j * dv1, u2 + j * dv2), ang, qj, body, options.gravity)
+
+
+@njit(cache=True)
 def _record(records: Records, j: int, i: int, x: tuple, u: tuple, ang: tuple, q: np.ndarray,
             body: Body, g: float) -> None:
     """Store the state after a step: centre of mass, the listing's energy, orientation, nodes."""

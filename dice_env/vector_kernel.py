@@ -162,17 +162,10 @@ def _add(acc, corner):
 
 
 @njit(cache=True, error_model="numpy")
-def _tile_step_plain(t: np.ndarray, body: Body, contact: Contact, options: Options,
-                     stops: Stops) -> None:
-    """:func:`_step` for dice that run to the time limit: no rest test or decided face."""
-    _step(t, body, contact, options, stops, False)
-
-
-@njit(cache=True, error_model="numpy")
-def _tile_step_ending(t: np.ndarray, body: Body, contact: Contact, options: Options,
-                      stops: Stops) -> None:
-    """:func:`_step` for dice that may end at rest or at a decided face."""
-    _step(t, body, contact, options, stops, True)
+def _tile_step(t: np.ndarray, body: Body, contact: Contact, options: Options, stops: Stops,
+               ends: bool) -> None:
+    """:func:`_step` of a tile (``ends``: with the rest test and the decided face)."""
+    _step(t, body, contact, options, stops, ends)
 
 
 @njit(cache=True, inline="always")
@@ -351,10 +344,7 @@ def _run_tile(first: int, last: int, dice: Dice, body: Body, contact: Contact, o
                 break
             if _all_ended(t, lanes):
                 break
-        if ends:
-            _tile_step_ending(t, body, contact, options, stops)
-        else:
-            _tile_step_plain(t, body, contact, options, stops)
+        _tile_step(t, body, contact, options, stops, ends)
         for i in range(TILE):  # the rare large turn, exactly as the scalar kernel does it
             if t[TURN * TILE + i] > 0.0:
                 for a in range(3):
