@@ -431,7 +431,7 @@ def _candidate_overlap(c: int, a: int, b: int, world: np.ndarray, x: np.ndarray,
     return overlap, axis, True
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def least_overlap(a: int, b: int, world: np.ndarray, x: np.ndarray, q: np.ndarray,
                   axes: np.ndarray, directions: np.ndarray, first: int) -> tuple:
     """The axis along which dice ``a`` and ``b`` overlap least (separating axes).
@@ -558,7 +558,7 @@ def _turned_back(q: np.ndarray, die: int, p: tuple, x: np.ndarray) -> tuple:
             q[die, 0, 2] * r0 + q[die, 1, 2] * r1 + q[die, 2, 2] * r2)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def pair_contacts(a: int, b: int, n: tuple, world: np.ndarray, x: np.ndarray, q: np.ndarray,
                   cu: np.ndarray, cw: np.ndarray, hulls: Hulls, pair: Pair, ties: np.ndarray,
                   fresh: bool, seen: np.ndarray, force: np.ndarray, torque: np.ndarray) -> tuple:
@@ -935,7 +935,7 @@ def _group_jump(planes: np.ndarray, lowest: np.ndarray, touching: np.ndarray, x:
     return jump
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _decided(bodies: Bodies, q: np.ndarray, energy: float, floor_total: float,
              up: tuple) -> bool:
     """Whether no die's face can change: each die's lock exceeds all the group could give it.
@@ -955,7 +955,7 @@ def _decided(bodies: Bodies, q: np.ndarray, energy: float, floor_total: float,
     return True
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _meeting(out: GroupOutcome, g: int, end: int, done: int, u: np.ndarray,
              w: np.ndarray) -> None:
     """Store the first die–die contact's start (``end`` 0) or end (1), after ``done`` steps."""
@@ -966,7 +966,7 @@ def _meeting(out: GroupOutcome, g: int, end: int, done: int, u: np.ndarray,
             out.meet[g, end, a, 3 + k] = w[a, k]
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _record(records: GroupRecords, j: int, g: int, x: np.ndarray, q: np.ndarray) -> None:
     """Store the dice's centres and orientations after a step."""
     records.x[g, j] = x
