@@ -1,6 +1,7 @@
-"""Gymnasium environments: DiceThrow-v0 (single and natively batched) and its SB3 adapter.
+"""Gymnasium environments: DiceThrow-v0 (single and natively batched), its named tasks, SB3.
 
-Importing :mod:`dice_env` registers ``DiceThrow-v0``, so both ``gym.make("DiceThrow-v0")`` after
+Importing :mod:`dice_env` registers ``DiceThrow-v0`` and the named tasks beside it
+(:data:`dice_env.envs.tasks.TASKS`), so both ``gym.make("DiceThrow-v0")`` after
 ``import dice_env`` and ``gym.make("dice_env:DiceThrow-v0")`` work.
 """
 
@@ -8,19 +9,26 @@ from gymnasium.envs.registration import register, registry
 
 from dice_env.envs.dice_throw import DiceThrowEnv
 from dice_env.envs.task import Throw, ThrowTask, make_task
+from dice_env.envs.tasks import TASKS, NamedTask
 from dice_env.envs.vector import DiceThrowVectorEnv
 
 ENV_ID = "DiceThrow-v0"
 
-if ENV_ID not in registry:
-    register(
-        id=ENV_ID,
-        entry_point="dice_env.envs.dice_throw:DiceThrowEnv",
-        vector_entry_point="dice_env.envs.vector:DiceThrowVectorEnv",
-    )
 
-__all__ = ["ENV_ID", "DiceThrowEnv", "DiceThrowSB3VecEnv", "DiceThrowVectorEnv", "Throw",
-           "ThrowTask", "make_sb3_env", "make_task"]
+def _register(task: NamedTask) -> None:
+    """Register ``task`` (once per process: a reload keeps the registration)."""
+    if task.id not in registry:
+        register(id=task.id, entry_point="dice_env.envs.dice_throw:DiceThrowEnv",
+                 vector_entry_point="dice_env.envs.vector:DiceThrowVectorEnv",
+                 kwargs=dict(task.keywords))
+
+
+for task in TASKS:
+    _register(task)
+del task
+
+__all__ = ["ENV_ID", "TASKS", "DiceThrowEnv", "DiceThrowSB3VecEnv", "DiceThrowVectorEnv",
+           "NamedTask", "Throw", "ThrowTask", "make_sb3_env", "make_task"]
 
 
 def __getattr__(name: str) -> object:

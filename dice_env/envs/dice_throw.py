@@ -205,6 +205,10 @@ class DiceThrowEnv(gym.Env):
     | ``render_mode`` | None | "rgb_array", "rgb_array_list" or "human" |
     | ``render_width``, ``render_height`` | 320, 240 | frame size (pixels) |
 
+    ## Named tasks
+    Ids registered beside DiceThrow-v0, this env with keywords fixed:
+    :data:`dice_env.envs.tasks.TASKS`.
+
     ## Version History
     See ``CHANGELOG.md``: what each version of ``dice_env`` changed in DiceThrow-v0.
     """

@@ -1,0 +1,159 @@
+"""How hard each named task is: random, a rule and the oracle on every registered id.
+
+    python benchmarks/tasks.py            # about 7 minutes on 2 cores
+    python benchmarks/tasks.py --quick    # a smoke run: few throws, a tiny search
+
+For each id of :data:`dice_env.envs.tasks.TASKS`, made with ``gym.make``, every thrower faces
+the same seeded throws (targets, hands, hand noise: ``agents.evaluate.compare``): uniform random
+actions and a rule (the hand-written thrower for one die; for the set dice of the craps task the
+craps study's throw, ``dice_env.studies.craps``: the all-sevens set, 2 m/s at the back wall with
+backspin) on ``throws`` throws each, Wilson 95 % intervals; the oracle (``agents.oracle``,
+started from their actions) on the first of those observations, each scored on 16 fresh noise
+draws, its interval Wilson's divided by the observations' design effect
+(``agents.evaluate.clustered``). The oracle's search takes its default settings for one die;
+for several dice, whose throws cost far more, a smaller search whose finalists are compared on
+more draws. Prints a table and writes ``benchmarks/results/tasks.json``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import json
+import os
+import sys
+import time
+from pathlib import Path
+
+import gymnasium as gym
+import numpy as np
+
+from agents.baselines import HandThrower, RandomThrower, Thrower
+from agents.episodes import EPISODE_KEYWORDS
+from agents.evaluate import ORACLE_SCORE_SAMPLES, compare
+from agents.oracle import CEM
+from dice_env.envs.task import SET_ANGLE, ThrowTask
+from dice_env.envs.tasks import TASKS, NamedTask
+from dice_env.rotations import matrix_to_quaternion
+from dice_env.studies import craps
+from dice_env.studies.common import code_version
+
+SEED = 0
+THROWS = 400  # evaluation throws per thrower and task
+ORACLE_OBSERVATIONS = {1: 32, 2: 12}  # observations the oracle searches, by dice per throw
+GROUP_CEM = CEM(global_candidates=12, restarts=1, iterations=3, population=10, noise_samples=6,
+                finalists=2, validation_samples=48)
+QUICK = {"throws": 16, "observations": 2,
+         "cem": CEM(global_candidates=4, restarts=1, iterations=1, population=4,
+                    noise_samples=2, finalists=1, validation_samples=4)}
+
+
+@dataclasses.dataclass(frozen=True)
+class SetThrower:
+    """The craps study's throw with the dice set in the all-sevens set (two d6, ``set_dice``).
+
+    Each die's setting turns its drawn orientation into :func:`craps.sevens_set`'s; the hand
+    moves as :func:`craps.action` at the study's first speed, scaled to the task's maxima.
+    """
+
+    task: ThrowTask
+
+    def __call__(self, observations: np.ndarray) -> np.ndarray:
+        """Actions (n, 12): the throw, then each die's setting as a rotation vector / pi."""
+        _, hands = self.task.decode(observations)
+        turns = craps.sevens_set() @ np.swapaxes(hands, -1, -2)
+        quat = matrix_to_quaternion(turns)  # w >= 0: angles in [0, pi]
+        half = np.arccos(np.clip(quat[..., :1], -1.0, 1.0))
+        sine = np.sin(half)
+        axis = np.where(sine > 1e-12, quat[..., 1:] / np.maximum(sine, 1e-12), 0.0)
+        setting = (2.0 * half * axis / SET_ANGLE).reshape(len(hands), -1)
+        scale = np.r_[[craps.MAX_SPEED / self.task.max_speed] * 3,
+                      [craps.MAX_SPIN / self.task.max_spin] * 3]
+        throw = craps.action(craps.SPEEDS[0]) * scale
+        return np.hstack([np.tile(throw, (len(hands), 1)), setting])
+
+
+def throwers(task: ThrowTask) -> dict[str, Thrower]:
+    """Random actions and the task's rule: hand-written for one die, the set throw for craps."""
+    out: dict[str, Thrower] = {"random": RandomThrower(SEED, task.action_dim)}
+    if task.n_dice == 1:
+        out["hand-written"] = HandThrower(task)
+    elif task.set_dice and task.n_dice == 2:
+        out["set"] = SetThrower(task)
+    return out
+
+
+def chance(task: ThrowTask, episode: dict[str, object]) -> float:
+    """Success of fair dice: 1 / faces for one die, else P(the total) averaged over targets."""
+    if task.n_dice == 1:
+        return 1.0 / task.n_faces
+    totals = np.ones(1)
+    for faces in task.faces:
+        totals = np.convolve(totals, np.full(faces, 1.0 / faces))
+    fixed = episode.get("target_sum")
+    return float(totals[fixed - task.n_dice]) if fixed is not None else 1.0 / len(totals)
+
+
+def measure(named: NamedTask, throws: int, observations: int | None,
+            cem: CEM | None) -> dict[str, object]:
+    """Every thrower's success on the task's seeded throws, the oracle's on the first ones."""
+    start = time.perf_counter()
+    env = gym.make(named.id)
+    task = env.unwrapped.task
+    episode = {k: v for k, v in named.keywords.items() if k in EPISODE_KEYWORDS}
+    if observations is None:
+        observations = ORACLE_OBSERVATIONS[min(task.n_dice, 2)]
+    if cem is None:
+        cem = CEM() if task.n_dice == 1 else GROUP_CEM
+    result = compare(task, throwers(task), throws, observations, SEED, cem, episode)
+    rates = {name: {key: s[key] for key in ("rate", "ci", "n")}
+             for name, s in result["summary"].items()}
+    common = result["common"]
+    rates["oracle"] = {key: common["oracle"][key] for key in ("rate", "ci", "n", "observations")}
+    return {
+        "id": named.id, "keywords": dict(named.keywords), "description": named.description,
+        "chance": chance(task, episode), "throws": throws, "oracle_observations": observations,
+        "oracle_score_samples": ORACLE_SCORE_SAMPLES, "cem": dataclasses.asdict(cem),
+        "oracle_throws_searched": observations * cem.throws_per_observation(
+            len(result["summary"])),
+        "rates": rates,
+        "on_oracle_throws": {name: {key: s[key] for key in ("rate", "ci")}
+                             for name, s in common.items()},
+        "seconds": time.perf_counter() - start,
+    }
+
+
+def shown(rate: dict[str, object]) -> str:
+    """``rate [low, high]``."""
+    low, high = rate["ci"]
+    return f"{rate['rate']:.3f} [{low:.3f}, {high:.3f}]"
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--quick", action="store_true", help="a smoke run, numbers meaningless")
+    parser.add_argument("--out", type=Path,
+                        default=Path(__file__).parent / "results" / "tasks.json")
+    args = parser.parse_args()
+    quick = QUICK if args.quick else {"throws": THROWS, "observations": None, "cem": None}
+    start = time.perf_counter()
+    rows = []
+    for named in TASKS:
+        rows.append(measure(named, **quick))
+        row = rows[-1]
+        rule = [f"{name} {shown(r)}" for name, r in row["rates"].items()
+                if name not in ("random", "oracle")]
+        print(f"{row['id']:<24} chance {row['chance']:.3f}  random {shown(row['rates']['random'])}"
+              f"  {' '.join(rule) or 'no rule':<36}  oracle {shown(row['rates']['oracle'])}"
+              f"  ({row['seconds']:.0f} s)", flush=True)
+    report = {"tasks": rows, "seed": SEED, "threads": os.cpu_count(),
+              "seconds": time.perf_counter() - start, "load_average": os.getloadavg()[0],
+              "command": " ".join(["python", "benchmarks/tasks.py", *sys.argv[1:]]),
+              "commit": code_version()}
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    args.out.write_text(json.dumps(report, indent=2) + "\n")
+    print(f"wrote {args.out} in {report['seconds'] / 60:.1f} min")
+
+
+if __name__ == "__main__":
+    main()
