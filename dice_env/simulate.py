@@ -386,10 +386,10 @@ ROTATION_TOL = 1e-6  # State.orientation's allowed orthonormality error (a long 
 # cold compile time on two cores (s, about; benchmarks/cold_start.py), said on stderr before
 # they compile (dice_env.compile_notice).
 COMPILES = {
-    kernel.simulate_batch: ((kernel.simulate_one,), "the die's kernel", 35.0),
-    vector_kernel.simulate_batch: ((vector_kernel._run_tile,), "the paper scene's kernel", 50.0),
+    kernel.simulate_batch: ((kernel.simulate_one,), "the die's kernel", 17.0),
+    vector_kernel.simulate_batch: ((vector_kernel._run_tile,), "the paper scene's kernel", 25.0),
     group_kernel.simulate_groups: ((group_kernel.advance_group,), "the kernel of several dice",
-                                   55.0),
+                                   50.0),
 }
 _LONG_RUN = 2_000_000  # die-steps (about 0.1 s) from which a run goes on a worker thread
 _after_fork = False  # set in a child forked after the parent's kernel started threads
