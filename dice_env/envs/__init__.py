@@ -23,9 +23,9 @@ def _register(task: NamedTask) -> None:
                  kwargs=dict(task.keywords))
 
 
-for task in TASKS:
-    _register(task)
-del task
+for _named in TASKS:
+    _register(_named)
+del _named
 
 __all__ = ["ENV_ID", "TASKS", "DiceThrowEnv", "DiceThrowSB3VecEnv", "DiceThrowVectorEnv",
            "NamedTask", "Throw", "ThrowTask", "make_sb3_env", "make_task"]
