@@ -29,11 +29,16 @@ def announce(dispatchers: Sequence[object], what: str, seconds: float) -> None:
     if what in _announced or os.environ.get(QUIET, "") not in ("", "0"):
         return
     _announced.add(what)
-    if all(d.overloads or _cached(d) for d in dispatchers):
+    if all(ready(d) for d in dispatchers):
         return
     minutes = f"{seconds / 60:.0f} min" if seconds >= 90 else f"{seconds:.0f} s"
     print(f"dice_env: compiling {what} (first use with this numba cache: about {minutes} on "
           f"2 cores, then cached; {QUIET}=1 silences this)", file=sys.stderr, flush=True)
+
+
+def ready(dispatcher: object) -> bool:
+    """Whether ``dispatcher`` runs without compiling: compiled in this process or cached."""
+    return bool(dispatcher.overloads) or _cached(dispatcher)
 
 
 def _cached(dispatcher: object) -> bool:

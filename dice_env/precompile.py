@@ -21,33 +21,34 @@ import numpy as np
 from dice_env.group import GroupState, simulate_group
 from dice_env.paper import paper_scene
 from dice_env.scene import Scene
-from dice_env.simulate import State, simulate
+from dice_env.simulate import SERIAL_FIRST, State, simulate
 from dice_env.surroundings import tray
 from dice_env.vector_kernel import TILE
 
 THREADS = min(2, numba.config.NUMBA_NUM_THREADS)  # 2 runs the parallel loop, 1 the serial
+BATCH = SERIAL_FIRST + TILE  # throws of a batch that takes the parallel loop, tiles whole
 
 
 def _die() -> None:
     """The one-die kernel, parallel and serial (every scene that is not the paper's)."""
     scene = Scene(t_max=0.01)
-    for n in (2, 1):
+    for n in (BATCH, 1):
         simulate(scene, State.release(scene, np.tile([0.0, 0.0, 0.05], (n, 1)), [1.0, 0, 0]),
                  num_threads=THREADS)
 
 
 def _paper() -> None:
-    """The paper scene's vector kernel, parallel and serial (a tile of dice)."""
+    """The paper scene's vector kernel, parallel and serial."""
     scene = paper_scene(t_max=0.01)
     for threads in (THREADS, 1):
-        simulate(scene, State.release(scene, np.tile([0.0, 0.0, 3.0], (TILE, 1)),
+        simulate(scene, State.release(scene, np.tile([0.0, 0.0, 3.0], (BATCH, 1)),
                                       [1.0, 0, 0]), num_threads=threads)
 
 
 def _group() -> None:
     """The kernel of several dice, parallel and serial."""
     scene = Scene(walls=tray(), t_max=0.01)
-    for n in (2, 1):
+    for n in (BATCH, 1):
         state = GroupState.of([State.release(scene, np.tile([0.0, y, 0.05], (n, 1)),
                                              [1.0, 0, 0]) for y in (-0.02, 0.02)])
         simulate_group(scene, (scene.die, scene.die), state, num_threads=THREADS)

@@ -17,7 +17,7 @@ import numpy as np
 
 from dice_env import group_kernel, kernel, vector_kernel
 from dice_env.checks import as_batch, check_finite, check_range
-from dice_env.compile_notice import announce
+from dice_env.compile_notice import announce, ready
 from dice_env.rotations import orthonormality_error
 from dice_env.scene import ContactLaw, FrictionLaw, Scene, Scheme
 
@@ -198,7 +198,8 @@ def simulate(
     ``t_max`` overrides the scene's time limit. ``record_every`` > 0 stores the centre of mass
     every that many steps, plus what ``record`` names among "energy", "orientations", "nodes".
     ``num_threads`` caps numba's threads for this call (1 to ``NUMBA_NUM_THREADS``; default:
-    all of them); a single throw or one thread runs on the calling thread, and so does every
+    all of them); a single throw or one thread runs on the calling thread, and so do a batch
+    of at most :data:`SERIAL_FIRST` throws while the parallel loop is not compiled and every
     run in a process forked after its parent ran threads (GNU OpenMP cannot be used across a
     fork; :func:`_forked`). ``free_flight`` takes the contact-free steps in
     analytic jumps (gated law, or no damping, where the paper law is the same); False steps them
@@ -386,11 +387,21 @@ ROTATION_TOL = 1e-6  # State.orientation's allowed orthonormality error (a long 
 # cold compile time on two cores (s, about; benchmarks/cold_start.py), said on stderr before
 # they compile (dice_env.compile_notice).
 COMPILES = {
-    kernel.simulate_batch: ((kernel.simulate_one,), "the die's kernel", 17.0),
-    vector_kernel.simulate_batch: ((vector_kernel._run_tile,), "the paper scene's kernel", 25.0),
-    group_kernel.simulate_groups: ((group_kernel.advance_group,), "the kernel of several dice",
-                                   50.0),
+    kernel.simulate_serial: ((kernel.simulate_one, kernel.simulate_serial), "the die's kernel",
+                             13.0),
+    kernel.simulate_batch: ((kernel.simulate_batch,), "the die's kernel on threads", 17.0),
+    vector_kernel.simulate_serial: ((vector_kernel._run_tile, vector_kernel.simulate_serial),
+                                    "the paper scene's kernel", 20.0),
+    vector_kernel.simulate_batch: ((vector_kernel.simulate_batch,),
+                                   "the paper scene's kernel on threads", 25.0),
+    group_kernel.simulate_groups_serial: ((group_kernel.advance_group,
+                                           group_kernel.simulate_groups_serial),
+                                          "the kernel of several dice", 33.0),
+    group_kernel.simulate_groups: ((group_kernel.simulate_groups,),
+                                   "the kernel of several dice on threads", 50.0),
 }
+SERIAL_FIRST = 256  # throws: a batch up to this size runs serially while its parallel loop
+# is not compiled (on a cold cache, a first small batch does not wait for that compile)
 _LONG_RUN = 2_000_000  # die-steps (about 0.1 s) from which a run goes on a worker thread
 _after_fork = False  # set in a child forked after the parent's kernel started threads
 
@@ -453,15 +464,18 @@ def run_kernel(parallel: Callable, serial: Callable, args: tuple, abort: np.ndar
                batch: int, threads: int, work: int) -> None:
     """Run a compiled kernel ``parallel(*args)`` or ``serial(*args)`` over a batch.
 
-    On the calling thread for a batch of one, one thread, or in a process forked after its
-    parent ran threads (:func:`_forked`); in parallel otherwise. A run of more than
+    On the calling thread for a batch of one, one thread, a batch of at most
+    :data:`SERIAL_FIRST` while ``parallel`` is neither compiled nor in numba's cache (the same
+    results, without waiting for that compile), or in a process forked after its parent ran
+    threads (:func:`_forked`); in parallel otherwise. A run of more than
     ``_LONG_RUN`` die-steps of ``work`` can be interrupted (:func:`_run_interruptibly`). A
     kernel about to compile is said on stderr first (:data:`COMPILES`).
     """
-    announce(*COMPILES[parallel])
-    serial_run = batch == 1 or threads == 1 or _after_fork
-    _run_interruptibly(serial if serial_run else parallel, args, abort, threads,
-                       long=work > _LONG_RUN)
+    serial_run = (batch == 1 or threads == 1 or _after_fork
+                  or (batch <= SERIAL_FIRST and not ready(parallel)))
+    run = serial if serial_run else parallel
+    announce(*COMPILES[run])
+    _run_interruptibly(run, args, abort, threads, long=work > _LONG_RUN)
 
 
 def _run_interruptibly(run: Callable, args: tuple, abort: np.ndarray, threads: int, *,
