@@ -34,7 +34,7 @@ from agents.evaluate import ORACLE_SCORE_SAMPLES, compare
 from agents.oracle import CEM
 from dice_env.envs.task import SET_ANGLE, ThrowTask
 from dice_env.envs.tasks import TASKS, NamedTask
-from dice_env.rotations import matrix_to_quaternion
+from dice_env.rotations import matrix_to_rotation_vector
 from dice_env.studies import craps
 from dice_env.studies.common import code_version
 
@@ -62,11 +62,7 @@ class SetThrower:
         """Actions (n, 12): the throw, then each die's setting as a rotation vector / pi."""
         _, hands = self.task.decode(observations)
         turns = craps.sevens_set() @ np.swapaxes(hands, -1, -2)
-        quat = matrix_to_quaternion(turns)  # w >= 0: angles in [0, pi]
-        half = np.arccos(np.clip(quat[..., :1], -1.0, 1.0))
-        sine = np.sin(half)
-        axis = np.where(sine > 1e-12, quat[..., 1:] / np.maximum(sine, 1e-12), 0.0)
-        setting = (2.0 * half * axis / SET_ANGLE).reshape(len(hands), -1)
+        setting = (matrix_to_rotation_vector(turns) / SET_ANGLE).reshape(len(hands), -1)
         scale = np.r_[[craps.MAX_SPEED / self.task.max_speed] * 3,
                       [craps.MAX_SPIN / self.task.max_spin] * 3]
         throw = craps.action(craps.SPEEDS[0]) * scale

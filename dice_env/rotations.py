@@ -58,6 +58,18 @@ def matrix_to_quaternion(rot: np.ndarray) -> np.ndarray:
     return np.where(quat[..., :1] < 0, -quat, quat)
 
 
+def matrix_to_rotation_vector(rot: np.ndarray) -> np.ndarray:
+    """Rotation vectors (..., 3), axis times angle in [0, pi], of rotation matrices (..., 3, 3).
+
+    The logarithm of :func:`matrix_to_quaternion`'s quaternion; zero for the identity.
+    """
+    quat = matrix_to_quaternion(rot)  # w >= 0: half the angle in [0, pi/2]
+    half = np.arccos(np.clip(quat[..., :1], -1.0, 1.0))
+    sine = np.sin(half)
+    axis = np.where(sine > 1e-12, quat[..., 1:] / np.maximum(sine, 1e-12), 0.0)
+    return 2.0 * half * axis
+
+
 def axis_angle(axis: np.ndarray, angle: float) -> np.ndarray:
     """Rotation by ``angle`` (rad) about ``axis`` (any non-zero length), shape (3, 3)."""
     k = np.asarray(axis, dtype=np.float64)

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from dice_env import ContactLaw, Die, FrictionLaw, Ground, Scene, Scheme, State, simulate
-from dice_env.rotations import axis_angle, random_rotations
+from dice_env.rotations import axis_angle, matrix_to_rotation_vector, random_rotations
 
 
 def random_throws(scene: Scene, n: int, seed: int = 0, height: float = 0.1) -> State:
@@ -297,3 +297,15 @@ def test_outcome_record():
 def test_bad_input_names_the_parameter(make, match):
     with pytest.raises(ValueError, match=match):
         make()
+
+
+def test_rotation_vectors_invert_axis_angle():
+    rng = np.random.default_rng(3)
+    axes = rng.normal(size=(50, 3))
+    angles = rng.uniform(0.0, np.pi, 50)
+    rot = np.stack([axis_angle(a, t) for a, t in zip(axes, angles, strict=True)])
+    vectors = matrix_to_rotation_vector(rot)
+    assert np.allclose(np.linalg.norm(vectors, axis=1), angles, atol=1e-12)
+    assert np.allclose(vectors / angles[:, None], axes / np.linalg.norm(axes, axis=1)[:, None],
+                       atol=1e-9)
+    assert np.array_equal(matrix_to_rotation_vector(np.eye(3)), np.zeros(3))
