@@ -49,6 +49,7 @@ from __future__ import annotations
 import copy
 from typing import Any
 
+import numpy as np
 from stable_baselines3.common.utils import LinearSchedule
 
 # The keys of an entry that are not PPO keywords (as in rl-zoo3's files).
@@ -90,3 +91,69 @@ def learning_rate(value: float | str) -> float | LinearSchedule:
             raise ValueError(f"learning_rate must be a number or 'lin_<number>', got {value!r}")
         return LinearSchedule(float(value[4:]), 0.0, 1.0)
     return value
+
+
+# The benchmark (``python -m agents.benchmark``): one budget in throws per named task, the same
+# for every algorithm. They are what two CPU cores train 3 seeds x 3 algorithms of every task
+# in about an hour: the one-die tasks run 1,000-3,000 throws/s on one core, two dice in the tray
+# about 100 and the craps throw about 20 (``benchmarks/env.json`` measures the default task).
+BUDGETS: dict[str, int] = {
+    "DiceThrow-v0": 40_000,
+    "DiceThrowHigh-v0": 40_000,
+    "DiceThrowD20-v0": 40_000,
+    "DiceThrowTray2d6Sum-v0": 8_000,
+    "DiceThrowCraps-v0": 2_000,
+}
+# Fewer throws per step where a throw costs more, so that a small budget still makes updates.
+_N_ENVS = {"DiceThrowTray2d6Sum-v0": 16, "DiceThrowCraps-v0": 8}
+# Keys of an rl-zoo3 entry that are not the algorithm's keywords (rl-zoo3 reads the noise keys
+# into an ``action_noise``).
+NON_ALGORITHM_KEYS = (*NON_PPO_KEYS, "noise_type", "noise_std")
+# Per algorithm, the keywords for every task: untuned, no search was run. PPO is the
+# DiceThrow-v0 recipe above with a rollout of ``n_envs`` x 4 throws; SAC and TD3 are
+# Stable-Baselines3's defaults for a one-step task (every episode one throw, so gamma does not
+# matter), with one gradient step per 4 throws and TD3 with rl-zoo3's usual exploration noise.
+_ALGORITHMS: dict[str, dict[str, Any]] = {
+    "ppo": {"n_steps": 4, "batch_size": 64, "n_epochs": 10, "learning_rate": "lin_3e-4",
+            "policy_kwargs": {"net_arch": [256, 256], "log_std_init": -2.0}},
+    "sac": {"learning_rate": 3e-4, "batch_size": 256, "learning_starts": 1_000,
+            "train_freq": 1, "gamma": 0.0, "policy_kwargs": {"net_arch": [256, 256]}},
+    "td3": {"learning_rate": 1e-3, "batch_size": 256, "learning_starts": 1_000,
+            "train_freq": 1, "gamma": 0.0, "noise_type": "normal", "noise_std": 0.1,
+            "policy_kwargs": {"net_arch": [256, 256]}},
+}
+
+
+def _benchmark_entry(algo: str, env_id: str) -> dict[str, Any]:
+    """One (algorithm, task) entry in rl-zoo3's schema."""
+    n_envs = _N_ENVS.get(env_id, 64)
+    entry = {"policy": "MlpPolicy", "n_envs": n_envs, "n_timesteps": BUDGETS[env_id],
+             "env_kwargs": {}, **copy.deepcopy(_ALGORITHMS[algo])}
+    if algo != "ppo":
+        entry["gradient_steps"] = max(1, n_envs // 4)
+        entry["buffer_size"] = BUDGETS[env_id]
+        entry["learning_starts"] = min(entry["learning_starts"], BUDGETS[env_id] // 4)
+    return entry
+
+
+BENCHMARK_HYPERPARAMS: dict[str, dict[str, dict[str, Any]]] = {
+    algo: {env_id: _benchmark_entry(algo, env_id) for env_id in BUDGETS} for algo in _ALGORITHMS
+}
+
+
+def algorithm_kwargs(algo: str, env_id: str, action_dim: int) -> dict[str, Any]:
+    """The SB3 keywords of ``algo`` on ``env_id`` (a fresh copy), as rl-zoo3 builds them."""
+    if algo not in BENCHMARK_HYPERPARAMS:
+        raise ValueError(f"algo must be one of {sorted(BENCHMARK_HYPERPARAMS)}, got {algo!r}")
+    if env_id not in BUDGETS:
+        raise ValueError(f"env_id must be one of {sorted(BUDGETS)}, got {env_id!r}")
+    entry = BENCHMARK_HYPERPARAMS[algo][env_id]
+    kwargs = {key: copy.deepcopy(value) for key, value in entry.items()
+              if key not in NON_ALGORITHM_KEYS}
+    kwargs["learning_rate"] = learning_rate(kwargs["learning_rate"])
+    if entry.get("noise_type") == "normal":
+        from stable_baselines3.common.noise import NormalActionNoise
+
+        kwargs["action_noise"] = NormalActionNoise(np.zeros(action_dim),
+                                                   entry["noise_std"] * np.ones(action_dim))
+    return kwargs
