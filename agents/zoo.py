@@ -1,18 +1,20 @@
-r"""rl-zoo3 hyperparameter files, written from :mod:`agents.hyperparams` (their one source).
+r"""rl-zoo3 hyperparameter files, written from :data:`agents.hyperparams.BENCHMARK_HYPERPARAMS`.
 
-    python -m agents.zoo              # rewrites agents/zoo_configs/ppo.yml
-    python -m agents.zoo --check      # exit 1 if the file differs from the table
+    python -m agents.zoo              # rewrites agents/zoo_configs/{ppo,sac,td3}.yml
+    python -m agents.zoo --check      # exit 1 if a file differs from the table
 
-The file is rl-zoo3's format (keyed by env id; ``policy_kwargs`` as the Python expression rl-zoo3
-evaluates), so a user trains and replays with rl-zoo3's own commands::
+The files are rl-zoo3's format (keyed by env id, one entry per named task; ``policy_kwargs`` as
+the Python expression rl-zoo3 evaluates; TD3's exploration as ``noise_type``/``noise_std``),
+with the benchmark's budgets (``python -m agents.benchmark``), so a user trains and replays a
+benchmark run with rl-zoo3's own commands::
 
-    python -m rl_zoo3.train --algo ppo --env DiceThrow-v0 --gym-packages dice_env \
-        --conf-file agents/zoo_configs/ppo.yml -f logs
-    python -m rl_zoo3.enjoy --algo ppo --env DiceThrow-v0 --gym-packages dice_env -f logs \
+    python -m rl_zoo3.train --algo sac --env DiceThrowD20-v0 --gym-packages dice_env \
+        --conf-file agents/zoo_configs/sac.yml -f logs
+    python -m rl_zoo3.enjoy --algo sac --env DiceThrowD20-v0 --gym-packages dice_env -f logs \
         --no-render -n 1000
 
-rl-zoo3 steps ``n_envs`` separate Gymnasium envs (one throw per env per step) where
-``train.py`` steps them as one batched kernel call; the policy and hyperparameters are the same.
+rl-zoo3 steps ``n_envs`` separate Gymnasium envs (one throw per env per step) where the
+benchmark steps them as one batched kernel call; the policy and hyperparameters are the same.
 """
 
 from __future__ import annotations
@@ -24,7 +26,7 @@ from typing import Any
 
 import yaml
 
-from agents.hyperparams import PPO_HYPERPARAMS
+from agents.hyperparams import BENCHMARK_HYPERPARAMS
 
 ZOO = Path(__file__).resolve().parent / "zoo_configs"
 HEADER = "# Written by `python -m agents.zoo` from agents/hyperparams.py; do not edit by hand.\n"
@@ -38,7 +40,7 @@ def _python(value: Any) -> str:
 
 
 def zoo_entry(entry: dict[str, Any]) -> dict[str, Any]:
-    """One env's rl-zoo3 hyperparameters from its :data:`PPO_HYPERPARAMS` entry."""
+    """One env's rl-zoo3 hyperparameters from its table entry."""
     out = dict(entry)
     out["n_timesteps"] = float(entry["n_timesteps"])
     if "policy_kwargs" in entry:
@@ -46,9 +48,9 @@ def zoo_entry(entry: dict[str, Any]) -> dict[str, Any]:
     return out
 
 
-def ppo_yaml() -> str:
-    """The text of ``agents/zoo_configs/ppo.yml``."""
-    table = {env_id: zoo_entry(entry) for env_id, entry in PPO_HYPERPARAMS.items()}
+def zoo_yaml(algo: str) -> str:
+    """The text of ``agents/zoo_configs/<algo>.yml``."""
+    table = {env_id: zoo_entry(entry) for env_id, entry in BENCHMARK_HYPERPARAMS[algo].items()}
     return HEADER + yaml.safe_dump(table, sort_keys=False)
 
 
@@ -59,18 +61,19 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--check", action="store_true",
                         help="change nothing; exit 1 if the file differs from the table")
     args = parser.parse_args(argv)
-    path = ZOO / "ppo.yml"
-    text = ppo_yaml()
-    if args.check:
-        current = path.read_text() if path.exists() else ""
-        if current != text:
-            print(f"{path} differs from agents/hyperparams.py (python -m agents.zoo)")
-            return 1
-        return 0
-    ZOO.mkdir(exist_ok=True)
-    path.write_text(text)
-    print(f"wrote {path}")
-    return 0
+    stale = []
+    for algo in BENCHMARK_HYPERPARAMS:
+        path, text = ZOO / f"{algo}.yml", zoo_yaml(algo)
+        if args.check:
+            if not path.exists() or path.read_text() != text:
+                stale.append(path)
+            continue
+        ZOO.mkdir(exist_ok=True)
+        path.write_text(text)
+        print(f"wrote {path}")
+    for path in stale:
+        print(f"{path} differs from agents/hyperparams.py (python -m agents.zoo)")
+    return 1 if stale else 0
 
 
 if __name__ == "__main__":
