@@ -1,4 +1,4 @@
-"""Baseline throwers: a random one and a hand-written one, the bar a person could write.
+"""Baseline throwers: random, the hand-written one (one die) and the set craps throw.
 
 A thrower maps observations (n, faces + 9) to actions (n, 6) in [-1, 1], like a trained policy's
 ``predict``; see :class:`Thrower`. Sizes come from the observations (the one-hot's length is the
@@ -13,7 +13,9 @@ from typing import Protocol
 
 import numpy as np
 
-from dice_env.envs.task import ACTION_DIM, ORIENTATION_DIM, ThrowTask
+from dice_env.envs.task import ACTION_DIM, ORIENTATION_DIM, SET_ANGLE, ThrowTask
+from dice_env.rotations import matrix_to_rotation_vector
+from dice_env.studies import craps
 
 ROTATION_DIM = ORIENTATION_DIM  # the hand's orientation, a row-major 3x3 matrix, after the one-hot
 
@@ -113,3 +115,34 @@ class HandThrower:
         drop = self.task.release_height - float(scene.die.resting_heights.min())
         g = scene.gravity * float(np.asarray(scene.ground.normal)[2])
         return (self.toss + math.sqrt(self.toss**2 + 2 * g * drop)) / g
+
+
+@dataclass(frozen=True)
+class SetThrower:
+    """The craps study's throw with the dice set in the all-sevens set (two d6, ``set_dice``).
+
+    Each die's setting turns its drawn orientation into :func:`craps.sevens_set`'s; the hand
+    moves as :func:`craps.action` at the study's first speed, scaled to the task's maxima.
+    """
+
+    task: ThrowTask
+
+    def __call__(self, observations: np.ndarray) -> np.ndarray:
+        """Actions (n, 12): the throw, then each die's setting as a rotation vector / pi."""
+        _, hands = self.task.decode(observations)
+        turns = craps.sevens_set() @ np.swapaxes(hands, -1, -2)
+        setting = (matrix_to_rotation_vector(turns) / SET_ANGLE).reshape(len(hands), -1)
+        scale = np.r_[[craps.MAX_SPEED / self.task.max_speed] * 3,
+                      [craps.MAX_SPIN / self.task.max_spin] * 3]
+        throw = craps.action(craps.SPEEDS[0]) * scale
+        return np.hstack([np.tile(throw, (len(hands), 1)), setting])
+
+
+def rule_throwers(task: ThrowTask, seed: int = 0) -> dict[str, Thrower]:
+    """Random actions and the task's rule: hand-written for one die, the set throw for craps."""
+    out: dict[str, Thrower] = {"random": RandomThrower(seed, task.action_dim)}
+    if task.n_dice == 1:
+        out["hand-written"] = HandThrower(task)
+    elif task.set_dice and task.n_dice == 2:
+        out["set"] = SetThrower(task)
+    return out

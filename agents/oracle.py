@@ -80,6 +80,19 @@ class CEM:
         return screened + searched + validated
 
 
+# The oracle's budget on the named tasks (benchmarks/tasks.py, agents.learned), by dice per
+# throw: its default search on that many observations for one die; for several dice, whose
+# throws cost far more, a smaller search whose finalists are compared on more draws.
+OBSERVATIONS = {1: 32, 2: 12}
+GROUP_CEM = CEM(global_candidates=12, restarts=1, iterations=3, population=10, noise_samples=6,
+                finalists=2, validation_samples=48)
+
+
+def task_budget(task: ThrowTask) -> tuple[int, CEM]:
+    """The observations the oracle searches on ``task`` and its settings (:data:`OBSERVATIONS`)."""
+    return OBSERVATIONS[min(task.n_dice, 2)], CEM() if task.n_dice == 1 else GROUP_CEM
+
+
 def search(
     task: ThrowTask,
     observations: np.ndarray,

@@ -10,9 +10,8 @@ craps study's throw, ``dice_env.studies.craps``: the all-sevens set, 2 m/s at th
 backspin) on ``throws`` throws each, Wilson 95 % intervals; the oracle (``agents.oracle``,
 started from their actions) on the first of those observations, each scored on 16 fresh noise
 draws, its interval Wilson's divided by the observations' design effect
-(``agents.evaluate.clustered``). The oracle's search takes its default settings for one die;
-for several dice, whose throws cost far more, a smaller search whose finalists are compared on
-more draws. Prints a table and writes ``benchmarks/results/tasks.json``.
+(``agents.evaluate.clustered``). The oracle's budget is ``agents.oracle.task_budget``'s.
+Prints a table and writes ``benchmarks/results/tasks.json``.
 """
 
 from __future__ import annotations
@@ -28,55 +27,19 @@ from pathlib import Path
 import gymnasium as gym
 import numpy as np
 
-from agents.baselines import HandThrower, RandomThrower, Thrower
+from agents.baselines import rule_throwers
 from agents.episodes import EPISODE_KEYWORDS
 from agents.evaluate import ORACLE_SCORE_SAMPLES, compare
-from agents.oracle import CEM
-from dice_env.envs.task import SET_ANGLE, ThrowTask
+from agents.oracle import CEM, task_budget
+from dice_env.envs.task import ThrowTask
 from dice_env.envs.tasks import TASKS, NamedTask
-from dice_env.rotations import matrix_to_rotation_vector
-from dice_env.studies import craps
 from dice_env.studies.common import code_version
 
 SEED = 0
 THROWS = 400  # evaluation throws per thrower and task
-ORACLE_OBSERVATIONS = {1: 32, 2: 12}  # observations the oracle searches, by dice per throw
-GROUP_CEM = CEM(global_candidates=12, restarts=1, iterations=3, population=10, noise_samples=6,
-                finalists=2, validation_samples=48)
 QUICK = {"throws": 16, "observations": 2,
          "cem": CEM(global_candidates=4, restarts=1, iterations=1, population=4,
                     noise_samples=2, finalists=1, validation_samples=4)}
-
-
-@dataclasses.dataclass(frozen=True)
-class SetThrower:
-    """The craps study's throw with the dice set in the all-sevens set (two d6, ``set_dice``).
-
-    Each die's setting turns its drawn orientation into :func:`craps.sevens_set`'s; the hand
-    moves as :func:`craps.action` at the study's first speed, scaled to the task's maxima.
-    """
-
-    task: ThrowTask
-
-    def __call__(self, observations: np.ndarray) -> np.ndarray:
-        """Actions (n, 12): the throw, then each die's setting as a rotation vector / pi."""
-        _, hands = self.task.decode(observations)
-        turns = craps.sevens_set() @ np.swapaxes(hands, -1, -2)
-        setting = (matrix_to_rotation_vector(turns) / SET_ANGLE).reshape(len(hands), -1)
-        scale = np.r_[[craps.MAX_SPEED / self.task.max_speed] * 3,
-                      [craps.MAX_SPIN / self.task.max_spin] * 3]
-        throw = craps.action(craps.SPEEDS[0]) * scale
-        return np.hstack([np.tile(throw, (len(hands), 1)), setting])
-
-
-def throwers(task: ThrowTask) -> dict[str, Thrower]:
-    """Random actions and the task's rule: hand-written for one die, the set throw for craps."""
-    out: dict[str, Thrower] = {"random": RandomThrower(SEED, task.action_dim)}
-    if task.n_dice == 1:
-        out["hand-written"] = HandThrower(task)
-    elif task.set_dice and task.n_dice == 2:
-        out["set"] = SetThrower(task)
-    return out
 
 
 def chance(task: ThrowTask, episode: dict[str, object]) -> float:
@@ -97,11 +60,10 @@ def measure(named: NamedTask, throws: int, observations: int | None,
     env = gym.make(named.id)
     task = env.unwrapped.task
     episode = {k: v for k, v in named.keywords.items() if k in EPISODE_KEYWORDS}
-    if observations is None:
-        observations = ORACLE_OBSERVATIONS[min(task.n_dice, 2)]
-    if cem is None:
-        cem = CEM() if task.n_dice == 1 else GROUP_CEM
-    result = compare(task, throwers(task), throws, observations, SEED, cem, episode)
+    default_observations, default_cem = task_budget(task)
+    observations = default_observations if observations is None else observations
+    cem = default_cem if cem is None else cem
+    result = compare(task, rule_throwers(task, SEED), throws, observations, SEED, cem, episode)
     rates = {name: {key: s[key] for key in ("rate", "ci", "n")}
              for name, s in result["summary"].items()}
     common = result["common"]
