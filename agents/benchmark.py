@@ -49,7 +49,7 @@ CURVE_POINTS = 5  # evaluations along a run (the last at its budget)
 CURVE_THROWS = 128  # fixed throws per curve evaluation
 CURVE_SEED = 1  # their draw (the final evaluation's is benchmarks/tasks.py's seed 0)
 FINAL_THROWS = 400  # as benchmarks/tasks.py
-QUICK_BUDGET, QUICK_THROWS = 64, 16
+QUICK_BUDGET, QUICK_THROWS = 320, 16
 
 
 def algorithm(name: str) -> type:
@@ -59,17 +59,23 @@ def algorithm(name: str) -> type:
     return getattr(stable_baselines3, name.upper())
 
 
-def evaluation(task_id: str, throws: int, seed: int) -> tuple[Any, Any]:
-    """The task and the batch of fixed throws the policies are scored on."""
-    import gymnasium as gym
-
-    from agents.episodes import EPISODE_KEYWORDS, Batch
+def episode(task_id: str) -> dict[str, Any]:
+    """The named task's episode keywords (a fixed target or total), as ``Batch.sample`` takes."""
+    from agents.episodes import EPISODE_KEYWORDS
     from dice_env.envs.tasks import TASKS
 
     named = {t.id: t for t in TASKS}[task_id]
-    task = gym.make(task_id).unwrapped.task
-    episode = {k: v for k, v in named.keywords.items() if k in EPISODE_KEYWORDS}
-    return task, Batch.sample(task, throws, np.random.default_rng(seed), **episode)
+    return {k: v for k, v in named.keywords.items() if k in EPISODE_KEYWORDS}
+
+
+def evaluation(task_id: str, throws: int, seed: int, **keywords: Any) -> tuple[Any, Any]:
+    """The task (``keywords`` overriding its own) and the fixed throws policies are scored on."""
+    import gymnasium as gym
+
+    from agents.episodes import Batch
+
+    task = gym.make(task_id, **keywords).unwrapped.task
+    return task, Batch.sample(task, throws, np.random.default_rng(seed), **episode(task_id))
 
 
 def success(model: Any, task: Any, batch: Any) -> dict[str, Any]:
@@ -90,7 +96,9 @@ class Run:
         self.curve_throws, self.final_throws = curve_throws, final_throws
         self.result = out / "baselines" / task_id / f"{algo}-{seed}.json"
         self.work = RUNS / out.name / task_id / f"{algo}-{seed}"
-        self.points = [round(budget * (i + 1) / CURVE_POINTS) for i in range(CURVE_POINTS)]
+        step = BENCHMARK_HYPERPARAMS[algo][task_id]["n_envs"]  # throws per env step
+        self.points = sorted({-(-budget * (i + 1) // (CURVE_POINTS * step)) * step
+                              for i in range(CURVE_POINTS)})
 
     def state(self) -> dict[str, Any]:
         """The curve and wall time kept at the last checkpoint (empty for a new run)."""
@@ -146,7 +154,8 @@ def train(run: Run, log: Any = print) -> dict[str, Any]:
         def _on_step(self) -> bool:
             if pending and self.model.num_timesteps >= pending[0]:
                 state["train_seconds"] += time.perf_counter() - self.started
-                pending.pop(0)
+                while pending and self.model.num_timesteps >= pending[0]:
+                    pending.pop(0)
                 point = {"throws": int(self.model.num_timesteps),
                          "train_seconds": state["train_seconds"],
                          **success(self.model, task, curve_batch)}
@@ -248,6 +257,7 @@ def print_table(summary: dict[str, Any]) -> None:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
+    """Train the runs not yet kept, then write the summary and the figure."""
     parser = argparse.ArgumentParser(prog="python -m agents.benchmark",
                                      description=__doc__.split("\n")[0])
     parser.add_argument("--tasks", nargs="+", default=list(BUDGETS), choices=list(BUDGETS),
@@ -257,7 +267,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--table", action="store_true",
                         help="train nothing: the summary and figure from the kept JSONs")
     parser.add_argument("--quick", action="store_true",
-                        help="a smoke run: budgets of 64 throws, 16 evaluation throws")
+                        help=f"a smoke run: budgets of {QUICK_BUDGET} throws, {QUICK_THROWS} "
+                        "evaluation throws")
     parser.add_argument("--out", type=Path, default=RESULTS,
                         help="results folder (default benchmarks/results)")
     args = parser.parse_args(argv)

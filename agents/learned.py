@@ -1,0 +1,180 @@
+r"""What the benchmark's learned throwers do: each task's best run against the oracle.
+
+    python -m agents.learned          # after python -m agents.benchmark; about 10 min on 2 cores
+
+For each named task the best algorithm (highest mean final success over its seeds) and its best
+seed are loaded from ``runs/benchmark/`` and compared on ``benchmarks/tasks.py``'s throws
+(:func:`agents.evaluate.compare`) with the oracle searched from their actions
+(:func:`agents.oracle.task_budget`), both scored on the same fresh throws: their success with
+intervals and the paired difference; what each does on those observations (medians of the
+intended release speed, its vertical part and the spin; for one die, per class of how far the
+target must turn, the push along the roll direction and the spin axis against the target's tilt,
+:func:`agents.evaluate.strategy`); the learned thrower's failures on all the throws (success per
+turn class or per target, void reasons). For the craps task, P(seven) of the learned throw and
+of the set throw against the hand's noise (:data:`CRAPS_NOISES`), Wilson 95 % intervals, and the
+largest noise at which the interval still excludes 1/6. Writes
+``benchmarks/results/learned.json``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import collections
+import json
+import sys
+import time
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from agents.baselines import rule_throwers
+from agents.benchmark import FINAL_THROWS, RESULTS, RUNS, algorithm, episode, evaluation
+from agents.episodes import Batch, PolicyThrower
+from agents.evaluate import by_turn, compare, paired_difference, strategy, strategy_table, tilt
+from agents.oracle import CEM, task_budget
+
+SEED = 0  # benchmarks/tasks.py's: the same throws
+CRAPS = "DiceThrowCraps-v0"
+CRAPS_NOISES = (0.001, 0.003, 0.01, 0.03, 0.1)  # hand and orientation noise
+CRAPS_THROWS = 400  # per noise and thrower
+QUICK = {"throws": 16, "observations": 2, "cem": CEM(
+    global_candidates=4, restarts=1, iterations=1, population=4, noise_samples=2, finalists=1,
+    validation_samples=4)}
+
+
+def best_run(task_id: str, out: Path = RESULTS) -> dict[str, Any]:
+    """The kept result of the task's best algorithm's best seed."""
+    runs = [json.loads(p.read_text()) for p in sorted((out / "baselines" / task_id).glob("*.json"))]
+    if not runs:
+        raise SystemExit(f"no kept run of {task_id}: run python -m agents.benchmark first")
+    by_algo = collections.defaultdict(list)
+    for r in runs:
+        by_algo[r["algo"]].append(r)
+    algo = max(by_algo, key=lambda a: np.mean([r["final"]["rate"] for r in by_algo[a]]))
+    return max(by_algo[algo], key=lambda r: r["final"]["rate"])
+
+
+def load_model(run: dict[str, Any], out: Path = RESULTS) -> Any:
+    """The final model of a kept run (saved at its last curve point)."""
+    path = RUNS / out.name / run["task"] / f"{run['algo']}-{run['seed']}" / "model.zip"
+    if not path.exists():
+        raise SystemExit(f"{path} is missing: delete its JSON and rerun python -m agents.benchmark "
+                         f"--tasks {run['task']} --algos {run['algo']} --seeds {run['seed']}")
+    return algorithm(run["algo"]).load(path, device="cpu")
+
+
+def release(actions: np.ndarray, task: Any) -> dict[str, float]:
+    """Medians of the intended release: speed, vertical speed, horizontal speed, spin."""
+    velocity = actions[:, :3] * task.max_speed
+    spin = actions[:, 3:6] * task.max_spin
+    return {"speed": float(np.median(np.linalg.norm(velocity, axis=1))),
+            "vz": float(np.median(velocity[:, 2])),
+            "horizontal": float(np.median(np.linalg.norm(velocity[:, :2], axis=1))),
+            "spin": float(np.median(np.linalg.norm(spin, axis=1)))}
+
+
+def analyse(task_id: str, out: Path = RESULTS, quick: bool = False) -> dict[str, Any]:
+    """The best learned thrower of ``task_id`` against the oracle (see the module docstring).
+
+    ``quick``: a smoke run (:data:`QUICK`: few throws, a tiny search).
+    """
+    run = best_run(task_id, out)
+    model = load_model(run, out)
+    task, _ = evaluation(task_id, 1, SEED)
+    observations, cem = task_budget(task)
+    throws = FINAL_THROWS
+    if quick:
+        throws, observations, cem = QUICK["throws"], QUICK["observations"], QUICK["cem"]
+    throwers = {"learned": PolicyThrower(model), **rule_throwers(task, SEED)}
+    result = compare(task, throwers, throws, observations, SEED, cem, episode(task_id))
+    m = len(result["oracle_actions"])
+    learned = np.asarray(result["throws"]["learned"]["action"])
+    batch: Batch = result["batch"]
+    first = Batch(batch.targets[:m], batch.hands[:m], batch.observations[:m], batch.noise[:m])
+    success = np.asarray(result["throws"]["learned"]["is_success"], bool)
+    reasons = collections.Counter(str(r) for r in result["throws"]["learned"]["void_reason"])
+    report: dict[str, Any] = {
+        "task": task_id, "algo": run["algo"], "seed": run["seed"], "budget": run["budget"],
+        "learned": result["summary"]["learned"]["rate"],
+        "learned_ci": result["summary"]["learned"]["ci"],
+        "on_oracle_throws": {name: {"rate": s["rate"], "ci": s["ci"]}
+                             for name, s in result["common"].items()},
+        "oracle_minus_learned": paired_difference(result["common_success"]["oracle"],
+                                                  result["common_success"]["learned"]),
+        "release": {"learned": release(learned[:m], task),
+                    "oracle": release(result["oracle_actions"], task)},
+        "void_reasons": {k or "counted": v for k, v in reasons.items()},
+        "observations": m,
+    }
+    if task.n_dice == 1:
+        report["strategy"] = {
+            "learned": strategy_table(strategy(first, learned[:m], task)),
+            "oracle": strategy_table(strategy(first, result["oracle_actions"], task))}
+        report["by_turn"] = by_turn(success, tilt(batch.observations, task)[0])
+    else:
+        report["per_target"] = {str(k): v for k, v in
+                                result["summary"]["learned"]["per_target"].items()}
+    if task_id == CRAPS:
+        report["sevens"] = sevens(model, QUICK["throws"] if quick else CRAPS_THROWS)
+    return report
+
+
+def sevens(model: Any, throws: int = CRAPS_THROWS) -> dict[str, Any]:
+    """P(seven) of the learned and the set throw at each of :data:`CRAPS_NOISES`."""
+    from dice_env.intervals import wilson_bounds
+
+    out: dict[str, Any] = {"noises": list(CRAPS_NOISES), "throws": throws}
+    for name in ("learned", "set"):
+        rows = []
+        for noise in CRAPS_NOISES:
+            task, batch = evaluation(CRAPS, throws, SEED, hand_noise=noise,
+                                     orientation_noise=noise)
+            thrower = PolicyThrower(model) if name == "learned" else rule_throwers(task)["set"]
+            info = batch.throw(task, thrower)
+            counted = np.asarray(info["void_reason"]) == ""
+            seven = int(np.sum((np.asarray(info["total"]) == 7) & counted))
+            n = int(counted.sum())
+            low, high = wilson_bounds(seven, n)
+            rows.append({"noise": noise, "counted": n, "sevens": seven,
+                         "p": seven / n if n else float("nan"), "ci": (low, high),
+                         "differs": bool(low > 1 / 6 or high < 1 / 6)})
+        differing = [r["noise"] for r in rows if r["differs"]]
+        out[name] = {"rows": rows, "largest_differing_noise": max(differing, default=None)}
+    return out
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Analyse every task with kept runs; write ``learned.json``."""
+    from dice_env.studies.common import code_version
+
+    parser = argparse.ArgumentParser(prog="python -m agents.learned",
+                                     description=__doc__.split("\n")[0])
+    parser.add_argument("--tasks", nargs="+", default=None, help="task ids (default: all kept)")
+    parser.add_argument("--out", type=Path, default=RESULTS, help="the benchmark's results folder")
+    parser.add_argument("--quick", action="store_true",
+                        help="a smoke run: few throws, a tiny search, numbers meaningless")
+    args = parser.parse_args(argv)
+    if args.quick and args.out.resolve() == RESULTS.resolve():
+        parser.error("--quick needs --out: its numbers must not replace the kept results")
+    tasks = args.tasks or [p.name for p in sorted((args.out / "baselines").iterdir())]
+    start = time.perf_counter()
+    reports = []
+    for task_id in tasks:
+        reports.append(analyse(task_id, args.out, args.quick))
+        r = reports[-1]
+        oracle = r["on_oracle_throws"]["oracle"]["rate"]
+        print(f"{task_id:<24} {r['algo'].upper()} seed {r['seed']}: {r['learned']:.3f}; on the "
+              f"oracle's throws {r['on_oracle_throws']['learned']['rate']:.3f} against the "
+              f"oracle's {oracle:.3f}", flush=True)
+    path = args.out / "learned.json"
+    path.write_text(json.dumps({"tasks": reports, "seconds": time.perf_counter() - start,
+                                "command": "python -m agents.learned",
+                                "commit": code_version()}, indent=1) + "\n")
+    print(f"wrote {path}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
