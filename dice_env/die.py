@@ -131,7 +131,7 @@ class Die:
 
         ``size`` (m) as the field (default :data:`STANDARD_SIZES`); ``mass`` (kg) defaults to
         :data:`DENSITY` times the volume. ``pips`` (d6 only): None for the uniform solid, a
-        :class:`~dice_env.pips.Pips` or a preset name of :data:`dice_env.pips.PRESETS`
+        :class:`~dice_env.pips.Pips` or a preset name of :data:`dice_env.pips.DRILLINGS`
         (which also supplies the size and mass left None): the cube minus its drilled pips,
         ``mass`` being the die's actual mass as weighed (:func:`dice_env.pips.drill`).
         Numbering (Wikipedia, "Dice" and "Pentagonal trapezohedron"): opposite faces sum to

@@ -80,7 +80,7 @@ class Material:
         check_positive("stiffness", self.stiffness)
 
 
-PRESETS: dict[str, Material] = {
+MATERIALS: dict[str, Material] = {
     "felt": Material(0.30, 0.30, 2e4, "e estimate (fibre layer deadens); mu billiard cloth "
                      "0.2 plus the nap ploughed (estimate); S: ~1 mm sink"),
     "wood": Material(table.RESTITUTION, table.FRICTION, table.STIFFNESS,
@@ -94,10 +94,10 @@ PRESETS: dict[str, Material] = {
 
 
 def preset(name: str) -> Material:
-    """The :class:`Material` called ``name`` (a key of :data:`PRESETS`)."""
-    if name not in PRESETS:
-        raise ValueError(f"name must be one of the presets {', '.join(PRESETS)}, got {name!r}")
-    return PRESETS[name]
+    """The :class:`Material` called ``name`` (a key of :data:`MATERIALS`)."""
+    if name not in MATERIALS:
+        raise ValueError(f"name must be one of the presets {', '.join(MATERIALS)}, got {name!r}")
+    return MATERIALS[name]
 
 
 def ground(name: str, die: Die | None = None) -> Ground:

@@ -3,7 +3,7 @@
 A real die has its pips drilled into the faces: 1 to 6 cavities, 21 in all, so the face with
 six pips is lighter than the face with one and the centre of mass moves toward the one.
 :class:`Pips` describes the cavities; ``Die.standard("d6", pips=...)`` takes a :class:`Pips`
-or a preset name from :data:`PRESETS` and returns the die with the exact mass properties of
+or a preset name from :data:`DRILLINGS` and returns the die with the exact mass properties of
 the solid cube minus the cavities (plus the paint, for "casino" dice whose pips are filled
 flush). The geometry (vertices, faces) stays the cube's.
 
@@ -68,7 +68,7 @@ class Pips:
     ``radius`` (m): the opening radius at the face; ``depth`` (m): the cap's depth, in
     ``(0, radius]`` (at most a hemisphere, the cut of a ball-end drill); ``offset``: the
     off-centre pips' distance from the face centre along each face axis, as a fraction of the
-    face's half-width, in (0, 1) (default 0.5, see :data:`PRESETS`); ``paint_density``
+    face's half-width, in (0, 1) (default 0.5, see :data:`DRILLINGS`); ``paint_density``
     (kg/m^3): None for empty (drilled) pips, else the density of a paint filling them flush
     ("casino" dice; 0 is the same as None); ``shape``: "spherical cap", the only one.
     """
@@ -106,7 +106,7 @@ class Preset(NamedTuple):
     source: str
 
 
-PRESETS = {
+DRILLINGS = {
     "drilled16": Preset(
         Pips(radius=1.5e-3, depth=1.0e-3),
         None, None,
@@ -185,10 +185,10 @@ def with_defaults(name: str, pips: Pips | str, size: float | None, mass: float |
         return pips, size, mass
     if not isinstance(pips, str):
         raise TypeError(f"pips must be None, a Pips or a preset name, got {pips!r}")
-    if pips not in PRESETS:
-        raise ValueError(f"pips must be one of {', '.join(map(repr, PRESETS))} or a Pips, "
+    if pips not in DRILLINGS:
+        raise ValueError(f"pips must be one of {', '.join(map(repr, DRILLINGS))} or a Pips, "
                          f"got {pips!r}")
-    preset = PRESETS[pips]
+    preset = DRILLINGS[pips]
     size = preset.size if size is None else size
     if mass is None and preset.density is not None and size is not None:
         check_positive("size", size)

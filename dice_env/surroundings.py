@@ -43,11 +43,11 @@ def craps(distance: float = CRAPS[0], width: float = CRAPS[1],
             Wall.through((0, -y, 0), (0, 1, 0), **material))
 
 
-PRESETS = {"none": lambda **material: (), "tray": tray, "craps": craps}
+WALLS = {"none": lambda **material: (), "tray": tray, "craps": craps}
 
 
 def walls(name: str, **material: float) -> tuple[Wall, ...]:
     """The preset ``name`` (``"none"``, ``"tray"`` or ``"craps"``) with its default sizes."""
-    if name not in PRESETS:
-        raise ValueError(f"walls must be one of {sorted(PRESETS)}, got {name!r}")
-    return PRESETS[name](**material)
+    if name not in WALLS:
+        raise ValueError(f"walls must be one of {sorted(WALLS)}, got {name!r}")
+    return WALLS[name](**material)

@@ -18,9 +18,9 @@ def test_wood_is_the_default_table():
     assert materials.scene("wood") == Scene()
 
 
-@pytest.mark.parametrize("name", list(materials.PRESETS))
+@pytest.mark.parametrize("name", list(materials.MATERIALS))
 def test_each_preset_builds_and_gives_its_restitution(name):
-    material = materials.PRESETS[name]
+    material = materials.MATERIALS[name]
     ground = materials.ground(name)
     assert (ground.stiffness, ground.friction) == (material.stiffness, material.friction)
     assert materials.measured(name) == pytest.approx(material.restitution, abs=RESTITUTION_TOL)
@@ -28,7 +28,7 @@ def test_each_preset_builds_and_gives_its_restitution(name):
 
 def test_damping_follows_the_die_mass():
     heavy = Die.standard("d6", mass=4 * table.DIE_MASS)
-    for name, material in materials.PRESETS.items():
+    for name, material in materials.MATERIALS.items():
         light, heavier = materials.ground(name), materials.ground(name, heavy)
         assert heavier.damping == pytest.approx(2 * light.damping)
         assert heavier.damping == pytest.approx(table.damping_for_restitution(
@@ -52,10 +52,10 @@ def test_material_values_are_checked():
 def test_quick_study_writes_the_page(tmp_path):
     numbers = run_study("materials", tmp_path, quick=True)
     text = (tmp_path / "materials.md").read_text()
-    for name in materials.PRESETS:
+    for name in materials.MATERIALS:
         assert f"| {name} |" in text
         assert numbers[f"{name}_restitution"] == pytest.approx(
-            materials.PRESETS[name].restitution, abs=RESTITUTION_TOL)
+            materials.MATERIALS[name].restitution, abs=RESTITUTION_TOL)
         for kind in ("vigorous", "gentle"):
             assert 0.0 <= numbers[f"{name}_{kind}_down"] <= 1.0
             assert numbers[f"{name}_{kind}_impacts"] >= 1.0

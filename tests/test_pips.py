@@ -8,7 +8,7 @@ from scipy.stats import qmc
 
 from dice_env import studies
 from dice_env.die import Die
-from dice_env.pips import PRESETS, Pips, cap_properties, drill, layout
+from dice_env.pips import DRILLINGS, Pips, cap_properties, drill, layout
 
 DRILLED = Pips(radius=1.5e-3, depth=1.0e-3)
 SHALLOW = Pips(radius=2.0e-3, depth=0.4e-3, offset=0.6)
@@ -155,7 +155,7 @@ def test_paint_density_moves_the_com_proportionally(fraction):
 
 
 def test_presets_build_and_are_documented():
-    for name, preset in PRESETS.items():
+    for name, preset in DRILLINGS.items():
         die = Die.standard("d6", pips=name)
         assert die.size == (preset.size or 0.016)
         assert preset.source
@@ -216,5 +216,5 @@ def test_page_is_written(tmp_path):
     text = (tmp_path / "pips.md").read_text()
     assert "python -m dice_env.studies pips" in text
     assert 2e-3 < numbers["drilled16_com_over_edge"] < 4e-3
-    for name in PRESETS:
+    for name in DRILLINGS:
         assert name in text

@@ -21,7 +21,7 @@ import numpy as np
 from dice_env.checks import check_nonnegative, check_positive, check_range
 from dice_env.die import STANDARD_SIZES, Die
 from dice_env.scene import ContactLaw, FrictionLaw, Ground, Rest, Scene, Scheme, Wall, as_enum
-from dice_env.surroundings import PRESETS
+from dice_env.surroundings import WALLS
 from dice_env.surroundings import walls as preset_walls
 
 DEFAULT_T_MAX = 5.0  # s, without a base scene: gentle throws settle in well under 2 s
@@ -243,14 +243,14 @@ def _die(
 def _walls(walls: str | tuple[Wall, ...]) -> tuple[Wall, ...]:
     """The ``walls`` keyword: a preset name or the walls themselves."""
     if isinstance(walls, str):
-        if walls not in PRESETS:
-            raise ValueError(f"walls must be one of {sorted(PRESETS)} or a tuple of Wall, "
+        if walls not in WALLS:
+            raise ValueError(f"walls must be one of {sorted(WALLS)} or a tuple of Wall, "
                              f"got {walls!r}")
         return preset_walls(walls)
     if isinstance(walls, Wall):
         return (walls,)
     if not (isinstance(walls, (tuple, list)) and all(isinstance(w, Wall) for w in walls)):
-        raise ValueError(f"walls must be one of {sorted(PRESETS)} or a tuple of Wall, "
+        raise ValueError(f"walls must be one of {sorted(WALLS)} or a tuple of Wall, "
                          f"got {walls!r}")
     return tuple(walls)
 

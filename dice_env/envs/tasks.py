@@ -29,7 +29,7 @@ from typing import Any
 from dice_env import materials
 
 _LAYOUT = materials.ground("craps")
-# The craps layout's cloth over padding (materials.PRESETS["craps"]) for the default die.
+# The craps layout's cloth over padding (materials.MATERIALS["craps"]) for the default die.
 CRAPS_TABLE = MappingProxyType({"stiffness": _LAYOUT.stiffness, "damping": _LAYOUT.damping,
                                 "friction": _LAYOUT.friction})
 

@@ -46,7 +46,7 @@ HEADER = ("| throws | preset | counted | not decided | faces 1–6 | chi2 | p | 
 
 
 @dataclass
-class Outcome:
+class MaterialThrows:
     """One material's throws of one kind.
 
     ``faces``: the faces read; ``impacts`` and ``time`` (s, to the decision) per counted
@@ -67,7 +67,7 @@ class Outcome:
         return hits / self.faces.ended, wilson(hits, self.faces.ended)
 
 
-def throw(scene: object, state: State, bar: object = None) -> Outcome:
+def throw(scene: object, state: State, bar: object = None) -> MaterialThrows:
     """Throw ``state`` on ``scene`` until each face is decided, in batches of ``BATCH``."""
     die = scene.die
     parts = []
@@ -86,7 +86,8 @@ def throw(scene: object, state: State, bar: object = None) -> Outcome:
     counts = np.bincount(face[ok], minlength=die.n_faces + 1)[1:]
     chi2, p = stats.chisquare(counts)
     faces = Faces(counts, int(ok.sum()), int((~ok).sum()), float(chi2), float(p))
-    return Outcome(faces, impacts[ok], when[ok], int(down[ok].sum()), int(up[ok].sum()), sink)
+    return MaterialThrows(faces, impacts[ok], when[ok], int(down[ok].sum()), int(up[ok].sum()),
+                          sink)
 
 
 def run(out: Path = DOCS, quick: bool = False, throws: int | None = None,
@@ -102,12 +103,12 @@ def run(out: Path = DOCS, quick: bool = False, throws: int | None = None,
     base = materials.scene("wood")
     releases = {label: vigorous_throws(base, n, rng, hand)
                 for (label, hand), n in zip(KINDS, sizes, strict=True)}
-    restitution = {name: materials.measured(name) for name in materials.PRESETS}
-    bar = progress(len(materials.PRESETS) * sum(sizes), "material throws")
+    restitution = {name: materials.measured(name) for name in materials.MATERIALS}
+    bar = progress(len(materials.MATERIALS) * sum(sizes), "material throws")
     bar.unit = "throw"
     results = {name: {label: throw(materials.scene(name, t_max=T_MAX), state, bar)
                       for label, state in releases.items()}
-               for name in materials.PRESETS}
+               for name in materials.MATERIALS}
     bar.close()
     seconds = time.perf_counter() - start
     energy = {label: float(np.median(throw_energy(base, state)))
@@ -215,7 +216,7 @@ def _markdown(results: dict, restitution: dict, energy: dict, sizes: tuple, seco
         f"| {name} | {m.restitution:.2f} | {restitution[name]:.4f} | {m.friction:.2f} | "
         f"{m.stiffness:.0e} | {materials.ground(name).damping:.4g} | "
         f"{materials.scene(name).step * 1e6:.1f} | {m.source} |"
-        for name, m in materials.PRESETS.items())
+        for name, m in materials.MATERIALS.items())
     rows = []
     for label, _ in KINDS:
         for name, kinds in results.items():

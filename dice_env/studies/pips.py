@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 
 from dice_env.die import Die
-from dice_env.pips import PRESETS, SOURCES, Pips, cap_properties
+from dice_env.pips import DRILLINGS, SOURCES, Pips, cap_properties
 from dice_env.studies.common import DOCS
 
 
@@ -30,8 +30,8 @@ def run(out: Path = DOCS, quick: bool = False) -> dict[str, float]:
 def _rows() -> list[tuple[str, Die, Pips]]:
     """The presets, then the casino die with its spots left empty and with paint 10 % light."""
     rows = [(f"`{name}`", Die.standard("d6", pips=name), preset.pips)
-            for name, preset in PRESETS.items()]
-    casino = PRESETS["casino19"]
+            for name, preset in DRILLINGS.items()]
+    casino = DRILLINGS["casino19"]
     for label, paint in (("empty spots", None), ("paint 10 % lighter", 0.9 * casino.density)):
         pips = Pips(casino.pips.radius, casino.pips.depth, casino.pips.offset, paint)
         die = Die.standard("d6", casino.size, casino.density * casino.size**3, pips=pips)
@@ -76,7 +76,7 @@ def _page(rows: list[tuple[str, Die, Pips]]) -> str:
         "(g/cm³) | source |",
         "|---|---|---|---|---|---|---|---|",
     ]
-    for (name, preset), (_, die, pips) in zip(PRESETS.items(), rows, strict=False):
+    for (name, preset), (_, die, pips) in zip(DRILLINGS.items(), rows, strict=False):
         paint = "empty" if pips.paint_density is None else f"{pips.paint_density / 1e3:g}"
         lines.append(f"| `{name}` | {die.size * 1e3:.2f} | {die.mass * 1e3:.3f} | "
                      f"{2e3 * pips.radius:g} | {1e3 * pips.depth:g} | {pips.offset:g} | "

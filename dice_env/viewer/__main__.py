@@ -18,7 +18,7 @@ from pathlib import Path
 
 from dice_env.die import STANDARD_SIZES
 from dice_env.envs.task import MAX_NUM_DICE, make_task
-from dice_env.surroundings import PRESETS
+from dice_env.surroundings import WALLS
 from dice_env.viewer.files import ReplayError, load, replay
 from dice_env.viewer.recording import FPS
 from dice_env.viewer.throws import random_throws
@@ -30,7 +30,7 @@ def main(argv: list[str] | None = None) -> int:
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--die", choices=sorted(STANDARD_SIZES), default="d6",
                         help="the die (default d6)")
-    parser.add_argument("--walls", choices=sorted(PRESETS), default="none",
+    parser.add_argument("--walls", choices=sorted(WALLS), default="none",
                         help="walls around the table (default none)")
     parser.add_argument("--num-dice", type=int, default=1,
                         help=f"dice thrown together (1 to {MAX_NUM_DICE})")
