@@ -38,12 +38,12 @@ The throw ends when every die is at rest (every corner slow, for the hold, on th
 on the planes or held by another die: a die left leaning on another rests too) or, with a
 decision rule, when no energy left in the group can change any die's face: for every die
 ``i``, its own energy plus all that the others could give it (their energy above their
-least, ``Bodies.floor``) is below the lock of the face it reads. The loop
-over a die's vertices and the planes is :func:`dice_env.kernel.simulate_one`'s, written out
-again: shared as a function taking the arrays, it cost the single-die kernel 30–45 % of its
-speed (reference counts on every array handed on; ``benchmarks/kernel_ab.py``, scalar paper
-scene 0.56–0.69 and default decided throws 0.58–0.97 of the inline loop, three rounds). This module
-imports nothing from the package but :mod:`dice_env.kernel`.
+least, ``Bodies.floor``) is below the lock of the face it reads. Each die's step on the
+planes is the single die's own (:func:`dice_env.kernel.die_on_planes`, handed whole arrays
+and the die's rows, so no view of them is made), and so are its flight in closed form
+(:func:`dice_env.kernel.euler_steps`) and the midpoint's extrapolation; a group of one die
+steps as :func:`dice_env.kernel.simulate_one` does. This module imports nothing from the
+package but :mod:`dice_env.kernel`.
 """
 
 from __future__ import annotations
@@ -57,11 +57,7 @@ from numba import njit, prange
 from dice_env.kernel import (
     ABORT_EVERY,
     ABORTED,
-    CT,
-    DAMP,
     DECIDED,
-    KT,
-    MU,
     NONFINITE,
     NX,
     NY,
@@ -69,16 +65,17 @@ from dice_env.kernel import (
     OFFSET,
     RUNNING,
     SETTLED,
-    STIFF,
     Contact,
     Options,
+    ahead,
     angular_velocity,
+    die_on_planes,
+    euler_steps,
     face_read,
     flight_jump,
     relative_rise,
     stick_slip,
     torque_free,
-    vertex_on_plane,
 )
 
 # Edges closer to parallel than this (|e_a x e_b|^2 over |e_a|^2 |e_b|^2) have no edge contact:
@@ -631,9 +628,11 @@ def advance_group(g: int, dice: GroupDice, bodies: Bodies, hulls: Hulls, pair: P
     cu, cw = np.empty((n_dice, 3)), np.empty((n_dice, 3))
     n_v = vertices.shape[1]
     world = np.empty((n_dice, n_v, 3))
-    heights = np.full((n_dice, n_v, n_planes), -1.0)  # vertex heights entering the last step
-    anchors = np.zeros((n_dice, n_v, n_planes, 3))  # stick-slip: where each spring is tied
-    tied = np.zeros((n_dice, n_v, n_planes), np.bool_)
+    flat = vertices.reshape((n_dice * n_v, 3))  # die a's vertices: rows a n_v ... (kernel's)
+    offsets = np.empty((n_v, 3))
+    heights = np.full((n_planes, n_dice * n_v), -1.0)  # vertex heights entering the last step
+    anchors = np.zeros((n_planes, n_dice * n_v, 3))  # stick-slip: where each spring is tied
+    tied = np.zeros((n_planes, n_dice * n_v), np.bool_)
     # likewise die against die (see _push_tied)
     die_ties = np.zeros((n_dice, n_v, n_dice, 4) if pair.stick else (0, 0, 0, 4))
     lowest = np.empty((n_dice, n_planes))  # each die's lowest vertex height over each plane
@@ -674,10 +673,8 @@ def advance_group(g: int, dice: GroupDice, bodies: Bodies, hulls: Hulls, pair: P
             u0, u1, u2, w0, w1, w2 = u[a, 0], u[a, 1], u[a, 2], w[a, 0], w[a, 1], w[a, 2]
             cu0, cu1, cu2, cw0, cw1, cw2 = u0, u1, u2, w0, w1, w2
             if midpoint:
-                cu0, cu1, cu2 = 1.5 * u0 - 0.5 * pu[a, 0], 1.5 * u1 - 0.5 * pu[a, 1], \
-                    1.5 * u2 - 0.5 * pu[a, 2]
-                cw0, cw1, cw2 = 1.5 * w0 - 0.5 * pw[a, 0], 1.5 * w1 - 0.5 * pw[a, 1], \
-                    1.5 * w2 - 0.5 * pw[a, 2]
+                cu0, cu1, cu2 = ahead((u0, u1, u2), (pu[a, 0], pu[a, 1], pu[a, 2]))
+                cw0, cw1, cw2 = ahead((w0, w1, w2), (pw[a, 0], pw[a, 1], pw[a, 2]))
             cu[a, 0], cu[a, 1], cu[a, 2], cw[a, 0], cw[a, 1], cw[a, 2] = cu0, cu1, cu2, cw0, cw1, \
                 cw2
             l0, l1, l2 = ang[a, 0], ang[a, 1], ang[a, 2]
@@ -689,67 +686,20 @@ def advance_group(g: int, dice: GroupDice, bodies: Bodies, hulls: Hulls, pair: P
             kinetic[a] = 0.5 * m * (u0 * u0 + u1 * u1 + u2 * u2) + 0.5 * (
                 l0 * wl0 + l1 * wl1 + l2 * wl2)
             near[a] = stops.at_rest and kinetic[a] < 0.5 * m * stops.v_rest * stops.v_rest
-            f0, f1, f2 = 0.0, 0.0, -m * g_acc
-            t0, t1, t2 = 0.0, 0.0, 0.0
-            spring, spring_t, touch, fast, hit = 0.0, 0.0, 0, 0.0, 0.0
             dt_m = dt / m
             x0, x1, x2 = x[a, 0], x[a, 1], x[a, 2]
+            f0, f1, f2, t0, t1, t2, spring, spring_t, touch, hit, fast, sink = die_on_planes(
+                flat, (a * n_v, n_vertices[a], a), qa, ((x0, x1, x2), (u0, u1, u2),
+                (w0, w1, w2), (cu0, cu1, cu2), (cw0, cw1, cw2)), near[a], planes,
+                (gated, stick, vmin, midpoint, rotation, dt, dt_m, m * g_acc), offsets, heights,
+                anchors, tied, lowest)
+            max_pen[g, a] = max(max_pen[g, a], sink)
             for p in range(n_planes):
-                lowest[a, p] = np.inf
+                if lowest[a, p] < 0.0:
+                    touched[g, a, p] = True
             for k in range(n_vertices[a]):
-                b0, b1, b2 = vertices[a, k, 0], vertices[a, k, 1], vertices[a, k, 2]
-                rk0 = q[a, 0, 0] * b0 + q[a, 0, 1] * b1 + q[a, 0, 2] * b2
-                rk1 = q[a, 1, 0] * b0 + q[a, 1, 1] * b1 + q[a, 1, 2] * b2
-                rk2 = q[a, 2, 0] * b0 + q[a, 2, 1] * b1 + q[a, 2, 2] * b2
-                if near[a]:
-                    v0, v1, v2 = u0 + w1 * rk2 - w2 * rk1, u1 + w2 * rk0 - w0 * rk2, \
-                        u2 + w0 * rk1 - w1 * rk0
-                    fast = max(fast, v0 * v0 + v1 * v1 + v2 * v2)
-                position = (x0 + rk0, x1 + rk1, x2 + rk2)
-                world[a, k, 0], world[a, k, 1], world[a, k, 2] = position
-                for p in range(n_planes):
-                    height = (planes[p, NX] * position[0] + planes[p, NY] * position[1]
-                              + planes[p, NZ] * position[2]) - planes[p, OFFSET]
-                    lowest[a, p] = min(lowest[a, p], height)
-                    before = heights[a, k, p]
-                    heights[a, k, p] = height
-                    if height >= 0.0:
-                        tied[a, k, p] = False
-                        if gated:
-                            continue
-                    velocity = (u0 + w1 * rk2 - w2 * rk1, u1 + w2 * rk0 - w0 * rk2,
-                                u2 + w0 * rk1 - w1 * rk0)
-                    middle = velocity
-                    if midpoint:
-                        middle = (cu0 + cw1 * rk2 - cw2 * rk1, cu1 + cw2 * rk0 - cw0 * rk2,
-                                  cu2 + cw0 * rk1 - cw1 * rk0)
-                    plane = (planes[p, NX], planes[p, NY], planes[p, NZ], planes[p, OFFSET],
-                             planes[p, STIFF], planes[p, DAMP], planes[p, MU], planes[p, KT],
-                             planes[p, CT])
-                    anchor, tie = (0.0, 0.0, 0.0), False
-                    if stick:
-                        anchor = (anchors[a, k, p, 0], anchors[a, k, p, 1], anchors[a, k, p, 2])
-                        tie = tied[a, k, p]
-                    fk0, fk1, fk2, spring_k, stored, below, dg, approach_k, anchor, tie = (
-                        vertex_on_plane(plane, stick, vmin, height, before, position, velocity,
-                                        middle, midpoint, dt, dt_m, anchor, tie))
-                    if stick:
-                        anchors[a, k, p, 0], anchors[a, k, p, 1], anchors[a, k, p, 2] = anchor
-                        tied[a, k, p] = tie
-                    if below:
-                        touch += 1
-                        touched[g, a, p] = True
-                        spring += spring_k
-                        max_pen[g, a] = max(max_pen[g, a], dg)
-                        hit = max(hit, approach_k)
-                    spring_t += stored
-                    f0 += fk0
-                    f1 += fk1
-                    f2 += fk2
-                    if rotation:
-                        t0 += rk1 * fk2 - rk2 * fk1
-                        t1 += rk2 * fk0 - rk0 * fk2
-                        t2 += rk0 * fk1 - rk1 * fk0
+                world[a, k, 0], world[a, k, 1], world[a, k, 2] = (
+                    x0 + offsets[k, 0], x1 + offsets[k, 1], x2 + offsets[k, 2])
             for k in range(n_vertices[a], n_v):  # a smaller die's padding: its first corner
                 world[a, k, 0], world[a, k, 1], world[a, k, 2] = world[a, 0, 0], world[a, 0, 1], \
                     world[a, 0, 2]
@@ -839,15 +789,9 @@ def advance_group(g: int, dice: GroupDice, bodies: Bodies, hulls: Hulls, pair: P
         for a in range(n_dice):
             dt_m = dt / mass[a]
             dv0, dv1, dv2 = force[a, 0] * dt_m, force[a, 1] * dt_m, force[a, 2] * dt_m
-            if jump > 1:  # flight steps in closed form, as kernel.simulate_one takes them
-                half = 0.5 * jump * (jump + 1)
-                nx0 = x[a, 0] + dt * (jump * u[a, 0] + half * dv0)
-                nx1 = x[a, 1] + dt * (jump * u[a, 1] + half * dv1)
-                nx2 = x[a, 2] + dt * (jump * u[a, 2] + half * dv2)
-                nu0, nu1, nu2 = u[a, 0] + jump * dv0, u[a, 1] + jump * dv1, u[a, 2] + jump * dv2
-            else:
-                nu0, nu1, nu2 = u[a, 0] + dv0, u[a, 1] + dv1, u[a, 2] + dv2
-                nx0, nx1, nx2 = x[a, 0] + dt * nu0, x[a, 1] + dt * nu1, x[a, 2] + dt * nu2
+            (nx0, nx1, nx2), (nu0, nu1, nu2) = euler_steps(
+                (x[a, 0], x[a, 1], x[a, 2]), (u[a, 0], u[a, 1], u[a, 2]), (dv0, dv1, dv2), dt,
+                jump)
             nl0, nl1, nl2 = ang[a, 0], ang[a, 1], ang[a, 2]
             if rotation:
                 nl0, nl1, nl2 = nl0 + dt * torque[a, 0], nl1 + dt * torque[a, 1], \
@@ -922,7 +866,7 @@ def _group_jump(planes: np.ndarray, lowest: np.ndarray, touching: np.ndarray, x:
             spin = math.sqrt(ang[a, 0] ** 2 + ang[a, 1] ** 2 + ang[a, 2] ** 2) \
                 * bodies.inv_i_min[a]
         dt_m = dt / m
-        jump = min(jump, flight_jump(planes, lowest[a], (u[a, 0], u[a, 1], u[a, 2]), spin,
+        jump = min(jump, flight_jump(planes, lowest, a, (u[a, 0], u[a, 1], u[a, 2]), spin,
                                      bodies.r_max[a], (force[a, 0] * dt_m, force[a, 1] * dt_m,
                                                        force[a, 2] * dt_m), dt, limit))
         for b in range(a + 1, n_dice):
