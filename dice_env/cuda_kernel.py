@@ -58,7 +58,7 @@ def simulate_cuda(dice: Dice, body: Body, contact: Contact, options: Options, st
             cuda.local.array((MAX_PLANES, GPU_MAX_VERTICES), np.float64),
             cuda.local.array((MAX_PLANES, GPU_MAX_VERTICES, 3), np.float64),
             cuda.local.array((MAX_PLANES, GPU_MAX_VERTICES), np.bool_),
-            cuda.local.array((1, MAX_PLANES), np.float64)))
+            cuda.local.array(MAX_PLANES, np.float64)))
 
 
 def run(dice: Dice, body: Body, contact: Contact, options: Options, stops: Stops,

@@ -56,9 +56,8 @@ takes a few named groups (:class:`Body`, :class:`Contact`, :class:`Options`, :cl
 :class:`Records`, :class:`Dice`, :class:`Outcome`), built by
 :func:`dice_env.simulate.pack_scene` and :func:`dice_env.simulate.pack_run`; each piece of the
 physics is one small inlined function: a vertex on a plane (:func:`vertex_on_plane`,
-:func:`stick_slip`), one die on the planes in one step (:func:`die_on_planes`, which the group
-kernel runs for each of its dice), the contact-free jump (:func:`free_steps`,
-:func:`euler_steps`, :func:`torque_free`), the face
+:func:`stick_slip`), the contact-free jump (:func:`free_steps`, :func:`euler_steps`,
+:func:`torque_free`), the face
 read and the decided-face test (:func:`face_read`, :func:`decided`), the rotation
 (:func:`rotate`); :func:`advance` loops them for one die in scratch arrays its caller gives,
 :func:`simulate_one` on the CPU and :mod:`dice_env.cuda_kernel` on a GPU, where numba-cuda
@@ -213,7 +212,7 @@ class Scratch(NamedTuple):
     Larger arrays are fine; their contents on entry do not matter. ``qi`` (3, 3) the
     orientation, ``qj`` (3, 3) one recorded within a jump; per vertex (N) and plane (P):
     ``offsets`` (N, 3) from the centre, ``heights`` (P, N) entering the last step,
-    ``anchors`` (P, N, 3) and ``tied`` (P, N) the stick-slip ties, ``lowest`` (1, P) each
+    ``anchors`` (P, N, 3) and ``tied`` (P, N) the stick-slip ties, ``lowest`` (P,) each
     plane's lowest vertex height.
     """
 
@@ -476,93 +475,6 @@ def relative_rise(e_max: float, e_start: float, e_tol: float) -> float:
     return np.inf if rise > 0.0 else rise
 
 
-@njit(cache=True, inline="always")
-def die_on_planes(vertices: np.ndarray, rows: tuple, q: np.ndarray, state: tuple,
-                  near_rest: bool, planes: np.ndarray, law: tuple, offsets: np.ndarray,
-                  heights: np.ndarray, anchors: np.ndarray, tied: np.ndarray,
-                  lowest: np.ndarray) -> tuple:
-    """The planes' forces on one die in one step, and the step's books: every loop's die step.
-
-    ``rows = (first, n, die)``: the die's vertices are rows ``first ... first + n`` of
-    ``vertices`` (body frame), of ``heights`` (P, rows; entering the last step), ``anchors``
-    (P, rows, 3) and ``tied`` (P, rows) (the stick-slip ties, kept between steps), and its
-    lowest vertex height over plane ``p`` goes to ``lowest[die, p]``. ``q`` its rotation;
-    ``state = (x, u, w, cu, cw)``: centre, velocity, angular velocity and (used for damping
-    and friction when midpoint) their values at the middle of the kick; ``law = (gated, stick,
-    vmin, midpoint, rotation, dt, dt / mass, weight)``. First every vertex's offset from the
-    centre (into ``offsets`` (n, 3); near rest, the fastest vertex), then plane by plane the
-    vertices' heights, and velocities only where a vertex feels the plane. Returns the force
-    (3, the weight included), the torque (3), the contact springs' energy, the tangential
-    springs' energy, the vertices in contact, the fastest approach, the fastest vertex speed
-    squared (near rest) and the deepest sink.
-    """
-    first, n_vertices, die = rows
-    gated, stick, vmin, midpoint, rotation, dt, dt_m, weight = law
-    (x0, x1, x2), (u0, u1, u2), (w0, w1, w2), (cu0, cu1, cu2), (cw0, cw1, cw2) = state
-    f0, f1, f2 = 0.0, 0.0, -weight
-    t0, t1, t2 = 0.0, 0.0, 0.0
-    spring, spring_t, touching, approach, fastest, pen = 0.0, 0.0, 0, 0.0, 0.0, 0.0
-    for k in range(n_vertices):
-        b0, b1, b2 = vertices[first + k, 0], vertices[first + k, 1], vertices[first + k, 2]
-        rk0 = q[0, 0] * b0 + q[0, 1] * b1 + q[0, 2] * b2
-        rk1 = q[1, 0] * b0 + q[1, 1] * b1 + q[1, 2] * b2
-        rk2 = q[2, 0] * b0 + q[2, 1] * b1 + q[2, 2] * b2
-        offsets[k, 0], offsets[k, 1], offsets[k, 2] = rk0, rk1, rk2
-        if near_rest:
-            v0, v1, v2 = u0 + w1 * rk2 - w2 * rk1, u1 + w2 * rk0 - w0 * rk2, \
-                u2 + w0 * rk1 - w1 * rk0
-            fastest = max(fastest, v0 * v0 + v1 * v1 + v2 * v2)
-    for p in range(planes.shape[0]):
-        plane = (planes[p, NX], planes[p, NY], planes[p, NZ], planes[p, OFFSET],
-                 planes[p, STIFF], planes[p, DAMP], planes[p, MU], planes[p, KT],
-                 planes[p, CT])
-        pn0, pn1, pn2, offset = plane[0], plane[1], plane[2], plane[3]
-        low = np.inf
-        for k in range(n_vertices):
-            row = first + k
-            rk0, rk1, rk2 = offsets[k, 0], offsets[k, 1], offsets[k, 2]
-            position = (x0 + rk0, x1 + rk1, x2 + rk2)
-            height = pn0 * position[0] + pn1 * position[1] + pn2 * position[2] - offset
-            low = min(low, height)
-            before = heights[p, row]
-            heights[p, row] = height
-            if height >= 0.0:
-                tied[p, row] = False
-                if gated:
-                    continue
-            velocity = (u0 + w1 * rk2 - w2 * rk1, u1 + w2 * rk0 - w0 * rk2,
-                        u2 + w0 * rk1 - w1 * rk0)
-            middle = velocity
-            if midpoint:
-                middle = (cu0 + cw1 * rk2 - cw2 * rk1, cu1 + cw2 * rk0 - cw0 * rk2,
-                          cu2 + cw0 * rk1 - cw1 * rk0)
-            anchor, tie = (0.0, 0.0, 0.0), False  # the ties matter to stick-slip only
-            if stick:
-                anchor = (anchors[p, row, 0], anchors[p, row, 1], anchors[p, row, 2])
-                tie = tied[p, row]
-            fk0, fk1, fk2, spring_k, stored, below, dg, approach_k, anchor, tie = (
-                vertex_on_plane(plane, stick, vmin, height, before, position, velocity,
-                                middle, midpoint, dt, dt_m, anchor, tie))
-            if stick:
-                anchors[p, row, 0], anchors[p, row, 1], anchors[p, row, 2] = anchor
-                tied[p, row] = tie
-            if below:
-                touching += 1
-                spring += spring_k
-                pen = max(pen, dg)
-                approach = max(approach, approach_k)
-            spring_t += stored
-            f0 += fk0
-            f1 += fk1
-            f2 += fk2
-            if rotation:
-                t0 += rk1 * fk2 - rk2 * fk1
-                t1 += rk2 * fk0 - rk0 * fk2
-                t2 += rk0 * fk1 - rk1 * fk0
-        lowest[die, p] = low
-    return f0, f1, f2, t0, t1, t2, spring, spring_t, touching, approach, fastest, pen
-
-
 @njit(cache=True)
 def simulate_one(i: int, dice: Dice, body: Body, contact: Contact, options: Options,
                  stops: Stops, records: Records, out: Outcome) -> None:
@@ -571,7 +483,7 @@ def simulate_one(i: int, dice: Dice, body: Body, contact: Contact, options: Opti
     advance(i, dice, body, contact, options, stops, records, out, Scratch(
         np.empty((3, 3)), np.empty((3, 3)), np.empty((n_vertices, 3)),
         np.empty((n_planes, n_vertices)), np.empty((n_planes, n_vertices, 3)),
-        np.empty((n_planes, n_vertices), np.bool_), np.empty((1, n_planes))))
+        np.empty((n_planes, n_vertices), np.bool_), np.empty(n_planes)))
 
 
 @njit(cache=True)
@@ -596,7 +508,6 @@ def advance(i: int, dice: Dice, body: Body, contact: Contact, options: Options, 
     mass = body.mass
     w0, w1, w2 = (dice.w[i, 0], dice.w[i, 1], dice.w[i, 2]) if rotation else (0.0, 0.0, 0.0)
     dt_m = dt / mass
-    law = (gated, stick, vmin, midpoint, rotation, dt, dt_m, mass * g)
     n_steps, stride = stops.n_steps, records.stride
     for a in range(3):
         for c in range(3):
@@ -638,12 +549,71 @@ def advance(i: int, dice: Dice, body: Body, contact: Contact, options: Options, 
             l0 * wl0 + l1 * wl1 + l2 * wl2
         )
         near_rest = stops.at_rest and kinetic < kinetic_rest
-        # 1.-2. vertices, and the forces and torques of the planes on them
-        f0, f1, f2, t0, t1, t2, spring, spring_t, touching, approach, fastest, sink = (
-            die_on_planes(vertices, (0, n_vertices, 0), qi, ((x0, x1, x2), (u0, u1, u2),
-                          (w0, w1, w2), cu, cw), near_rest, planes, law, offsets, heights,
-                          anchors, tied, lowest))
-        pen = max(pen, sink)
+        # 1.-2. vertices, and the forces and torques of the planes on them: first every
+        # vertex's offset (and, near rest, the fastest vertex), then plane by plane the
+        # vertices' heights, and velocities only where a vertex feels the plane
+        cu0, cu1, cu2 = cu
+        cw0, cw1, cw2 = cw
+        f0, f1, f2 = 0.0, 0.0, -mass * g
+        t0, t1, t2 = 0.0, 0.0, 0.0
+        spring, spring_t, touching, approach, fastest = 0.0, 0.0, 0, 0.0, 0.0
+        for k in range(n_vertices):
+            b0, b1, b2 = vertices[k, 0], vertices[k, 1], vertices[k, 2]
+            rk0 = qi[0, 0] * b0 + qi[0, 1] * b1 + qi[0, 2] * b2
+            rk1 = qi[1, 0] * b0 + qi[1, 1] * b1 + qi[1, 2] * b2
+            rk2 = qi[2, 0] * b0 + qi[2, 1] * b1 + qi[2, 2] * b2
+            offsets[k, 0], offsets[k, 1], offsets[k, 2] = rk0, rk1, rk2
+            if near_rest:
+                v0, v1, v2 = u0 + w1 * rk2 - w2 * rk1, u1 + w2 * rk0 - w0 * rk2, \
+                    u2 + w0 * rk1 - w1 * rk0
+                fastest = max(fastest, v0 * v0 + v1 * v1 + v2 * v2)
+        for p in range(n_planes):
+            plane = (planes[p, NX], planes[p, NY], planes[p, NZ], planes[p, OFFSET],
+                     planes[p, STIFF], planes[p, DAMP], planes[p, MU], planes[p, KT],
+                     planes[p, CT])
+            pn0, pn1, pn2, offset = plane[0], plane[1], plane[2], plane[3]
+            low = np.inf
+            for k in range(n_vertices):
+                rk0, rk1, rk2 = offsets[k, 0], offsets[k, 1], offsets[k, 2]
+                position = (x0 + rk0, x1 + rk1, x2 + rk2)
+                height = pn0 * position[0] + pn1 * position[1] + pn2 * position[2] - offset
+                low = min(low, height)
+                before = heights[p, k]
+                heights[p, k] = height
+                if height >= 0.0:
+                    tied[p, k] = False
+                    if gated:
+                        continue
+                velocity = (u0 + w1 * rk2 - w2 * rk1, u1 + w2 * rk0 - w0 * rk2,
+                            u2 + w0 * rk1 - w1 * rk0)
+                middle = velocity
+                if midpoint:
+                    middle = (cu0 + cw1 * rk2 - cw2 * rk1, cu1 + cw2 * rk0 - cw0 * rk2,
+                              cu2 + cw0 * rk1 - cw1 * rk0)
+                anchor, tie = (0.0, 0.0, 0.0), False  # the ties matter to stick-slip only
+                if stick:
+                    anchor = (anchors[p, k, 0], anchors[p, k, 1], anchors[p, k, 2])
+                    tie = tied[p, k]
+                fk0, fk1, fk2, spring_k, stored, below, dg, approach_k, anchor, tie = (
+                    vertex_on_plane(plane, stick, vmin, height, before, position, velocity,
+                                    middle, midpoint, dt, dt_m, anchor, tie))
+                if stick:
+                    anchors[p, k, 0], anchors[p, k, 1], anchors[p, k, 2] = anchor
+                    tied[p, k] = tie
+                if below:
+                    touching += 1
+                    spring += spring_k
+                    pen = max(pen, dg)
+                    approach = max(approach, approach_k)
+                spring_t += stored
+                f0 += fk0
+                f1 += fk1
+                f2 += fk2
+                if rotation:
+                    t0 += rk1 * fk2 - rk2 * fk1
+                    t1 += rk2 * fk0 - rk0 * fk2
+                    t2 += rk0 * fk1 - rk1 * fk0
+            lowest[p] = low
         # energy of the state entering this step. The gain check leaves out the tangential
         # springs: a slip re-ties a spring to carry the whole force mu fn, damping share
         # included, which can stretch it beyond what the vertex's motion put in (on a soft,
@@ -679,8 +649,8 @@ def advance(i: int, dice: Dice, body: Body, contact: Contact, options: Options, 
         jump = 1
         if options.flight and touching == 0:
             spin = math.sqrt(l0 * l0 + l1 * l1 + l2 * l2) * body.inv_i_min if rotation else 0.0
-            jump = flight_jump(planes, lowest, 0, (u0, u1, u2), spin, body.r_max,
-                               (dv0, dv1, dv2), dt, n_steps - step + 1)
+            jump = flight_jump(planes, lowest, (u0, u1, u2), spin, body.r_max, (dv0, dv1, dv2),
+                               dt, n_steps - step + 1)
         if jump > 1:
             if n_rec > 0:  # the records falling inside the jump (it does not depend on them)
                 _record_jump(records, i, step, jump, (x0, x1, x2), (u0, u1, u2), (l0, l1, l2),
@@ -755,9 +725,9 @@ def ahead(v: tuple, before: tuple) -> tuple:
 
 
 @njit(cache=True, inline="always")
-def flight_jump(planes: np.ndarray, lowest: np.ndarray, die: int, u: tuple, spin: float,
-                r_max: float, dv: tuple, dt: float, limit: int) -> int:
-    """Flight steps to take at once (at least 1) for die ``die`` (its row of ``lowest``).
+def flight_jump(planes: np.ndarray, lowest: np.ndarray, u: tuple, spin: float, r_max: float,
+          dv: tuple, dt: float, limit: int) -> int:
+    """Flight steps to take at once (at least 1).
 
     All but the last of those surely free of every plane, so the step before a contact is a
     plain one.
@@ -765,7 +735,7 @@ def flight_jump(planes: np.ndarray, lowest: np.ndarray, die: int, u: tuple, spin
     free = limit
     for p in range(planes.shape[0]):
         n0, n1, n2 = planes[p, NX], planes[p, NY], planes[p, NZ]
-        free = min(free, free_steps(lowest[die, p], n0 * u[0] + n1 * u[1] + n2 * u[2], spin,
+        free = min(free, free_steps(lowest[p], n0 * u[0] + n1 * u[1] + n2 * u[2], spin,
                                     r_max, n0 * dv[0] + n1 * dv[1] + n2 * dv[2], dt, limit))
     return max(1, free - 1)
 
