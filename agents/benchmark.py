@@ -8,9 +8,9 @@ r"""The standard algorithms on every named task: one resumable command, one smal
 Each run (task, algorithm, seed) trains Stable-Baselines3's algorithm with the task's entry of
 :data:`agents.hyperparams.BENCHMARK_HYPERPARAMS` for the task's budget in throws
 (:data:`agents.hyperparams.BUDGETS`: the same for every algorithm of a task), and at
-:data:`CURVE_POINTS` evenly spaced points evaluates the policy's mean action on
-:data:`CURVE_THROWS` fixed throws (success against throws and against training wall time, the
-evaluations left out of it). At the end it scores the policy on the :data:`FINAL_THROWS` throws
+``CURVE_POINTS`` evenly spaced points evaluates the policy's mean action on ``CURVE_THROWS``
+fixed throws (success against throws and against training time: the process's CPU time, the
+evaluations left out). At the end it scores the policy on the :data:`FINAL_THROWS` throws
 ``benchmarks/tasks.py`` scores random and the rule on (seed 0: the same targets, hands and hand
 noise) and writes ``benchmarks/results/baselines/<task>/<algo>-<seed>.json``.
 
@@ -146,14 +146,18 @@ def train(run: Run, log: Any = print) -> dict[str, Any]:
     pending = [p for p in run.points if p > model.num_timesteps]
 
     class Checkpoints(BaseCallback):
-        """At each curve point: evaluate, checkpoint; the evaluations' time left out."""
+        """At each curve point: evaluate, checkpoint; the evaluations' time left out.
+
+        Training time is the process's CPU time: one PyTorch and one kernel thread taking
+        turns, so other processes on the machine inflate it little.
+        """
 
         def _on_training_start(self) -> None:
-            self.started = time.perf_counter()
+            self.started = time.process_time()
 
         def _on_step(self) -> bool:
             if pending and self.model.num_timesteps >= pending[0]:
-                state["train_seconds"] += time.perf_counter() - self.started
+                state["train_seconds"] += time.process_time() - self.started
                 while pending and self.model.num_timesteps >= pending[0]:
                     pending.pop(0)
                 point = {"throws": int(self.model.num_timesteps),
@@ -163,7 +167,7 @@ def train(run: Run, log: Any = print) -> dict[str, Any]:
                 run.save(self.model, state)
                 log(f"{run.task_id} {run.algo} seed {run.seed}: {point['throws']} throws, "
                     f"success {point['rate']:.3f} ({point['train_seconds']:.0f} s training)")
-                self.started = time.perf_counter()
+                self.started = time.process_time()
             return True
 
     remaining = run.budget - model.num_timesteps
