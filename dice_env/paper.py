@@ -70,8 +70,10 @@ def real_throw_cube(
     """
     if L0 is None:
         L0 = np.random.default_rng(seed).random(3) * 0.75 + 1e-6
-    return _run(L0, True, r, total_mass, normal, S, D, mu, clockmax, tmax, x0, u0, g, umin,
-                contact_law, record_nodes, allow_unstable)
+    return _run(L0, True, r=r, total_mass=total_mass, normal=normal, S=S, D=D, mu=mu,
+                clockmax=clockmax, tmax=tmax, x0=x0, u0=u0, g=g, umin=umin,
+                contact_law=contact_law, record_nodes=record_nodes,
+                allow_unstable=allow_unstable)
 
 
 def ground_cube(
@@ -93,8 +95,10 @@ def ground_cube(
     allow_unstable: bool = False,
 ) -> PaperRun:
     """Run ``ground_cube.m``: the same cube translating only (no rotation)."""
-    return _run(np.zeros(3), False, r, total_mass, normal, S, D, mu, clockmax, tmax, x0, u0, g,
-                umin, contact_law, record_nodes, allow_unstable)
+    return _run(np.zeros(3), False, r=r, total_mass=total_mass, normal=normal, S=S, D=D, mu=mu,
+                clockmax=clockmax, tmax=tmax, x0=x0, u0=u0, g=g, umin=umin,
+                contact_law=contact_law, record_nodes=record_nodes,
+                allow_unstable=allow_unstable)
 
 
 def paper_scene(
@@ -115,14 +119,13 @@ def paper_scene(
     )
 
 
-def _run(L0, rotation, r, total_mass, normal, S, D, mu, clockmax, tmax, x0, u0, g, umin,
-         contact_law, record_nodes, allow_unstable) -> PaperRun:
+def _run(L0: object, rotation: bool, *, clockmax: int, tmax: float, x0: object, u0: object,
+         record_nodes: bool, **listing: object) -> PaperRun:
+    """Either listing's run; ``listing``: :func:`paper_scene`'s other keywords."""
     if not isinstance(clockmax, (int, np.integer)) or clockmax < 1:
         raise ValueError(f"clockmax must be an int >= 1, got {clockmax!r}")
     check_positive("tmax", tmax)
-    scene = paper_scene(r=r, total_mass=total_mass, normal=normal, S=S, D=D, mu=mu,
-                        dt=tmax / clockmax, g=g, umin=umin, rotation=rotation,
-                        contact_law=contact_law, allow_unstable=allow_unstable, t_max=tmax)
+    scene = paper_scene(**listing, dt=tmax / clockmax, rotation=rotation, t_max=tmax)
     L0 = _vector("L0", L0)
     position = _vector("x0", x0)
     sink = float(scene.sink(position, np.eye(3)[None])[0])
