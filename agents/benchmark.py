@@ -168,7 +168,7 @@ def train(run: Run, log: Any = print) -> dict[str, Any]:
                 log(f"{run.task_id} {run.algo} seed {run.seed}: {point['throws']} throws, "
                     f"success {point['rate']:.3f} ({point['train_seconds']:.0f} s training)")
                 self.started = time.process_time()
-            return True
+            return bool(pending)  # at the budget: stop, so the last checkpoint is the model
 
     remaining = run.budget - model.num_timesteps
     if remaining > 0:
@@ -203,15 +203,18 @@ def table(out: Path) -> dict[str, Any]:
             row["learned"][algo] = {
                 "mean": float(finals.mean()), "sd": float(finals.std(ddof=1)) if len(runs) > 1
                 else 0.0, "min": float(finals.min()), "max": float(finals.max()),
-                "seeds": [r["seed"] for r in runs], "best_ci": max(
+                "seeds": [r["seed"] for r in runs],
+                "train_seconds": float(sum(r["train_seconds"] for r in runs)), "best_ci": max(
                     (r["final"] for r in runs), key=lambda f: f["rate"])["ci"],
                 "curve": [[p["throws"], p["train_seconds"], p["rate"]] for p in
                           _mean_curve(runs)],
             }
         rows.append(row)
+    from dice_env.studies.common import code_version
+
     return {"rows": rows, "algos": list(ALGOS),
             "command": "python -m agents.benchmark", "final_throws": FINAL_THROWS,
-            "curve_throws": CURVE_THROWS}
+            "curve_throws": CURVE_THROWS, "commit": code_version()}
 
 
 def _mean_curve(runs: list[dict[str, Any]]) -> list[dict[str, float]]:

@@ -105,7 +105,7 @@ def analyse(task_id: str, out: Path = RESULTS, quick: bool = False) -> dict[str,
                                                   result["common_success"]["learned"]),
         "release": {"learned": release(learned[:m], task),
                     "oracle": release(result["oracle_actions"], task)},
-        "void_reasons": {k or "counted": v for k, v in reasons.items()},
+        "void_reasons": {k or "not void": v for k, v in reasons.items()},
         "observations": m,
     }
     if task.n_dice == 1:
@@ -147,6 +147,7 @@ def sevens(model: Any, throws: int = CRAPS_THROWS) -> dict[str, Any]:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Analyse every task with kept runs; write ``learned.json``."""
+    from dice_env.envs.tasks import TASKS
     from dice_env.studies.common import code_version
 
     parser = argparse.ArgumentParser(prog="python -m agents.learned",
@@ -158,7 +159,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = parser.parse_args(argv)
     if args.quick and args.out.resolve() == RESULTS.resolve():
         parser.error("--quick needs --out: its numbers must not replace the kept results")
-    tasks = args.tasks or [p.name for p in sorted((args.out / "baselines").iterdir())]
+    kept = [t.id for t in TASKS if (args.out / "baselines" / t.id).is_dir()]
+    tasks = args.tasks or kept
     start = time.perf_counter()
     reports = []
     for task_id in tasks:

@@ -91,12 +91,14 @@ def test_the_summary_is_made_from_the_kept_runs_and_tasks_json(tmp_path):
         curve = [{"throws": 10 * (i + 1), "train_seconds": float(i + 1), "rate": rate}
                  for i in range(benchmark.CURVE_POINTS)]
         (folder / f"sac-{seed}.json").write_text(json.dumps(
-            {"seed": seed, "curve": curve, "final": {"rate": rate, "ci": [0.0, 1.0], "n": 16}}))
+            {"seed": seed, "curve": curve, "final": {"rate": rate, "ci": [0.0, 1.0], "n": 16},
+             "train_seconds": 5.0}))
     summary = benchmark.table(out)
     row = next(r for r in summary["rows"] if r["task"] == TASK)
     sac = row["learned"]["sac"]
     assert sac["mean"] == pytest.approx(0.6) and sac["min"] == 0.5 and sac["max"] == 0.7
     assert sac["sd"] == pytest.approx(0.1414, abs=1e-3) and sac["seeds"] == [0, 1]
+    assert sac["train_seconds"] == 10.0
     assert set(row["fixed"]) >= {"random", "oracle"} and "ppo" not in row["learned"]
     assert sac["curve"][0] == [10.0, 1.0, pytest.approx(0.6)]
 
@@ -124,3 +126,18 @@ def test_learned_names_the_command_that_rebuilds_a_missing_model(tmp_path, monke
     run = {"task": TASK, "algo": "sac", "seed": 2}
     with pytest.raises(SystemExit, match="--tasks DiceThrow-v0 --algos sac --seeds 2"):
         learned.load_model(run, tmp_path / "results")
+
+
+def test_the_kept_runs_cover_every_task_algorithm_and_seed_with_todays_settings():
+    for task_id, budget in BUDGETS.items():
+        for algo in benchmark.ALGOS:
+            entry = json.loads(json.dumps(BENCHMARK_HYPERPARAMS[algo][task_id]))
+            for seed in benchmark.SEEDS:
+                path = benchmark.RESULTS / "baselines" / task_id / f"{algo}-{seed}.json"
+                run = json.loads(path.read_text())
+                assert (run["budget"], run["hyperparams"]) == (budget, entry), path
+                assert run["throws"] >= budget and len(run["curve"]) == benchmark.CURVE_POINTS
+                assert run["final"]["n"] == benchmark.FINAL_THROWS
+    summary = json.loads((benchmark.RESULTS / "baselines.json").read_text())
+    today = json.loads(json.dumps(benchmark.table(benchmark.RESULTS)))
+    assert {**summary, "commit": None} == {**today, "commit": None}
