@@ -1,6 +1,6 @@
 r"""The standard algorithms on every named task: one resumable command, one small JSON per run.
 
-    python -m agents.benchmark                    # every task x PPO, SAC, TD3 x 3 seeds
+    python -m agents.benchmark                    # every task x PPO, A2C, SAC, TD3 x 3 seeds
     python -m agents.benchmark --tasks DiceThrow-v0 --algos sac --seeds 0
     python -m agents.benchmark --table            # the summary from the kept JSONs only
     python -m agents.benchmark --quick --out DIR  # a smoke run: tiny budgets, numbers meaningless
@@ -43,7 +43,7 @@ from agents.hyperparams import BENCHMARK_HYPERPARAMS, BUDGETS, algorithm_kwargs
 ROOT = Path(__file__).resolve().parent.parent
 RESULTS = ROOT / "benchmarks" / "results"
 RUNS = ROOT / "runs" / "benchmark"
-ALGOS = ("ppo", "sac", "td3")
+ALGOS = ("ppo", "a2c", "sac", "td3")
 SEEDS = (0, 1, 2)
 CURVE_POINTS = 5  # evaluations along a run (the last at its budget)
 CURVE_THROWS = 128  # fixed throws per curve evaluation
@@ -53,7 +53,7 @@ QUICK_BUDGET, QUICK_THROWS = 320, 16
 
 
 def algorithm(name: str) -> type:
-    """The Stable-Baselines3 class of ``name`` (``ppo``, ``sac``, ``td3``)."""
+    """The Stable-Baselines3 class of ``name`` (one of :data:`ALGOS`)."""
     import stable_baselines3
 
     return getattr(stable_baselines3, name.upper())

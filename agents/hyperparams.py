@@ -110,11 +110,14 @@ _N_ENVS = {"DiceThrowTray2d6Sum-v0": 16, "DiceThrowCraps-v0": 8}
 # into an ``action_noise``).
 NON_ALGORITHM_KEYS = (*NON_PPO_KEYS, "noise_type", "noise_std")
 # Per algorithm, the keywords for every task: untuned, no search was run. PPO is the
-# DiceThrow-v0 recipe above with a rollout of ``n_envs`` x 4 throws; SAC and TD3 are
+# DiceThrow-v0 recipe above with a rollout of ``n_envs`` x 4 throws, A2C the same rollout and
+# policy with Stable-Baselines3's learning rate decaying to 0; SAC and TD3 are
 # Stable-Baselines3's defaults for a one-step task (every episode one throw, so gamma does not
 # matter), with one gradient step per 4 throws and TD3 with rl-zoo3's usual exploration noise.
 _ALGORITHMS: dict[str, dict[str, Any]] = {
     "ppo": {"n_steps": 4, "batch_size": 64, "n_epochs": 10, "learning_rate": "lin_3e-4",
+            "policy_kwargs": {"net_arch": [256, 256], "log_std_init": -2.0}},
+    "a2c": {"n_steps": 4, "learning_rate": "lin_7e-4", "ent_coef": 0.0,
             "policy_kwargs": {"net_arch": [256, 256], "log_std_init": -2.0}},
     "sac": {"learning_rate": 3e-4, "batch_size": 256, "learning_starts": 1_000,
             "train_freq": 1, "gamma": 0.0, "policy_kwargs": {"net_arch": [256, 256]}},
@@ -129,7 +132,7 @@ def _benchmark_entry(algo: str, env_id: str) -> dict[str, Any]:
     n_envs = _N_ENVS.get(env_id, 64)
     entry = {"policy": "MlpPolicy", "n_envs": n_envs, "n_timesteps": BUDGETS[env_id],
              "env_kwargs": {}, **copy.deepcopy(_ALGORITHMS[algo])}
-    if algo != "ppo":
+    if algo in ("sac", "td3"):
         entry["gradient_steps"] = max(1, n_envs // 4)
         entry["buffer_size"] = BUDGETS[env_id]
         entry["learning_starts"] = min(entry["learning_starts"], BUDGETS[env_id] // 4)

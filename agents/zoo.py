@@ -1,6 +1,6 @@
 r"""rl-zoo3 hyperparameter files, written from :data:`agents.hyperparams.BENCHMARK_HYPERPARAMS`.
 
-    python -m agents.zoo              # rewrites agents/zoo_configs/{ppo,sac,td3}.yml
+    python -m agents.zoo              # rewrites agents/zoo_configs/{ppo,a2c,sac,td3}.yml
     python -m agents.zoo --check      # exit 1 if a file differs from the table
 
 The files are rl-zoo3's format (keyed by env id, one entry per named task; ``policy_kwargs`` as

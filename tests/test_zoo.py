@@ -8,7 +8,7 @@ import yaml
 
 from agents import zoo
 
-ALGOS = ("ppo", "sac", "td3")
+ALGOS = ("ppo", "a2c", "sac", "td3")
 
 
 def test_zoo_files_are_the_hyperparameter_table():
@@ -46,6 +46,7 @@ def _run(module: str, *args: str, cwd) -> str:
 
 # One task per algorithm, each with a budget of two small updates.
 TRAINED = {"ppo": ("DiceThrow-v0", ["n_envs:8", "batch_size:32"]),
+           "a2c": ("DiceThrowTray2d6Sum-v0", ["n_envs:4"]),
            "sac": ("DiceThrowD20-v0", ["n_envs:4", "learning_starts:16", "gradient_steps:1"]),
            "td3": ("DiceThrowHigh-v0", ["n_envs:4", "learning_starts:16", "gradient_steps:1"])}
 
