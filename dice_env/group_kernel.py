@@ -325,7 +325,7 @@ def _push(a: int, b: int, point: tuple, depth: float, n: tuple, x: np.ndarray,
     return spring
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, forceinline=True)
 def _push_tied(a: int, b: int, first: int, k: int, point: tuple, depth: float, n: tuple,
                x: np.ndarray, q: np.ndarray, cu: np.ndarray, cw: np.ndarray, pair: Pair,
                ties: np.ndarray, fresh: bool, force: np.ndarray, torque: np.ndarray) -> tuple:
@@ -504,7 +504,7 @@ def _seen(p: tuple, along: float, n: tuple, seen: np.ndarray, n_seen: int) -> in
     return n_seen + 1
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, forceinline=True)
 def _crossings(a: int, b: int, first: int, other: int, n: tuple, high_b: float,
                low_a: float, world: np.ndarray, x: np.ndarray, q: np.ndarray, cu: np.ndarray,
                cw: np.ndarray, hulls: Hulls, pair: Pair, seen: np.ndarray, n_seen: int,
@@ -589,7 +589,7 @@ def pair_contacts(a: int, b: int, n: tuple, world: np.ndarray, x: np.ndarray, q:
     low_a = _extent(a, n0, n1, n2, world)[0]
     high_b = _extent(b, n0, n1, n2, world)[1]
     r_max = hulls.r_max
-    spring, stored, found, n_seen = 0.0, 0.0, False, 0
+    spring, stored, found, n_seen = 0.0, 0.0, False, np.int64(0)  # one type: one compile
     for first, other in ((a, b), (b, a)):
         tol = LATERAL * r_max[other]
         for k in range(n_vertices[first]):
@@ -877,12 +877,12 @@ def advance_group(g: int, dice: GroupDice, bodies: Bodies, hulls: Hulls, pair: P
             next_record = (step // stride + 1) * stride
     for j in range(step // stride, n_rec):  # dice that stopped early stay where they are
         _record(records, j, g, x, q)
-    dice.x[g] = x
-    dice.u[g] = u
-    dice.ang[g] = ang
-    dice.q[g] = q
+    _put(dice.x[g], x)
+    _put(dice.u[g], u)
+    _put(dice.ang[g], ang)
+    _put(dice.q[g], q)
     if rotation:
-        dice.w[g] = w
+        _put(dice.w[g], w)
     for a in range(n_dice):
         out.contacts[g, a] = touching[a]
         out.touching[g, a] = die_touch[a]
@@ -966,9 +966,20 @@ def _meeting(out: GroupOutcome, g: int, end: int, done: int, u: np.ndarray,
 @njit(cache=True)
 def _record(records: GroupRecords, j: int, g: int, x: np.ndarray, q: np.ndarray) -> None:
     """Store the dice's centres and orientations after a step."""
-    records.x[g, j] = x
+    _put(records.x[g, j], x)
     if records.orientation.shape[1] > 0:
-        records.orientation[g, j] = q
+        _put(records.orientation[g, j], q)
+
+
+@njit(cache=True)
+def _put(target: np.ndarray, values: np.ndarray) -> None:
+    """``target[...] = values`` for two arrays of one shape, element by element.
+
+    numba's slice assignment checks the shapes at run time, and the message of that check
+    alone takes seconds to compile.
+    """
+    for index in np.ndindex(values.shape):
+        target[index] = values[index]
 
 
 @njit(cache=True, parallel=True, nogil=True)

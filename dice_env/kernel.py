@@ -344,7 +344,7 @@ def free_steps(lowest: float, un: float, spin: float, r_max: float, dvn: float, 
     return max(1, int(last) + 1)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, forceinline=True)
 def torque_free(q: np.ndarray, inv_body: np.ndarray, inv_iso: float, l0: float, l1: float,
                 l2: float, dt: float, n: int) -> tuple[float, float, float]:
     """``n`` rotation steps at constant ``L``, in place on ``q``; returns the last ``w``.
@@ -361,7 +361,7 @@ def torque_free(q: np.ndarray, inv_body: np.ndarray, inv_iso: float, l0: float, 
     return w0, w1, w2
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, forceinline=True)
 def vertex_on_plane(plane: tuple, stick: bool, vmin: float, height: float, before: float,
                     position: tuple, velocity: tuple, middle: tuple, midpoint: bool, dt: float,
                     dt_m: float, anchor: tuple, tied: bool) -> tuple:

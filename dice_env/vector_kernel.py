@@ -164,17 +164,9 @@ def _add(acc, corner):
 @njit(cache=True, error_model="numpy")
 def _tile_step(t: np.ndarray, body: Body, contact: Contact, options: Options, stops: Stops,
                ends: bool) -> None:
-    """:func:`_step` of a tile (``ends``: with the rest test and the decided face)."""
-    _step(t, body, contact, options, stops, ends)
-
-
-@njit(cache=True, inline="always")
-def _step(t: np.ndarray, body: Body, contact: Contact, options: Options, stops: Stops,
-          ends: bool) -> None:
     """One step of every die of the tile ``t`` (rows of ``TILE`` lanes), in place.
 
-    ``ends`` (a constant in each of the two compiled copies, so its work costs nothing when
-    False) enables the rest test and the decided face. Leaves in row ``TURN`` the squared
+    ``ends`` enables the rest test and the decided face. Leaves in row ``TURN`` the squared
     turn of each die that the series could not take (else 0).
     """
     planes = contact.planes
