@@ -6,7 +6,9 @@
 
 Each run is a fresh process that imports ``dice_env`` and calls, one after another, the entry
 points below, timing each first call; the cold run gets an empty ``NUMBA_CACHE_DIR`` (every
-kernel a call needs compiles then), the warm run the cache the cold run left. ``--suite``
+kernel a call needs compiles then), the warm run the cache the cold run left. The parallel
+loops' first calls (2 threads, :data:`THREADED`) and a new user's first throw, import included
+(:data:`FIRST_THROWS`), are timed each in a process and an empty cache of its own. ``--suite``
 then times, in a second empty cache, ``python -m dice_env.precompile`` and the README's test
 command after it (``pytest -n auto``). Prints a table and writes
 ``benchmarks/results/cold_start.json`` (``--out`` to change).
@@ -50,6 +52,28 @@ ENTRY_POINTS = (
      "(4, 3))) for y in (-0.015, 0.015)]), stop_when_decided=True)"),
 )
 
+# the parallel loops (2 threads, batches above ``simulate.SERIAL_FIRST``), each the first
+# call in a process and an empty cache of its own
+THREADED = (
+    ("simulate on 2 threads (1024 throws)", "simulate(scene, State.release(scene, np.tile("
+     "[0.0, 0.0, 0.1], (1024, 1)), rng.normal(0, 0.5, (1024, 3)), rng.normal(0, 30, "
+     "(1024, 3))), stop_when_decided=True, num_threads=2)"),
+    ("the paper scene on 2 threads", "from dice_env.paper import paper_scene; "
+     "ps = paper_scene(t_max=0.2); simulate(ps, State.release(ps, np.tile([0.0, 0.0, 3.0], "
+     "(1024, 1)), rng.normal(0, 1, (1024, 3)), rng.normal(0, 3, (1024, 3))), num_threads=2)"),
+    ("simulate_group on 2 threads (512 throws)", "from dice_env.group import GroupState, "
+     "simulate_group; from dice_env.surroundings import tray; ts = Scene(walls=tray(), "
+     "t_max=0.05); simulate_group(ts, (dice_env.Die(),) * 2, GroupState.of([State.release("
+     "ts, np.tile([0.0, y, 0.1], (512, 1)), rng.normal(0, 0.5, (512, 3)), rng.normal(0, 30, "
+     "(512, 3))) for y in (-0.015, 0.015)]), num_threads=2)"),
+)
+# a new user's first throw, each in its own process and empty cache (import included)
+FIRST_THROWS = (
+    ("import + first simulate", ENTRY_POINTS[0][1] + "; " + ENTRY_POINTS[1][1]),
+    ("import + gym.make + first step", "import gymnasium as gym; import dice_env; "
+     "env = gym.make('DiceThrow-v0'); env.reset(seed=0); env.step(env.action_space.sample())"),
+)
+
 PROBE = """
 import json, sys, time
 times = []
@@ -61,13 +85,13 @@ print(json.dumps(times))
 """
 
 
-def run(cache: Path) -> tuple[list[float], list[str]]:
+def run(cache: Path, entry_points: tuple = ENTRY_POINTS) -> tuple[list[float], list[str]]:
     """Seconds of each entry point's first call in a fresh process with ``cache``.
 
     Also the compile notices the process wrote on stderr (:mod:`dice_env.compile_notice`).
     """
     env = {**os.environ, "NUMBA_CACHE_DIR": str(cache), "DICE_ENV_QUIET_COMPILE": ""}
-    done = subprocess.run([sys.executable, "-c", PROBE, json.dumps(ENTRY_POINTS)], cwd=ROOT,
+    done = subprocess.run([sys.executable, "-c", PROBE, json.dumps(entry_points)], cwd=ROOT,
                           env=env, capture_output=True, text=True, check=True)
     notices = [line for line in done.stderr.splitlines() if line.startswith("dice_env: ")]
     return json.loads(done.stdout.strip().splitlines()[-1]), notices
@@ -81,9 +105,13 @@ def suite(cache: Path) -> dict[str, object]:
                           ("tests", ["-m", "pytest", "-n", "auto", "-p", "no:cacheprovider"])):
         start = time.perf_counter()
         done = subprocess.run([sys.executable, *command], cwd=ROOT, env=env,
-                              capture_output=True, text=True, check=True)
+                              capture_output=True, text=True)
         seconds[name] = time.perf_counter() - start
-    return {"seconds": seconds, "summary": done.stdout.strip().splitlines()[-1]}
+        if done.returncode != 0:  # the times still count; the summary says what failed
+            print(done.stdout[-4000:], done.stderr[-2000:], file=sys.stderr)
+            break
+    return {"seconds": seconds, "summary": done.stdout.strip().splitlines()[-1],
+            "returncode": done.returncode}
 
 
 def main() -> None:
@@ -103,6 +131,17 @@ def main() -> None:
         with tempfile.TemporaryDirectory(prefix="numba-cache-") as folder:
             runs["cold"], notices["cold"] = run(Path(folder))
             runs["warm"], notices["warm"] = run(Path(folder))
+        threads = {"entry_points": [name for name, _ in THREADED], "seconds": []}
+        notices["threads"] = []
+        for entry_point in THREADED:  # after a set-up that compiles nothing
+            with tempfile.TemporaryDirectory(prefix="numba-cache-") as folder:
+                seconds, said = run(Path(folder), (("set-up", ENTRY_POINTS[0][1]), entry_point))
+            threads["seconds"].append(seconds[1])
+            notices["threads"] += said
+        first = {"entry_points": [name for name, _ in FIRST_THROWS], "seconds": []}
+        for entry_point in FIRST_THROWS:
+            with tempfile.TemporaryDirectory(prefix="numba-cache-") as folder:
+                first["seconds"].append(run(Path(folder), (entry_point,))[0][0])
     tests = None
     if args.suite:
         with tempfile.TemporaryDirectory(prefix="numba-cache-") as folder:
@@ -112,6 +151,10 @@ def main() -> None:
     for i, name in enumerate(names):
         print(f"{name:40s}" + "".join(f"{times[i]:9.1f}s" for times in runs.values()))
     print(f"{'all, one after another':40s}" + "".join(f"{sum(t):9.1f}s" for t in runs.values()))
+    if not args.warm_only:
+        for part in (threads, first):
+            for name, seconds in zip(part["entry_points"], part["seconds"]):
+                print(f"{name:40s}{seconds:9.1f}s")
     for kind, lines in notices.items():
         print(f"{kind}: {len(lines)} compile notice(s)" + "".join(f"\n  {line}" for line in lines))
     if tests is not None:
@@ -121,6 +164,8 @@ def main() -> None:
     commit = code_version()
     record = {"command": " ".join(["python", "benchmarks/cold_start.py", *sys.argv[1:]]),
               "commit": commit, "entry_points": names, "seconds": runs, "notices": notices,
+              "threads": None if args.warm_only else threads,
+              "first_throw": None if args.warm_only else first,
               "suite": tests, "cpus": os.cpu_count(),
               "load_average": os.getloadavg(), "python": platform.python_version(),
               "started": time.strftime("%Y-%m-%d %H:%M", time.gmtime(started))}

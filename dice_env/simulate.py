@@ -388,17 +388,17 @@ ROTATION_TOL = 1e-6  # State.orientation's allowed orthonormality error (a long 
 # they compile (dice_env.compile_notice).
 COMPILES = {
     kernel.simulate_serial: ((kernel.simulate_one, kernel.simulate_serial), "the die's kernel",
-                             13.0),
-    kernel.simulate_batch: ((kernel.simulate_batch,), "the die's kernel on threads", 17.0),
+                             8.0),
+    kernel.simulate_batch: ((kernel.simulate_batch,), "the die's kernel on threads", 11.0),
     vector_kernel.simulate_serial: ((vector_kernel._run_tile, vector_kernel.simulate_serial),
-                                    "the paper scene's kernel", 20.0),
+                                    "the paper scene's kernel", 10.0),
     vector_kernel.simulate_batch: ((vector_kernel.simulate_batch,),
-                                   "the paper scene's kernel on threads", 25.0),
+                                   "the paper scene's kernel on threads", 13.0),
     group_kernel.simulate_groups_serial: ((group_kernel.advance_group,
                                            group_kernel.simulate_groups_serial),
-                                          "the kernel of several dice", 33.0),
+                                          "the kernel of several dice", 20.0),
     group_kernel.simulate_groups: ((group_kernel.simulate_groups,),
-                                   "the kernel of several dice on threads", 50.0),
+                                   "the kernel of several dice on threads", 27.0),
 }
 SERIAL_FIRST = 256  # throws: a batch up to this size runs serially while its parallel loop
 # is not compiled (on a cold cache, a first small batch does not wait for that compile)

@@ -1,15 +1,19 @@
 """The compile notice: a line on stderr when a kernel compiles, none when the cache is warm."""
 
+import json
 import os
 import subprocess
 import sys
 import textwrap
+from pathlib import Path
 
 import pytest
 
 from dice_env import group_kernel, kernel, precompile, vector_kernel
 from dice_env.compile_notice import QUIET, _cached
 from dice_env.simulate import COMPILES
+
+ROOT = Path(__file__).resolve().parents[1]
 
 KERNEL = textwrap.dedent("""
     from numba import njit
@@ -71,3 +75,17 @@ def test_precompile_compiles_every_cpu_kernel_parallel_and_serial():
         assert loop.overloads, loop
     for dispatchers, what, _ in COMPILES.values():  # a callee loaded with its caller from
         assert all(d.overloads or _cached(d) for d in dispatchers), what  # the cache: on disk
+
+
+def test_the_announced_times_are_the_measured_ones():
+    """Each kernel's time in the notice is within half of ``benchmarks/cold_start.py``'s."""
+    measured = json.loads((ROOT / "benchmarks/results/cold_start.json").read_text())
+    cold, threads = measured["seconds"]["cold"], measured["threads"]["seconds"]
+    first_calls = {kernel.simulate_serial: cold[1], vector_kernel.simulate_serial: cold[3],
+                   group_kernel.simulate_groups_serial: cold[6], kernel.simulate_batch: threads[0],
+                   vector_kernel.simulate_batch: threads[1],
+                   group_kernel.simulate_groups: threads[2]}
+    assert first_calls.keys() == COMPILES.keys()
+    for loop, seconds in first_calls.items():
+        what, announced = COMPILES[loop][1:]
+        assert 0.5 * seconds <= announced <= 1.5 * seconds, (what, announced, seconds)
