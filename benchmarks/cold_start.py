@@ -153,7 +153,7 @@ def main() -> None:
     print(f"{'all, one after another':40s}" + "".join(f"{sum(t):9.1f}s" for t in runs.values()))
     if not args.warm_only:
         for part in (threads, first):
-            for name, seconds in zip(part["entry_points"], part["seconds"]):
+            for name, seconds in zip(part["entry_points"], part["seconds"], strict=True):
                 print(f"{name:40s}{seconds:9.1f}s")
     for kind, lines in notices.items():
         print(f"{kind}: {len(lines)} compile notice(s)" + "".join(f"\n  {line}" for line in lines))
