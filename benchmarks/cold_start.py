@@ -97,6 +97,21 @@ def run(cache: Path, entry_points: tuple = ENTRY_POINTS) -> tuple[list[float], l
     return json.loads(done.stdout.strip().splitlines()[-1]), notices
 
 
+def alone(entry_points: tuple, setup: tuple = ()) -> tuple[dict[str, list], list[str]]:
+    """Each entry point's first call in a process and an empty cache of its own.
+
+    After the entry points ``setup`` (untimed). Returns the names and seconds, and the
+    compile notices.
+    """
+    seconds, notices = [], []
+    for entry_point in entry_points:
+        with tempfile.TemporaryDirectory(prefix="numba-cache-") as folder:
+            times, said = run(Path(folder), (*setup, entry_point))
+        seconds.append(times[-1])
+        notices += said
+    return {"entry_points": [name for name, _ in entry_points], "seconds": seconds}, notices
+
+
 def suite(cache: Path) -> dict[str, object]:
     """Seconds of ``python -m dice_env.precompile`` and then the tests, with ``cache`` empty."""
     env = {**os.environ, "NUMBA_CACHE_DIR": str(cache)}
@@ -131,17 +146,8 @@ def main() -> None:
         with tempfile.TemporaryDirectory(prefix="numba-cache-") as folder:
             runs["cold"], notices["cold"] = run(Path(folder))
             runs["warm"], notices["warm"] = run(Path(folder))
-        threads = {"entry_points": [name for name, _ in THREADED], "seconds": []}
-        notices["threads"] = []
-        for entry_point in THREADED:  # after a set-up that compiles nothing
-            with tempfile.TemporaryDirectory(prefix="numba-cache-") as folder:
-                seconds, said = run(Path(folder), (("set-up", ENTRY_POINTS[0][1]), entry_point))
-            threads["seconds"].append(seconds[1])
-            notices["threads"] += said
-        first = {"entry_points": [name for name, _ in FIRST_THROWS], "seconds": []}
-        for entry_point in FIRST_THROWS:
-            with tempfile.TemporaryDirectory(prefix="numba-cache-") as folder:
-                first["seconds"].append(run(Path(folder), (entry_point,))[0][0])
+        threads, notices["threads"] = alone(THREADED, (("set-up", ENTRY_POINTS[0][1]),))
+        first, _ = alone(FIRST_THROWS)
     tests = None
     if args.suite:
         with tempfile.TemporaryDirectory(prefix="numba-cache-") as folder:
