@@ -178,7 +178,7 @@ class DiceThrowEnv(gym.Env):
     | ``shaping`` | 0.0 | weight of the dense term |
     | ``target_face`` | None | fix the target (1 … n) instead of drawing it |
     | ``orientation_mode`` | "uniform" | how the hand orientation is drawn |
-    | ``t_max`` | 5.0 | simulated time limit per throw (s; the scene's when ``scene`` is given) |
+    | ``t_max`` | 5.0 | time limit per throw (s; DEFAULT_T_MAX, or the ``scene``'s when given) |
     | ``die`` | "d6" | "d4", "d6", "d8", "d10", "d12", "d20" (Die.standard) or a Die |
     | ``size`` (``edge``: d6), ``mass`` | Scene() | die size (m, Die.size) and mass (kg) |
     | ``load_face``, ``load_fraction``, ``load_depth`` | n, 0, 0.8 | a loaded die (Die.load) |
