@@ -10,7 +10,6 @@ from dice_env.envs import task as task_module
 from dice_env.envs.sb3 import DiceThrowSB3VecEnv
 from dice_env.envs.task import (
     HAND_GAP,
-    GroupThrowTask,
     ThrowTask,
     make_task,
 )
@@ -300,7 +299,7 @@ def test_bad_actions_and_options_are_refused():
             one.reset(options={"orientation": "eye"})
     obs, _ = env.reset(options={"orientation": np.stack([np.eye(3)] * 2), "target_sum": 12})
     assert obs[10] == 1.0
-    assert isinstance(make_task(num_dice=2), GroupThrowTask)
+    assert type(make_task(num_dice=2)) is ThrowTask
 
 
 # --- agents --------------------------------------------------------------------------------

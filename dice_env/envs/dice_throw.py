@@ -14,10 +14,8 @@ from dice_env.envs.task import (
     ACTION_DIM,
     ORIENTATION_DIM,
     ThrowTask,
-    check_actions,
     check_orientation_mode,
     check_rotation,
-    check_task_keywords,
     make_task,
 )
 
@@ -65,23 +63,24 @@ def check_frame_memory(render_mode: str | None, t_max: float, width: int, height
 
 
 def configure(
-    env: Any, modes: tuple[str, ...], render_mode: str | None, target_face: Any,
-    target_sum: int | None, orientation_mode: str, width: int, height: int,
-    task_keywords: dict[str, Any],
+    env: Any, modes: tuple[str, ...], render_mode: str | None = None, *,
+    target_face: Any = None, target_sum: int | None = None, orientation_mode: str = "uniform",
+    render_width: int = 320, render_height: int = 240, **task_keywords: Any,
 ) -> ThrowTask:
-    """Validate the keywords shared by the single and the vector env, set them on ``env``.
+    """Validate the keywords of the single and the vector env, set the episode's on ``env``.
 
-    Returns the :class:`ThrowTask` built from ``task_keywords``.
+    Returns the :class:`ThrowTask` :func:`make_task` builds from ``task_keywords``.
     """
-    check_render(render_mode, modes, width, height)
-    task = make_task(**check_task_keywords(task_keywords))
+    check_render(render_mode, modes, render_width, render_height)
+    task = make_task(**task_keywords)
+    check_frame_memory(render_mode, task.scene.t_max, render_width, render_height)
     task.fixed_target(target_face, target_sum)
     check_orientation_mode(orientation_mode)
     env.target_face = target_face
     env.target_sum = target_sum
     env.orientation_mode = orientation_mode
     env.render_mode = render_mode
-    env.render_size = (height, width)
+    env.render_size = (render_height, render_width)
     return task
 
 
@@ -179,7 +178,7 @@ class DiceThrowEnv(gym.Env):
     | ``shaping`` | 0.0 | weight of the dense term |
     | ``target_face`` | None | fix the target (1 … n) instead of drawing it |
     | ``orientation_mode`` | "uniform" | how the hand orientation is drawn |
-    | ``t_max`` | 5.0 | simulated time limit per throw (s; the scene's when ``scene`` is given) |
+    | ``t_max`` | 5.0 | time limit per throw (s; DEFAULT_T_MAX, or the ``scene``'s when given) |
     | ``die`` | "d6" | "d4", "d6", "d8", "d10", "d12", "d20" (Die.standard) or a Die |
     | ``size`` (``edge``: d6), ``mass`` | Scene() | die size (m, Die.size) and mass (kg) |
     | ``load_face``, ``load_fraction``, ``load_depth`` | n, 0, 0.8 | a loaded die (Die.load) |
@@ -216,27 +215,14 @@ class DiceThrowEnv(gym.Env):
     metadata: ClassVar[dict[str, Any]] = {"render_modes": list(RENDER_MODES),
                                           "render_fps": RENDER_FPS}
 
-    def __init__(
-        self,
-        render_mode: str | None = None,
-        *,
-        target_face: Any = None,
-        target_sum: int | None = None,
-        orientation_mode: str = "uniform",
-        render_width: int = 320,
-        render_height: int = 240,
-        **task_keywords: Any,
-    ) -> None:
-        self.task: ThrowTask = configure(self, RENDER_MODES, render_mode, target_face,
-                                         target_sum, orientation_mode, render_width,
-                                         render_height, task_keywords)
-        check_frame_memory(render_mode, self.task.scene.t_max, render_width, render_height)
+    def __init__(self, render_mode: str | None = None, **keywords: Any) -> None:
+        self.task: ThrowTask = configure(self, RENDER_MODES, render_mode, **keywords)
         self.observation_space = observation_space(self.task)
         self.action_space = action_space(self.task)
         # Placeholders until reset: the dice in the hand, unturned.
         self._target, self._hand = self.task.sample_hand(np.random.default_rng(0),
                                                          orientation_mode="identity")
-        self._pose = (self._release_position(), self._hand)
+        self._pose = (self.task.hand_position, self._hand)
         self._frames: list[np.ndarray] = []
         self._viewer: Any = None
 
@@ -246,21 +232,16 @@ class DiceThrowEnv(gym.Env):
         """Put the die in the hand and draw the target; options override one episode."""
         super().reset(seed=seed)
         self._target, self._hand = episode_hand(self, self.np_random, options)
-        self._pose = (self._release_position(), self._hand)
+        self._pose = (self.task.hand_position, self._hand)
         self._frames = []
         self._draw([self._pose])
         return self.task.observe(self._target, self._hand)[0], {}
 
     def step(self, action: np.ndarray) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
         """Throw once and simulate to rest."""
-        dim = self.task.action_dim
-        checked = check_actions(action, dim)
-        if np.shape(action) != (dim,):
-            raise ValueError(f"action must have shape ({dim},) (one throw; DiceThrowVectorEnv "
-                             f"takes (n, {dim})), got {np.shape(action)}")
-        noise = self.task.sample_noise(self.np_random)
-        throw = self.task.throw(checked, [self._target], self._hand[None], noise,
-                                record_every=self._record_every())
+        throw = self.task.throw(action, [self._target], self._hand[None], [self.np_random],
+                                record_every=self._record_every(),
+                                action_shape=self.action_space.shape)
         result = throw.result
         self._pose = (result.final.position[0], result.final.orientation[0])
         if result.orientations is not None:  # the frames until the die stopped, then at rest
@@ -289,11 +270,6 @@ class DiceThrowEnv(gym.Env):
         if self.render_mode not in ("rgb_array_list", "human"):
             return 0
         return max(1, round(1.0 / (RENDER_FPS * self.task.step)))
-
-    def _release_position(self) -> np.ndarray:
-        """The centre of each die in the hand: (3,) for one die, (N, 3) for N."""
-        task = self.task
-        return task.release_position if task.n_dice == 1 else task.release_positions
 
     def _frame(self, position: np.ndarray, orientation: np.ndarray) -> np.ndarray:
         from dice_env.envs.render import render_task

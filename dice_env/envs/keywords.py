@@ -24,8 +24,15 @@ from dice_env.scene import ContactLaw, FrictionLaw, Ground, Rest, Scene, Scheme,
 from dice_env.surroundings import WALLS
 from dice_env.surroundings import walls as preset_walls
 
-DEFAULT_T_MAX = 5.0  # s, without a base scene: gentle throws settle in well under 2 s
-ENV_MAX_STEPS = 10**7  # steps of an env throw (scene.MAX_STEPS bounds any run): about 2.5 s
+DEFAULT_T_MAX = 5.0
+"""The env's simulated time limit per throw (s), the ``t_max`` of its scene when no ``scene``
+is given. Half of :class:`~dice_env.scene.Scene`'s 10 s, a bound for any run: the env's gentle
+throws settle in well under 2 s, so 5 s leaves them room and halves the compute of a die that
+never settles."""
+ENV_MAX_STEPS = 10**7
+"""The most steps of one env throw (``t_max`` or ``rest_hold`` over the step): 21 times the
+default throw's 4.8e5, so that no keyword makes one ``step`` run for minutes;
+:data:`dice_env.scene.MAX_STEPS` (10**9) bounds any run of the simulator."""
 MAX_SINK = 0.1  # the weight's sink of a flat die's corners into the table, in die sizes
 
 

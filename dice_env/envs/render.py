@@ -25,6 +25,7 @@ import sys
 from collections.abc import Iterator
 from dataclasses import dataclass
 from functools import lru_cache
+from typing import Any
 
 import numpy as np
 
@@ -120,42 +121,49 @@ class FaceArt:
     reach: float
 
 
-def render_die(
-    scene: Scene,
-    position: np.ndarray,
-    orientation: np.ndarray,
-    *,
-    size: tuple[int, int] = (240, 320),
-    elevation: float = 55.0,
-    azimuth: float = -60.0,
-    view_edges: float = 5.0,
-) -> np.ndarray:
-    """An RGB image (height, width, 3) uint8 of the die in the scene: floor, walls, shadow.
+@dataclass(frozen=True)
+class View:
+    """The camera of :func:`render_die` and :func:`render_dice`, given as their keywords.
 
-    ``position`` (3,) centre of mass, ``orientation`` (3, 3) body to world. ``size`` (height,
-    width) in pixels; ``elevation`` (degrees, in (0, 90]) and ``azimuth`` (degrees, in
-    [-360, 360]) place the camera; ``view_edges`` is the image width in die sizes
+    ``size`` (height, width) in pixels; ``elevation`` (degrees, in (0, 90]) and ``azimuth``
+    (degrees, in [-360, 360]) place the camera; ``view_edges`` is the image width in die sizes
     (:attr:`Die.size`).
     """
-    position, orientation = _check_view(position, orientation, size, elevation, azimuth,
-                                        view_edges)
+
+    size: tuple[int, int] = (240, 320)
+    elevation: float = 55.0
+    azimuth: float = -60.0
+    view_edges: float = 5.0
+
+    def __post_init__(self) -> None:
+        if (not isinstance(self.size, (tuple, list)) or len(self.size) != 2 or not all(
+                isinstance(n, (int, np.integer)) and not isinstance(n, bool) and n >= 1
+                for n in self.size)):
+            raise ValueError(f"size must be (height, width), two ints >= 1, got {self.size!r}")
+        check_range("elevation", self.elevation, 0.0, 90.0)
+        if self.elevation == 0:
+            raise ValueError("elevation must be in (0, 90] degrees, got 0")
+        check_range("azimuth", self.azimuth, -360.0, 360.0)
+        check_positive("view_edges", self.view_edges)
+
+
+def render_die(scene: Scene, position: np.ndarray, orientation: np.ndarray,
+               **view: Any) -> np.ndarray:
+    """An RGB image (height, width, 3) uint8 of the die in the scene: floor, walls, shadow.
+
+    ``position`` (3,) centre of mass, ``orientation`` (3, 3) body to world; ``view``: the
+    camera's keywords (:class:`View`).
+    """
+    camera = View(**view)
+    position, orientation = _check_pose(position, orientation)
     die = scene.die
     centre = position - orientation @ np.asarray(die.com)  # geometric centre, camera target
     return _render(scene, _Dice((die,), np.zeros((1, 3)), orientation[None]), centre,
-                   view_edges * die.size, size, elevation, azimuth)
+                   camera.view_edges * die.size, camera)
 
 
-def render_dice(
-    scene: Scene,
-    dice: tuple[Die, ...],
-    positions: np.ndarray,
-    orientations: np.ndarray,
-    *,
-    size: tuple[int, int] = (240, 320),
-    elevation: float = 55.0,
-    azimuth: float = -60.0,
-    view_edges: float = 5.0,
-) -> np.ndarray:
+def render_dice(scene: Scene, dice: tuple[Die, ...], positions: np.ndarray,
+                orientations: np.ndarray, **view: Any) -> np.ndarray:
     """An RGB image (height, width, 3) uint8 of several dice in the scene, as :func:`render_die`.
 
     ``positions`` (N, 3) centres of mass, ``orientations`` (N, 3, 3). The camera looks at the
@@ -163,19 +171,20 @@ def render_dice(
     wide, or the dice's spread plus that, whichever is wider. Each pixel shows the nearest die
     it sees; the floor's grid is one largest die's size.
     """
+    camera = View(**view)
     positions = np.asarray(positions, dtype=np.float64)
     orientations = np.asarray(orientations, dtype=np.float64)
     if positions.ndim != 2 or len(positions) != len(dice) or len(orientations) != len(dice):
         raise ValueError(f"positions and orientations must hold one row per die ({len(dice)}), "
                          f"got {positions.shape} and {orientations.shape}")
     for p, q in zip(positions, orientations, strict=True):
-        _check_view(p, q, size, elevation, azimuth, view_edges)
+        _check_pose(p, q)
     centres = positions - np.einsum("nij,nj->ni", orientations, [d.com for d in dice])
     centre = (centres.min(axis=0) + centres.max(axis=0)) / 2
     largest = max(d.size for d in dice)
     spread = float(np.ptp(centres, axis=0).max()) + 2 * largest
     return _render(scene, _Dice(tuple(dice), centres - centre, orientations), centre,
-                   max(view_edges * largest, spread), size, elevation, azimuth)
+                   max(camera.view_edges * largest, spread), camera)
 
 
 @dataclass(frozen=True)
@@ -197,11 +206,12 @@ class _Dice:
 
 
 def _render(scene: Scene, dice: _Dice, centre: np.ndarray, view: float,
-            size: tuple[int, int], elevation: float, azimuth: float) -> np.ndarray:
+            camera_view: View) -> np.ndarray:
     """The image of ``dice`` about ``centre`` (the camera's target), ``view`` m wide."""
-    height, width = size
+    height, width = camera_view.size
     normal = np.asarray(scene.ground.normal)
-    forward, right, up = _camera(normal, math.radians(elevation), math.radians(azimuth))
+    forward, right, up = _camera(normal, math.radians(camera_view.elevation),
+                                 math.radians(camera_view.azimuth))
     scale = view / width  # metres per pixel
     xs = (np.arange(width) - (width - 1) / 2) * scale
     ys = ((height - 1) / 2 - np.arange(height)) * scale
@@ -600,10 +610,8 @@ def _text_strokes(text: str, underline: bool) -> np.ndarray:
 
 # --- input and figures --------------------------------------------------------------------
 
-def _check_view(position: np.ndarray, orientation: np.ndarray, size: tuple[int, int],
-                elevation: float, azimuth: float,
-                view_edges: float) -> tuple[np.ndarray, np.ndarray]:
-    """``position`` (3,) and ``orientation`` (3, 3) as float arrays; the view checked."""
+def _check_pose(position: np.ndarray, orientation: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``position`` (3,) and ``orientation`` (3, 3) as finite float arrays, else ``ValueError``."""
     position = np.asarray(position, dtype=np.float64)
     orientation = np.asarray(orientation, dtype=np.float64)
     for name, value, shape in (("position", position, (3,)),
@@ -611,15 +619,6 @@ def _check_view(position: np.ndarray, orientation: np.ndarray, size: tuple[int, 
         if value.shape != shape:
             raise ValueError(f"{name} must have shape {shape}, got {value.shape}")
         check_finite(name, value)
-    if (not isinstance(size, (tuple, list)) or len(size) != 2 or not all(
-            isinstance(n, (int, np.integer)) and not isinstance(n, bool) and n >= 1
-            for n in size)):
-        raise ValueError(f"size must be (height, width), two ints >= 1, got {size!r}")
-    check_range("elevation", elevation, 0.0, 90.0)
-    if elevation == 0:
-        raise ValueError("elevation must be in (0, 90] degrees, got 0")
-    check_range("azimuth", azimuth, -360.0, 360.0)
-    check_positive("view_edges", view_edges)
     return position, orientation
 
 

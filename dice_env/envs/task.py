@@ -16,7 +16,7 @@ from __future__ import annotations
 import inspect
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, fields, replace
 from functools import cached_property
 from typing import Any
 
@@ -56,22 +56,53 @@ SET_ANGLE = math.pi  # rad: a dice-setting action of 1 turns its die by this muc
 
 @dataclass(frozen=True)
 class ThrowTask:
-    """A throw from the hand: how actions become releases and how a landing is scored.
+    """A throw of N dice from the hand: how actions become releases and how a landing is scored.
 
-    ``release_height`` (m): height of the die's centre above the table at release (None:
-    :data:`RELEASE_HEIGHT`, or :data:`RELEASE_GAP` above the die's farthest corner, rounded
-    to 0.1 mm, if that is higher).
+    ``dice``: the 1 … :data:`MAX_NUM_DICE` dice in the hand, mixed shapes allowed (default: the
+    scene's die alone); ``scene`` gives the table, walls and physics, and its die is set to the
+    first die. One die is thrown with :func:`dice_env.simulate`, several together with
+    :func:`dice_env.group.simulate_group` (die against die, the planes of ``scene``).
+    Per-die arrays (targets, hands, faces, releases) have a die axis only for several dice:
+    one die's target is a face, its hand (3, 3).
+
+    ``release_height`` (m): height of the hand's centre above the table at release (None:
+    :data:`RELEASE_HEIGHT`, or :data:`RELEASE_GAP` above the farthest corner of any die,
+    rounded to 0.1 mm, if that is higher).
     ``max_speed`` (m/s) and ``max_spin`` (rad/s): release velocity and angular velocity per
     component at action ±1. ``hand_noise``: standard deviation of the noise added to each action
     component before scaling (so 0.05 is 5% of that component's maximum). ``orientation_noise``
-    (rad): standard deviation of each component of a random rotation vector applied to the
-    hand's orientation. ``min_speed`` (m/s) and ``min_spin`` (rad/s): the fair-throw rule; a
-    release slower than either is a foul (void, reward 0). ``shaping``: weight of the dense term
-    ``n_target . n_table`` at rest (1 target up, 0 on a side, -1 down). ``num_threads`` caps the
-    kernel's threads (None: all cores). ``until``: "rest" simulates each throw to rest;
-    "decided" ends it as soon as its face is decided (``simulate(stop_when_decided=True)``: the
-    same face, 2–3 times faster; the die's final state, rest time and impacts are those of that
-    moment, and the shaping term is taken there; horizontal table only).
+    (rad): standard deviation of each component of a random rotation vector applied to each
+    die's orientation in the hand. ``min_speed`` (m/s) and ``min_spin`` (rad/s): the fair-throw
+    rule; a die released slower than either is a foul (void, reward 0). ``shaping``: weight of
+    the dense term ``n_target . n_table`` at rest (1 target up, 0 on a side, -1 down; the mean
+    over the dice). ``num_threads`` caps the kernel's threads (None: all cores). ``until``:
+    "rest" simulates each throw to rest; "decided" ends it as soon as its faces are decided
+    (``stop_when_decided``: the same faces, 2–3 times faster; the final state, rest time and
+    impacts are those of that moment, and the shaping term is taken there; horizontal table
+    only).
+
+    **The hand** holds the dice in rows of up to :data:`HAND_ROW` along the table's y axis, the
+    rows one behind the other along its x axis, die ``i`` in row ``i // 4``; neighbours' centres
+    are :attr:`hand_spacing` apart, each row centred on y = 0 and the rows on x = 0, so the
+    hand's centre is the release point (:attr:`hand_offsets`; one die sits on it). The hand is
+    rigid: one action gives the hand's velocity ``v`` and spin ``w``, and die ``i`` leaves it
+    with velocity ``v + w x r_i`` and spin ``w`` (``r_i`` its offset); each die has its own
+    hand noise (:data:`NOISE_DIM` standard normals per die, added to the action before that
+    product) and its own orientation in the hand, drawn per die.
+
+    **Targets.** ``target="faces"`` (one die's only target): a face per die, each drawn
+    uniformly, success when every die shows its own; the observation starts with one one-hot
+    per die. ``target="sum"`` (the default for several dice): a total N … sum of the faces is
+    drawn uniformly and the throw succeeds when the faces read add up to it ("roll a seven"
+    with two d6); the observation starts with one one-hot over the totals, and the shaping
+    term is 0 (no single face needs to be up). Then every die's orientation (9 numbers per die).
+
+    **Void throws**, the first that applies: foul, unstable, sunk (any die), not settled or
+    not decided, then "leaning": a die ended leaning on another die (not read).
+
+    ``set_dice`` (several dice): the agent also sets each die in the hand, as craps "dice
+    setters" do: the action grows by 3 per die, a rotation vector ``SET_ANGLE * a`` (rad, world
+    frame) applied to that die's drawn orientation before the orientation noise.
     """
 
     scene: Scene
@@ -85,10 +116,14 @@ class ThrowTask:
     shaping: float = 0.0
     num_threads: int | None = None
     until: str = "rest"
+    dice: tuple[Die, ...] = ()
+    target: str | None = None
+    set_dice: bool = False
 
     def __post_init__(self) -> None:
         if not isinstance(self.scene, Scene):
             raise ValueError(f"scene must be a Scene, got {type(self.scene).__name__}")
+        self._check_dice()
         clearance = max(die.reach for die in self.dice)
         if self.release_height is None:
             object.__setattr__(self, "release_height",
@@ -102,13 +137,10 @@ class ThrowTask:
                 f"table; got {self.release_height!r}. Raise release_height, or make the die "
                 f"smaller (size={self.scene.die.size:g} m) or its load (load_fraction, "
                 "load_depth) lighter")
-        check_positive("max_speed", self.max_speed)
-        check_positive("max_spin", self.max_spin)
-        check_nonnegative("hand_noise", self.hand_noise)
-        check_nonnegative("orientation_noise", self.orientation_noise)
-        check_nonnegative("min_speed", self.min_speed)
-        check_nonnegative("min_spin", self.min_spin)
-        check_nonnegative("shaping", self.shaping)
+        for name in ("max_speed", "max_spin"):
+            check_positive(name, getattr(self, name))
+        for name in ("hand_noise", "orientation_noise", "min_speed", "min_spin", "shaping"):
+            check_nonnegative(name, getattr(self, name))
         if not isinstance(self.until, str) or self.until not in UNTIL:
             raise ValueError(f"until must be one of {list(UNTIL)}, got {self.until!r}")
         if self.until == "decided" and not all(np.isfinite(lock_energy(s)).all()
@@ -118,27 +150,34 @@ class ThrowTask:
         thread_count(self.num_threads)  # refuses a count numba does not have
         for scene in self.die_scenes:
             check_scene(scene, self.release_height)
+        if self.scene.t_max / self.step > ENV_MAX_STEPS:
+            raise ValueError(
+                f"t_max must be at most {ENV_MAX_STEPS:.0e} steps: t_max={self.scene.t_max:g} s "
+                f"over the {self.n_dice} dice's step of {self.step:.3g} s (die against die "
+                f"included) is {self.scene.t_max / self.step:.3g} steps; lower t_max or num_dice")
         self._check_walls()
 
-    @property
-    def dice(self) -> tuple[Die, ...]:
-        """The dice in the hand: the scene's die."""
-        return (self.scene.die,)
-
-    @property
-    def step(self) -> float:
-        """The integration step of a throw (s)."""
-        return self.scene.step
-
-    @property
-    def die_scenes(self) -> tuple[Scene, ...]:
-        """The scene with each die of :attr:`dice`."""
-        return (self.scene,)
-
-    @property
-    def release_positions(self) -> np.ndarray:
-        """Each die's centre at release, (N, 3) m: the release point."""
-        return self.release_position[None]
+    def _check_dice(self) -> None:
+        """Check ``dice``, ``target`` and ``set_dice``; set their defaults and the scene's die."""
+        dice = self.dice or (self.scene.die,)
+        if not (isinstance(dice, tuple) and all(isinstance(d, Die) for d in dice)
+                and 1 <= len(dice) <= MAX_NUM_DICE):
+            raise ValueError(f"dice must be a tuple of 1 to {MAX_NUM_DICE} Die, got {dice!r}")
+        if self.scene.die is not dice[0]:
+            object.__setattr__(self, "scene", self.scene.with_(die=dice[0]))
+        object.__setattr__(self, "dice", dice)
+        several = len(dice) > 1
+        if self.target is None:
+            object.__setattr__(self, "target", "sum" if several else "faces")
+        if not (isinstance(self.target, str) and self.target in TARGETS):
+            raise ValueError(f"target must be one of {TARGETS}, got {self.target!r}")
+        if not isinstance(self.set_dice, bool):
+            raise ValueError(f"set_dice must be True or False, got {self.set_dice!r}")
+        if not several and self.target != "faces":
+            raise ValueError(f"target must be 'faces' for one die (target='sum' needs "
+                             f"num_dice >= 2), got {self.target!r}")
+        if not several and self.set_dice:
+            raise ValueError(f"set_dice needs num_dice >= 2, got set_dice={self.set_dice!r}")
 
     def _check_walls(self) -> None:
         """Every die in the hand must clear every wall by its reach."""
@@ -151,297 +190,10 @@ class ThrowTask:
                         f"a wall (walls) by {die.reach - gap:.3g} m; use fewer or smaller "
                         "dice (num_dice, size) or other walls")
 
-    @property
-    def n_dice(self) -> int:
-        """Dice per throw: 1."""
-        return 1
-
-    @property
-    def target(self) -> str:
-        """What the target names: "faces", the face to land up."""
-        return "faces"
-
-    @property
-    def target_dim(self) -> int:
-        """Length of the target's encoding at the start of the observation: ``n_faces``."""
-        return self.n_faces
-
-    @property
-    def action_dim(self) -> int:
-        """Action size: :data:`ACTION_DIM`."""
-        return ACTION_DIM
-
-    @property
-    def noise_dim(self) -> int:
-        """Hand noise per throw: :data:`NOISE_DIM` standard normals."""
-        return NOISE_DIM
-
-    @property
-    def n_faces(self) -> int:
-        """Number of faces of the die: targets are 1 … ``n_faces``."""
-        return self.scene.die.n_faces
-
-    @property
-    def obs_dim(self) -> int:
-        """Observation size: the target's encoding and each die's orientation (9 per die)."""
-        return self.target_dim + ORIENTATION_DIM * self.n_dice
-
-    @property
-    def release_position(self) -> np.ndarray:
-        """Centre of the die at release: ``release_height`` along the table normal (3,)."""
-        return self.release_height * np.asarray(self.scene.ground.normal)
-
-    def sample_hand(
-        self,
-        rng: np.random.Generator,
-        target_face: int | None = None,
-        orientation_mode: str = "uniform",
-    ) -> tuple[int, np.ndarray]:
-        """One episode's context: the target face and the hand's orientation (3, 3).
-
-        The target is uniform over 1 … ``n_faces`` unless ``target_face`` is given.
-        ``orientation_mode`` "uniform": over all rotations; "flat": a uniform face read (its
-        reading direction along world z) with a uniform turn about the vertical; "identity":
-        the body frame, no draw.
-        """
-        targets, hands = self.sample_hands([rng], target_face, orientation_mode)
-        return int(targets[0]), hands[0]
-
-    def sample_hands(
-        self,
-        rngs: Sequence[np.random.Generator],
-        target_face: int | None = None,
-        orientation_mode: str = "uniform",
-    ) -> tuple[np.ndarray, np.ndarray]:
-        """One context per generator: targets (n,) and hands (n, 3, 3).
-
-        Each is drawn from its generator as :meth:`sample_hand` draws it; the rotations are
-        built in one batch.
-        """
-        if target_face is not None:
-            check_face("target_face", target_face, self.n_faces)
-        check_orientation_mode(orientation_mode)
-        targets = np.full(len(rngs), target_face or 0, np.int64)
-        draws = np.zeros((len(rngs), 3))
-        for i, rng in enumerate(rngs):
-            if target_face is None:
-                targets[i] = rng.integers(1, self.n_faces + 1)
-            draws[i] = _orientation_draw(rng, orientation_mode, self.n_faces)
-        return targets, _orientations(orientation_mode, draws, self.scene.die)
-
-    def fixed_target(self, target_face: object = None, target_sum: object = None) -> Any:
-        """The episode keywords ``target_face``/``target_sum`` as a fixed target (None: drawn).
-
-        One die: ``target_face`` (1 … ``n_faces``); ``target_sum`` is refused.
-        """
-        if target_sum is not None:
-            raise ValueError(f"target_sum fixes the total of several dice (num_dice >= 2, "
-                             f"target='sum'); this throw has one die, got {target_sum!r}")
-        return None if target_face is None else check_face("target_face", target_face,
-                                                           self.n_faces)
-
-    def sample_noise(self, rng: np.random.Generator, n: int = 1) -> np.ndarray:
-        """Hand noise for ``n`` throws: standard normals (n, :attr:`noise_dim`).
-
-        Scaled by :meth:`release`.
-        """
-        return rng.standard_normal((n, self.noise_dim))
-
-    def decode(self, observations: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Targets and hands from observations (n, :attr:`obs_dim`), as :meth:`observe` took.
-
-        The float32 matrices are projected back onto rotations (nearest in Frobenius norm), so
-        they can be thrown again with :meth:`throw`.
-        """
-        observations = np.atleast_2d(np.asarray(observations, dtype=np.float64))
-        if observations.shape[1] != self.obs_dim:
-            raise ValueError(f"observations must have {self.obs_dim} columns, got "
-                             f"{observations.shape[1]}")
-        u, _, vt = np.linalg.svd(observations[:, self.target_dim:].reshape(-1, 3, 3))
-        hands = (u @ vt).reshape(len(observations), *self._hand_shape)
-        return self._decode_target(observations[:, :self.target_dim]), hands
-
-    @property
-    def _hand_shape(self) -> tuple[int, ...]:
-        return (3, 3)
-
-    def _decode_target(self, encoding: np.ndarray) -> np.ndarray:
-        return encoding.argmax(axis=1) + 1
-
-    def observe(self, targets: np.ndarray, orientations: np.ndarray) -> np.ndarray:
-        """Observations (n, :attr:`obs_dim`) float32: one-hot target, orientation row-major."""
-        targets = np.asarray(targets).reshape(-1)
-        obs = np.zeros((targets.size, self.obs_dim), np.float32)
-        obs[np.arange(targets.size), targets - 1] = 1.0
-        obs[:, self.n_faces:] = np.clip(np.asarray(orientations).reshape(-1, 9), -1.0, 1.0)
-        return obs
-
-    def release(
-        self, actions: np.ndarray, hands: np.ndarray, noise: np.ndarray
-    ) -> tuple[State, np.ndarray]:
-        """Releases actually used for ``actions`` (n, 6), ``hands`` (n, 3, 3), ``noise`` (n, 9).
-
-        Actions are checked (finite, shape) and clipped to [-1, 1]; returns the batch State and a
-        bool (n,) saying which actions were clipped.
-        """
-        actions = check_actions(actions, self.action_dim)
-        clipped = np.any(np.abs(actions) > 1.0, axis=1)
-        noisy = np.clip(actions, -1.0, 1.0) + self.hand_noise * noise[:, :6]
-        tilt = quaternion_to_matrix(_rotation_vector_quaternion(
-            self.orientation_noise * noise[:, 6:]))
-        state = State.release(
-            self.scene, self.release_position, noisy[:, :3] * self.max_speed,
-            noisy[:, 3:] * self.max_spin, tilt @ np.asarray(hands).reshape(-1, 3, 3),
-        )
-        return state, clipped
-
-    def throw(
-        self,
-        actions: np.ndarray,
-        targets: np.ndarray,
-        hands: np.ndarray,
-        noise: np.ndarray,
-        *,
-        record_every: int = 0,
-    ) -> Throw:
-        """Simulate ``n`` throws to rest in one kernel call and score them.
-
-        ``actions`` (n, 6) in [-1, 1]; ``targets`` (n,) in 1 … n_faces; ``hands`` (n, 3, 3)
-        orientations in the hand; ``noise`` (n, 9) from :meth:`sample_noise`. ``record_every``
-        > 0 records the centre and orientation every that many steps (for rendering).
-        """
-        targets = np.array(targets, dtype=np.int64).reshape(-1)  # a copy: envs redraw theirs
-        state, clipped = self.release(actions, hands, noise)
-        record = ("orientations",) if record_every else ("energy",)
-        # Early rest: the same face, rest time and impacts as waiting out the rest hold, ~3x
-        # faster (docs/performance.md); the state at rest is taken when rest is proven.
-        decided = self.until == "decided"
-        result = simulate(self.scene, state, record_every=record_every, record=record,
-                          num_threads=self.num_threads, early_rest=not decided,
-                          stop_when_decided=decided)
-        if not decided:
-            result = _held_within_t_max(result, self.scene)
-        normal = np.asarray(self.scene.ground.normal)
-        speed = np.linalg.norm(state.velocity, axis=1)
-        spin = np.linalg.norm(state.angular_velocity, axis=1)
-        fair = (speed >= self.min_speed) & (spin >= self.min_spin)
-        ended = result.decided if decided else result.settled
-        void = void_reasons(fair, result.unstable, result.sunk, ended, self.until)
-        counts = void == ""
-        success = counts & (result.face == targets)
-        alignment = target_alignment(result.final.orientation, self.scene.die, targets, normal)
-        shaping = np.where(counts, self.shaping * alignment, 0.0)
-        outcome = {"face": result.face, "settled": result.settled, "unstable": result.unstable,
-                   "sunk": result.sunk, "max_sink": result.max_penetration}
-        return self._scored(("target_face", targets), outcome, success, fair, void, shaping,
-                            state, clipped, result)
-
-    def _scored(self, target: tuple[str, np.ndarray], outcome: dict[str, np.ndarray],
-                success: np.ndarray, fair: np.ndarray, void: np.ndarray, shaping: np.ndarray,
-                state: State | GroupState, clipped: np.ndarray,
-                result: Result | GroupResult) -> Throw:
-        """The :class:`Throw` of a scored batch: rewards, info arrays, observations.
-
-        ``target``: the info key of the targets and the targets; ``outcome``: the info arrays
-        of what landed (``face``, ``settled``, ``unstable``, ``sunk``, ``max_sink``, ...).
-        """
-        name, targets = target
-        reward_success = success.astype(np.float64)
-        info = {
-            "is_success": success,
-            name: targets,
-            **outcome,
-            "fair": fair,
-            "void_reason": void,
-            "rest_time": result.rest_time,
-            "impacts": result.impacts,
-            "reward_success": reward_success,
-            "reward_shaping": shaping,
-            "release_velocity": state.velocity,
-            "release_spin": state.angular_velocity,
-            "release_orientation": state.orientation,
-            "action_clipped": clipped,
-        }
-        return Throw(reward=reward_success + shaping, info=info, result=result,
-                     observation=self.observe(targets, result.final.orientation))
-
-
-@dataclass
-class Throw:
-    """Outcome of a batch of n throws.
-
-    ``reward`` (n,); ``info`` arrays over n, keys as in the env's ``info``; ``observation``
-    (n, obs_dim) of the dice at rest; ``result`` from the kernel.
-    """
-
-    reward: np.ndarray
-    info: dict[str, np.ndarray]
-    result: Result | GroupResult
-    observation: np.ndarray
-
-
-@dataclass(frozen=True)
-class GroupThrowTask(ThrowTask):
-    """A throw of several dice from one hand: they fly, collide and land together.
-
-    ``dice``: 2 … :data:`MAX_NUM_DICE` dice, mixed shapes allowed, simulated together with
-    :func:`dice_env.group.simulate_group` (die against die, the planes of ``scene``; the
-    scene's own die is not used). Every other field as :class:`ThrowTask`; ``release_height``
-    must clear the reach of every die.
-
-    **The hand** holds the dice in rows of up to :data:`HAND_ROW` along the table's y axis, the
-    rows one behind the other along its x axis, die ``i`` in row ``i // 4``; neighbours' centres
-    are :attr:`hand_spacing` apart (the largest die's diameter across corners plus
-    :data:`HAND_GAP`), each row centred on y = 0 and the rows on x = 0, so the hand's centre is
-    the release point, all at ``release_height`` (:attr:`hand_offsets`). The hand is rigid:
-    one action gives the hand's velocity ``v`` and spin ``w``, and die ``i`` leaves it with
-    velocity ``v + w x r_i`` and spin ``w`` (``r_i`` its offset); each die has its own hand noise
-    (9 standard normals per die, as one die's, added to the action before that product) and
-    its own orientation in the hand, drawn per die.
-
-    **Targets.** ``target="sum"`` (the default): a total N … sum of the faces is drawn uniformly
-    and the throw succeeds when the faces read add up to it ("roll a seven" with two d6); the
-    observation starts with one one-hot over the totals. Games with several dice score their
-    total (craps, backgammon's moves aside, most board games), so it is the task people throw
-    for; the dense shaping term is 0 (no single face needs to be up). ``target="faces"``: a face
-    per die, each drawn uniformly, success when every die shows its own; the observation starts
-    with one one-hot per die, and the shaping term is the mean over dice of each target's
-    alignment with the table normal. Then every die's orientation (9 numbers per die).
-
-    **Void throws** as one die's (foul: a die released slower than ``min_speed`` or
-    ``min_spin``; unstable; sunk: any die; not settled or not decided), then "leaning": a die
-    ended leaning on another die (not read).
-
-    ``set_dice``: the agent also sets each die in the hand, as craps "dice setters" do: the
-    action grows by 3 per die, a rotation vector ``SET_ANGLE * a`` (rad, world frame) applied
-    to that die's drawn orientation before the orientation noise.
-    """
-
-    dice: tuple[Die, ...] = ()
-    target: str = "sum"
-    set_dice: bool = False
-
-    def __post_init__(self) -> None:
-        if not (isinstance(self.dice, tuple) and all(isinstance(d, Die) for d in self.dice)
-                and 2 <= len(self.dice) <= MAX_NUM_DICE):
-            raise ValueError(f"dice must be a tuple of 2 to {MAX_NUM_DICE} Die, "
-                             f"got {self.dice!r}")
-        if not (isinstance(self.target, str) and self.target in TARGETS):
-            raise ValueError(f"target must be one of {TARGETS}, got {self.target!r}")
-        if not isinstance(self.set_dice, bool):
-            raise ValueError(f"set_dice must be True or False, got {self.set_dice!r}")
-        super().__post_init__()
-        step = self.step
-        if self.scene.t_max / step > ENV_MAX_STEPS:
-            raise ValueError(
-                f"t_max must be at most {ENV_MAX_STEPS:.0e} steps: t_max={self.scene.t_max:g} s "
-                f"over the {self.n_dice} dice's step of {step:.3g} s (die against die included) is "
-                f"{self.scene.t_max / step:.3g} steps; lower t_max or num_dice")
-
     @cached_property
     def die_scenes(self) -> tuple[Scene, ...]:
-        """The scene with each die of :attr:`dice`."""
-        return tuple(self.scene.with_(die=die) for die in self.dice)
+        """The scene with each die of :attr:`dice` (the first is :attr:`scene`)."""
+        return (self.scene, *(self.scene.with_(die=die) for die in self.dice[1:]))
 
     @cached_property
     def step(self) -> float:
@@ -454,10 +206,9 @@ class GroupThrowTask(ThrowTask):
         return len(self.dice)
 
     @property
-    def n_faces(self) -> int:
-        """Refused: several dice have :attr:`faces`, one count per die."""
-        raise ValueError("n_faces is one die's; a throw of several dice has faces (one count "
-                         "per die)")
+    def die_shape(self) -> tuple[int, ...]:
+        """The die axis of per-die arrays: () for one die, (N,) for several."""
+        return () if self.n_dice == 1 else (self.n_dice,)
 
     @property
     def faces(self) -> tuple[int, ...]:
@@ -465,9 +216,22 @@ class GroupThrowTask(ThrowTask):
         return tuple(die.n_faces for die in self.dice)
 
     @property
+    def n_faces(self) -> int:
+        """Faces of the one die: its targets are 1 … ``n_faces`` (several dice: :attr:`faces`)."""
+        if self.n_dice > 1:
+            raise ValueError("n_faces is one die's; a throw of several dice has faces (one "
+                             "count per die)")
+        return self.faces[0]
+
+    @property
     def totals(self) -> range:
         """The totals the faces can add up to: N … the sum of the faces."""
         return range(self.n_dice, sum(self.faces) + 1)
+
+    @property
+    def target_shape(self) -> tuple[int, ...]:
+        """One throw's target: a face per die (:attr:`die_shape`) or a total (())."""
+        return self.die_shape if self.target == "faces" else ()
 
     @property
     def target_dim(self) -> int:
@@ -476,13 +240,23 @@ class GroupThrowTask(ThrowTask):
 
     @property
     def action_dim(self) -> int:
-        """The hand's velocity and spin (6), and 3 per die with ``set_dice``."""
+        """The hand's velocity and spin (:data:`ACTION_DIM`), and 3 per die with ``set_dice``."""
         return ACTION_DIM + (3 * self.n_dice if self.set_dice else 0)
 
     @property
     def noise_dim(self) -> int:
         """Hand noise per throw: :data:`NOISE_DIM` standard normals per die."""
         return NOISE_DIM * self.n_dice
+
+    @property
+    def obs_dim(self) -> int:
+        """Observation size: the target's encoding and each die's orientation (9 per die)."""
+        return self.target_dim + ORIENTATION_DIM * self.n_dice
+
+    @property
+    def release_position(self) -> np.ndarray:
+        """The hand's centre at release: ``release_height`` along the table normal (3,)."""
+        return self.release_height * np.asarray(self.scene.ground.normal)
 
     @property
     def hand_spacing(self) -> float:
@@ -513,17 +287,22 @@ class GroupThrowTask(ThrowTask):
         """Each die's centre at release, (N, 3) m."""
         return self.release_position + self.hand_offsets
 
-    def fixed_target(self, target_face: object = None, target_sum: object = None) -> Any:
-        """The episode keywords as a fixed target (None: drawn).
+    @property
+    def hand_position(self) -> np.ndarray:
+        """The dice's centres in the hand as a pose's position: (3,) for one die, (N, 3)."""
+        return self.release_positions.reshape(*self.die_shape, 3)
 
-        "faces": ``target_face``, one face per die (a sequence of N labels); "sum":
+    def fixed_target(self, target_face: object = None, target_sum: object = None) -> Any:
+        """The episode keywords ``target_face``/``target_sum`` as a fixed target (None: drawn).
+
+        "faces": ``target_face``, a face (one die) or a sequence of N faces; "sum":
         ``target_sum``, an int in :attr:`totals`. The other is refused.
         """
         if self.target == "faces":
             if target_sum is not None:
-                raise ValueError(f"target_sum fixes the total with target='sum'; target is "
-                                 f"'faces' (fix each die's face with target_face), got "
-                                 f"{target_sum!r}")
+                raise ValueError(f"target_sum fixes the total of several dice with "
+                                 f"target='sum'; target is 'faces' (fix each die's face with "
+                                 f"target_face), got {target_sum!r}")
             return None if target_face is None else self._check_faces(target_face)
         if target_face is not None:
             raise ValueError(f"target_face fixes each die's face with target='faces'; target "
@@ -536,7 +315,10 @@ class GroupThrowTask(ThrowTask):
         check_range("target_sum", int(target_sum), self.totals[0], self.totals[-1])
         return int(target_sum)
 
-    def _check_faces(self, value: object) -> tuple[int, ...]:
+    def _check_faces(self, value: object) -> int | tuple[int, ...]:
+        """``target_face``: one die's face, or a sequence of one face per die."""
+        if self.n_dice == 1:
+            return check_face("target_face", value, self.faces[0])
         if isinstance(value, (str, bytes)) or not isinstance(value, Sequence | np.ndarray) \
                 or len(value) != self.n_dice:
             raise ValueError(f"target_face must be a sequence of {self.n_dice} faces, one per "
@@ -550,9 +332,14 @@ class GroupThrowTask(ThrowTask):
         target: Any = None,
         orientation_mode: str = "uniform",
     ) -> tuple[Any, np.ndarray]:
-        """One episode's context: the target (N faces, or a total) and the hands (N, 3, 3)."""
+        """One episode's context: the target and the hand (3, 3), or hands (N, 3, 3).
+
+        ``target``: as :meth:`sample_hands`; ``orientation_mode`` "uniform": over all rotations;
+        "flat": a uniform face read (its reading direction along world z) with a uniform turn
+        about the vertical; "identity": the body frame, no draw.
+        """
         targets, hands = self.sample_hands([rng], target, orientation_mode)
-        return targets[0], hands[0]
+        return targets[0].tolist() if targets.ndim == 1 else targets[0], hands[0]
 
     def sample_hands(
         self,
@@ -560,11 +347,11 @@ class GroupThrowTask(ThrowTask):
         target: Any = None,
         orientation_mode: str = "uniform",
     ) -> tuple[np.ndarray, np.ndarray]:
-        """One context per generator: targets ((n, N) faces or (n,) totals), hands (n, N, 3, 3).
+        """One context per generator: targets (n, :attr:`target_shape`), hands (n, N, 3, 3).
 
         ``target``: a fixed target as :meth:`fixed_target` returns it (None: drawn uniformly:
         each die's face, or the total over :attr:`totals`). Each generator draws the target,
-        then each die's orientation in turn, as one die's.
+        then each die's orientation in turn; the rotations are built in one batch.
         """
         check_orientation_mode(orientation_mode)
         n, faces = len(rngs), np.array(self.faces)
@@ -582,7 +369,15 @@ class GroupThrowTask(ThrowTask):
                 draws[j, i] = _orientation_draw(rng, orientation_mode, self.faces[j])
         hands = np.stack([_orientations(orientation_mode, draws[j], die)
                           for j, die in enumerate(self.dice)], axis=1)
-        return targets, hands
+        return (targets.reshape(n, *self.target_shape),
+                hands.reshape(n, *self.die_shape, 3, 3))
+
+    def sample_noise(self, rng: np.random.Generator, n: int = 1) -> np.ndarray:
+        """Hand noise for ``n`` throws: standard normals (n, :attr:`noise_dim`).
+
+        Scaled by :meth:`release`.
+        """
+        return rng.standard_normal((n, self.noise_dim))
 
     def observe(self, targets: np.ndarray, orientations: np.ndarray) -> np.ndarray:
         """Observations (n, :attr:`obs_dim`) float32: the target's one-hot(s), orientations."""
@@ -597,27 +392,45 @@ class GroupThrowTask(ThrowTask):
         obs[:, self.target_dim:] = np.clip(orientations, -1.0, 1.0)
         return obs
 
-    @property
-    def _hand_shape(self) -> tuple[int, ...]:
-        return (self.n_dice, 3, 3)
+    def decode(self, observations: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Targets and hands from observations (n, :attr:`obs_dim`), as :meth:`observe` took.
 
-    def _decode_target(self, encoding: np.ndarray) -> np.ndarray:
+        The float32 matrices are projected back onto rotations (nearest in Frobenius norm), so
+        they can be thrown again with :meth:`throw`.
+        """
+        observations = np.atleast_2d(np.asarray(observations, dtype=np.float64))
+        if observations.shape[1] != self.obs_dim:
+            raise ValueError(f"observations must have {self.obs_dim} columns, got "
+                             f"{observations.shape[1]}")
+        n, encoding = len(observations), observations[:, :self.target_dim]
+        u, _, vt = np.linalg.svd(observations[:, self.target_dim:].reshape(-1, 3, 3))
         if self.target == "sum":
-            return encoding.argmax(axis=1) + self.totals[0]
-        ends = np.cumsum(self.faces)
-        return np.stack([encoding[:, end - f:end].argmax(axis=1) + 1
-                         for f, end in zip(self.faces, ends, strict=True)], axis=1)
+            targets = encoding.argmax(axis=1) + self.totals[0]
+        else:
+            ends = np.cumsum(self.faces)
+            targets = np.stack([encoding[:, end - f:end].argmax(axis=1) + 1
+                                for f, end in zip(self.faces, ends, strict=True)], axis=1)
+        return (targets.reshape(n, *self.target_shape),
+                (u @ vt).reshape(n, *self.die_shape, 3, 3))
 
     def release(
-        self, actions: np.ndarray, hands: np.ndarray, noise: np.ndarray
-    ) -> tuple[GroupState, np.ndarray]:
-        """Releases for ``actions`` (n, :attr:`action_dim`), ``hands`` (n, N, 3, 3), ``noise``.
+        self, actions: np.ndarray, hands: np.ndarray,
+        noise: np.ndarray | Sequence[np.random.Generator], *,
+        action_shape: tuple[int, ...] | None = None,
+    ) -> tuple[State | GroupState, np.ndarray]:
+        """Releases for ``actions`` (n, :attr:`action_dim`), ``hands`` and ``noise``.
 
-        ``noise`` (n, 9 N). Returns the group's state and which actions were clipped (n,).
+        ``hands`` (n, 3, 3) or (n, N, 3, 3); ``noise`` (n, :attr:`noise_dim`) standard normals,
+        or one generator per throw that draws them (:meth:`sample_noise`) once the actions
+        pass. Actions are checked (finite, shape; ``action_shape`` as :func:`check_actions`'
+        ``shape``) and clipped to [-1, 1]. Returns the die's State (one die) or the group's,
+        and which actions were clipped (n,).
         """
-        actions = check_actions(actions, self.action_dim)
+        actions = check_actions(actions, self.action_dim, action_shape)
         clipped = np.any(np.abs(actions) > 1.0, axis=1)
         actions = np.clip(actions, -1.0, 1.0)
+        if len(noise) and isinstance(noise[0], np.random.Generator):
+            noise = np.concatenate([self.sample_noise(rng) for rng in noise])
         n, dice = len(actions), self.n_dice
         noise = np.asarray(noise, dtype=np.float64).reshape(n, dice, NOISE_DIM)
         noisy = actions[:, None, :ACTION_DIM] + self.hand_noise * noise[..., :ACTION_DIM]
@@ -629,72 +442,123 @@ class GroupThrowTask(ThrowTask):
                 @ hands
         orientation = _rotation_matrices(self.orientation_noise * noise[..., 6:]) @ hands
         positions = self.release_positions
-        return GroupState.of([
-            State.release(scene, positions[i], velocity[:, i], spin[:, i], orientation[:, i])
-            for i, scene in enumerate(self.die_scenes)]), clipped
+        states = [State.release(scene, positions[i], velocity[:, i], spin[:, i], orientation[:, i])
+                  for i, scene in enumerate(self.die_scenes)]
+        return (GroupState.of(states) if dice > 1 else states[0]), clipped
 
     def throw(
         self,
         actions: np.ndarray,
         targets: np.ndarray,
         hands: np.ndarray,
-        noise: np.ndarray,
+        noise: np.ndarray | Sequence[np.random.Generator],
         *,
         record_every: int = 0,
+        action_shape: tuple[int, ...] | None = None,
     ) -> Throw:
         """Simulate ``n`` throws of the dice in one kernel call and score them.
 
-        ``targets``: (n, N) faces or (n,) totals; ``hands`` (n, N, 3, 3); ``noise`` (n, 9 N).
-        Info as one die's, per throw, except per die (n, N): ``face`` (0: not read),
-        ``leaning``, ``impacts``, ``release_velocity`` (n, N, 3), ``release_spin`` (n, N, 3),
-        ``release_orientation`` (n, N, 3, 3); ``total`` (n,) the faces' sum; ``target_face``
-        (n, N) or ``target_sum`` (n,).
+        ``actions`` (n, :attr:`action_dim`) in [-1, 1]; ``targets`` (n, :attr:`target_shape`);
+        ``hands`` (n, 3, 3) or (n, N, 3, 3) orientations in the hand; ``noise`` and
+        ``action_shape`` as :meth:`release`'s. ``record_every`` > 0 records the centres and
+        orientations every that many steps (for rendering). Info per throw (n,) as the env's,
+        per die (a die axis for several dice, :attr:`die_shape`): ``face`` (0: not read),
+        ``impacts``, ``release_velocity`` (.., 3), ``release_spin`` (.., 3),
+        ``release_orientation`` (.., 3, 3); several dice add ``total`` (n,) the faces' sum and
+        ``leaning`` per die.
         """
-        by_face = self.target == "faces"
-        targets = np.array(targets, dtype=np.int64).reshape((-1, self.n_dice) if by_face
-                                                             else (-1,))
-        state, clipped = self.release(actions, hands, noise)
-        decided = self.until == "decided"
-        result = simulate_group(self.scene, self.dice, state, stop_when_decided=decided,
-                                record_every=record_every, orientations=bool(record_every),
-                                num_threads=self.num_threads)
-        speed = np.linalg.norm(state.velocity, axis=2)
-        spin = np.linalg.norm(state.angular_velocity, axis=2)
+        state, clipped = self.release(actions, hands, noise, action_shape=action_shape)
+        n, by_face = len(clipped), self.target == "faces"
+        targets = np.array(targets, dtype=np.int64).reshape(n, *self.target_shape)
+        result = self._simulate(state, record_every)
+        leaning = (~result.read if isinstance(result, GroupResult)
+                   else np.zeros((n, 1), np.bool_))
+        speed = np.linalg.norm(state.velocity, axis=-1).reshape(n, -1)
+        spin = np.linalg.norm(state.angular_velocity, axis=-1).reshape(n, -1)
         fair = np.all((speed >= self.min_speed) & (spin >= self.min_spin), axis=1)
-        ended = result.decided if decided else result.settled
-        leaning = ~result.read
-        void = void_reasons(fair, result.unstable, result.sunk.any(axis=1), ended, self.until,
-                            leaning.any(axis=1))
+        sunk = result.sunk.reshape(n, -1).any(axis=1)
+        ended = result.decided if self.until == "decided" else result.settled
+        void = void_reasons(fair, result.unstable, sunk, ended, self.until, leaning.any(axis=1))
         counts = void == ""
-        total = result.face.sum(axis=1)
+        faces = result.face.reshape(n, -1)
         if by_face:
-            hit = np.all(result.face == targets, axis=1)
+            per_die = targets.reshape(n, -1)
+            hit = np.all(faces == per_die, axis=1)
             normal = np.asarray(self.scene.ground.normal)
-            alignment = np.mean([target_alignment(result.final.orientation[:, i], die,
-                                                  targets[:, i], normal)
+            final = result.final.orientation.reshape(n, -1, 3, 3)
+            alignment = np.mean([target_alignment(final[:, i], die, per_die[:, i], normal)
                                  for i, die in enumerate(self.dice)], axis=0)
         else:
-            hit, alignment = total == targets, np.zeros(len(targets))
+            hit, alignment = faces.sum(axis=1) == targets, np.zeros(n)
         success = counts & hit
+        reward_success = success.astype(np.float64)
         shaping = np.where(counts, self.shaping * alignment, 0.0)
-        outcome = {"face": result.face, "total": total, "leaning": leaning,
-                   "settled": result.settled, "unstable": result.unstable,
-                   "sunk": result.sunk.any(axis=1),
-                   "max_sink": result.max_penetration.max(axis=1)}
-        return self._scored(("target_face" if by_face else "target_sum", targets), outcome,
-                            success, fair, void, shaping, state, clipped, result)
+        several = {"total": faces.sum(axis=1), "leaning": leaning} if self.n_dice > 1 else {}
+        info = {
+            "is_success": success,
+            "target_face" if by_face else "target_sum": targets,
+            "face": result.face, **several,
+            "settled": result.settled,
+            "unstable": result.unstable,
+            "sunk": sunk,
+            "max_sink": result.max_penetration.reshape(n, -1).max(axis=1),
+            "fair": fair,
+            "void_reason": void,
+            "rest_time": result.rest_time,
+            "impacts": result.impacts,
+            "reward_success": reward_success,
+            "reward_shaping": shaping,
+            "release_velocity": state.velocity,
+            "release_spin": state.angular_velocity,
+            "release_orientation": state.orientation,
+            "action_clipped": clipped,
+        }
+        return Throw(reward=reward_success + shaping, info=info, result=result,
+                     observation=self.observe(targets, result.final.orientation))
+
+    def _simulate(self, state: State | GroupState, record_every: int) -> Result | GroupResult:
+        """The kernel's run of the released dice: one die's (early rest), or the group's."""
+        decided = self.until == "decided"
+        if isinstance(state, GroupState):
+            return simulate_group(self.scene, self.dice, state, stop_when_decided=decided,
+                                  record_every=record_every, orientations=bool(record_every),
+                                  num_threads=self.num_threads)
+        # Early rest: the same face, rest time and impacts as waiting out the rest hold, ~3x
+        # faster (docs/performance.md); the state at rest is taken when rest is proven.
+        result = simulate(self.scene, state, record_every=record_every,
+                          record=("orientations",) if record_every else ("energy",),
+                          num_threads=self.num_threads, early_rest=not decided,
+                          stop_when_decided=decided)
+        return result if decided else _held_within_t_max(result, self.scene)
+
+
+@dataclass
+class Throw:
+    """Outcome of a batch of n throws.
+
+    ``reward`` (n,); ``info`` arrays over n, keys as in the env's ``info``; ``observation``
+    (n, obs_dim) of the dice at rest; ``result`` from the kernel.
+    """
+
+    reward: np.ndarray
+    info: dict[str, np.ndarray]
+    result: Result | GroupResult
+    observation: np.ndarray
+
+
+# ThrowTask's fields that make_task takes as keywords (the scene and dice come from keywords).
+TASK_KEYWORDS = tuple(f.name for f in fields(ThrowTask) if f.name not in ("scene", "dice"))
 
 
 def void_reasons(fair: np.ndarray, unstable: np.ndarray, sunk: np.ndarray, ended: np.ndarray,
-                 until: str, leaning: np.ndarray | None = None) -> np.ndarray:
+                 until: str, leaning: np.ndarray) -> np.ndarray:
     """Why each throw does not count, (n,) strings, ``""`` where it counts.
 
     The first that applies of "foul" (not ``fair``), "unstable", "sunk", not ended
     (:data:`UNTIL` of ``until``) and "leaning" (a die left leaning on another).
     """
-    counted = np.where(leaning, "leaning", "") if leaning is not None else ""
     return np.where(~fair, "foul", np.where(unstable, "unstable", np.where(
-        sunk, "sunk", np.where(~ended, UNTIL[until], counted))))
+        sunk, "sunk", np.where(~ended, UNTIL[until], np.where(leaning, "leaning", "")))))
 
 
 def target_alignment(orientation: np.ndarray, die: Die, targets: np.ndarray,
@@ -706,17 +570,26 @@ def target_alignment(orientation: np.ndarray, die: Die, targets: np.ndarray,
     return np.einsum("bij,bj,i->b", orientation, die.reading[np.asarray(targets) - 1], normal)
 
 
-def check_actions(actions: np.ndarray, dim: int = ACTION_DIM) -> np.ndarray:
-    """Actions as a float64 (n, dim) array; NaN/inf or a wrong shape raise ``ValueError``."""
+def check_actions(actions: np.ndarray, dim: int = ACTION_DIM,
+                  shape: tuple[int, ...] | None = None) -> np.ndarray:
+    """Actions as a float64 (n, dim) array; NaN/inf or a wrong shape raise ``ValueError``.
+
+    ``shape``: the one shape the caller takes (an env's: (dim,) or (num_envs, dim)); None:
+    (dim,) or (n, dim).
+    """
+    allowed = f"({dim},) or (n, {dim})" if shape is None else str(shape)
     try:
         array = np.asarray(actions, dtype=np.float64)
     except (TypeError, ValueError) as error:
-        raise ValueError(f"action must be an array of numbers, shape ({dim},) or (n, {dim}), "
+        raise ValueError(f"action must be an array of numbers, shape {allowed}, "
                          f"got {actions!r}") from error
+    if shape is not None and array.shape != shape:
+        raise ValueError(f"action{'s' if len(shape) > 1 else ''} must have shape {shape}, "
+                         f"got {array.shape}")
     if array.shape == (dim,):
         array = array[None]
     if array.ndim != 2 or array.shape[1] != dim:
-        raise ValueError(f"action must have shape ({dim},) or (n, {dim}), got {array.shape}")
+        raise ValueError(f"action must have shape {allowed}, got {array.shape}")
     if not np.all(np.isfinite(array)):
         raise ValueError(f"action must be finite (no NaN or inf), got {actions!r}")
     return array
@@ -736,52 +609,26 @@ def check_rotation(name: str, value: object) -> np.ndarray:
     return rot
 
 
-def make_task(
-    *,
-    release_height: float | None = None,
-    max_speed: float = 1.0,
-    max_spin: float = 40.0,
-    hand_noise: float = 0.05,
-    orientation_noise: float = 0.05,
-    min_speed: float = 0.0,
-    min_spin: float = 0.0,
-    shaping: float = 0.0,
-    num_threads: int | None = None,
-    until: str = "rest",
-    num_dice: int | None = None,
-    target: str | None = None,
-    set_dice: bool = False,
-    scene: Scene | None = None,
-    **physics: Any,
-) -> ThrowTask:
+def make_task(*, num_dice: int | None = None, scene: Scene | None = None,
+              **keywords: Any) -> ThrowTask:
     """A validated :class:`ThrowTask` from flat keywords (the env's ``gym.make`` keywords).
 
-    ``physics`` are :func:`~dice_env.envs.keywords.build_scene`'s keywords (``t_max``, ``mass``,
-    ``stiffness``, ...): each one given modifies ``scene`` (default: ``Scene()`` with ``t_max``
-    5 s), whose other fields are kept, so changes to the default scene flow through.
+    ``keywords``: the task's fields :data:`TASK_KEYWORDS` (``release_height``, ``max_speed``,
+    ..., ``target``, ``set_dice``), and :func:`~dice_env.envs.keywords.build_scene`'s keywords
+    (``t_max``, ``die``, ``mass``, ``stiffness``, ...): each one given modifies ``scene``
+    (default: ``Scene()`` with the env's ``t_max``,
+    :data:`~dice_env.envs.keywords.DEFAULT_T_MAX`), whose other fields are kept, so changes to
+    the default scene flow through.
 
-    Several dice (:class:`GroupThrowTask`): ``num_dice`` (1 … :data:`MAX_NUM_DICE`; None: 1, or
-    the length of a ``die`` tuple) repeats the die; ``die`` may also be a tuple of names or
-    :class:`Die`, one per die (the die keywords ``size``, ``mass``, ``load_*`` apply to each).
-    ``target`` "sum" (the default for several dice) or "faces" (one die's only target);
-    ``set_dice`` lets the agent set the dice in the hand. One die is today's :class:`ThrowTask`.
+    Several dice: ``num_dice`` (1 … :data:`MAX_NUM_DICE`; None: 1, or the length of a ``die``
+    tuple) repeats the die; ``die`` may also be a tuple of names or :class:`Die`, one per die
+    (the die keywords ``size``, ``mass``, ``load_*`` apply to each).
     """
-    check_task_keywords(physics)
-    dice = check_num_dice(num_dice, physics.pop("die", None))
-    common = {"release_height": release_height, "max_speed": max_speed, "max_spin": max_spin,
-              "hand_noise": hand_noise, "orientation_noise": orientation_noise,
-              "min_speed": min_speed, "min_spin": min_spin, "shaping": shaping,
-              "num_threads": num_threads, "until": until}
-    if len(dice) == 1:
-        if target not in (None, "faces"):
-            raise ValueError(f"target must be 'faces' for one die (target='sum' needs "
-                             f"num_dice >= 2), got {target!r}")
-        if set_dice is not False:
-            raise ValueError(f"set_dice needs num_dice >= 2, got set_dice={set_dice!r}")
-        return ThrowTask(build_scene(scene, die=dice[0], **physics), **common)
-    scenes = [build_scene(scene, die=die, **physics) for die in dice]
-    return GroupThrowTask(scenes[0], **common, dice=tuple(s.die for s in scenes),
-                          target="sum" if target is None else target, set_dice=set_dice)
+    check_task_keywords(keywords)
+    fields_given = {name: keywords.pop(name) for name in TASK_KEYWORDS if name in keywords}
+    dice = check_num_dice(num_dice, keywords.pop("die", None))
+    scenes = [build_scene(scene, die=die, **keywords) for die in dice]
+    return ThrowTask(scene=scenes[0], dice=tuple(s.die for s in scenes), **fields_given)
 
 
 def check_num_dice(num_dice: object, die: object) -> tuple[Any, ...]:
@@ -803,15 +650,19 @@ def check_num_dice(num_dice: object, die: object) -> tuple[Any, ...]:
     return tuple(die)
 
 
+def task_keywords() -> set[str]:
+    """The keywords :func:`make_task` takes: the task's, ``num_dice``, and the scene's."""
+    return {*TASK_KEYWORDS, *inspect.signature(make_task).parameters,
+            *inspect.signature(build_scene).parameters} - {"keywords"}
+
+
 def check_task_keywords(keywords: dict[str, object]) -> dict[str, object]:
     """``keywords`` unchanged if :func:`make_task` takes them all, else ``ValueError``."""
-    known = {*inspect.signature(make_task).parameters,
-             *inspect.signature(build_scene).parameters} - {"physics"}
-    unknown = sorted(set(keywords) - set(known))
+    unknown = sorted(set(keywords) - task_keywords())
     if unknown:
-        raise ValueError(f"unknown keyword(s) {unknown}; DiceThrow-v0 takes {sorted(known)} "
-                         "plus target_face, orientation_mode, render_mode, render_width, "
-                         "render_height")
+        raise ValueError(f"unknown keyword(s) {unknown}; DiceThrow-v0 takes "
+                         f"{sorted(task_keywords())} plus target_face, target_sum, "
+                         "orientation_mode, render_mode, render_width, render_height")
     return keywords
 
 

@@ -17,7 +17,7 @@ from dice_env.envs.dice_throw import (
     episode_hand,
     observation_space,
 )
-from dice_env.envs.task import ThrowTask, check_actions
+from dice_env.envs.task import ThrowTask
 
 MAX_NUM_ENVS = 2**20  # about 1 kB per env in the kernel's and the env's arrays
 
@@ -39,24 +39,12 @@ class DiceThrowVectorEnv(VectorEnv):
         "autoreset_mode": AutoresetMode.SAME_STEP,
     }
 
-    def __init__(
-        self,
-        num_envs: int = 1,
-        render_mode: str | None = None,
-        *,
-        target_face: Any = None,
-        target_sum: int | None = None,
-        orientation_mode: str = "uniform",
-        render_width: int = 320,
-        render_height: int = 240,
-        **task_keywords: Any,
-    ) -> None:
+    def __init__(self, num_envs: int = 1, render_mode: str | None = None,
+                 **keywords: Any) -> None:
         if isinstance(num_envs, bool) or not isinstance(num_envs, (int, np.integer)) or not (
                 1 <= num_envs <= MAX_NUM_ENVS):
             raise ValueError(f"num_envs must be an int in [1, {MAX_NUM_ENVS}], got {num_envs!r}")
-        self.task: ThrowTask = configure(self, ("rgb_array",), render_mode, target_face,
-                                         target_sum, orientation_mode, render_width,
-                                         render_height, task_keywords)
+        self.task: ThrowTask = configure(self, ("rgb_array",), render_mode, **keywords)
         self.num_envs = int(num_envs)
         self.single_observation_space = observation_space(self.task)
         self.single_action_space = action_space(self.task)
@@ -106,12 +94,8 @@ class DiceThrowVectorEnv(VectorEnv):
         """Throw all N dice in one kernel call, then start the next episodes."""
         if not self._rngs:
             raise RuntimeError("call reset() before step()")
-        actions = check_actions(actions, self.task.action_dim)
-        if actions.shape[0] != self.num_envs:
-            raise ValueError(f"actions must have shape ({self.num_envs}, "
-                             f"{self.task.action_dim}), got {actions.shape}")
-        noise = np.concatenate([self.task.sample_noise(rng) for rng in self._rngs])
-        throw = self.task.throw(actions, self._targets, self._hands, noise)
+        throw = self.task.throw(actions, self._targets, self._hands, self._rngs,
+                                action_shape=self.action_space.shape)
         mask = np.ones(self.num_envs, np.bool_)
         final_info: dict[str, Any] = {}
         for key, value in throw.info.items():
@@ -132,6 +116,5 @@ class DiceThrowVectorEnv(VectorEnv):
         from dice_env.envs.render import render_task
 
         task = self.task
-        position = task.release_position if task.n_dice == 1 else task.release_positions
-        return tuple(render_task(task, position, self._hands[i], size=self.render_size)
+        return tuple(render_task(task, task.hand_position, self._hands[i], size=self.render_size)
                      for i in range(self.num_envs))

@@ -1,7 +1,7 @@
 """Setting the dice for a craps throw: how much control over the seven survives the back wall.
 
 ``run(out, quick, throws)`` writes ``out/craps.md`` and ``out/figures/craps.png``. Two default
-d6 leave one hand (:class:`dice_env.envs.task.GroupThrowTask`, the env's hand with
+d6 leave one hand (:class:`dice_env.envs.task.ThrowTask`, the env's hand with
 ``num_dice=2``) on the craps layout (:func:`dice_env.materials.scene` ``"craps"``) toward the
 back wall 1 m ahead (:func:`dice_env.surroundings.craps`), with backspin, each throw until
 both faces are decided. The dice are either **set** in the hand (:func:`sevens_set`: every
@@ -26,7 +26,7 @@ import numpy as np
 from scipy import stats
 
 from dice_env import materials
-from dice_env.envs.task import GroupThrowTask, make_task
+from dice_env.envs.task import ThrowTask, make_task
 from dice_env.group import GroupResult
 from dice_env.intervals import wilson
 from dice_env.rotations import axis_angle
@@ -73,7 +73,7 @@ def sevens_set() -> np.ndarray:
     return np.stack([np.eye(3), axis_angle([0.0, 1.0, 0.0], np.pi)])
 
 
-def hand(noise: float) -> GroupThrowTask:
+def hand(noise: float) -> ThrowTask:
     """The env's two-dice hand on the craps scene with hand and orientation noise ``noise``."""
     return make_task(num_dice=2, scene=craps_scene(), release_height=RELEASE_HEIGHT,
                      max_speed=MAX_SPEED, max_spin=MAX_SPIN, hand_noise=noise,
@@ -220,7 +220,7 @@ thread(s) of a shared machine ({cpu:.0f} s of this process's CPU time).
 ## The throw
 
 Two default d6 leave the env's hand (`make_task(num_dice=2, ...)`,
-`GroupThrowTask.release`: side by side across the throw, {RELEASE_HEIGHT * 100:g} cm above
+`ThrowTask.release`: side by side across the throw, {RELEASE_HEIGHT * 100:g} cm above
 the table) on the craps layout (`materials.scene("craps")`: restitution 0.40, friction 0.20,
 S = {scene.ground.stiffness:g} N/m) toward the back wall {CRAPS[0]:g} m ahead, between side
 walls {CRAPS[1]:g} m apart (`surroundings.craps()`, walls of the default table's material).
