@@ -35,6 +35,7 @@ from dice_env.kernel import (
     Dice,
     Options,
     Outcome,
+    PlaneContacts,
     Records,
     Scratch,
     Stops,
@@ -54,11 +55,12 @@ def simulate_cuda(dice: Dice, body: Body, contact: Contact, options: Options, st
     if i < dice.x.shape[0]:
         advance(i, dice, body, contact, options, stops, records, out, Scratch(
             cuda.local.array((3, 3), np.float64), cuda.local.array((3, 3), np.float64),
-            cuda.local.array((GPU_MAX_VERTICES, 3), np.float64),
-            cuda.local.array((MAX_PLANES, GPU_MAX_VERTICES), np.float64),
-            cuda.local.array((MAX_PLANES, GPU_MAX_VERTICES, 3), np.float64),
-            cuda.local.array((MAX_PLANES, GPU_MAX_VERTICES), np.bool_),
-            cuda.local.array(MAX_PLANES, np.float64)))
+            PlaneContacts(
+                cuda.local.array((GPU_MAX_VERTICES, 3), np.float64),
+                cuda.local.array((MAX_PLANES, GPU_MAX_VERTICES), np.float64),
+                cuda.local.array((MAX_PLANES, GPU_MAX_VERTICES, 3), np.float64),
+                cuda.local.array((MAX_PLANES, GPU_MAX_VERTICES), np.bool_),
+                cuda.local.array((1, MAX_PLANES), np.float64))))
 
 
 def run(dice: Dice, body: Body, contact: Contact, options: Options, stops: Stops,

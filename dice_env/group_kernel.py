@@ -38,15 +38,11 @@ The throw ends when every die is at rest (every corner slow, for the hold, on th
 on the planes or held by another die: a die left leaning on another rests too) or, with a
 decision rule, when no energy left in the group can change any die's face: for every die
 ``i``, its own energy plus all that the others could give it (their energy above their
-least, ``Bodies.floor``) is below the lock of the face it reads. The flight's closed form
-and the midpoint's extrapolation are the single die's (:func:`dice_env.kernel.euler_steps`,
-:func:`dice_env.kernel.ahead`); its loop over a die's vertices and the planes is
-:func:`dice_env.kernel.simulate_one`'s, written out again: as an inlined function taking the arrays
-it costs the single-die kernel 12 atomic reference counts per step, which numba's pruning
-cannot remove across the loops (six arrays bound on entry and released on exit, in the LLVM
-IR), and the scalar paper scene runs at 0.72–0.88 of the inline loop
-(``benchmarks/kernel_ab.py``, six rounds). This module imports
-nothing from the package but :mod:`dice_env.kernel`.
+least, ``Bodies.floor``) is below the lock of the face it reads. Each die's step on the planes
+is the single die's (:func:`dice_env.kernel.die_on_planes`, the group's dice one after
+another in its per-vertex arrays), and so are the flight's closed form and the midpoint's
+extrapolation (:func:`dice_env.kernel.euler_steps`, :func:`dice_env.kernel.ahead`). This
+module imports nothing from the package but :mod:`dice_env.kernel`.
 """
 
 from __future__ import annotations
@@ -60,11 +56,7 @@ from numba import njit, prange
 from dice_env.kernel import (
     ABORT_EVERY,
     ABORTED,
-    CT,
-    DAMP,
     DECIDED,
-    KT,
-    MU,
     NONFINITE,
     NX,
     NY,
@@ -72,18 +64,18 @@ from dice_env.kernel import (
     OFFSET,
     RUNNING,
     SETTLED,
-    STIFF,
     Contact,
     Options,
+    PlaneContacts,
     ahead,
     angular_velocity,
+    die_on_planes,
     euler_steps,
     face_read,
     flight_jump,
     relative_rise,
     stick_slip,
     torque_free,
-    vertex_on_plane,
 )
 
 # Edges closer to parallel than this (|e_a x e_b|^2 over |e_a|^2 |e_b|^2) have no edge contact:
@@ -635,13 +627,16 @@ def advance_group(g: int, dice: GroupDice, bodies: Bodies, hulls: Hulls, pair: P
     pu, pw = u.copy(), w.copy()  # velocities one step back, for the midpoint forces
     cu, cw = np.empty((n_dice, 3)), np.empty((n_dice, 3))
     n_v = vertices.shape[1]
-    world = np.empty((n_dice, n_v, 3))
-    heights = np.full((n_dice, n_v, n_planes), -1.0)  # vertex heights entering the last step
-    anchors = np.zeros((n_dice, n_v, n_planes, 3))  # stick-slip: where each spring is tied
-    tied = np.zeros((n_dice, n_v, n_planes), np.bool_)
+    world = np.empty((n_dice, n_v, 3))  # every die's corners, placed where a pair may touch
+    placed = np.zeros(n_dice, np.bool_)
+    flat = vertices.reshape((n_dice * n_v, 3))  # die a's vertices from row a n_v on
+    offsets = np.empty((n_dice * n_v, 3))
+    lowest = np.empty((n_dice, n_planes))  # each die's lowest vertex height over each plane
+    contacts = PlaneContacts(offsets, np.full((n_planes, n_dice * n_v), -1.0),
+                             np.zeros((n_planes, n_dice * n_v, 3)),
+                             np.zeros((n_planes, n_dice * n_v), np.bool_), lowest)
     # likewise die against die (see _push_tied)
     die_ties = np.zeros((n_dice, n_v, n_dice, 4) if pair.stick else (0, 0, 0, 4))
-    lowest = np.empty((n_dice, n_planes))  # each die's lowest vertex height over each plane
     seen = np.empty((2 * n_v + 2 * hulls.edges.shape[1] * hulls.planes.shape[1], 3))
     force, torque = np.empty((n_dice, 3)), np.empty((n_dice, 3))
     kinetic, own = np.empty(n_dice), np.empty(n_dice)
@@ -692,73 +687,22 @@ def advance_group(g: int, dice: GroupDice, bodies: Bodies, hulls: Hulls, pair: P
             kinetic[a] = 0.5 * m * (u0 * u0 + u1 * u1 + u2 * u2) + 0.5 * (
                 l0 * wl0 + l1 * wl1 + l2 * wl2)
             near[a] = stops.at_rest and kinetic[a] < 0.5 * m * stops.v_rest * stops.v_rest
-            f0, f1, f2 = 0.0, 0.0, -m * g_acc
-            t0, t1, t2 = 0.0, 0.0, 0.0
-            spring, spring_t, touch, fast, hit = 0.0, 0.0, 0, 0.0, 0.0
-            dt_m = dt / m
             x0, x1, x2 = x[a, 0], x[a, 1], x[a, 2]
+            law = (gated, stick, vmin, midpoint, rotation, dt, dt / m, m * g_acc)
+            (f0, f1, f2, t0, t1, t2, spring, spring_t, touching[a], approach[a], fastest[a],
+             sink) = die_on_planes(
+                a, a * n_v, n_vertices[a], flat, planes, law, contacts,
+                (q[a, 0, 0], q[a, 0, 1], q[a, 0, 2], q[a, 1, 0], q[a, 1, 1], q[a, 1, 2],
+                 q[a, 2, 0], q[a, 2, 1], q[a, 2, 2]),
+                ((x0, x1, x2), (u0, u1, u2), (w0, w1, w2), (cu0, cu1, cu2), (cw0, cw1, cw2)),
+                near[a])
+            max_pen[g, a] = max(max_pen[g, a], sink)
             for p in range(n_planes):
-                lowest[a, p] = np.inf
-            for k in range(n_vertices[a]):
-                b0, b1, b2 = vertices[a, k, 0], vertices[a, k, 1], vertices[a, k, 2]
-                rk0 = q[a, 0, 0] * b0 + q[a, 0, 1] * b1 + q[a, 0, 2] * b2
-                rk1 = q[a, 1, 0] * b0 + q[a, 1, 1] * b1 + q[a, 1, 2] * b2
-                rk2 = q[a, 2, 0] * b0 + q[a, 2, 1] * b1 + q[a, 2, 2] * b2
-                if near[a]:
-                    v0, v1, v2 = u0 + w1 * rk2 - w2 * rk1, u1 + w2 * rk0 - w0 * rk2, \
-                        u2 + w0 * rk1 - w1 * rk0
-                    fast = max(fast, v0 * v0 + v1 * v1 + v2 * v2)
-                position = (x0 + rk0, x1 + rk1, x2 + rk2)
-                world[a, k, 0], world[a, k, 1], world[a, k, 2] = position
-                for p in range(n_planes):
-                    height = (planes[p, NX] * position[0] + planes[p, NY] * position[1]
-                              + planes[p, NZ] * position[2]) - planes[p, OFFSET]
-                    lowest[a, p] = min(lowest[a, p], height)
-                    before = heights[a, k, p]
-                    heights[a, k, p] = height
-                    if height >= 0.0:
-                        tied[a, k, p] = False
-                        if gated:
-                            continue
-                    velocity = (u0 + w1 * rk2 - w2 * rk1, u1 + w2 * rk0 - w0 * rk2,
-                                u2 + w0 * rk1 - w1 * rk0)
-                    middle = velocity
-                    if midpoint:
-                        middle = (cu0 + cw1 * rk2 - cw2 * rk1, cu1 + cw2 * rk0 - cw0 * rk2,
-                                  cu2 + cw0 * rk1 - cw1 * rk0)
-                    plane = (planes[p, NX], planes[p, NY], planes[p, NZ], planes[p, OFFSET],
-                             planes[p, STIFF], planes[p, DAMP], planes[p, MU], planes[p, KT],
-                             planes[p, CT])
-                    anchor, tie = (0.0, 0.0, 0.0), False
-                    if stick:
-                        anchor = (anchors[a, k, p, 0], anchors[a, k, p, 1], anchors[a, k, p, 2])
-                        tie = tied[a, k, p]
-                    fk0, fk1, fk2, spring_k, stored, below, dg, approach_k, anchor, tie = (
-                        vertex_on_plane(plane, stick, vmin, height, before, position, velocity,
-                                        middle, midpoint, dt, dt_m, anchor, tie))
-                    if stick:
-                        anchors[a, k, p, 0], anchors[a, k, p, 1], anchors[a, k, p, 2] = anchor
-                        tied[a, k, p] = tie
-                    if below:
-                        touch += 1
-                        touched[g, a, p] = True
-                        spring += spring_k
-                        max_pen[g, a] = max(max_pen[g, a], dg)
-                        hit = max(hit, approach_k)
-                    spring_t += stored
-                    f0 += fk0
-                    f1 += fk1
-                    f2 += fk2
-                    if rotation:
-                        t0 += rk1 * fk2 - rk2 * fk1
-                        t1 += rk2 * fk0 - rk0 * fk2
-                        t2 += rk0 * fk1 - rk1 * fk0
-            for k in range(n_vertices[a], n_v):  # a smaller die's padding: its first corner
-                world[a, k, 0], world[a, k, 1], world[a, k, 2] = world[a, 0, 0], world[a, 0, 1], \
-                    world[a, 0, 2]
+                if lowest[a, p] < 0.0:
+                    touched[g, a, p] = True
+            placed[a] = False
             force[a, 0], force[a, 1], force[a, 2] = f0, f1, f2
             torque[a, 0], torque[a, 1], torque[a, 2] = t0, t1, t2
-            touching[a], fastest[a], approach[a] = touch, fast, hit
             own[a] = kinetic[a] + m * g_acc * x2 + spring + spring_t
             checked += kinetic[a] + m * g_acc * x2 + spring
             tangential += spring_t
@@ -773,6 +717,10 @@ def advance_group(g: int, dice: GroupDice, bodies: Bodies, hulls: Hulls, pair: P
                 touch_ab = False
                 if d0 * d0 + d1 * d1 + d2 * d2 < reach * reach:
                     apart = False
+                    for c in (a, b):
+                        if not placed[c]:
+                            _place(world, c, n_vertices[c], x, offsets)
+                            placed[c] = True
                     depth, n, separating[a, b] = least_overlap(
                         a, b, world, x, q, axes, directions, separating[a, b])
                     if depth > 0.0:
@@ -896,6 +844,22 @@ def advance_group(g: int, dice: GroupDice, bodies: Bodies, hulls: Hulls, pair: P
     out.energy_rise[g] = max(out.energy_rise[g], relative_rise(e_max, e_start, e_tol))
 
 
+@njit(cache=True, forceinline=True, _nrt=False)
+def _place(world: np.ndarray, a: int, count: int, x: np.ndarray, offsets: np.ndarray) -> None:
+    """Die ``a``'s corners in the world, ``world[a]``, from its vertex offsets this step.
+
+    A smaller die's padding repeats its first corner.
+    """
+    first = a * world.shape[1]
+    for k in range(count):
+        r = first + k
+        world[a, k, 0], world[a, k, 1], world[a, k, 2] = x[a, 0] + offsets[r, 0], \
+            x[a, 1] + offsets[r, 1], x[a, 2] + offsets[r, 2]
+    for k in range(count, world.shape[1]):
+        world[a, k, 0], world[a, k, 1], world[a, k, 2] = world[a, 0, 0], world[a, 0, 1], \
+            world[a, 0, 2]
+
+
 @njit(cache=True)
 def _group_jump(planes: np.ndarray, lowest: np.ndarray, touching: np.ndarray, x: np.ndarray,
                 u: np.ndarray, ang: np.ndarray, force: np.ndarray, bodies: Bodies,
@@ -919,7 +883,7 @@ def _group_jump(planes: np.ndarray, lowest: np.ndarray, touching: np.ndarray, x:
             spin = math.sqrt(ang[a, 0] ** 2 + ang[a, 1] ** 2 + ang[a, 2] ** 2) \
                 * bodies.inv_i_min[a]
         dt_m = dt / m
-        jump = min(jump, flight_jump(planes, lowest[a], (u[a, 0], u[a, 1], u[a, 2]), spin,
+        jump = min(jump, flight_jump(planes, lowest, a, (u[a, 0], u[a, 1], u[a, 2]), spin,
                                      bodies.r_max[a], (force[a, 0] * dt_m, force[a, 1] * dt_m,
                                                        force[a, 2] * dt_m), dt, limit))
         for b in range(a + 1, n_dice):

@@ -56,14 +56,15 @@ takes a few named groups (:class:`Body`, :class:`Contact`, :class:`Options`, :cl
 :class:`Records`, :class:`Dice`, :class:`Outcome`), built by
 :func:`dice_env.simulate.pack_scene` and :func:`dice_env.simulate.pack_run`; each piece of the
 physics is one small inlined function: a vertex on a plane (:func:`vertex_on_plane`,
-:func:`stick_slip`), the contact-free jump (:func:`free_steps`, :func:`euler_steps`,
-:func:`torque_free`), the face
-read and the decided-face test (:func:`face_read`, :func:`decided`), the rotation
-(:func:`rotate`); :func:`advance` loops them for one die in scratch arrays its caller gives,
-:func:`simulate_one` on the CPU and :mod:`dice_env.cuda_kernel` on a GPU, where numba-cuda
-compiles the same functions again.
+:func:`stick_slip`), one die's step on all the planes (:func:`die_on_planes`, also each die's
+in :mod:`dice_env.group_kernel`), the contact-free jump (:func:`free_steps`,
+:func:`euler_steps`, :func:`torque_free`), the face read and the decided-face test
+(:func:`face_read`, :func:`decided`), the rotation (:func:`rotate`); :func:`advance` loops
+them for one die in scratch arrays its caller gives, :func:`simulate_one` on the CPU and
+:mod:`dice_env.cuda_kernel` on a GPU, where numba-cuda compiles the same functions again.
 The hot loop hands those pieces numbers, not arrays: in numba each array handed on costs an
-atomic reference count, which cost the loop more than its arithmetic. This module imports
+atomic reference count, which cost the loop more than its arithmetic; the one piece that
+takes arrays, :func:`die_on_planes`, is compiled without reference counts. This module imports
 nothing else from the package.
 """
 
@@ -206,23 +207,32 @@ class Outcome(NamedTuple):
     abort: np.ndarray
 
 
-class Scratch(NamedTuple):
-    """One die's working arrays in :func:`advance`.
+class PlaneContacts(NamedTuple):
+    """The vertices against the planes, kept from step to step (:func:`die_on_planes`).
 
-    Larger arrays are fine; their contents on entry do not matter. ``qi`` (3, 3) the
-    orientation, ``qj`` (3, 3) one recorded within a jump; per vertex (N) and plane (P):
-    ``offsets`` (N, 3) from the centre, ``heights`` (P, N) entering the last step,
-    ``anchors`` (P, N, 3) and ``tied`` (P, N) the stick-slip ties, ``lowest`` (P,) each
-    plane's lowest vertex height.
+    Larger arrays are fine; their contents on entry do not matter. Per vertex row (V: a
+    group's dice one after another) and plane (P): ``offsets`` (V, 3) from the die's centre,
+    ``heights`` (P, V) entering the last step, ``anchors`` (P, V, 3) and ``tied`` (P, V) the
+    stick-slip ties; ``lowest`` (D, P) each die's lowest vertex height over each plane.
     """
 
-    qi: np.ndarray
-    qj: np.ndarray
     offsets: np.ndarray
     heights: np.ndarray
     anchors: np.ndarray
     tied: np.ndarray
     lowest: np.ndarray
+
+
+class Scratch(NamedTuple):
+    """One die's working arrays in :func:`advance`.
+
+    ``qi`` (3, 3) the orientation, ``qj`` (3, 3) one recorded within a jump, and the die's
+    :class:`PlaneContacts`.
+    """
+
+    qi: np.ndarray
+    qj: np.ndarray
+    contacts: PlaneContacts
 
 
 @njit(cache=True, inline="always")
@@ -453,6 +463,93 @@ def stick_slip(plane: tuple, height: float, before: float, position: tuple, ut: 
     return ft0, ft1, ft2, 0.5 * kt * (e0 * e0 + e1 * e1 + e2 * e2), (a0, a1, a2)
 
 
+@njit(cache=True, forceinline=True, _nrt=False)
+def die_on_planes(die: int, first: int, count: int, vertices: np.ndarray, planes: np.ndarray,
+                  law: tuple, contacts: PlaneContacts, q: tuple, motion: tuple,
+                  near_rest: bool) -> tuple:
+    """One die's step on the planes: their forces and torques on it, and the step's books.
+
+    The die's ``count`` vertices are the rows from ``first`` on of ``vertices`` (body frame)
+    and of ``contacts``' per-vertex arrays; its lowest heights are row ``die`` of
+    ``contacts.lowest``. ``law``: ``(gated, stick, vmin, midpoint, rotation, dt, dt_m,
+    weight)``; ``q``: its rotation, nine numbers row by row; ``motion``: ``(x, u, w, cu,
+    cw)``, its centre, velocity and angular velocity, and the last two at the midpoint
+    forces' time. First every vertex's offset (and, near rest, the fastest vertex), then
+    plane by plane the vertices' heights, and velocities only where a vertex feels the plane.
+
+    Returns the force (3, gravity's ``-weight`` included), the torque (3), the energy in the
+    normal and in the tangential springs, how many vertices are below a plane, the fastest
+    approach among them, the largest squared vertex speed (near rest only, else 0) and the
+    deepest sink. Compiled without reference counts (``_nrt=False``): it binds the arrays it
+    is handed at every step, and numba cannot prune those counts across its loops.
+    """
+    gated, stick, vmin, midpoint, rotation, dt, dt_m, weight = law
+    q00, q01, q02, q10, q11, q12, q20, q21, q22 = q
+    (x0, x1, x2), (u0, u1, u2), (w0, w1, w2), (cu0, cu1, cu2), (cw0, cw1, cw2) = motion
+    offsets, heights, anchors, tied = contacts.offsets, contacts.heights, contacts.anchors, \
+        contacts.tied
+    f0, f1, f2 = 0.0, 0.0, -weight
+    t0, t1, t2 = 0.0, 0.0, 0.0
+    spring, spring_t, touching, approach, fastest, pen = 0.0, 0.0, 0, 0.0, 0.0, 0.0
+    for k in range(first, first + count):
+        b0, b1, b2 = vertices[k, 0], vertices[k, 1], vertices[k, 2]
+        rk0 = q00 * b0 + q01 * b1 + q02 * b2
+        rk1 = q10 * b0 + q11 * b1 + q12 * b2
+        rk2 = q20 * b0 + q21 * b1 + q22 * b2
+        offsets[k, 0], offsets[k, 1], offsets[k, 2] = rk0, rk1, rk2
+        if near_rest:
+            v0, v1, v2 = u0 + w1 * rk2 - w2 * rk1, u1 + w2 * rk0 - w0 * rk2, \
+                u2 + w0 * rk1 - w1 * rk0
+            fastest = max(fastest, v0 * v0 + v1 * v1 + v2 * v2)
+    for p in range(planes.shape[0]):
+        plane = (planes[p, NX], planes[p, NY], planes[p, NZ], planes[p, OFFSET],
+                 planes[p, STIFF], planes[p, DAMP], planes[p, MU], planes[p, KT], planes[p, CT])
+        pn0, pn1, pn2, offset = plane[0], plane[1], plane[2], plane[3]
+        low = np.inf
+        for k in range(first, first + count):
+            rk0, rk1, rk2 = offsets[k, 0], offsets[k, 1], offsets[k, 2]
+            position = (x0 + rk0, x1 + rk1, x2 + rk2)
+            height = pn0 * position[0] + pn1 * position[1] + pn2 * position[2] - offset
+            low = min(low, height)
+            before = heights[p, k]
+            heights[p, k] = height
+            if height >= 0.0:
+                tied[p, k] = False
+                if gated:
+                    continue
+            velocity = (u0 + w1 * rk2 - w2 * rk1, u1 + w2 * rk0 - w0 * rk2,
+                        u2 + w0 * rk1 - w1 * rk0)
+            middle = velocity
+            if midpoint:
+                middle = (cu0 + cw1 * rk2 - cw2 * rk1, cu1 + cw2 * rk0 - cw0 * rk2,
+                          cu2 + cw0 * rk1 - cw1 * rk0)
+            anchor, tie = (0.0, 0.0, 0.0), False  # the ties matter to stick-slip only
+            if stick:
+                anchor = (anchors[p, k, 0], anchors[p, k, 1], anchors[p, k, 2])
+                tie = tied[p, k]
+            fk0, fk1, fk2, spring_k, stored, below, dg, approach_k, anchor, tie = (
+                vertex_on_plane(plane, stick, vmin, height, before, position, velocity,
+                                middle, midpoint, dt, dt_m, anchor, tie))
+            if stick:
+                anchors[p, k, 0], anchors[p, k, 1], anchors[p, k, 2] = anchor
+                tied[p, k] = tie
+            if below:
+                touching += 1
+                spring += spring_k
+                pen = max(pen, dg)
+                approach = max(approach, approach_k)
+            spring_t += stored
+            f0 += fk0
+            f1 += fk1
+            f2 += fk2
+            if rotation:
+                t0 += rk1 * fk2 - rk2 * fk1
+                t1 += rk2 * fk0 - rk0 * fk2
+                t2 += rk0 * fk1 - rk1 * fk0
+        contacts.lowest[die, p] = low
+    return f0, f1, f2, t0, t1, t2, spring, spring_t, touching, approach, fastest, pen
+
+
 @njit(cache=True)
 def decided(lock: np.ndarray, faces: np.ndarray, reads_down: bool, q: np.ndarray, up: tuple,
             energy: float) -> bool:
@@ -481,9 +578,10 @@ def simulate_one(i: int, dice: Dice, body: Body, contact: Contact, options: Opti
     """Advance die ``i`` in place; see :func:`simulate_batch`."""
     n_vertices, n_planes = body.vertices.shape[0], contact.planes.shape[0]
     advance(i, dice, body, contact, options, stops, records, out, Scratch(
-        np.empty((3, 3)), np.empty((3, 3)), np.empty((n_vertices, 3)),
-        np.empty((n_planes, n_vertices)), np.empty((n_planes, n_vertices, 3)),
-        np.empty((n_planes, n_vertices), np.bool_), np.empty(n_planes)))
+        np.empty((3, 3)), np.empty((3, 3)), PlaneContacts(
+            np.empty((n_vertices, 3)), np.empty((n_planes, n_vertices)),
+            np.empty((n_planes, n_vertices, 3)), np.empty((n_planes, n_vertices), np.bool_),
+            np.empty((1, n_planes)))))
 
 
 @njit(cache=True)
@@ -494,7 +592,9 @@ def advance(i: int, dice: Dice, body: Body, contact: Contact, options: Options, 
     Nothing here allocates or calls an array method, so the same source compiles as a CUDA
     device function (:mod:`dice_env.cuda_kernel`).
     """
-    qi, qj, offsets, heights, anchors, tied, lowest = scratch
+    qi, qj, contacts = scratch
+    heights, anchors, tied, lowest = contacts.heights, contacts.anchors, contacts.tied, \
+        contacts.lowest
     # the groups' arrays taken out once: each taking costs a reference count
     vertices, planes, faces, lock = body.vertices, contact.planes, body.faces, stops.lock
     inv_body, inv_iso, reads_down = body.inv_inertia, body.inv_iso, body.reads_down
@@ -508,6 +608,7 @@ def advance(i: int, dice: Dice, body: Body, contact: Contact, options: Options, 
     mass = body.mass
     w0, w1, w2 = (dice.w[i, 0], dice.w[i, 1], dice.w[i, 2]) if rotation else (0.0, 0.0, 0.0)
     dt_m = dt / mass
+    law = (gated, stick, vmin, midpoint, rotation, dt, dt_m, mass * g)
     n_steps, stride = stops.n_steps, records.stride
     for a in range(3):
         for c in range(3):
@@ -549,71 +650,14 @@ def advance(i: int, dice: Dice, body: Body, contact: Contact, options: Options, 
             l0 * wl0 + l1 * wl1 + l2 * wl2
         )
         near_rest = stops.at_rest and kinetic < kinetic_rest
-        # 1.-2. vertices, and the forces and torques of the planes on them: first every
-        # vertex's offset (and, near rest, the fastest vertex), then plane by plane the
-        # vertices' heights, and velocities only where a vertex feels the plane
-        cu0, cu1, cu2 = cu
-        cw0, cw1, cw2 = cw
-        f0, f1, f2 = 0.0, 0.0, -mass * g
-        t0, t1, t2 = 0.0, 0.0, 0.0
-        spring, spring_t, touching, approach, fastest = 0.0, 0.0, 0, 0.0, 0.0
-        for k in range(n_vertices):
-            b0, b1, b2 = vertices[k, 0], vertices[k, 1], vertices[k, 2]
-            rk0 = qi[0, 0] * b0 + qi[0, 1] * b1 + qi[0, 2] * b2
-            rk1 = qi[1, 0] * b0 + qi[1, 1] * b1 + qi[1, 2] * b2
-            rk2 = qi[2, 0] * b0 + qi[2, 1] * b1 + qi[2, 2] * b2
-            offsets[k, 0], offsets[k, 1], offsets[k, 2] = rk0, rk1, rk2
-            if near_rest:
-                v0, v1, v2 = u0 + w1 * rk2 - w2 * rk1, u1 + w2 * rk0 - w0 * rk2, \
-                    u2 + w0 * rk1 - w1 * rk0
-                fastest = max(fastest, v0 * v0 + v1 * v1 + v2 * v2)
-        for p in range(n_planes):
-            plane = (planes[p, NX], planes[p, NY], planes[p, NZ], planes[p, OFFSET],
-                     planes[p, STIFF], planes[p, DAMP], planes[p, MU], planes[p, KT],
-                     planes[p, CT])
-            pn0, pn1, pn2, offset = plane[0], plane[1], plane[2], plane[3]
-            low = np.inf
-            for k in range(n_vertices):
-                rk0, rk1, rk2 = offsets[k, 0], offsets[k, 1], offsets[k, 2]
-                position = (x0 + rk0, x1 + rk1, x2 + rk2)
-                height = pn0 * position[0] + pn1 * position[1] + pn2 * position[2] - offset
-                low = min(low, height)
-                before = heights[p, k]
-                heights[p, k] = height
-                if height >= 0.0:
-                    tied[p, k] = False
-                    if gated:
-                        continue
-                velocity = (u0 + w1 * rk2 - w2 * rk1, u1 + w2 * rk0 - w0 * rk2,
-                            u2 + w0 * rk1 - w1 * rk0)
-                middle = velocity
-                if midpoint:
-                    middle = (cu0 + cw1 * rk2 - cw2 * rk1, cu1 + cw2 * rk0 - cw0 * rk2,
-                              cu2 + cw0 * rk1 - cw1 * rk0)
-                anchor, tie = (0.0, 0.0, 0.0), False  # the ties matter to stick-slip only
-                if stick:
-                    anchor = (anchors[p, k, 0], anchors[p, k, 1], anchors[p, k, 2])
-                    tie = tied[p, k]
-                fk0, fk1, fk2, spring_k, stored, below, dg, approach_k, anchor, tie = (
-                    vertex_on_plane(plane, stick, vmin, height, before, position, velocity,
-                                    middle, midpoint, dt, dt_m, anchor, tie))
-                if stick:
-                    anchors[p, k, 0], anchors[p, k, 1], anchors[p, k, 2] = anchor
-                    tied[p, k] = tie
-                if below:
-                    touching += 1
-                    spring += spring_k
-                    pen = max(pen, dg)
-                    approach = max(approach, approach_k)
-                spring_t += stored
-                f0 += fk0
-                f1 += fk1
-                f2 += fk2
-                if rotation:
-                    t0 += rk1 * fk2 - rk2 * fk1
-                    t1 += rk2 * fk0 - rk0 * fk2
-                    t2 += rk0 * fk1 - rk1 * fk0
-            lowest[p] = low
+        # 1.-2. the planes' forces and torques on the vertices
+        (f0, f1, f2, t0, t1, t2, spring, spring_t, touching, approach, fastest,
+         sink) = die_on_planes(
+            0, 0, n_vertices, vertices, planes, law, contacts,
+            (qi[0, 0], qi[0, 1], qi[0, 2], qi[1, 0], qi[1, 1], qi[1, 2], qi[2, 0], qi[2, 1],
+             qi[2, 2]),
+            ((x0, x1, x2), (u0, u1, u2), (w0, w1, w2), cu, cw), near_rest)
+        pen = max(pen, sink)
         # energy of the state entering this step. The gain check leaves out the tangential
         # springs: a slip re-ties a spring to carry the whole force mu fn, damping share
         # included, which can stretch it beyond what the vertex's motion put in (on a soft,
@@ -649,8 +693,8 @@ def advance(i: int, dice: Dice, body: Body, contact: Contact, options: Options, 
         jump = 1
         if options.flight and touching == 0:
             spin = math.sqrt(l0 * l0 + l1 * l1 + l2 * l2) * body.inv_i_min if rotation else 0.0
-            jump = flight_jump(planes, lowest, (u0, u1, u2), spin, body.r_max, (dv0, dv1, dv2),
-                               dt, n_steps - step + 1)
+            jump = flight_jump(planes, lowest, 0, (u0, u1, u2), spin, body.r_max,
+                               (dv0, dv1, dv2), dt, n_steps - step + 1)
         if jump > 1:
             if n_rec > 0:  # the records falling inside the jump (it does not depend on them)
                 _record_jump(records, i, step, jump, (x0, x1, x2), (u0, u1, u2), (l0, l1, l2),
@@ -725,9 +769,9 @@ def ahead(v: tuple, before: tuple) -> tuple:
 
 
 @njit(cache=True, inline="always")
-def flight_jump(planes: np.ndarray, lowest: np.ndarray, u: tuple, spin: float, r_max: float,
-          dv: tuple, dt: float, limit: int) -> int:
-    """Flight steps to take at once (at least 1).
+def flight_jump(planes: np.ndarray, lowest: np.ndarray, die: int, u: tuple, spin: float,
+                r_max: float, dv: tuple, dt: float, limit: int) -> int:
+    """Flight steps to take at once (at least 1), for die ``die`` of ``lowest`` (D, P).
 
     All but the last of those surely free of every plane, so the step before a contact is a
     plain one.
@@ -735,7 +779,7 @@ def flight_jump(planes: np.ndarray, lowest: np.ndarray, u: tuple, spin: float, r
     free = limit
     for p in range(planes.shape[0]):
         n0, n1, n2 = planes[p, NX], planes[p, NY], planes[p, NZ]
-        free = min(free, free_steps(lowest[p], n0 * u[0] + n1 * u[1] + n2 * u[2], spin,
+        free = min(free, free_steps(lowest[die, p], n0 * u[0] + n1 * u[1] + n2 * u[2], spin,
                                     r_max, n0 * dv[0] + n1 * dv[1] + n2 * dv[2], dt, limit))
     return max(1, free - 1)
 
