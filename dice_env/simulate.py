@@ -16,7 +16,7 @@ import numba
 import numpy as np
 
 from dice_env import group_kernel, kernel, vector_kernel
-from dice_env.checks import as_batch, check_choice, check_finite, check_range
+from dice_env.checks import as_batch, check_bool, check_choice, check_finite, check_range
 from dice_env.compile_notice import announce, ready
 from dice_env.rotations import orthonormality_error
 from dice_env.scene import ContactLaw, FrictionLaw, Scene, Scheme
@@ -334,8 +334,7 @@ def check_run(scene: Scene, state: object, kind: type, record_every: object,
             or record_every < 0:
         raise ValueError(f"record_every must be an int >= 0, got {record_every!r}")
     for name, flag in flags.items():
-        if not isinstance(flag, (bool, np.bool_)):
-            raise TypeError(f"{name} must be a bool, got {flag!r}")
+        check_bool(name, flag)
     return thread_count(num_threads)
 
 
