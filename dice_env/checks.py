@@ -80,6 +80,15 @@ def as_floats(name: str, value: object) -> np.ndarray:
         raise ValueError(f"{name} must be an array of numbers, got {value!r}") from error
 
 
+def as_shaped(name: str, value: object, shape: tuple[int, ...]) -> np.ndarray:
+    """``value`` as a finite float64 array of ``shape``, or ``ValueError`` naming ``name``."""
+    array = as_floats(name, value)
+    if array.shape != shape:
+        raise ValueError(f"{name} must have shape {shape}, got {array.shape}")
+    check_finite(name, array)
+    return array
+
+
 def as_batch(name: str, value: np.ndarray, tail: tuple[int, ...]) -> np.ndarray:
     """Return ``value`` as a finite float64 array of shape ``(B, *tail)`` (adds a batch axis)."""
     array = as_floats(name, value)

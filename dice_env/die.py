@@ -31,7 +31,7 @@ from typing import NamedTuple
 import numpy as np
 
 from dice_env import polyhedra
-from dice_env.checks import check_choice, check_finite, check_positive, check_range
+from dice_env.checks import as_shaped, check_choice, check_positive, check_range
 from dice_env.pips import Pips, drill, with_defaults
 from dice_env.table import DIE_EDGE, DIE_MASS
 
@@ -234,10 +234,7 @@ class Die:
     @classmethod
     def from_node_masses(cls, masses: np.ndarray, edge: float = DIE_EDGE) -> Die:
         """A d6 whose whole mass sits in its 8 corner nodes (inertia of those point masses)."""
-        masses = np.asarray(masses, dtype=np.float64)
-        if masses.shape != (8,):
-            raise ValueError(f"masses must have shape (8,), got {masses.shape}")
-        check_finite("masses", masses)
+        masses = as_shaped("masses", masses, (8,))
         if np.any(masses <= 0):
             raise ValueError("masses must all be > 0")
         die = cls(edge=edge)
@@ -424,10 +421,7 @@ class Die:
              size: float, mass: float, com: tuple[float, ...] | np.ndarray,
              inertia: tuple[tuple[float, ...], ...] | None, reads_down: bool) -> None:
         check_positive("mass", mass)
-        com = np.asarray(com, dtype=np.float64)
-        if com.shape != (3,):
-            raise ValueError(f"com must have shape (3,), got {com.shape}")
-        check_finite("com", com)
+        com = as_shaped("com", com, (3,))
         normals = polyhedra.face_normals(vertices, faces)
         if np.any(normals @ com >= _face_distances(vertices, faces, normals)):
             raise ValueError("com must lie inside the die (closer to the geometric centre than "
@@ -566,10 +560,7 @@ def _solid_inertia(name: str, vertices: np.ndarray, faces: tuple[tuple[int, ...]
 
 
 def _check_inertia(inertia: object) -> None:
-    inertia = np.asarray(inertia, dtype=np.float64)
-    if inertia.shape != (3, 3):
-        raise ValueError(f"inertia must have shape (3, 3), got {inertia.shape}")
-    check_finite("inertia", inertia)
+    inertia = as_shaped("inertia", inertia, (3, 3))
     if not np.allclose(inertia, inertia.T, rtol=1e-12, atol=0.0):
         raise ValueError("inertia must be symmetric")
     principal = np.linalg.eigvalsh(inertia)

@@ -16,6 +16,7 @@ import numpy as np
 from dice_env import table
 from dice_env.checks import (
     as_enum,
+    as_shaped,
     check_bool,
     check_finite,
     check_nonnegative,
@@ -94,10 +95,7 @@ class Plane:
     def __post_init__(self) -> None:
         check_material(self.stiffness, self.damping, self.friction, self.tangential)
         check_finite("offset", self.offset)
-        normal = np.asarray(self.normal, dtype=np.float64)
-        if normal.shape != (3,):
-            raise ValueError(f"normal must have shape (3,), got {normal.shape}")
-        check_finite("normal", normal)
+        normal = as_shaped("normal", self.normal, (3,))
         norm = float(np.linalg.norm(normal))
         if norm == 0.0:
             raise ValueError("normal must be a non-zero vector (it is normalised), got (0, 0, 0)")
@@ -147,10 +145,7 @@ class Wall(Plane):
     def through(cls, point: tuple[float, float, float], normal: tuple[float, float, float],
                 **material: float) -> Wall:
         """The wall through ``point`` facing ``normal`` (any length), with ``material``."""
-        point = np.asarray(point, dtype=np.float64)
-        if point.shape != (3,):
-            raise ValueError(f"point must have shape (3,), got {point.shape}")
-        check_finite("point", point)
+        point = as_shaped("point", point, (3,))
         n = np.asarray(normal, dtype=np.float64)
         length = float(np.linalg.norm(n)) if n.shape == (3,) else 0.0
         if length == 0.0 or not math.isfinite(length):
