@@ -120,7 +120,7 @@ class GroupState(DiceArrays):
 
 @dataclass
 class GroupResult(RunResult):
-    """Outcome of B throws of N dice: the fields of :class:`dice_env.simulate.RunResult`.
+    """Outcome of B throws of N dice: the fields of :class:`dice_env.Result`, and more.
 
     Per die (B, N): ``face`` (the label read, 0 where not read), ``read`` (False for a die
     leaning on another at the end), ``impacts``, ``die_impacts`` (starts of a contact with

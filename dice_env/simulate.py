@@ -141,21 +141,7 @@ class State(DiceArrays):
 
 @dataclass
 class RunResult:
-    """What every run returns, arrays over the batch (B,) or its dice (B, N).
-
-    - ``face``: the label read at the end (the face up against gravity, whatever the floor's
-      tilt; the d4's face down);
-    - ``settled``: came to rest; ``rest_time``: when the rest began (s; the time simulated if
-      not settled);
-    - ``decided``: ended by ``stop_when_decided`` with too little energy left to change face;
-    - ``impacts``: airborne-to-contact transitions;
-    - ``unstable``: energy rose beyond the scene's tolerance, or the state stopped being finite;
-      ``energy_rise``: the largest rise above the start in units of that tolerance;
-    - ``max_penetration``: deepest corner below a plane (m); ``sunk``: deeper than the
-      scene's :attr:`~dice_env.scene.Scene.sink_limit` (a contact too soft for the load or the
-      impact: physics the model cannot represent; never count such a throw's face);
-    - ``steps``: steps taken; ``final``: the state at the end.
-    """
+    """The fields of every run's outcome, one die's or several's; :class:`Result` explains them."""
 
     face: np.ndarray
     settled: np.ndarray
@@ -172,7 +158,20 @@ class RunResult:
 
 @dataclass
 class Result(RunResult):
-    """Outcome of a batch of throws: the fields of :class:`RunResult` over the batch (B,).
+    """Outcome of a batch of throws (arrays over the batch, B).
+
+    - ``face``: the label read at the end (the face up against gravity, whatever the floor's
+      tilt; the d4's face down);
+    - ``settled``: came to rest; ``rest_time``: when the rest began (s; the time simulated if
+      not settled);
+    - ``decided``: ended by ``stop_when_decided`` with too little energy left to change face;
+    - ``impacts``: airborne-to-contact transitions;
+    - ``unstable``: energy rose beyond the scene's tolerance, or the state stopped being finite;
+      ``energy_rise``: the largest rise above the start in units of that tolerance;
+    - ``max_penetration``: deepest corner below a plane (m); ``sunk``: deeper than the
+      scene's :attr:`~dice_env.scene.Scene.sink_limit` (a contact too soft for the load or the
+      impact: physics the model cannot represent; never count such a throw's face);
+    - ``steps``: steps taken; ``final``: the state at the end.
 
     With recording: ``t`` (n,), ``x_cm`` (B, n, 3), ``energy`` (B, n) as the listing computes
     it (kinetic + m g z, no ground springs), ``orientations`` (B, n, 3, 3), ``nodes``
