@@ -10,7 +10,7 @@ import threading
 from collections.abc import Callable
 from dataclasses import dataclass
 from types import ModuleType
-from typing import ClassVar, NamedTuple, Self
+from typing import ClassVar, Self
 
 import numba
 import numpy as np
@@ -399,25 +399,18 @@ def outcome_fields(scene: Scene, outcome: kernel.Outcome | group_kernel.GroupOut
             "sunk": outcome.max_pen > scene.sink_limit * size, "steps": outcome.steps}
 
 
-class Backend(NamedTuple):
-    """A CPU kernel's two loops over a batch: on numba's threads and on the calling thread."""
-
-    parallel: Callable
-    serial: Callable
-
-
 DEVICES = ("cpu", "cuda")  # where simulate runs
 UP = np.array([0.0, 0.0, 1.0])  # against gravity: faces are read relative to it
 RECORDS = ("energy", "orientations", "nodes")
 RELEASE_SINK = 1e-3  # deepest corner of a release, as a fraction of the die's size
 MAX_RECORD_BYTES = 4 * 2**30  # records larger than this are refused before any work
 ROTATION_TOL = 1e-6  # State.orientation's allowed orthonormality error (a long run drifts)
-# The CPU kernel of each kind of run: a single die, the paper's scene on the vector kernel
-# (:func:`dice_env.vector_kernel.covers`), several dice together.
-BACKENDS = {
-    "die": Backend(kernel.simulate_batch, kernel.simulate_serial),
-    "paper": Backend(vector_kernel.simulate_batch, vector_kernel.simulate_serial),
-    "dice": Backend(group_kernel.simulate_groups, group_kernel.simulate_groups_serial),
+# The CPU kernel of each kind of run, its loop on numba's threads and its serial loop: a
+# single die, the paper's scene (dice_env.vector_kernel.covers), several dice together.
+BACKENDS: dict[str, tuple[Callable, Callable]] = {
+    "die": (kernel.simulate_batch, kernel.simulate_serial),
+    "paper": (vector_kernel.simulate_batch, vector_kernel.simulate_serial),
+    "dice": (group_kernel.simulate_groups, group_kernel.simulate_groups_serial),
 }
 # Each CPU kernel (by its parallel loop): its costly functions, its name for a user and its
 # cold compile time on two cores (s, about; benchmarks/cold_start.py), said on stderr before
