@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Hashable, Iterable
+from enum import Enum, IntEnum
 
 import numpy as np
 
@@ -25,15 +27,49 @@ def check_nonnegative(name: str, value: float) -> None:
         raise ValueError(f"{name} must be a finite number >= 0, got {value!r}")
 
 
-def check_range(
-    name: str, value: float, low: float, high: float, *, high_open: bool = False
-) -> None:
-    """Raise ``ValueError`` unless ``low <= value <= high`` (``< high`` if ``high_open``)."""
-    ok = _is_real(value) and math.isfinite(value) and low <= value
+def check_range(name: str, value: float, low: float, high: float, *, low_open: bool = False,
+                high_open: bool = False) -> None:
+    """Raise ``ValueError`` unless ``low <= value <= high`` (``<`` at an open end)."""
+    ok = _is_real(value) and math.isfinite(value)
+    ok = ok and (low < value if low_open else low <= value)
     ok = ok and (value < high if high_open else value <= high)
     if not ok:
-        bracket = ")" if high_open else "]"
-        raise ValueError(f"{name} must be in [{low}, {high}{bracket}, got {value!r}")
+        interval = f"{'(' if low_open else '['}{low}, {high}{')' if high_open else ']'}"
+        raise ValueError(f"{name} must be in {interval}, got {value!r}")
+
+
+def check_bool(name: str, value: object) -> None:
+    """Raise ``TypeError`` unless ``value`` is a bool (Python's or numpy's)."""
+    if not isinstance(value, (bool, np.bool_)):
+        raise TypeError(f"{name} must be a bool, got {value!r}")
+
+
+def check_choice(name: str, value: object, choices: Iterable[object], *,
+                 also: str = "") -> None:
+    """Raise ``ValueError`` unless ``value`` is one of ``choices`` (``also``: what else is).
+
+    A value that cannot be one of them (an array, a list) is refused too.
+    """
+    choices = tuple(choices)
+    if not isinstance(value, Hashable) or value not in choices:
+        raise ValueError(f"{name} must be one of {', '.join(map(repr, choices))}{also}, got "
+                         f"{value!r}")
+
+
+def as_enum(name: str, kind: type[IntEnum], value: object) -> IntEnum:
+    """``value`` as a member of ``kind``: a member, its name (any case) or its int value.
+
+    A member of another enum is refused, whatever its value.
+    """
+    if isinstance(value, kind):
+        return value
+    if isinstance(value, str) and value.upper() in kind.__members__:
+        return kind[value.upper()]
+    if isinstance(value, (int, np.integer)) and not isinstance(value, (bool, Enum)) \
+            and value in kind._value2member_map_:
+        return kind(value)
+    names = ", ".join(repr(m.name.lower()) for m in kind)
+    raise ValueError(f"{name} must be a {kind.__name__} or one of {names}, got {value!r}")
 
 
 def as_floats(name: str, value: object) -> np.ndarray:
@@ -42,6 +78,15 @@ def as_floats(name: str, value: object) -> np.ndarray:
         return np.asarray(value, dtype=np.float64)
     except (TypeError, ValueError) as error:
         raise ValueError(f"{name} must be an array of numbers, got {value!r}") from error
+
+
+def as_shaped(name: str, value: object, shape: tuple[int, ...]) -> np.ndarray:
+    """``value`` as a finite float64 array of ``shape``, or ``ValueError`` naming ``name``."""
+    array = as_floats(name, value)
+    if array.shape != shape:
+        raise ValueError(f"{name} must have shape {shape}, got {array.shape}")
+    check_finite(name, array)
+    return array
 
 
 def as_batch(name: str, value: np.ndarray, tail: tuple[int, ...]) -> np.ndarray:

@@ -14,6 +14,7 @@ import dataclasses
 from enum import Enum
 from typing import Any
 
+from dice_env.checks import check_choice
 from dice_env.die import Die
 from dice_env.group import DieContact
 from dice_env.scene import Ground, Rest, Scene, Wall
@@ -46,8 +47,7 @@ def from_data(data: Any) -> Any:
     if isinstance(data, dict):
         fields = dict(data)
         name = fields.pop("type", None)
-        if name not in TYPES:
-            raise ValueError(f"data's type must be one of {', '.join(TYPES)}, got {name!r}")
+        check_choice("data's type", name, TYPES)
         kind = TYPES[name]
         known = {f.name for f in dataclasses.fields(kind)}
         if set(fields) != known:

@@ -30,10 +30,9 @@ from typing import NamedTuple
 
 import numpy as np
 
-from dice_env import pips as drilled
 from dice_env import polyhedra
-from dice_env.checks import check_finite, check_positive, check_range
-from dice_env.pips import Pips
+from dice_env.checks import as_shaped, check_choice, check_positive, check_range
+from dice_env.pips import Pips, drill, with_defaults
 from dice_env.table import DIE_EDGE, DIE_MASS
 
 # The d6's corner signs in the order of the paper's cube.m (node k = row k).
@@ -154,11 +153,9 @@ class Die:
           from +x; each lower face takes ``n + 1`` minus its opposite's label. Beyond the
           opposite sums, this arrangement is ours, not a manufacturer's.
         """
-        if name not in STANDARD_SIZES:
-            raise ValueError(f"name must be one of {', '.join(map(repr, STANDARD_SIZES))}, "
-                             f"got {name!r}")
+        check_choice("name", name, STANDARD_SIZES)
         if pips is not None:
-            pips, size, mass = drilled.with_defaults(name, pips, size, mass)
+            pips, size, mass = with_defaults(name, pips, size, mass)
         size = STANDARD_SIZES[name] if size is None else size
         check_positive("size", size)
         _check_mass(mass)
@@ -168,7 +165,7 @@ class Die:
             vertices, shape.faces)[0]
         die = cls._make(name, vertices, shape.faces, size, _mass(mass, volume),
                         shape.reads_down)
-        mass_properties = None if pips is None else drilled.drill(size, die.mass, pips)
+        mass_properties = None if pips is None else drill(size, die.mass, pips)
         return die if mass_properties is None else die._with_mass(die.mass, *mass_properties)
 
     @classmethod
@@ -237,10 +234,7 @@ class Die:
     @classmethod
     def from_node_masses(cls, masses: np.ndarray, edge: float = DIE_EDGE) -> Die:
         """A d6 whose whole mass sits in its 8 corner nodes (inertia of those point masses)."""
-        masses = np.asarray(masses, dtype=np.float64)
-        if masses.shape != (8,):
-            raise ValueError(f"masses must have shape (8,), got {masses.shape}")
-        check_finite("masses", masses)
+        masses = as_shaped("masses", masses, (8,))
         if np.any(masses <= 0):
             raise ValueError("masses must all be > 0")
         die = cls(edge=edge)
@@ -248,10 +242,7 @@ class Die:
         corners = np.asarray(die.vertices)
         com = masses @ corners / total
         rel = corners - com
-        inertia = sum(
-            mk * (rk @ rk * np.eye(3) - np.outer(rk, rk))
-            for mk, rk in zip(masses, rel, strict=True)
-        )
+        inertia = sum(mk * polyhedra.point_inertia(rk) for mk, rk in zip(masses, rel, strict=True))
         return die._with_mass(total, com, inertia)
 
     def load(self, face: int, fraction: float = 0.1, depth: float = 0.8) -> Die:
@@ -269,10 +260,10 @@ class Die:
         check_range("depth", depth, 0.0, 1.0, high_open=True)
         p = self.face_normals[face - 1] * depth * self._face_distances[face - 1]
         c0 = np.asarray(self.com)
-        solid = (1 - fraction) * (self.inertia_body + self.mass * _shift(c0))
-        weight = fraction * self.mass * _shift(p)
+        solid = (1 - fraction) * (self.inertia_body + self.mass * polyhedra.point_inertia(c0))
+        weight = fraction * self.mass * polyhedra.point_inertia(p)
         com = (1 - fraction) * c0 + fraction * p
-        about_com = solid + weight - self.mass * _shift(com)
+        about_com = solid + weight - self.mass * polyhedra.point_inertia(com)
         return self._with_mass(self.mass, com, about_com)
 
     # --- geometry -------------------------------------------------------------------------
@@ -359,7 +350,6 @@ class Die:
         ``sqrt(2)`` half edges, balanced on an edge). Computed once per die (read-only).
         """
         corners, reading = self.vertices_body, self.reading
-        r_max = float(np.linalg.norm(corners, axis=1).max())
         out = np.full(self.n_faces, np.inf)
         for f, g in itertools.combinations(range(self.n_faces), 2):
             arc = _tie_arc(reading, f, g)
@@ -370,7 +360,7 @@ class Die:
             phi = np.linspace(lo, hi, n)
             up = np.cos(phi)[:, None] * m + np.sin(phi)[:, None] * w
             gap = (hi - lo) / (n - 1) if n > 1 else 0.0
-            low = float(_heights_above_lowest_corner(corners, up).min()) - r_max * gap / 2
+            low = float(_heights_above_lowest_corner(corners, up).min()) - self.reach * gap / 2
             out[f], out[g] = min(out[f], low), min(out[g], low)
         return _frozen(out)
 
@@ -431,10 +421,7 @@ class Die:
              size: float, mass: float, com: tuple[float, ...] | np.ndarray,
              inertia: tuple[tuple[float, ...], ...] | None, reads_down: bool) -> None:
         check_positive("mass", mass)
-        com = np.asarray(com, dtype=np.float64)
-        if com.shape != (3,):
-            raise ValueError(f"com must have shape (3,), got {com.shape}")
-        check_finite("com", com)
+        com = as_shaped("com", com, (3,))
         normals = polyhedra.face_normals(vertices, faces)
         if np.any(normals @ com >= _face_distances(vertices, faces, normals)):
             raise ValueError("com must lie inside the die (closer to the geometric centre than "
@@ -573,10 +560,7 @@ def _solid_inertia(name: str, vertices: np.ndarray, faces: tuple[tuple[int, ...]
 
 
 def _check_inertia(inertia: object) -> None:
-    inertia = np.asarray(inertia, dtype=np.float64)
-    if inertia.shape != (3, 3):
-        raise ValueError(f"inertia must have shape (3, 3), got {inertia.shape}")
-    check_finite("inertia", inertia)
+    inertia = as_shaped("inertia", inertia, (3, 3))
     if not np.allclose(inertia, inertia.T, rtol=1e-12, atol=0.0):
         raise ValueError("inertia must be symmetric")
     principal = np.linalg.eigvalsh(inertia)
@@ -585,11 +569,6 @@ def _check_inertia(inertia: object) -> None:
             "inertia must be positive definite with principal moments obeying the "
             f"triangle inequality, got principal moments {principal}"
         )
-
-
-def _shift(r: np.ndarray) -> np.ndarray:
-    """Inertia of a unit point mass at ``r`` about the origin: ``|r|^2 I - r r^T``."""
-    return r @ r * np.eye(3) - np.outer(r, r)
 
 
 # --- reading and tipping ------------------------------------------------------------------

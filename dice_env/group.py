@@ -21,21 +21,23 @@ from typing import ClassVar
 
 import numpy as np
 
-from dice_env import group_kernel, kernel
-from dice_env.checks import check_nonnegative, check_positive, check_range
+from dice_env import group_kernel
+from dice_env.checks import as_enum
 from dice_env.die import Die
-from dice_env.scene import MAX_STEPS, FrictionLaw, Scene, as_enum, critical_step
+from dice_env.scene import FrictionLaw, Scene, check_material, critical_step
 from dice_env.simulate import (
     UP,
     DiceArrays,
+    RunResult,
     State,
-    check_record_bytes,
+    blank_outcome,
     check_run,
     lock_energy,
+    outcome_fields,
     pack_run,
     pack_scene,
-    record_stride,
-    record_times,
+    record_plan,
+    recorded,
     run_kernel,
 )
 from dice_env.table import DIE_MASS, STIFFNESS, damping_for_restitution
@@ -71,14 +73,9 @@ class DieContact:
     tangential: float = 2.0 / 7.0
 
     def __post_init__(self) -> None:
-        check_positive("stiffness", self.stiffness)
-        check_nonnegative("damping", self.damping)
-        check_nonnegative("friction", self.friction)
+        check_material(self.stiffness, self.damping, self.friction, self.tangential)
         object.__setattr__(self, "friction_law",
                            as_enum("friction_law", FrictionLaw, self.friction_law))
-        check_range("tangential", self.tangential, 0.0, 1.0)
-        if self.tangential == 0:
-            raise ValueError("tangential must be in (0, 1], got 0")
 
     @property
     def law(self) -> str:
@@ -122,17 +119,17 @@ class GroupState(DiceArrays):
 
 
 @dataclass
-class GroupResult:
-    """Outcome of B throws of N dice.
+class GroupResult(RunResult):
+    """Outcome of B throws of N dice: the fields of :class:`dice_env.Result`, and more.
 
     Per die (B, N): ``face`` (the label read, 0 where not read), ``read`` (False for a die
     leaning on another at the end), ``impacts``, ``die_impacts`` (starts of a contact with
-    another die, their centres' relative speed above the rest speed), ``max_penetration``
-    (deepest corner in a plane, m), ``sunk``; ``touched`` (B, N, P): the die touched plane P
-    (:attr:`Scene.planes`: the floor, then the walls). Per throw (B,): ``settled`` (every die
-    at rest), ``decided`` (no face can change any more), ``rest_time``, ``unstable`` (energy
-    gain beyond the scene's tolerance, or a non-finite state), ``energy_rise``, ``overlap``
-    (deepest die–die overlap along separating axes, m), ``steps``; ``final`` the state at the end.
+    another die, their centres' relative speed above the rest speed), ``max_penetration``,
+    ``sunk`` (also where the dice overlap deeper than the sink limit); ``touched`` (B, N, P):
+    the die touched plane P (:attr:`Scene.planes`: the floor, then the walls). Per throw
+    (B,): ``settled`` (every die at rest), ``decided`` (no face can change any more),
+    ``rest_time``, ``unstable``, ``energy_rise``, ``overlap`` (deepest die–die overlap along
+    separating axes, m), ``steps``; ``final`` the state at the end.
 
     The first die–die contact: ``meet_dice`` (B, 2) the pair (-1 where no dice touched),
     ``meet_steps`` (B, 2) the steps done when it starts and when it ends (-1: none, or the
@@ -142,19 +139,9 @@ class GroupResult:
     (B, n, N, 3, 3).
     """
 
-    face: np.ndarray
-    read: np.ndarray
-    settled: np.ndarray
-    decided: np.ndarray
-    rest_time: np.ndarray
-    impacts: np.ndarray
-    unstable: np.ndarray
-    energy_rise: np.ndarray
-    max_penetration: np.ndarray
-    overlap: np.ndarray
-    sunk: np.ndarray
-    steps: np.ndarray
     final: GroupState
+    read: np.ndarray
+    overlap: np.ndarray
     die_impacts: np.ndarray
     touched: np.ndarray
     meet_dice: np.ndarray
@@ -233,21 +220,20 @@ def simulate_group(
     if state.n_dice != len(dice):
         raise ValueError(f"state holds {state.n_dice} dice per throw, dice {len(dice)}")
     dt = group_step(scene, dice, contact)
-    t_max = scene.t_max if t_max is None else t_max
-    check_positive("t_max", t_max)
-    if t_max / dt > MAX_STEPS:
-        raise ValueError(f"t_max / step must be <= {MAX_STEPS:.0e} steps, got {t_max / dt:.3g}")
-    n_steps = max(1, round(t_max / dt))
+    n_steps = scene.steps_for(t_max, dt)
     out = state.copy()
     b, n = out.batch_size, out.n_dice
     _check_apart(dice, out)
     scenes = [scene.with_(die=die, dt=dt, allow_unstable=True) for die in dice]
-    sinks = np.stack([s.sink(out.position[:, i], out.orientation[:, i])
-                      for i, s in enumerate(scenes)], axis=1)
-    if sinks.max() > scene.sink_limit * min(d.size for d in dice):
-        throw, die = np.unravel_index(int(sinks.argmax()), sinks.shape)
-        raise ValueError(f"state.position: die {die} of throw {throw} starts with a corner "
-                         f"{sinks[throw, die]:.3g} m inside a plane")
+    size = min(d.size for d in dice)
+    outcome = group_kernel.GroupOutcome(
+        **blank_outcome(scene, np.stack([s.sink(out.position[:, i], out.orientation[:, i])
+                                         for i, s in enumerate(scenes)], axis=1), size),
+        overlap=np.zeros(b), contacts=np.zeros((b, n), np.int64),
+        touching=np.zeros((b, n), np.bool_), die_impacts=np.zeros((b, n), np.int64),
+        touched=np.zeros((b, n, len(scene.planes)), np.bool_),
+        meet_dice=np.full((b, 2), -1, np.int64), meet_steps=np.full((b, 2), -1, np.int64),
+        meet=np.zeros((b, 2, n, 6)))
     _, contact_planes = pack_scene(scenes[0])
     options, _ = pack_run(scenes[0], n_steps=n_steps, free_flight=free_flight)
     stops = group_kernel.GroupStops(
@@ -255,56 +241,42 @@ def simulate_group(
         hold_steps=_hold_steps(scene.rest.hold / dt, n_steps), decide=bool(stop_when_decided),
         energy_scale=float(sum(d.mass * scene.gravity * d.size for d in dice)))
     bodies = _bodies(scenes, stop_when_decided)
-    hulls = _hulls(scenes, bodies)
+    stride, n_rec = record_plan(record_every, n_steps, b * n * (12 if orientations else 3),
+                                f"{b} throws of {n} dice")
+    records = group_kernel.GroupRecords(
+        stride=stride, x=np.zeros((b, n_rec, n, 3)),
+        orientation=np.zeros((b, n_rec if orientations else 0, n, 3, 3)))
+    inputs = (group_kernel.GroupDice(*out._arrays()), bodies, _hulls(scenes, bodies),
+              _pair(scene, dice, contact, dt), contact_planes, options, stops, records)
+    run_kernel("dice", inputs, outcome, batch=b, threads=threads, work=b * n * n_steps)
+    fields = outcome_fields(scene, outcome, size)
+    # The kernel checks the centres, velocities and momenta; a rotation that overflows in the
+    # last step (a spin near 1e300 rad/s) leaves a non-finite orientation it did not see.
+    fields["unstable"] |= ~np.all([np.isfinite(a).reshape(b, -1).all(axis=1)
+                                   for a in out._arrays()], axis=0)
+    fields["sunk"] |= outcome.overlap[:, None] > scene.sink_limit * size
+    read = ~(outcome.touching & (outcome.contacts < 3))
+    face = np.stack([die.face_read(out.orientation[:, i], UP) for i, die in enumerate(dice)],
+                    axis=1)
+    return GroupResult(
+        face=np.where(read, face, 0), read=read, final=out, overlap=outcome.overlap,
+        die_impacts=outcome.die_impacts, touched=outcome.touched, meet_dice=outcome.meet_dice,
+        meet_steps=outcome.meet_steps, meet_velocity=outcome.meet[..., :3],
+        meet_spin=outcome.meet[..., 3:], **fields,
+        **recorded(record_every, records, dt,
+                   {"orientations": records.orientation} if orientations else {}))
+
+
+def _pair(scene: Scene, dice: tuple[Die, ...], contact: DieContact,
+          dt: float) -> group_kernel.Pair:
+    """The kernel's die–die contact for ``dice`` at the step ``dt``."""
     reduced = pair_mass(scene, dice)
-    pair = group_kernel.Pair(
+    return group_kernel.Pair(
         float(contact.stiffness), float(contact.damping), float(contact.friction),
         float(scene.friction_vmin), float(group_kernel.GRIP * reduced / dt),
         contact.friction_law == FrictionLaw.STICK_SLIP and contact.friction > 0,
         float(contact.tangential * contact.stiffness),
         float(contact.tangential * contact.damping), float(dt / reduced))
-    n_rec = n_steps // record_every if record_every else 0
-    check_record_bytes(8 * b * n_rec * n * (12 if orientations else 3), record_every, n_rec,
-                       f"{b} throws of {n} dice")
-    records = group_kernel.GroupRecords(
-        stride=record_stride(record_every, n_steps),
-        x=np.zeros((b, n_rec, n, 3)),
-        orientation=np.zeros((b, n_rec if orientations else 0, n, 3, 3)))
-    outcome = group_kernel.GroupOutcome(
-        status=np.zeros(b, np.int8), unstable=np.zeros(b, np.bool_), rest_time=np.zeros(b),
-        energy_rise=np.zeros(b), steps=np.zeros(b, np.int64), overlap=np.zeros(b),
-        impacts=np.zeros((b, n), np.int64), max_pen=np.maximum(sinks, 0.0),
-        contacts=np.zeros((b, n), np.int64), touching=np.zeros((b, n), np.bool_),
-        die_impacts=np.zeros((b, n), np.int64),
-        touched=np.zeros((b, n, len(scene.planes)), np.bool_),
-        meet_dice=np.full((b, 2), -1, np.int64), meet_steps=np.full((b, 2), -1, np.int64),
-        meet=np.zeros((b, 2, n, 6)), abort=np.zeros(1, np.int64))
-    group = group_kernel.GroupDice(out.position, out.velocity, out.angular_momentum,
-                                   out.orientation, out.angular_velocity)
-    run_kernel(group_kernel.simulate_groups, group_kernel.simulate_groups_serial,
-               (group, bodies, hulls, pair, contact_planes, options, stops, records, outcome),
-               outcome.abort, batch=b, threads=threads, work=b * n * n_steps)
-    energy_rise = outcome.energy_rise / scene.energy_tol
-    # The kernel checks the centres, velocities and momenta; a rotation that overflows in the
-    # last step (a spin near 1e300 rad/s) leaves a non-finite orientation it did not see.
-    finite = np.all([np.isfinite(a).reshape(b, -1).all(axis=1) for a in out._arrays()], axis=0)
-    read = ~(outcome.touching & (outcome.contacts < 3))
-    face = np.stack([die.face_read(out.orientation[:, i], UP) for i, die in enumerate(dice)],
-                    axis=1)
-    limit = scene.sink_limit * min(d.size for d in dice)
-    recorded = {}
-    if record_every:
-        recorded = {"t": record_times(records, dt), "x_cm": records.x,
-                    "orientations": records.orientation if orientations else None}
-    return GroupResult(
-        face=np.where(read, face, 0), read=read, settled=outcome.status == kernel.SETTLED,
-        decided=outcome.status == kernel.DECIDED, rest_time=outcome.rest_time,
-        impacts=outcome.impacts, unstable=outcome.unstable | (energy_rise > 1.0) | ~finite,
-        energy_rise=energy_rise, max_penetration=outcome.max_pen, overlap=outcome.overlap,
-        sunk=(outcome.max_pen > limit) | (outcome.overlap[:, None] > limit),
-        steps=outcome.steps, final=out, die_impacts=outcome.die_impacts,
-        touched=outcome.touched, meet_dice=outcome.meet_dice, meet_steps=outcome.meet_steps,
-        meet_velocity=outcome.meet[..., :3], meet_spin=outcome.meet[..., 3:], **recorded)
 
 
 def _hold_steps(hold: float, n_steps: int) -> int:
@@ -327,6 +299,7 @@ def _dice(dice: Sequence[Die]) -> tuple[Die, ...]:
 def _bodies(scenes: list[Scene], decide: bool) -> group_kernel.Bodies:
     """The kernel's :class:`~dice_env.group_kernel.Bodies`, one scene per die."""
     dice = [s.die for s in scenes]
+    packed = [pack_scene(s)[0] for s in scenes]
     n = len(dice)
     n_v = max(len(d.vertices) for d in dice)
     n_f = max(d.n_faces for d in dice)
@@ -334,8 +307,7 @@ def _bodies(scenes: list[Scene], decide: bool) -> group_kernel.Bodies:
     lock = np.full((n, n_f), -math.inf)
     floor = np.zeros(n)
     for i, (scene, die) in enumerate(zip(scenes, dice, strict=True)):
-        body, _ = pack_scene(scene)
-        vertices[i, :len(die.vertices)] = body.vertices
+        vertices[i, :len(die.vertices)] = packed[i].vertices
         faces[i, :die.n_faces] = die.face_normals
         if not decide:  # the locks and floors serve the decision rule alone
             continue
@@ -349,7 +321,6 @@ def _bodies(scenes: list[Scene], decide: bool) -> group_kernel.Bodies:
                              f"stop_when_decided for die {i} ((m g)^2 / 2 S, mass "
                              f"{die.mass:g} kg): lower gravity, or pass "
                              "stop_when_decided=False") from error
-    packed = [pack_scene(s)[0] for s in scenes]
     return group_kernel.Bodies(
         vertices=vertices, n_vertices=np.array([len(d.vertices) for d in dice]),
         faces=faces, n_faces=np.array([d.n_faces for d in dice]),

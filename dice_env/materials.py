@@ -55,7 +55,7 @@ from dataclasses import dataclass
 
 from dice_env import table
 from dice_env.calibration import measured_restitution
-from dice_env.checks import check_positive, check_range
+from dice_env.checks import check_choice, check_positive, check_range
 from dice_env.die import Die
 from dice_env.scene import Ground, Scene
 from dice_env.table import damping_for_restitution
@@ -95,8 +95,7 @@ MATERIALS: dict[str, Material] = {
 
 def preset(name: str) -> Material:
     """The :class:`Material` called ``name`` (a key of :data:`MATERIALS`)."""
-    if name not in MATERIALS:
-        raise ValueError(f"name must be one of the presets {', '.join(MATERIALS)}, got {name!r}")
+    check_choice("name", name, MATERIALS)
     return MATERIALS[name]
 
 

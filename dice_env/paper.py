@@ -43,62 +43,28 @@ class PaperRun:
     result: Result
 
 
-def real_throw_cube(
-    L0: np.ndarray | None = None,
-    *,
-    seed: int | None = None,
-    r: float = 1.0,
-    total_mass: float = 1.0,
-    normal: tuple[float, float, float] = (0.0, 0.0, 1.0),
-    S: float = 1e4,
-    D: float = 0.1,
-    mu: float = 0.1,
-    clockmax: int = 100000,
-    tmax: float = 10.0,
-    x0: tuple[float, float, float] = (0.0, 0.0, 3.0),
-    u0: tuple[float, float, float] = (5.0, 0.0, 5.0),
-    g: float = 9.8,
-    umin: float | None = None,
-    contact_law: ContactLaw = ContactLaw.PAPER,
-    record_nodes: bool = False,
-    allow_unstable: bool = False,
-) -> PaperRun:
+def real_throw_cube(L0: np.ndarray | None = None, *, seed: int | None = None, D: float = 0.1,
+                    mu: float = 0.1, clockmax: int = 100000, **listing: object) -> PaperRun:
     """Run ``real_throw_cube.m``.
 
     ``L0`` defaults to the listing's ``rand(3,1)*0.75 + 1e-6`` drawn from
-    ``numpy.random.default_rng(seed)``; ``umin`` defaults to ``1e-6 * r``.
+    ``numpy.random.default_rng(seed)``. ``listing``: the listing's other values, as
+    keywords of :func:`paper_scene` (``r``, ``total_mass``, ``normal``, ``S``, ``g``,
+    ``umin`` (default ``1e-6 * r``), ``contact_law``, ``allow_unstable``) or of the run
+    (``tmax`` = 10, ``x0`` = (0, 0, 3), ``u0`` = (5, 0, 5), ``record_nodes`` = False).
     """
     if L0 is None:
         L0 = np.random.default_rng(seed).random(3) * 0.75 + 1e-6
-    return _run(L0, True, r=r, total_mass=total_mass, normal=normal, S=S, D=D, mu=mu,
-                clockmax=clockmax, tmax=tmax, x0=x0, u0=u0, g=g, umin=umin,
-                contact_law=contact_law, record_nodes=record_nodes,
-                allow_unstable=allow_unstable)
+    return _run(L0, True, D=D, mu=mu, clockmax=clockmax, **listing)
 
 
-def ground_cube(
-    *,
-    r: float = 1.0,
-    total_mass: float = 1.0,
-    normal: tuple[float, float, float] = (0.0, 0.0, 1.0),
-    S: float = 1e4,
-    D: float = 0.2,
-    mu: float = 0.075,
-    clockmax: int = 10000,
-    tmax: float = 10.0,
-    x0: tuple[float, float, float] = (0.0, 0.0, 3.0),
-    u0: tuple[float, float, float] = (5.0, 0.0, 5.0),
-    g: float = 9.8,
-    umin: float | None = None,
-    contact_law: ContactLaw = ContactLaw.PAPER,
-    record_nodes: bool = False,
-    allow_unstable: bool = False,
-) -> PaperRun:
-    """Run ``ground_cube.m``: the same cube translating only (no rotation)."""
-    return _run(np.zeros(3), False, r=r, total_mass=total_mass, normal=normal, S=S, D=D, mu=mu,
-                clockmax=clockmax, tmax=tmax, x0=x0, u0=u0, g=g, umin=umin,
-                contact_law=contact_law, record_nodes=record_nodes,
-                allow_unstable=allow_unstable)
+def ground_cube(*, D: float = 0.2, mu: float = 0.075, clockmax: int = 10000,
+                **listing: object) -> PaperRun:
+    """Run ``ground_cube.m``: the same cube translating only (no rotation).
+
+    ``listing``: as :func:`real_throw_cube`'s.
+    """
+    return _run(np.zeros(3), False, D=D, mu=mu, clockmax=clockmax, **listing)
 
 
 def paper_scene(
@@ -119,8 +85,9 @@ def paper_scene(
     )
 
 
-def _run(L0: object, rotation: bool, *, clockmax: int, tmax: float, x0: object, u0: object,
-         record_nodes: bool, **listing: object) -> PaperRun:
+def _run(L0: object, rotation: bool, *, clockmax: int, tmax: float = 10.0,
+         x0: object = (0.0, 0.0, 3.0), u0: object = (5.0, 0.0, 5.0), record_nodes: bool = False,
+         **listing: object) -> PaperRun:
     """Either listing's run; ``listing``: :func:`paper_scene`'s other keywords."""
     if not isinstance(clockmax, (int, np.integer)) or clockmax < 1:
         raise ValueError(f"clockmax must be an int >= 1, got {clockmax!r}")

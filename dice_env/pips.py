@@ -49,7 +49,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from dice_env.checks import check_nonnegative, check_positive, check_range
+from dice_env.checks import check_choice, check_nonnegative, check_positive, check_range
+from dice_env.polyhedra import point_inertia
 
 SHAPES = ("spherical cap",)
 # Cellulose acetate, the body of casino dice (kg/m^3): AZoM, "Cellulose Acetate" (Plascams
@@ -81,16 +82,11 @@ class Pips:
 
     def __post_init__(self) -> None:
         check_positive("radius", self.radius)
-        check_range("depth", self.depth, 0.0, self.radius)
-        if self.depth == 0:
-            raise ValueError(f"depth must be > 0, got {self.depth!r}")
-        check_range("offset", self.offset, 0.0, 1.0, high_open=True)
-        if self.offset == 0:
-            raise ValueError(f"offset must be in (0, 1), got {self.offset!r}")
+        check_range("depth", self.depth, 0.0, self.radius, low_open=True)
+        check_range("offset", self.offset, 0.0, 1.0, low_open=True, high_open=True)
         if self.paint_density is not None:
             check_nonnegative("paint_density", self.paint_density)
-        if self.shape not in SHAPES:
-            raise ValueError(f"shape must be one of {SHAPES}, got {self.shape!r}")
+        check_choice("shape", self.shape, SHAPES)
 
 
 class Preset(NamedTuple):
@@ -185,9 +181,7 @@ def with_defaults(name: str, pips: Pips | str, size: float | None, mass: float |
         return pips, size, mass
     if not isinstance(pips, str):
         raise TypeError(f"pips must be None, a Pips or a preset name, got {pips!r}")
-    if pips not in DRILLINGS:
-        raise ValueError(f"pips must be one of {', '.join(map(repr, DRILLINGS))} or a Pips, "
-                         f"got {pips!r}")
+    check_choice("pips", pips, DRILLINGS, also=" or a Pips")
     preset = DRILLINGS[pips]
     size = preset.size if size is None else size
     if mass is None and preset.density is not None and size is not None:
@@ -224,9 +218,9 @@ def drill(size: float, mass: float, pips: Pips) -> tuple[np.ndarray, np.ndarray]
     com = change * volume * centroids.sum(axis=0) / mass
     along = np.einsum("ki,kj->ij", normals, normals)
     about_centre = (density * outer * size**2 / 6 * np.eye(3)
-                    + change * (volume * sum(_shift(c) for c in centroids)
+                    + change * (volume * sum(point_inertia(c) for c in centroids)
                                 + transverse * (n * np.eye(3) - along) + axial * along))
-    return com, about_centre - mass * _shift(com)
+    return com, about_centre - mass * point_inertia(com)
 
 
 def _check_fit(pips: Pips, half: float) -> None:
@@ -238,11 +232,6 @@ def _check_fit(pips: Pips, half: float) -> None:
         raise ValueError(f"pips reach the face's edge: offset x size/2 + radius + depth "
                          f"({1e3 * (spacing + pips.radius + pips.depth):g} mm) must be <= "
                          f"size/2 ({1e3 * half:g} mm)")
-
-
-def _shift(r: np.ndarray) -> np.ndarray:
-    """Inertia of a unit point mass at ``r`` about the origin: ``|r|^2 I - r r^T``."""
-    return r @ r * np.eye(3) - np.outer(r, r)
 
 
 # --- the page -----------------------------------------------------------------------------

@@ -118,6 +118,11 @@ def mass_properties(
     return volume, ref + first, (inertia + inertia.T) / 2.0
 
 
+def point_inertia(r: np.ndarray) -> np.ndarray:
+    """Inertia of a unit point mass at ``r`` (3,) about the origin: ``|r|^2 I - r r^T``."""
+    return r @ r * np.eye(3) - np.outer(r, r)
+
+
 # --- the standard shapes (arbitrary scale, centred) ---------------------------------------
 
 def tetrahedron() -> np.ndarray:

@@ -9,31 +9,23 @@ from __future__ import annotations
 import functools
 import math
 from dataclasses import dataclass, field, replace
-from enum import Enum, IntEnum
+from enum import IntEnum
 
 import numpy as np
 
 from dice_env import table
-from dice_env.checks import check_finite, check_nonnegative, check_positive, check_range
+from dice_env.checks import (
+    as_enum,
+    as_shaped,
+    check_bool,
+    check_finite,
+    check_nonnegative,
+    check_positive,
+    check_range,
+)
 from dice_env.die import Die
 
 MAX_STEPS = 10**9  # steps of one throw to t_max: more is refused (about a minute a die)
-
-
-def as_enum(name: str, kind: type[IntEnum], value: object) -> IntEnum:
-    """``value`` as a member of ``kind``: a member, its name (any case) or its int value.
-
-    A member of another enum is refused, whatever its value.
-    """
-    if isinstance(value, kind):
-        return value
-    if isinstance(value, str) and value.upper() in kind.__members__:
-        return kind[value.upper()]
-    if isinstance(value, (int, np.integer)) and not isinstance(value, (bool, Enum)) \
-            and value in kind._value2member_map_:
-        return kind(value)
-    names = ", ".join(repr(m.name.lower()) for m in kind)
-    raise ValueError(f"{name} must be a {kind.__name__} or one of {names}, got {value!r}")
 
 
 class ContactLaw(IntEnum):
@@ -101,17 +93,9 @@ class Plane:
     tangential: float = 2.0 / 7.0
 
     def __post_init__(self) -> None:
-        check_positive("stiffness", self.stiffness)
-        check_range("tangential", self.tangential, 0.0, 1.0)
-        if self.tangential == 0:
-            raise ValueError("tangential must be in (0, 1], got 0")
-        check_nonnegative("damping", self.damping)
-        check_nonnegative("friction", self.friction)
+        check_material(self.stiffness, self.damping, self.friction, self.tangential)
         check_finite("offset", self.offset)
-        normal = np.asarray(self.normal, dtype=np.float64)
-        if normal.shape != (3,):
-            raise ValueError(f"normal must have shape (3,), got {normal.shape}")
-        check_finite("normal", normal)
+        normal = as_shaped("normal", self.normal, (3,))
         norm = float(np.linalg.norm(normal))
         if norm == 0.0:
             raise ValueError("normal must be a non-zero vector (it is normalised), got (0, 0, 0)")
@@ -161,10 +145,7 @@ class Wall(Plane):
     def through(cls, point: tuple[float, float, float], normal: tuple[float, float, float],
                 **material: float) -> Wall:
         """The wall through ``point`` facing ``normal`` (any length), with ``material``."""
-        point = np.asarray(point, dtype=np.float64)
-        if point.shape != (3,):
-            raise ValueError(f"point must have shape (3,), got {point.shape}")
-        check_finite("point", point)
+        point = as_shaped("point", point, (3,))
         n = np.asarray(normal, dtype=np.float64)
         length = float(np.linalg.norm(n)) if n.shape == (3,) else 0.0
         if length == 0.0 or not math.isfinite(length):
@@ -238,14 +219,11 @@ class Scene:
         if not isinstance(walls, (tuple, list)) or not all(isinstance(w, Wall) for w in walls):
             raise TypeError(f"walls must be a tuple of Wall, got {self.walls!r}")
         object.__setattr__(self, "walls", tuple(walls))
-        for name in ("rotation", "allow_unstable"):
-            if not isinstance(getattr(self, name), (bool, np.bool_)):
-                raise TypeError(f"{name} must be a bool, got {getattr(self, name)!r}")
+        check_bool("rotation", self.rotation)
+        check_bool("allow_unstable", self.allow_unstable)
         check_positive("sink_limit", self.sink_limit)
         check_nonnegative("gravity", self.gravity)
-        check_range("safety", self.safety, 0.0, 1.0)
-        if self.safety == 0:
-            raise ValueError("safety must be in (0, 1], got 0")
+        check_range("safety", self.safety, 0.0, 1.0, low_open=True)
         check_positive("t_max", self.t_max)
         check_positive("friction_vmin", self.friction_vmin)
         check_positive("energy_tol", self.energy_tol)
@@ -261,7 +239,7 @@ class Scene:
                 f"dt={self.dt}, safety={self.safety:g} and the critical step of "
                 f"{self.stiffest_plane()} (die mass {self.die.mass:g})"
             )
-        self.steps_for(self.t_max)
+        self.steps_for()
 
     @property
     def planes(self) -> tuple[Plane, ...]:
@@ -338,19 +316,25 @@ class Scene:
     @property
     def n_steps(self) -> int:
         """Number of steps to reach ``t_max``."""
-        return self.steps_for(self.t_max)
+        return self.steps_for()
 
-    def steps_for(self, t_max: float) -> int:
-        """Number of steps to reach ``t_max`` (s), refused above :data:`MAX_STEPS`."""
+    def steps_for(self, t_max: float | None = None, step: float | None = None) -> int:
+        """Steps of ``step`` (s) to reach ``t_max`` (s), refused above :data:`MAX_STEPS`.
+
+        ``t_max`` defaults to the scene's, ``step`` to :attr:`step` (a run of several dice
+        takes the step of :func:`dice_env.group.group_step`).
+        """
+        t_max = self.t_max if t_max is None else t_max
         check_positive("t_max", t_max)
-        count = t_max / self.step
+        own = step is None
+        step = self.step if own else step
+        count = t_max / step
         if count > MAX_STEPS:
-            raise ValueError(
-                f"t_max / step must be <= {MAX_STEPS:.0e} steps, got {count:.3g} (t_max "
-                f"{t_max:g} s, step {self.step:.3g} s from dt={self.dt}, safety "
-                f"{self.safety:g} and the critical step of {self.stiffest_plane()}, die mass "
-                f"{self.die.mass:g}): shorten t_max or soften the contact"
-            )
+            origin = (f" from dt={self.dt}, safety {self.safety:g} and the critical step of "
+                      f"{self.stiffest_plane()}, die mass {self.die.mass:g}" if own else "")
+            raise ValueError(f"t_max / step must be <= {MAX_STEPS:.0e} steps, got {count:.3g} "
+                             f"(t_max {t_max:g} s, step {step:.3g} s{origin}): shorten t_max "
+                             "or soften the contact")
         return max(1, round(count))
 
     def sink(self, position: np.ndarray, orientation: np.ndarray) -> np.ndarray:
@@ -365,6 +349,18 @@ class Scene:
     def with_(self, **changes: object) -> Scene:
         """A copy with some fields changed (validated again)."""
         return replace(self, **changes)
+
+
+def check_material(stiffness: float, damping: float, friction: float,
+                   tangential: float) -> None:
+    """Check a contact's material (:class:`Plane`'s fields of the same names).
+
+    ``stiffness`` > 0, ``damping`` and ``friction`` >= 0, ``tangential`` in (0, 1].
+    """
+    check_positive("stiffness", stiffness)
+    check_range("tangential", tangential, 0.0, 1.0, low_open=True)
+    check_nonnegative("damping", damping)
+    check_nonnegative("friction", friction)
 
 
 def critical_step(stiffness: float, damping: float, mass: float, scheme: Scheme) -> float:

@@ -16,7 +16,7 @@ import numba
 import numpy as np
 
 from dice_env import group_kernel, kernel, vector_kernel
-from dice_env.checks import as_batch, check_finite, check_range
+from dice_env.checks import as_batch, check_bool, check_choice, check_finite, check_range
 from dice_env.compile_notice import announce, ready
 from dice_env.rotations import orthonormality_error
 from dice_env.scene import ContactLaw, FrictionLaw, Scene, Scheme
@@ -140,26 +140,8 @@ class State(DiceArrays):
 
 
 @dataclass
-class Result:
-    """Outcome of a batch of throws (arrays over the batch, B).
-
-    - ``face``: the label read at the end (the face up against gravity, whatever the floor's
-      tilt; the d4's face down);
-    - ``settled``: came to rest; ``rest_time``: when the rest began (s; the time simulated if
-      not settled);
-    - ``decided``: ended by ``stop_when_decided`` with too little energy left to change face;
-    - ``impacts``: airborne-to-contact transitions;
-    - ``unstable``: energy rose beyond the scene's tolerance, or the state stopped being finite;
-      ``energy_rise``: the largest rise above the start in units of that tolerance;
-    - ``max_penetration``: deepest corner below the plane (m); ``sunk``: deeper than the
-      scene's :attr:`~dice_env.scene.Scene.sink_limit` (a contact too soft for the load or the
-      impact: physics the model cannot represent; never count such a throw's face);
-    - ``steps``: steps taken; ``final``: the state at the end.
-
-    With recording: ``t`` (n,), ``x_cm`` (B, n, 3), ``energy`` (B, n) as the listing computes
-    it (kinetic + m g z, no ground springs), ``orientations`` (B, n, 3, 3), ``nodes``
-    (B, n, 8, 3).
-    """
+class RunResult:
+    """The fields of every run's outcome, one die's or several's; :class:`Result` explains them."""
 
     face: np.ndarray
     settled: np.ndarray
@@ -171,6 +153,31 @@ class Result:
     max_penetration: np.ndarray
     sunk: np.ndarray
     steps: np.ndarray
+    final: DiceArrays
+
+
+@dataclass
+class Result(RunResult):
+    """Outcome of a batch of throws (arrays over the batch, B).
+
+    - ``face``: the label read at the end (the face up against gravity, whatever the floor's
+      tilt; the d4's face down);
+    - ``settled``: came to rest; ``rest_time``: when the rest began (s; the time simulated if
+      not settled);
+    - ``decided``: ended by ``stop_when_decided`` with too little energy left to change face;
+    - ``impacts``: airborne-to-contact transitions;
+    - ``unstable``: energy rose beyond the scene's tolerance, or the state stopped being finite;
+      ``energy_rise``: the largest rise above the start in units of that tolerance;
+    - ``max_penetration``: deepest corner below a plane (m); ``sunk``: deeper than the
+      scene's :attr:`~dice_env.scene.Scene.sink_limit` (a contact too soft for the load or the
+      impact: physics the model cannot represent; never count such a throw's face);
+    - ``steps``: steps taken; ``final``: the state at the end.
+
+    With recording: ``t`` (n,), ``x_cm`` (B, n, 3), ``energy`` (B, n) as the listing computes
+    it (kinetic + m g z, no ground springs), ``orientations`` (B, n, 3, 3), ``nodes``
+    (B, n, 8, 3).
+    """
+
     final: State
     t: np.ndarray | None = None
     x_cm: np.ndarray | None = None
@@ -227,55 +234,30 @@ def simulate(
                         stop_at_rest=stop_at_rest, free_flight=free_flight,
                         early_rest=early_rest, stop_when_decided=stop_when_decided)
     record = _record_names(record)
-    if device not in DEVICES:
-        raise ValueError(f"device must be one of {', '.join(map(repr, DEVICES))}, got {device!r}")
+    check_choice("device", device, DEVICES)
     body, contact = _packed_scene(scene)
-    dt = scene.step
-    n_steps = scene.steps_for(scene.t_max if t_max is None else t_max)
+    n_steps = scene.steps_for(t_max)
     out = state.copy()
     b = out.batch_size
-    start_sink = scene.sink(out.position, out.orientation)
-    if start_sink.max() > scene.sink_limit * scene.die.size:
-        i = int(start_sink.argmax())
-        raise ValueError(f"state.position: die {i} starts with a corner {start_sink[i]:.3g} m "
-                         f"inside the table, deeper than the scene's sink limit "
-                         f"({scene.sink_limit:g} of the die's size)")
+    outcome = kernel.Outcome(**blank_outcome(scene, scene.sink(out.position, out.orientation),
+                                             scene.die.size))
     records = _records(record, record_every, b, n_steps, len(body.vertices))
     options, stops = pack_run(scene, n_steps=n_steps, stop_at_rest=stop_at_rest,
                               free_flight=free_flight, early_rest=early_rest,
                               stop_when_decided=stop_when_decided)
-    dice = kernel.Dice(out.position, out.velocity, out.angular_momentum, out.orientation,
-                       out.angular_velocity)
-    outcome = kernel.Outcome(
-        status=np.zeros(b, np.int8), unstable=np.zeros(b, np.bool_), rest_time=np.zeros(b),
-        impacts=np.zeros(b, np.int64), max_pen=np.maximum(start_sink, 0.0),
-        energy_rise=np.zeros(b), steps=np.zeros(b, np.int64), abort=np.zeros(1, np.int64))
-    groups = (dice, body, contact, options, stops, records, outcome)
+    inputs = (kernel.Dice(*out._arrays()), body, contact, options, stops, records)
     if device == "cuda":
-        _cuda_kernel().run(*groups)
+        _cuda_kernel().run(*inputs, outcome)
     else:
-        chosen = vector_kernel if vector_kernel.covers(
-            scene, b, options.flight, records.stride <= n_steps) else kernel
-        run_kernel(chosen.simulate_batch, chosen.simulate_serial, groups, outcome.abort,
-                   batch=b, threads=threads, work=b * n_steps)
-    energy_rise, unstable, status = outcome.energy_rise, outcome.unstable, outcome.status
-    energy_rise /= scene.energy_tol
-    unstable |= energy_rise > 1.0
-    recorded = {}
-    if record_every:
-        fields = {"energy": records.energy, "orientations": records.orientation,
-                  "nodes": records.nodes}
-        recorded = {"t": record_times(records, dt), "x_cm": records.x,
-                    **{name: fields[name] for name in record}}
-    max_pen = outcome.max_pen
-    return Result(
-        face=scene.die.face_read(out.orientation, UP),
-        settled=status == kernel.SETTLED, decided=status == kernel.DECIDED,
-        rest_time=outcome.rest_time, impacts=outcome.impacts, unstable=unstable,
-        energy_rise=energy_rise, max_penetration=max_pen,
-        sunk=max_pen > scene.sink_limit * scene.die.size, steps=outcome.steps, final=out,
-        **recorded,
-    )
+        paper = vector_kernel.covers(scene, b, options.flight, records.stride <= n_steps)
+        run_kernel("paper" if paper else "die", inputs, outcome, batch=b, threads=threads,
+                   work=b * n_steps)
+    fields = {"energy": records.energy, "orientations": records.orientation,
+              "nodes": records.nodes}
+    return Result(face=scene.die.face_read(out.orientation, UP), final=out,
+                  **outcome_fields(scene, outcome, scene.die.size),
+                  **recorded(record_every, records, scene.step,
+                             {name: fields[name] for name in record}))
 
 
 def pack_run(scene: Scene, *, n_steps: int, stop_at_rest: bool = True, free_flight: bool = True,
@@ -326,13 +308,11 @@ def pack_scene(scene: Scene) -> tuple[kernel.Body, kernel.Contact]:
 def _records(record: tuple[str, ...], record_every: int, b: int, n_steps: int,
              n_vertices: int) -> kernel.Records:
     """Empty records for ``b`` dice every ``record_every`` steps (0: none), size-checked."""
-    n_rec = n_steps // record_every if record_every else 0
     sizes = {"energy": 1, "orientations": 9, "nodes": 3 * n_vertices}
-    check_record_bytes(8 * b * n_rec * (3 + sum(sizes[name] for name in record)), record_every,
-                       n_rec, f"{b} dice")
+    stride, n_rec = record_plan(record_every, n_steps,
+                                b * (3 + sum(sizes[name] for name in record)), f"{b} dice")
     return kernel.Records(
-        stride=record_stride(record_every, n_steps),
-        x=np.zeros((b, n_rec, 3)),
+        stride=stride, x=np.zeros((b, n_rec, 3)),
         energy=np.zeros((b, n_rec if "energy" in record else 0)),
         orientation=np.zeros((b, n_rec if "orientations" in record else 0, 3, 3)),
         nodes=np.zeros((b, n_rec if "nodes" in record else 0, n_vertices, 3)))
@@ -353,28 +333,70 @@ def check_run(scene: Scene, state: object, kind: type, record_every: object,
             or record_every < 0:
         raise ValueError(f"record_every must be an int >= 0, got {record_every!r}")
     for name, flag in flags.items():
-        if not isinstance(flag, (bool, np.bool_)):
-            raise TypeError(f"{name} must be a bool, got {flag!r}")
+        check_bool(name, flag)
     return thread_count(num_threads)
 
 
-def check_record_bytes(size: int, record_every: int, n_rec: int, what: str) -> None:
-    """Refuse ``size`` bytes of records (``n_rec`` states of ``what``) above the limit."""
+def record_plan(record_every: int, n_steps: int, floats: int, what: str) -> tuple[int, int]:
+    """The kernel's record stride and the number of states recorded in ``n_steps``.
+
+    Every ``record_every`` steps (0: none; a stride beyond the run records nothing), each
+    state ``floats`` numbers of ``what``; refused above :data:`MAX_RECORD_BYTES`.
+    """
+    n_rec = n_steps // record_every if record_every else 0
+    size = 8 * n_rec * floats
     if size > MAX_RECORD_BYTES:
         raise ValueError(f"record_every={record_every} records {n_rec} states of {what} "
                          f"({size / 2**30:.3g} GiB), more than the limit of "
                          f"{MAX_RECORD_BYTES / 2**30:g} GiB: record less often, fewer throws "
                          "or a shorter t_max")
+    return (int(record_every) if 0 < record_every <= n_steps else n_steps + 1), n_rec
 
 
-def record_stride(record_every: int, n_steps: int) -> int:
-    """The kernel's record stride: ``record_every``, or beyond the run (nothing recorded)."""
-    return int(record_every) if 0 < record_every <= n_steps else n_steps + 1
+def recorded(record_every: int, records: kernel.Records | group_kernel.GroupRecords,
+             dt: float, fields: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+    """A result's records: ``t``, ``x_cm`` and ``fields``; none when ``record_every`` is 0.
+
+    ``t``: the times (s) of the states, every ``stride`` steps of ``dt`` from the first.
+    """
+    if not record_every:
+        return {}
+    return {"t": np.arange(1, records.x.shape[1] + 1) * (records.stride * dt),
+            "x_cm": records.x, **fields}
 
 
-def record_times(records: kernel.Records | group_kernel.GroupRecords, dt: float) -> np.ndarray:
-    """The times (s) of the states in ``records``: every ``stride`` steps from the first."""
-    return np.arange(1, records.x.shape[1] + 1) * (records.stride * dt)
+def blank_outcome(scene: Scene, sink: np.ndarray, size: float) -> dict[str, np.ndarray]:
+    """The outcome arrays every kernel starts from, for dice ``sink`` (m) deep at the start.
+
+    ``sink`` (B,) or (B, N): each die's deepest corner in a plane (:meth:`Scene.sink`);
+    refused deeper than the scene's sink limit of ``size``, the (smallest) die's size.
+    """
+    if sink.max() > scene.sink_limit * size:
+        at = np.unravel_index(int(sink.argmax()), sink.shape)
+        die = f"die {at[-1]}" + (f" of throw {at[0]}" if sink.ndim > 1 else "")
+        raise ValueError(f"state.position: {die} starts with a corner {sink[at]:.3g} m inside "
+                         f"a plane, deeper than the scene's sink limit ({scene.sink_limit:g} "
+                         f"of {size:g} m)")
+    b = len(sink)
+    return {"status": np.zeros(b, np.int8), "unstable": np.zeros(b, np.bool_),
+            "rest_time": np.zeros(b), "energy_rise": np.zeros(b),
+            "steps": np.zeros(b, np.int64), "impacts": np.zeros(sink.shape, np.int64),
+            "max_pen": np.maximum(sink, 0.0), "abort": np.zeros(1, np.int64)}
+
+
+def outcome_fields(scene: Scene, outcome: kernel.Outcome | group_kernel.GroupOutcome,
+                   size: float) -> dict[str, np.ndarray]:
+    """The :class:`RunResult` fields a kernel's ``outcome`` gives, but ``face`` and ``final``.
+
+    The energy rise in units of the scene's tolerance (unstable above 1); sunk deeper than
+    its sink limit of ``size``, the (smallest) die's size.
+    """
+    energy_rise = outcome.energy_rise / scene.energy_tol
+    return {"settled": outcome.status == kernel.SETTLED,
+            "decided": outcome.status == kernel.DECIDED, "rest_time": outcome.rest_time,
+            "impacts": outcome.impacts, "unstable": outcome.unstable | (energy_rise > 1.0),
+            "energy_rise": energy_rise, "max_penetration": outcome.max_pen,
+            "sunk": outcome.max_pen > scene.sink_limit * size, "steps": outcome.steps}
 
 
 DEVICES = ("cpu", "cuda")  # where simulate runs
@@ -383,6 +405,13 @@ RECORDS = ("energy", "orientations", "nodes")
 RELEASE_SINK = 1e-3  # deepest corner of a release, as a fraction of the die's size
 MAX_RECORD_BYTES = 4 * 2**30  # records larger than this are refused before any work
 ROTATION_TOL = 1e-6  # State.orientation's allowed orthonormality error (a long run drifts)
+# The CPU kernel of each kind of run, its loop on numba's threads and its serial loop: a
+# single die, the paper's scene (dice_env.vector_kernel.covers), several dice together.
+BACKENDS: dict[str, tuple[Callable, Callable]] = {
+    "die": (kernel.simulate_batch, kernel.simulate_serial),
+    "paper": (vector_kernel.simulate_batch, vector_kernel.simulate_serial),
+    "dice": (group_kernel.simulate_groups, group_kernel.simulate_groups_serial),
+}
 # Each CPU kernel (by its parallel loop): its costly functions, its name for a user and its
 # cold compile time on two cores (s, about; benchmarks/cold_start.py), said on stderr before
 # they compile (dice_env.compile_notice).
@@ -460,9 +489,9 @@ def thread_count(num_threads: int | None) -> int:
     return int(num_threads)
 
 
-def run_kernel(parallel: Callable, serial: Callable, args: tuple, abort: np.ndarray, *,
-               batch: int, threads: int, work: int) -> None:
-    """Run a compiled kernel ``parallel(*args)`` or ``serial(*args)`` over a batch.
+def run_kernel(kind: str, inputs: tuple, outcome: tuple, *, batch: int, threads: int,
+               work: int) -> None:
+    """Run the CPU kernel of ``kind`` (:data:`BACKENDS`) on ``inputs`` into ``outcome``.
 
     On the calling thread for a batch of one, one thread, a batch of at most
     :data:`SERIAL_FIRST` while ``parallel`` is neither compiled nor in numba's cache (the same
@@ -471,11 +500,12 @@ def run_kernel(parallel: Callable, serial: Callable, args: tuple, abort: np.ndar
     ``_LONG_RUN`` die-steps of ``work`` can be interrupted (:func:`_run_interruptibly`). A
     kernel about to compile is said on stderr first (:data:`COMPILES`).
     """
+    parallel, serial = BACKENDS[kind]
     serial_run = (batch == 1 or threads == 1 or _after_fork
                   or (batch <= SERIAL_FIRST and not ready(parallel)))
     run = serial if serial_run else parallel
     announce(*COMPILES[run])
-    _run_interruptibly(run, args, abort, threads, long=work > _LONG_RUN)
+    _run_interruptibly(run, (*inputs, outcome), outcome.abort, threads, long=work > _LONG_RUN)
 
 
 def _run_interruptibly(run: Callable, args: tuple, abort: np.ndarray, threads: int, *,

@@ -7,7 +7,7 @@ the table's material unless given other ``stiffness``, ``damping``, ``friction``
 
 from __future__ import annotations
 
-from dice_env.checks import check_positive
+from dice_env.checks import check_choice, check_positive
 from dice_env.scene import Wall
 
 # A common felt-lined dice tray: 30 cm x 20 cm inside.
@@ -48,6 +48,5 @@ WALLS = {"none": lambda **material: (), "tray": tray, "craps": craps}
 
 def walls(name: str, **material: float) -> tuple[Wall, ...]:
     """The preset ``name`` (``"none"``, ``"tray"`` or ``"craps"``) with its default sizes."""
-    if name not in WALLS:
-        raise ValueError(f"walls must be one of {sorted(WALLS)}, got {name!r}")
+    check_choice("walls", name, WALLS)
     return WALLS[name](**material)

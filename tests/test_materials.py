@@ -38,7 +38,7 @@ def test_damping_follows_the_die_mass():
 
 def test_unknown_preset_names_the_presets():
     for bad in ("carpet", "Felt", 3):
-        with pytest.raises(ValueError, match="felt, wood, glass, craps"):
+        with pytest.raises(ValueError, match="'felt', 'wood', 'glass', 'craps'"):
             materials.ground(bad)
 
 
