@@ -80,10 +80,9 @@ def evaluation(task_id: str, throws: int, seed: int, **keywords: Any) -> tuple[A
 def success(model: Any, task: Any, batch: Any) -> dict[str, Any]:
     """The policy's mean action on ``batch``: rate, Wilson 95 % interval, throws."""
     from agents.episodes import PolicyThrower
-    from dice_env.intervals import wilson_bounds
+    from agents.evaluate import rate
 
-    s = np.asarray(batch.throw(task, PolicyThrower(model))["is_success"], bool)
-    return {"rate": float(s.mean()), "ci": wilson_bounds(int(s.sum()), s.size), "n": int(s.size)}
+    return rate(np.asarray(batch.throw(task, PolicyThrower(model))["is_success"], bool))
 
 
 class Run:
