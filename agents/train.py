@@ -339,13 +339,12 @@ def run_one(config: Config) -> Path:
 
 def run_group(config: Config) -> Path:
     """Train and evaluate every member of a group (seeds, sweep); write the group's report."""
+    given = config
     if config.resume is not None:
         group = Path(config.resume)
-        given = config
         config = resumed_config(config)
     else:
         group = new_run(config)
-        given = config
     members = config.members()
     for k, member in enumerate(members, 1):
         run = Path(member.runs) / str(member.name)
