@@ -224,10 +224,7 @@ def _mean_curve(runs: list[dict[str, Any]]) -> list[dict[str, float]]:
 
 def figure(summary: dict[str, Any], path: Path) -> None:
     """Learning curves, one column per task: success against throws (top), wall time (bottom)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from agents.plots import plt, save
 
     rows = summary["rows"]
     fig, axes = plt.subplots(2, len(rows), figsize=(3.2 * len(rows), 5.6), squeeze=False)
@@ -246,10 +243,7 @@ def figure(summary: dict[str, Any], path: Path) -> None:
                              fontsize=9)
         axes[0, j].set_ylabel("success" if j == 0 else "")
     axes[0, 0].legend(fontsize=7)
-    fig.tight_layout()
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    save(fig, path)
 
 
 def print_table(summary: dict[str, Any]) -> None:

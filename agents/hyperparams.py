@@ -70,9 +70,10 @@ NON_ALGORITHM_KEYS = ("policy", "n_envs", "n_timesteps", "env_kwargs", "noise_ty
 NON_PPO_KEYS = NON_ALGORITHM_KEYS
 
 # The benchmark (``python -m agents.benchmark``): one budget in throws per named task, the same
-# for every algorithm. They are what two CPU cores train 3 seeds x 3 algorithms of every task
-# in about an hour: the one-die tasks run 1,000-3,000 throws/s on one core, two dice in the tray
-# about 100 and the craps throw about 20 (``benchmarks/env.json`` measures the default task).
+# for every algorithm. They are what two CPU cores train 3 seeds x 4 algorithms of every task
+# in about an hour and a half: the one-die tasks run 1,000-3,000 throws/s on one core, two
+# dice in the tray about 100 and the craps throw about 20 (``benchmarks/env.json`` measures the
+# default task).
 BUDGETS: dict[str, int] = {
     "DiceThrow-v0": 40_000,
     "DiceThrowHigh-v0": 40_000,
@@ -104,13 +105,13 @@ ALGOS = tuple(_ALGORITHMS)
 def _benchmark_entry(algo: str, env_id: str) -> dict[str, Any]:
     """One (algorithm, task) entry of the benchmark."""
     n_envs = _N_ENVS.get(env_id, 64)
-    entry = {"policy": "MlpPolicy", "n_envs": n_envs, "n_timesteps": BUDGETS[env_id],
-             "env_kwargs": {}, **copy.deepcopy(_ALGORITHMS[algo])}
+    params = {"policy": "MlpPolicy", "n_envs": n_envs, "n_timesteps": BUDGETS[env_id],
+              "env_kwargs": {}, **copy.deepcopy(_ALGORITHMS[algo])}
     if algo in ("sac", "td3"):
-        entry["gradient_steps"] = max(1, n_envs // 4)
-        entry["buffer_size"] = BUDGETS[env_id]
-        entry["learning_starts"] = min(entry["learning_starts"], BUDGETS[env_id] // 4)
-    return entry
+        params["gradient_steps"] = max(1, n_envs // 4)
+        params["buffer_size"] = BUDGETS[env_id]
+        params["learning_starts"] = min(params["learning_starts"], BUDGETS[env_id] // 4)
+    return params
 
 
 # train.py's warm start: PPO for a one-step task (a contextual bandit): every episode ends after
