@@ -5,8 +5,8 @@ r"""The standard algorithms on every named task: one resumable command, one smal
     python -m agents.benchmark --table            # the summary from the kept JSONs only
     python -m agents.benchmark --quick --out DIR  # a smoke run: tiny budgets, numbers meaningless
 
-Each run (task, algorithm, seed) trains Stable-Baselines3's algorithm with the task's entry of
-:data:`agents.hyperparams.BENCHMARK_HYPERPARAMS` for the task's budget in throws
+Each run (task, algorithm, seed) trains Stable-Baselines3's algorithm with its ``"benchmark"``
+entry of :data:`agents.hyperparams.HYPERPARAMS` for the task's budget in throws
 (:data:`agents.hyperparams.BUDGETS`: the same for every algorithm of a task), and at
 ``CURVE_POINTS`` evenly spaced points evaluates the policy's mean action on ``CURVE_THROWS``
 fixed throws (success against throws and against training time: the process's CPU time, the
@@ -38,12 +38,11 @@ from typing import Any
 
 import numpy as np
 
-from agents.hyperparams import BENCHMARK_HYPERPARAMS, BUDGETS, algorithm_kwargs
+from agents.hyperparams import ALGOS, BUDGETS, algorithm_kwargs, entry
 
 ROOT = Path(__file__).resolve().parent.parent
 RESULTS = ROOT / "benchmarks" / "results"
 RUNS = ROOT / "runs" / "benchmark"
-ALGOS = ("ppo", "a2c", "sac", "td3")
 SEEDS = (0, 1, 2)
 CURVE_POINTS = 5  # evaluations along a run (the last at its budget)
 CURVE_THROWS = 128  # fixed throws per curve evaluation
@@ -81,10 +80,9 @@ def evaluation(task_id: str, throws: int, seed: int, **keywords: Any) -> tuple[A
 def success(model: Any, task: Any, batch: Any) -> dict[str, Any]:
     """The policy's mean action on ``batch``: rate, Wilson 95 % interval, throws."""
     from agents.episodes import PolicyThrower
-    from dice_env.intervals import wilson_bounds
+    from agents.evaluate import rate
 
-    s = np.asarray(batch.throw(task, PolicyThrower(model))["is_success"], bool)
-    return {"rate": float(s.mean()), "ci": wilson_bounds(int(s.sum()), s.size), "n": int(s.size)}
+    return rate(np.asarray(batch.throw(task, PolicyThrower(model))["is_success"], bool))
 
 
 class Run:
@@ -96,7 +94,7 @@ class Run:
         self.curve_throws, self.final_throws = curve_throws, final_throws
         self.result = out / "baselines" / task_id / f"{algo}-{seed}.json"
         self.work = RUNS / out.name / task_id / f"{algo}-{seed}"
-        step = BENCHMARK_HYPERPARAMS[algo][task_id]["n_envs"]  # throws per env step
+        step = entry(task_id, algo)["n_envs"]  # throws per env step
         self.points = sorted({-(-budget * (i + 1) // (CURVE_POINTS * step)) * step
                               for i in range(CURVE_POINTS)})
 
@@ -115,9 +113,9 @@ class Run:
             if (self.work / "buffer.pkl").exists():
                 model.load_replay_buffer(self.work / "buffer.pkl")
             return model
-        kwargs = algorithm_kwargs(self.algo, self.task_id, env.action_space.shape[0])
-        return cls(BENCHMARK_HYPERPARAMS[self.algo][self.task_id]["policy"], env, seed=self.seed,
-                   device="cpu", **kwargs)
+        params = entry(self.task_id, self.algo)
+        return cls(params["policy"], env, seed=self.seed, device="cpu",
+                   **algorithm_kwargs(params, env.action_space.shape[0]))
 
     def save(self, model: Any, state: dict[str, Any]) -> None:
         """A checkpoint: the model, an off-policy buffer, and the curve so far."""
@@ -135,12 +133,12 @@ def train(run: Run, log: Any = print) -> dict[str, Any]:
     from dice_env.envs.sb3 import make_sb3_env
     from dice_env.studies.common import code_version
 
-    entry = BENCHMARK_HYPERPARAMS[run.algo][run.task_id]
+    params = entry(run.task_id, run.algo)
     state = run.state()
     resumed = bool(state["curve"])
     state["resumed"] += resumed
-    env = make_sb3_env(entry["n_envs"], seed=1000 * run.seed + len(state["curve"]),
-                       env_id=run.task_id, **entry["env_kwargs"])
+    env = make_sb3_env(params["n_envs"], seed=1000 * run.seed + len(state["curve"]),
+                       env_id=run.task_id, **params["env_kwargs"])
     model = run.model(env, resumed)
     task, curve_batch = evaluation(run.task_id, run.curve_throws, CURVE_SEED)
     pending = [p for p in run.points if p > model.num_timesteps]
@@ -177,7 +175,7 @@ def train(run: Run, log: Any = print) -> dict[str, Any]:
     task, final_batch = evaluation(run.task_id, run.final_throws, 0)
     return {
         "task": run.task_id, "algo": run.algo, "seed": run.seed, "budget": run.budget,
-        "throws": int(model.num_timesteps), "hyperparams": entry,
+        "throws": int(model.num_timesteps), "hyperparams": params,
         "curve": state["curve"], "final": success(model, task, final_batch),
         "train_seconds": state["train_seconds"], "resumed": state["resumed"],
         "curve_throws": run.curve_throws, "final_throws": run.final_throws,
@@ -226,10 +224,7 @@ def _mean_curve(runs: list[dict[str, Any]]) -> list[dict[str, float]]:
 
 def figure(summary: dict[str, Any], path: Path) -> None:
     """Learning curves, one column per task: success against throws (top), wall time (bottom)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from agents.plots import plt, save
 
     rows = summary["rows"]
     fig, axes = plt.subplots(2, len(rows), figsize=(3.2 * len(rows), 5.6), squeeze=False)
@@ -248,10 +243,7 @@ def figure(summary: dict[str, Any], path: Path) -> None:
                              fontsize=9)
         axes[0, j].set_ylabel("success" if j == 0 else "")
     axes[0, 0].legend(fontsize=7)
-    fig.tight_layout()
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    save(fig, path)
 
 
 def print_table(summary: dict[str, Any]) -> None:

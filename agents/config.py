@@ -1,8 +1,8 @@
 """Training configuration: one dataclass whose field docstrings are the ``--help``.
 
-Per-env-id hyperparameters live in :data:`HYPERPARAMS` (like rl-zoo3's ``hyperparams/ppo.yml``):
-a preset name ("quick", "best") maps to PPO keywords, the training budget and the env keywords
-used for training. Values given on the command line win over the preset.
+The hyperparameters are PPO's entries of :data:`agents.hyperparams.HYPERPARAMS` for the env id
+and a preset (:data:`PRESETS`): PPO's keywords, the training budget, the env keywords used for
+training and the imitation warm start. Values given on the command line win over the preset.
 
 :func:`parse_config` checks every option before any work and before any folder is made (the env
 is built once per setting to check its keywords); a bad value ends with argparse's usage error
@@ -14,8 +14,8 @@ from __future__ import annotations
 
 import argparse
 import ast
+import copy
 import dataclasses
-import importlib
 import inspect
 import itertools
 import json
@@ -25,45 +25,11 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from agents.hyperparams import NON_PPO_KEYS, PPO_HYPERPARAMS, learning_rate
+from agents.hyperparams import HYPERPARAMS, algorithm_kwargs
 from dice_env.die import Die
 
-# PPO for a one-step task (a contextual bandit): every episode ends after one throw, so the
-# advantage is the reward minus the value (gamma and lambda do not matter); large batches of
-# throws per update, a few epochs, a small initial action noise around the hand-sized throws.
-_PPO_COMMON: dict[str, Any] = {
-    "n_steps": 8, "batch_size": 512, "n_epochs": 10, "gamma": 0.0, "gae_lambda": 1.0,
-    "learning_rate": 1e-4, "clip_range": 0.2, "target_kl": 0.05, "ent_coef": 0.0, "vf_coef": 0.5,
-    "max_grad_norm": 0.5,
-    "policy_kwargs": {"net_arch": [256, 256], "log_std_init": -2.5,
-                      "features_extractor_class": "agents.policy:TargetNormal"},
-}
-
-# The task: DiceThrow-v0 with its defaults (any gym.make keyword can be added per preset).
-_TASK: dict[str, Any] = {}
-# Training only: the dense term n_target . n_table at rest speeds learning; evaluation has none.
-_TRAIN = {"shaping": 0.5}
-# Warm start: before PPO, the policy's mean imitates the hand-written thrower on this many
-# observations for this many gradient steps (0: PPO from scratch). From 5 cm the landing is
-# sharp (a 10% error in spin costs about 0.1 of success), so PPO from scratch found no signal
-# in 40k throws; from the hand's throws it refines them.
-_WARM = {"imitation_throws": 20_000, "imitation_steps": 1500}
-
-# From scratch: plain MlpPolicy PPO with the recommended hyperparameters (agents/hyperparams.py).
-_PLAIN = PPO_HYPERPARAMS["DiceThrow-v0"]
-
-HYPERPARAMS: dict[str, dict[str, dict[str, Any]]] = {
-    "DiceThrow-v0": {
-        "quick": {"total_timesteps": 150_000, "n_envs": 256, "ppo": _PPO_COMMON,
-                  "env": _TASK, "train_env": _TRAIN, **_WARM},
-        "best": {"total_timesteps": 500_000, "n_envs": 256, "ppo": _PPO_COMMON,
-                 "env": _TASK, "train_env": _TRAIN, **_WARM},
-        "scratch": {"total_timesteps": _PLAIN["n_timesteps"], "n_envs": _PLAIN["n_envs"],
-                    "ppo": {k: v for k, v in _PLAIN.items() if k not in NON_PPO_KEYS},
-                    "env": _TASK, "train_env": _PLAIN["env_kwargs"],
-                    "imitation_throws": 0, "imitation_steps": 0},
-    },
-}
+# train.py's presets of PPO in agents.hyperparams.HYPERPARAMS.
+PRESETS = ("quick", "best", "scratch")
 
 
 @dataclass
@@ -71,10 +37,10 @@ class Config:
     """Train PPO to throw a die so that a target face lands up, then evaluate it."""
 
     env_id: str = "DiceThrow-v0"
-    """Gymnasium id of the environment (hyperparameters per id in agents/config.py)."""
+    """Gymnasium id of the environment (hyperparameters per id in agents/hyperparams.py)."""
     preset: str = "quick"
-    """Hyperparameter preset: "quick" (the README's default, minutes), "best" (longer), or
-    "scratch" (plain MlpPolicy PPO, no imitation warm start: agents/hyperparams.py)."""
+    """Hyperparameter preset (agents/hyperparams.py): "quick" (the README's default, minutes),
+    "best" (longer), or "scratch" (plain MlpPolicy PPO, no imitation warm start)."""
     seed: int = 0
     """Seed of the policy, the training envs and the evaluation (0 to 2**31 - 1)."""
     total_timesteps: int | None = None
@@ -122,35 +88,27 @@ class Config:
     """Threads of the simulation kernel (None: all cores)."""
 
     def hyperparams(self) -> dict[str, Any]:
-        """The preset's hyperparameters for ``env_id``, with this config's overrides applied."""
-        try:
-            presets = HYPERPARAMS[self.env_id]
-        except KeyError:
-            raise OptionError("env_id", f"must be one of {sorted(HYPERPARAMS)}, "
-                              f"got {self.env_id!r}") from None
-        if self.preset not in presets:
-            raise OptionError("preset", f"must be one of {sorted(presets)}, got {self.preset!r}")
-        params = json.loads(json.dumps(presets[self.preset]))
-        for key in ("total_timesteps", "n_envs"):
-            if getattr(self, key) is not None:
-                params[key] = getattr(self, key)
+        """The preset's entry for ``env_id`` (a fresh copy), with this config's overrides."""
+        ids = [e for e, algos in HYPERPARAMS.items() if set(PRESETS) <= set(algos["ppo"])]
+        if self.env_id not in ids:
+            raise OptionError("env_id", f"must be one of {sorted(ids)}, got {self.env_id!r}")
+        if self.preset not in PRESETS:
+            raise OptionError("preset", f"must be one of {sorted(PRESETS)}, got {self.preset!r}")
+        params = copy.deepcopy(HYPERPARAMS[self.env_id]["ppo"][self.preset])
+        if self.total_timesteps is not None:
+            params["n_timesteps"] = self.total_timesteps
+        if self.n_envs is not None:
+            params["n_envs"] = self.n_envs
         return params
 
     def ppo_kwargs(self, die: Die | None = None) -> dict[str, Any]:
-        """The preset's PPO keywords, ``"module:Name"`` classes in policy_kwargs imported.
+        """The preset's PPO keywords (:func:`agents.hyperparams.algorithm_kwargs`).
 
         A features extractor that takes ``reading`` (:class:`agents.policy.TargetNormal`) gets
         ``die``'s reading directions unless the preset gives them.
         """
-        ppo = self.hyperparams()["ppo"]
-        ppo.pop("policy", None)
-        if "learning_rate" in ppo:
-            ppo["learning_rate"] = learning_rate(ppo["learning_rate"])
+        ppo = algorithm_kwargs(self.hyperparams())
         policy = ppo.get("policy_kwargs", {})
-        for key, value in policy.items():
-            if key.endswith("_class") and isinstance(value, str):
-                module, _, name = value.partition(":")
-                policy[key] = getattr(importlib.import_module(module), name)
         extractor = policy.get("features_extractor_class")
         if die is not None and extractor is not None and "reading" in inspect.signature(
                 extractor).parameters:
@@ -159,8 +117,8 @@ class Config:
         return ppo
 
     def env_kwargs(self) -> dict[str, Any]:
-        """The preset's env keywords updated by ``--env`` (values parsed as Python literals)."""
-        kwargs = dict(self.hyperparams()["env"])
+        """The ``--env`` keywords (values parsed as Python literals)."""
+        kwargs = {}
         for item in self.env:
             key, value = _keyword("env", item)
             kwargs[key] = literal(value)
@@ -297,7 +255,7 @@ def check_env(config: Config, setting: dict[str, Any] | None = None) -> None:
 
     option = "sweep" if setting else "env"
     kwargs = {**config.env_kwargs(), **(setting or {}), **config.num_threads_kwargs()}
-    for extra in ({}, config.hyperparams()["train_env"]):
+    for extra in ({}, config.hyperparams()["env_kwargs"]):
         try:
             env = gym.make(config.env_id, **{**kwargs, **extra})
         except (ValueError, TypeError) as error:
@@ -310,8 +268,8 @@ def check_env(config: Config, setting: dict[str, Any] | None = None) -> None:
 def _check_one_die_preset(config: Config, option: str, dice: int) -> None:
     """Refuse a preset built on one-die constructs for a throw of several dice."""
     params = config.hyperparams()
-    extractor = params["ppo"].get("policy_kwargs", {}).get("features_extractor_class")
-    if dice > 1 and (params["imitation_steps"] or extractor is not None):
+    extractor = params.get("policy_kwargs", {}).get("features_extractor_class")
+    if dice > 1 and (params.get("imitation_steps") or extractor is not None):
         raise OptionError(option, f"num_dice={dice}: preset {config.preset!r} warm-starts from "
                           "the hand-written thrower and gives the policy the target face's "
                           "direction (TargetNormal), both built for one die; use --preset "

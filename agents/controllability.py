@@ -76,10 +76,7 @@ def heights_for(task: ThrowTask, heights: tuple[float, ...] = HEIGHTS) -> tuple[
 def plot(path: Path, maps: dict[str, np.ndarray], heights: tuple[float, ...],
          noises: tuple[float, ...], faces: int) -> Path:
     """One heatmap of success per thrower, chance (1 / ``faces``) at the colour map's low end."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from agents.plots import plt, save
 
     fig, axes = plt.subplots(1, len(maps), figsize=(4.0 * len(maps), 3.8), squeeze=False)
     for ax, (name, m) in zip(axes[0], maps.items(), strict=True):
@@ -92,10 +89,7 @@ def plot(path: Path, maps: dict[str, np.ndarray], heights: tuple[float, ...],
         ax.set(xticks=range(len(noises)), xticklabels=[f"{n:g}" for n in noises],
                yticks=range(len(heights)), yticklabels=[f"{100 * h:g}" for h in heights],
                xlabel="hand noise level", ylabel="release height (cm, centre)", title=name)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
+    return save(fig, path)
 
 
 def write_markdown(path: Path, maps: dict[str, np.ndarray], heights: tuple[float, ...],

@@ -64,19 +64,24 @@ def clustered(success: np.ndarray) -> tuple[float, float]:
     return wilson_bounds(p * size, size)
 
 
+def rate(success: np.ndarray) -> dict[str, Any]:
+    """Success rate, its 95% interval and the throws of ``success`` (n,) or (n, k).
+
+    With (n, k) (k throws per observation) the interval is :func:`clustered`, else Wilson's.
+    """
+    s = np.asarray(success)
+    ci = clustered(s) if s.ndim == 2 else wilson_bounds(int(s.sum()), s.size)
+    return {"rate": float(s.mean()), "ci": ci, "n": int(s.size)}
+
+
 def summary(success: np.ndarray, targets: np.ndarray,
             faces: int | Sequence[int]) -> dict[str, Any]:
-    """Success rate with its interval, overall and per target. ``success`` (n,) or (n, k).
+    """:func:`rate` overall and per target (with (n, k), also the observations).
 
     ``faces``: the target values to split by (an int n: 1 … n; :func:`target_values`).
-    With (n, k) (k throws per observation) the interval is :func:`clustered`.
     """
     def one(s: np.ndarray) -> dict[str, Any]:
-        if s.ndim == 2:
-            return {"rate": float(s.mean()), "ci": clustered(s), "n": int(s.size),
-                    "observations": len(s)}
-        return {"rate": float(s.mean()), "ci": wilson_bounds(int(s.sum()), s.size),
-                "n": int(s.size)}
+        return {**rate(s), **({"observations": len(s)} if s.ndim == 2 else {})}
 
     values = range(1, faces + 1) if isinstance(faces, int) else faces
     return {**one(success), "per_target": {
@@ -196,14 +201,8 @@ def turn_class(angle: np.ndarray) -> np.ndarray:
 def by_turn(success: np.ndarray, angle: np.ndarray) -> dict[str, dict[str, Any]]:
     """Success per class of :data:`TURN_CLASSES`; ``success`` (n,) or (n, k) per observation."""
     classes = turn_class(angle)
-    out = {}
-    for i, name in enumerate(TURN_CLASSES):
-        s = success[classes == i]
-        if len(s) == 0:
-            continue
-        ci = clustered(s) if s.ndim == 2 else wilson_bounds(int(s.sum()), s.size)
-        out[name] = {"rate": float(s.mean()), "ci": ci, "n": int(s.size)}
-    return out
+    return {name: rate(success[classes == i]) for i, name in enumerate(TURN_CLASSES)
+            if np.any(classes == i)}
 
 
 def strategy(batch: Batch, actions: np.ndarray, task: ThrowTask) -> dict[str, np.ndarray]:

@@ -1,4 +1,18 @@
-"""Recommended PPO hyperparameters per env id, for plain PPO from scratch (like rl-zoo3's).
+"""Every agent's hyperparameters: one table, :data:`HYPERPARAMS` ``[env_id][algo][preset]``.
+
+Each entry is in rl-zoo3's schema: ``policy``, ``n_envs`` (envs stepped together, one kernel
+call), ``n_timesteps`` (the budget in throws), ``env_kwargs`` (env keywords for training only:
+evaluation is on the task without them) and the algorithm's keywords, TD3's exploration as
+``noise_type``/``noise_std``; train.py's warm start adds ``imitation_throws`` and
+``imitation_steps``. The presets:
+
+* ``"benchmark"``: every named task with PPO, A2C, SAC and TD3 at the benchmark's budgets
+  (``python -m agents.benchmark``; ``python -m agents.zoo`` writes them as rl-zoo3 files).
+* ``"quick"`` and ``"best"``: ``train.py``'s PPO on DiceThrow-v0, warm-started by imitating the
+  hand-written thrower, with the target face's direction as a feature
+  (:class:`agents.policy.TargetNormal`).
+* ``"scratch"``: plain PPO from scratch, ``MlpPolicy`` on the raw observation (target one-hot
+  and hand orientation), no imitation (``train.py --preset scratch``; :data:`PPO_HYPERPARAMS`):
 
     from stable_baselines3 import PPO
     from agents.hyperparams import PPO_HYPERPARAMS, ppo_kwargs
@@ -9,19 +23,14 @@
     model = PPO(hp["policy"], env, seed=0, **ppo_kwargs("DiceThrow-v0"))
     model.learn(hp["n_timesteps"])
 
-Each entry holds the policy, the number of envs stepped together (one kernel call), the training
-budget in throws, the env keywords used for training (evaluate on the task without them) and
-PPO's keywords. No imitation, no custom features: ``MlpPolicy`` on the raw observation (target
-one-hot and hand orientation).
-
-Where DiceThrow-v0's values come from: ``python benchmarks/learn_from_scratch.py`` (default task:
-1.5 cm release, 5 % hand noise; success of the policy's mean action on fixed random throws; one
-kernel thread and one PyTorch thread). Its learning curve and final success with them, against
-the hand-written thrower on the same throws, are kept in
+Where DiceThrow-v0's ``"scratch"`` values come from: ``python benchmarks/learn_from_scratch.py``
+(default task: 1.5 cm release, 5 % hand noise; success of the policy's mean action on fixed
+random throws; one kernel thread and one PyTorch thread). Its learning curve and final success
+with them, against the hand-written thrower on the same throws, are kept in
 ``benchmarks/results/learn_from_scratch.json`` and shown in docs/agents.md with the oracle's.
-Variants, each changing one
-value (``--set KEY=VALUE``), single runs on 512 fixed throws (``--eval-throws 512``; this set
-reads 0.02-0.03 above larger ones near the top), their results not kept:
+Variants, each changing one value (``--set KEY=VALUE``), single runs on 512 fixed throws
+(``--eval-throws 512``; this set reads 0.02-0.03 above larger ones near the top), their results
+not kept:
 
 * Every episode is one throw, so the advantage is the reward minus the value whatever ``gamma``
   and ``gae_lambda`` are; they stay at SB3's defaults.
@@ -47,56 +56,24 @@ as the imitation warm start does.
 from __future__ import annotations
 
 import copy
+import importlib
 from typing import Any
 
 import numpy as np
 from stable_baselines3.common.utils import LinearSchedule
 
-# The keys of an entry that are not PPO keywords (as in rl-zoo3's files).
-NON_PPO_KEYS = ("policy", "n_envs", "n_timesteps", "env_kwargs")
-
-PPO_HYPERPARAMS: dict[str, dict[str, Any]] = {
-    "DiceThrow-v0": {
-        "policy": "MlpPolicy",
-        "n_envs": 256,
-        "n_timesteps": 800_000,
-        "env_kwargs": {"shaping": 0.5, "until": "decided"},
-        "n_steps": 4,
-        "batch_size": 256,
-        "n_epochs": 10,
-        "learning_rate": "lin_3e-4",
-        "policy_kwargs": {"net_arch": [256, 256], "log_std_init": -2.0},
-    },
-}
-
-
-def ppo_kwargs(env_id: str = "DiceThrow-v0") -> dict[str, Any]:
-    """PPO's keywords for ``env_id`` (a fresh copy): ``PPO(policy, env, **ppo_kwargs(env_id))``."""
-    if env_id not in PPO_HYPERPARAMS:
-        raise ValueError(f"env_id must be one of {sorted(PPO_HYPERPARAMS)}, got {env_id!r}")
-    kwargs = {key: copy.deepcopy(value) for key, value in PPO_HYPERPARAMS[env_id].items()
-              if key not in NON_PPO_KEYS}
-    kwargs["learning_rate"] = learning_rate(kwargs["learning_rate"])
-    return kwargs
-
-
-def learning_rate(value: float | str) -> float | LinearSchedule:
-    """A learning rate as written in the tables.
-
-    A number, or ``"lin_X"`` for a linear decay from X to 0 over training (rl-zoo3's
-    notation, which keeps the tables plain data).
-    """
-    if isinstance(value, str):
-        if not value.startswith("lin_"):
-            raise ValueError(f"learning_rate must be a number or 'lin_<number>', got {value!r}")
-        return LinearSchedule(float(value[4:]), 0.0, 1.0)
-    return value
-
+BENCHMARK = "benchmark"  # the benchmark's preset, on every named task and algorithm
+# The keys of an entry that are not the algorithm's keywords (rl-zoo3 reads the noise keys into
+# an ``action_noise``; train.py reads the imitation keys).
+NON_ALGORITHM_KEYS = ("policy", "n_envs", "n_timesteps", "env_kwargs", "noise_type",
+                      "noise_std", "imitation_throws", "imitation_steps")
+NON_PPO_KEYS = NON_ALGORITHM_KEYS
 
 # The benchmark (``python -m agents.benchmark``): one budget in throws per named task, the same
-# for every algorithm. They are what two CPU cores train 3 seeds x 3 algorithms of every task
-# in about an hour: the one-die tasks run 1,000-3,000 throws/s on one core, two dice in the tray
-# about 100 and the craps throw about 20 (``benchmarks/env.json`` measures the default task).
+# for every algorithm. They are what two CPU cores train 3 seeds x 4 algorithms of every task
+# in about an hour and a half: the one-die tasks run 1,000-3,000 throws/s on one core, two
+# dice in the tray about 100 and the craps throw about 20 (``benchmarks/env.json`` measures the
+# default task).
 BUDGETS: dict[str, int] = {
     "DiceThrow-v0": 40_000,
     "DiceThrowHigh-v0": 40_000,
@@ -106,11 +83,8 @@ BUDGETS: dict[str, int] = {
 }
 # Fewer throws per step where a throw costs more, so that a small budget still makes updates.
 _N_ENVS = {"DiceThrowTray2d6Sum-v0": 16, "DiceThrowCraps-v0": 8}
-# Keys of an rl-zoo3 entry that are not the algorithm's keywords (rl-zoo3 reads the noise keys
-# into an ``action_noise``).
-NON_ALGORITHM_KEYS = (*NON_PPO_KEYS, "noise_type", "noise_std")
-# Per algorithm, the keywords for every task: untuned, no search was run. PPO is the
-# DiceThrow-v0 recipe above with a rollout of ``n_envs`` x 4 throws, A2C the same rollout and
+# Per algorithm, the benchmark's keywords for every task: untuned, no search was run. PPO is the
+# "scratch" recipe below with a rollout of ``n_envs`` x 4 throws, A2C the same rollout and
 # policy with Stable-Baselines3's learning rate decaying to 0; SAC and TD3 are
 # Stable-Baselines3's defaults for a one-step task (every episode one throw, so gamma does not
 # matter), with one gradient step per 4 throws and TD3 with rl-zoo3's usual exploration noise.
@@ -125,38 +99,112 @@ _ALGORITHMS: dict[str, dict[str, Any]] = {
             "train_freq": 1, "gamma": 0.0, "noise_type": "normal", "noise_std": 0.1,
             "policy_kwargs": {"net_arch": [256, 256]}},
 }
+ALGOS = tuple(_ALGORITHMS)
 
 
 def _benchmark_entry(algo: str, env_id: str) -> dict[str, Any]:
-    """One (algorithm, task) entry in rl-zoo3's schema."""
+    """One (algorithm, task) entry of the benchmark."""
     n_envs = _N_ENVS.get(env_id, 64)
-    entry = {"policy": "MlpPolicy", "n_envs": n_envs, "n_timesteps": BUDGETS[env_id],
-             "env_kwargs": {}, **copy.deepcopy(_ALGORITHMS[algo])}
+    params = {"policy": "MlpPolicy", "n_envs": n_envs, "n_timesteps": BUDGETS[env_id],
+              "env_kwargs": {}, **copy.deepcopy(_ALGORITHMS[algo])}
     if algo in ("sac", "td3"):
-        entry["gradient_steps"] = max(1, n_envs // 4)
-        entry["buffer_size"] = BUDGETS[env_id]
-        entry["learning_starts"] = min(entry["learning_starts"], BUDGETS[env_id] // 4)
-    return entry
+        params["gradient_steps"] = max(1, n_envs // 4)
+        params["buffer_size"] = BUDGETS[env_id]
+        params["learning_starts"] = min(params["learning_starts"], BUDGETS[env_id] // 4)
+    return params
 
 
-BENCHMARK_HYPERPARAMS: dict[str, dict[str, dict[str, Any]]] = {
-    algo: {env_id: _benchmark_entry(algo, env_id) for env_id in BUDGETS} for algo in _ALGORITHMS
+# train.py's warm start: PPO for a one-step task (a contextual bandit): every episode ends after
+# one throw, so the advantage is the reward minus the value (gamma and lambda do not matter);
+# large batches of throws per update, a few epochs, a small initial action noise around the
+# hand-sized throws. Training only: the dense term n_target . n_table at rest speeds learning.
+# Before PPO, the policy's mean imitates the hand-written thrower on ``imitation_throws``
+# observations for ``imitation_steps`` gradient steps: from 5 cm the landing is sharp (a 10%
+# error in spin costs about 0.1 of success), so PPO from scratch found no signal in 40k throws;
+# from the hand's throws it refines them.
+_WARM_START: dict[str, Any] = {
+    "policy": "MlpPolicy", "n_envs": 256, "n_timesteps": 150_000, "env_kwargs": {"shaping": 0.5},
+    "n_steps": 8, "batch_size": 512, "n_epochs": 10, "gamma": 0.0, "gae_lambda": 1.0,
+    "learning_rate": 1e-4, "clip_range": 0.2, "target_kl": 0.05, "ent_coef": 0.0, "vf_coef": 0.5,
+    "max_grad_norm": 0.5,
+    "policy_kwargs": {"net_arch": [256, 256], "log_std_init": -2.5,
+                      "features_extractor_class": "agents.policy:TargetNormal"},
+    "imitation_throws": 20_000, "imitation_steps": 1500,
+}
+# Plain MlpPolicy PPO from scratch (the module's docstring says where each value comes from).
+_SCRATCH: dict[str, Any] = {
+    "policy": "MlpPolicy", "n_envs": 256, "n_timesteps": 800_000,
+    "env_kwargs": {"shaping": 0.5, "until": "decided"},
+    "n_steps": 4, "batch_size": 256, "n_epochs": 10, "learning_rate": "lin_3e-4",
+    "policy_kwargs": {"net_arch": [256, 256], "log_std_init": -2.0},
+}
+
+HYPERPARAMS: dict[str, dict[str, dict[str, dict[str, Any]]]] = {
+    env_id: {algo: {BENCHMARK: _benchmark_entry(algo, env_id)} for algo in ALGOS}
+    for env_id in BUDGETS
+}
+HYPERPARAMS["DiceThrow-v0"]["ppo"].update(
+    quick=_WARM_START, best={**_WARM_START, "n_timesteps": 500_000}, scratch=_SCRATCH)
+
+# The "scratch" entries by env id: plain PPO as an SB3 user writes it (the README's snippet).
+PPO_HYPERPARAMS: dict[str, dict[str, Any]] = {
+    env_id: algos["ppo"]["scratch"] for env_id, algos in HYPERPARAMS.items()
+    if "scratch" in algos["ppo"]
 }
 
 
-def algorithm_kwargs(algo: str, env_id: str, action_dim: int) -> dict[str, Any]:
-    """The SB3 keywords of ``algo`` on ``env_id`` (a fresh copy), as rl-zoo3 builds them."""
-    if algo not in BENCHMARK_HYPERPARAMS:
-        raise ValueError(f"algo must be one of {sorted(BENCHMARK_HYPERPARAMS)}, got {algo!r}")
-    if env_id not in BUDGETS:
-        raise ValueError(f"env_id must be one of {sorted(BUDGETS)}, got {env_id!r}")
-    entry = BENCHMARK_HYPERPARAMS[algo][env_id]
-    kwargs = {key: copy.deepcopy(value) for key, value in entry.items()
+def entry(env_id: str, algo: str = "ppo", preset: str = BENCHMARK) -> dict[str, Any]:
+    """The table's entry (not a copy) of ``algo`` on ``env_id`` in ``preset``."""
+    if env_id not in HYPERPARAMS:
+        raise ValueError(f"env_id must be one of {sorted(HYPERPARAMS)}, got {env_id!r}")
+    if algo not in HYPERPARAMS[env_id]:
+        raise ValueError(f"algo must be one of {sorted(HYPERPARAMS[env_id])}, got {algo!r}")
+    presets = HYPERPARAMS[env_id][algo]
+    if preset not in presets:
+        raise ValueError(f"preset must be one of {sorted(presets)}, got {preset!r}")
+    return presets[preset]
+
+
+def algorithm_kwargs(params: dict[str, Any], action_dim: int | None = None) -> dict[str, Any]:
+    """The SB3 keywords of an entry (a fresh copy), as rl-zoo3 builds them.
+
+    ``"lin_X"`` learning rates become schedules, ``"module:Name"`` classes in ``policy_kwargs``
+    are imported, and a ``noise_type`` becomes an ``action_noise`` over ``action_dim`` actions.
+    """
+    kwargs = {key: copy.deepcopy(value) for key, value in params.items()
               if key not in NON_ALGORITHM_KEYS}
-    kwargs["learning_rate"] = learning_rate(kwargs["learning_rate"])
-    if entry.get("noise_type") == "normal":
+    if "learning_rate" in kwargs:
+        kwargs["learning_rate"] = learning_rate(kwargs["learning_rate"])
+    policy = kwargs.get("policy_kwargs", {})
+    for key, value in policy.items():
+        if key.endswith("_class") and isinstance(value, str):
+            module, _, name = value.partition(":")
+            policy[key] = getattr(importlib.import_module(module), name)
+    if params.get("noise_type") == "normal":
         from stable_baselines3.common.noise import NormalActionNoise
 
+        if action_dim is None:
+            raise ValueError("an entry with noise_type needs action_dim")
         kwargs["action_noise"] = NormalActionNoise(np.zeros(action_dim),
-                                                   entry["noise_std"] * np.ones(action_dim))
+                                                   params["noise_std"] * np.ones(action_dim))
     return kwargs
+
+
+def ppo_kwargs(env_id: str = "DiceThrow-v0") -> dict[str, Any]:
+    """PPO's keywords for ``env_id`` (a fresh copy): ``PPO(policy, env, **ppo_kwargs(env_id))``."""
+    if env_id not in PPO_HYPERPARAMS:
+        raise ValueError(f"env_id must be one of {sorted(PPO_HYPERPARAMS)}, got {env_id!r}")
+    return algorithm_kwargs(PPO_HYPERPARAMS[env_id])
+
+
+def learning_rate(value: float | str) -> float | LinearSchedule:
+    """A learning rate as written in the table.
+
+    A number, or ``"lin_X"`` for a linear decay from X to 0 over training (rl-zoo3's
+    notation, which keeps the table plain data).
+    """
+    if isinstance(value, str):
+        if not value.startswith("lin_"):
+            raise ValueError(f"learning_rate must be a number or 'lin_<number>', got {value!r}")
+        return LinearSchedule(float(value[4:]), 0.0, 1.0)
+    return value

@@ -19,8 +19,10 @@ COLOURS = {"PPO": "tab:blue", "hand-written": "tab:orange", "random": "tab:gray"
 TILT_BINS = np.linspace(0.0, 180.0, 13)  # degrees, 15° wide
 
 
-def _save(fig: Any, path: Path) -> Path:
+def save(fig: Any, path: Path) -> Path:
+    """Lay out ``fig``, write it as a PNG at ``path`` (creating the folder), close it."""
     fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, dpi=110)
     plt.close(fig)
     return path
@@ -65,7 +67,7 @@ def learning(path: Path, curves: dict[str, list[dict[str, Any]]],
            title="learning curve (square: before PPO's first update"
                  + (", after the warm start)" if warm else ")"))
     ax.legend(fontsize=8, loc="lower right")
-    return _save(fig, path)
+    return save(fig, path)
 
 
 def by_turn(path: Path, turn: dict[str, dict[str, dict[str, Any]]]) -> Path:
@@ -83,7 +85,7 @@ def by_turn(path: Path, turn: dict[str, dict[str, dict[str, Any]]]) -> Path:
     ax.set(xticks=range(len(classes)), xticklabels=[f"target {c}" for c in classes],
            ylabel="success", ylim=(0, 1.05), title="success by how far the target face must turn")
     ax.legend(fontsize=8, ncol=len(turn))
-    return _save(fig, path)
+    return save(fig, path)
 
 
 def _binned(ax: Any, angle: np.ndarray, values: np.ndarray, colour: str, label: str) -> None:
@@ -127,7 +129,7 @@ def strategy(path: Path, strategies: dict[str, dict[str, np.ndarray]],
         ax.axvline(45, color="k", lw=0.5, ls=":")
         ax.axvline(135, color="k", lw=0.5, ls=":")
     axes[0, 0].legend(fontsize=8)
-    return _save(fig, path)
+    return save(fig, path)
 
 
 def confusion(path: Path, targets: np.ndarray, landed: dict[str, np.ndarray],
@@ -146,7 +148,7 @@ def confusion(path: Path, targets: np.ndarray, landed: dict[str, np.ndarray],
                         color="white" if rates[i, j] < 0.5 else "black")
         ax.set(xticks=range(faces), xticklabels=labels, yticks=range(faces), yticklabels=labels,
                xlabel="landed face", ylabel="target face", title=name)
-    return _save(fig, path)
+    return save(fig, path)
 
 
 def outcomes(path: Path, throws: dict[str, dict[str, np.ndarray]]) -> Path:
@@ -163,7 +165,7 @@ def outcomes(path: Path, throws: dict[str, dict[str, np.ndarray]]) -> Path:
     axes[0].set(xlabel="corner impacts", ylabel="throws", title="impacts per throw")
     axes[1].set(xlabel="rest time (s)", ylabel="throws", title="time to rest")
     axes[1].legend()
-    return _save(fig, path)
+    return save(fig, path)
 
 
 def robustness(path: Path, sweeps: dict[str, dict[str, list[dict[str, Any]]]],
@@ -186,4 +188,4 @@ def robustness(path: Path, sweeps: dict[str, dict[str, list[dict[str, Any]]]],
             ax.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
     axes[0, 0].set_ylabel("success")
     axes[0, 0].legend(fontsize=8)
-    return _save(fig, path)
+    return save(fig, path)

@@ -168,7 +168,7 @@ def write_report(run: Path, config: Config, evaluation: dict[str, Any],
         f"# {config.name}: PPO on {config.env_id}", "",
         f"Trained on {throws} throws in {seconds / 60:.1f} min ({warm}; preset "
         f"`{config.preset}`, seed {config.seed}); env keywords "
-        f"`{config.env_kwargs() or 'defaults'}`, training-only keywords `{params['train_env']}`.",
+        f"`{config.env_kwargs() or 'defaults'}`, training-only keywords `{params['env_kwargs']}`.",
         "", "## Headline", "", _rates_line(evaluation), "", *verdict(evaluation), "",
         *_section_success(evaluation),
         *_section_learning(run, evaluation, figures["learning"]),

@@ -219,7 +219,7 @@ def train(config: Config, run: Path | None = None) -> Path:
     n_envs = params["n_envs"]
     env_kwargs = {**config.env_kwargs(), **config.num_threads_kwargs()}
     env = make_sb3_env(n_envs, config.seed, env_id=config.env_id,
-                       **{**env_kwargs, **params["train_env"]})
+                       **{**env_kwargs, **params["env_kwargs"]})
     eval_env = make_sb3_env(min(n_envs, config.eval_episodes), config.seed + 10**6,
                             env_id=config.env_id, **env_kwargs)
     tensorboard = run / "tb" if importlib.util.find_spec("tensorboard") else None
@@ -230,13 +230,13 @@ def train(config: Config, run: Path | None = None) -> Path:
     if fresh and resuming:
         print(f"{run} has no readable checkpoint: training starts over", file=sys.stderr)
     if model is None:
-        model = PPO("MlpPolicy", env, seed=config.seed, tensorboard_log=tensorboard,
+        model = PPO(params["policy"], env, seed=config.seed, tensorboard_log=tensorboard,
                     device="cpu", verbose=0, **config.ppo_kwargs(env.get_attr("task")[0].scene.die))
-        if params["imitation_steps"]:
+        warm = bool(params.get("imitation_steps"))
+        if warm:
             loss = imitate(model, config, params["imitation_throws"], params["imitation_steps"])
             print(f"warm start: imitated the hand-written thrower, MSE {loss:.2e}")
-        start = evaluate_start(model, eval_env, config.eval_episodes, run,
-                               bool(params["imitation_steps"]))
+        start = evaluate_start(model, eval_env, config.eval_episodes, run, warm)
         print(f"success before PPO's first update: {start:.3f}")
     try:
         _learn(model, config, run, eval_env, fresh)
@@ -249,7 +249,7 @@ def train(config: Config, run: Path | None = None) -> Path:
 def _learn(model: PPO, config: Config, run: Path, eval_env: VecEnv, fresh: bool) -> None:
     """``model.learn`` to the config's total with checkpoints, evaluations and a bar."""
     params = config.hyperparams()
-    n_envs, total = params["n_envs"], params["total_timesteps"]
+    n_envs, total = params["n_envs"], params["n_timesteps"]
     end = rollout_end(model.num_timesteps, total, model.n_steps * n_envs)
     if end == model.num_timesteps:
         print(f"{run} is already trained to {model.num_timesteps} throws")
@@ -309,7 +309,7 @@ def write_interrupted(error: Interrupted, resume: Path) -> Path:
     if error.stage == "training":
         sessions = (run / "training.jsonl").read_text().splitlines()
         throws = json.loads(sessions[-1])["throws"]
-        total = config.hyperparams()["total_timesteps"]
+        total = config.hyperparams()["n_timesteps"]
         lines += [f"**Training was interrupted (Ctrl-C) at {throws} of {total} throws; this run "
                   "is not evaluated.** The model and a checkpoint at that step are saved "
                   f"(`model.zip`, `checkpoints/{CHECKPOINT_PREFIX}_{throws}_steps.zip`).", "",
@@ -339,13 +339,12 @@ def run_one(config: Config) -> Path:
 
 def run_group(config: Config) -> Path:
     """Train and evaluate every member of a group (seeds, sweep); write the group's report."""
+    given = config
     if config.resume is not None:
         group = Path(config.resume)
-        given = config
         config = resumed_config(config)
     else:
         group = new_run(config)
-        given = config
     members = config.members()
     for k, member in enumerate(members, 1):
         run = Path(member.runs) / str(member.name)

@@ -1,4 +1,4 @@
-r"""rl-zoo3 hyperparameter files, written from :data:`agents.hyperparams.BENCHMARK_HYPERPARAMS`.
+r"""rl-zoo3 files of the benchmark's entries in :data:`agents.hyperparams.HYPERPARAMS`.
 
     python -m agents.zoo              # rewrites agents/zoo_configs/{ppo,a2c,sac,td3}.yml
     python -m agents.zoo --check      # exit 1 if a file differs from the table
@@ -26,7 +26,7 @@ from typing import Any
 
 import yaml
 
-from agents.hyperparams import BENCHMARK_HYPERPARAMS
+from agents.hyperparams import ALGOS, HYPERPARAMS, entry
 
 ZOO = Path(__file__).resolve().parent / "zoo_configs"
 HEADER = "# Written by `python -m agents.zoo` from agents/hyperparams.py; do not edit by hand.\n"
@@ -39,41 +39,39 @@ def _python(value: Any) -> str:
     return repr(value)
 
 
-def zoo_entry(entry: dict[str, Any]) -> dict[str, Any]:
+def zoo_entry(params: dict[str, Any]) -> dict[str, Any]:
     """One env's rl-zoo3 hyperparameters from its table entry."""
-    out = dict(entry)
-    out["n_timesteps"] = float(entry["n_timesteps"])
-    if "policy_kwargs" in entry:
-        out["policy_kwargs"] = _python(entry["policy_kwargs"])
+    out = dict(params)
+    out["n_timesteps"] = float(params["n_timesteps"])
+    if "policy_kwargs" in params:
+        out["policy_kwargs"] = _python(params["policy_kwargs"])
     return out
 
 
 def zoo_yaml(algo: str) -> str:
     """The text of ``agents/zoo_configs/<algo>.yml``."""
-    table = {env_id: zoo_entry(entry) for env_id, entry in BENCHMARK_HYPERPARAMS[algo].items()}
+    table = {env_id: zoo_entry(entry(env_id, algo)) for env_id in HYPERPARAMS}
     return HEADER + yaml.safe_dump(table, sort_keys=False)
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Write ``agents/zoo_configs/ppo.yml``, or with ``--check`` report whether it is current."""
+    """Write ``agents/zoo_configs/*.yml``, or with ``--check`` report whether they are current."""
+    texts = {ZOO / f"{algo}.yml": zoo_yaml(algo) for algo in ALGOS}
     parser = argparse.ArgumentParser(prog="python -m agents.zoo",
                                      description=__doc__.split("\n")[0])
     parser.add_argument("--check", action="store_true",
-                        help="change nothing; exit 1 if the file differs from the table")
-    args = parser.parse_args(argv)
-    stale = []
-    for algo in BENCHMARK_HYPERPARAMS:
-        path, text = ZOO / f"{algo}.yml", zoo_yaml(algo)
-        if args.check:
-            if not path.exists() or path.read_text() != text:
-                stale.append(path)
-            continue
-        ZOO.mkdir(exist_ok=True)
+                        help="change nothing; exit 1 if a file differs from the table")
+    if parser.parse_args(argv).check:
+        stale = [path for path, text in texts.items()
+                 if not path.exists() or path.read_text() != text]
+        for path in stale:
+            print(f"{path} differs from agents/hyperparams.py (python -m agents.zoo)")
+        return 1 if stale else 0
+    ZOO.mkdir(exist_ok=True)
+    for path, text in texts.items():
         path.write_text(text)
         print(f"wrote {path}")
-    for path in stale:
-        print(f"{path} differs from agents/hyperparams.py (python -m agents.zoo)")
-    return 1 if stale else 0
+    return 0
 
 
 if __name__ == "__main__":

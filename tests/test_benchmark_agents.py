@@ -5,7 +5,7 @@ import json
 import pytest
 
 from agents import benchmark, learned
-from agents.hyperparams import BENCHMARK_HYPERPARAMS, BUDGETS, algorithm_kwargs
+from agents.hyperparams import BUDGETS, HYPERPARAMS, algorithm_kwargs, entry
 from dice_env.envs.tasks import TASKS
 
 TASK = "DiceThrow-v0"
@@ -16,17 +16,21 @@ def _run(tmp_path, algo, budget=320):  # five env steps of 64 throws
 
 
 def test_every_task_has_a_budget_and_every_algorithm_an_entry():
-    assert list(BUDGETS) == [t.id for t in TASKS]
-    for algo in benchmark.ALGOS:
-        assert list(BENCHMARK_HYPERPARAMS[algo]) == list(BUDGETS)
-        for env_id, entry in BENCHMARK_HYPERPARAMS[algo].items():
-            assert entry["n_timesteps"] == BUDGETS[env_id]
-    noise = algorithm_kwargs("td3", TASK, 6)["action_noise"]
+    assert list(BUDGETS) == list(HYPERPARAMS) == [t.id for t in TASKS]
+    for env_id, algos in HYPERPARAMS.items():
+        assert tuple(algos) == benchmark.ALGOS
+        for algo in algos:
+            assert entry(env_id, algo)["n_timesteps"] == BUDGETS[env_id]
+    noise = algorithm_kwargs(entry(TASK, "td3"), 6)["action_noise"]
     assert noise._sigma.shape == (6,)
+    with pytest.raises(ValueError, match="action_dim"):
+        algorithm_kwargs(entry(TASK, "td3"))
     with pytest.raises(ValueError, match="algo must be one of"):
-        algorithm_kwargs("dqn", TASK, 6)
+        entry(TASK, "dqn")
     with pytest.raises(ValueError, match="env_id must be one of"):
-        algorithm_kwargs("sac", "CartPole-v1", 6)
+        entry("CartPole-v1", "sac")
+    with pytest.raises(ValueError, match="preset must be one of"):
+        entry(TASK, "sac", "quick")
 
 
 @pytest.mark.parametrize("algo", ["ppo", "sac"])
@@ -131,11 +135,11 @@ def test_learned_names_the_command_that_rebuilds_a_missing_model(tmp_path, monke
 def test_the_kept_runs_cover_every_task_algorithm_and_seed_with_todays_settings():
     for task_id, budget in BUDGETS.items():
         for algo in benchmark.ALGOS:
-            entry = json.loads(json.dumps(BENCHMARK_HYPERPARAMS[algo][task_id]))
+            params = json.loads(json.dumps(entry(task_id, algo)))
             for seed in benchmark.SEEDS:
                 path = benchmark.RESULTS / "baselines" / task_id / f"{algo}-{seed}.json"
                 run = json.loads(path.read_text())
-                assert (run["budget"], run["hyperparams"]) == (budget, entry), path
+                assert (run["budget"], run["hyperparams"]) == (budget, params), path
                 assert run["throws"] >= budget and len(run["curve"]) == benchmark.CURVE_POINTS
                 assert run["final"]["n"] == benchmark.FINAL_THROWS
     summary = json.loads((benchmark.RESULTS / "baselines.json").read_text())

@@ -50,3 +50,13 @@ def test_learns_from_scratch_well_above_chance():
     actions = model.predict(task.observe(targets, hands), deterministic=True)[0]
     success = task.throw(actions, targets, hands, task.sample_noise(rng, 512)).info["is_success"]
     assert success.mean() > 0.35
+
+
+def test_train_presets_are_the_tables_entries():
+    from agents.config import PRESETS, Config
+    from agents.hyperparams import HYPERPARAMS
+
+    assert Config(preset="scratch").hyperparams() == HP
+    for preset in PRESETS:
+        assert Config(preset=preset).hyperparams() == HYPERPARAMS["DiceThrow-v0"]["ppo"][preset]
+    assert Config(preset="best", total_timesteps=10, n_envs=4).hyperparams()["n_timesteps"] == 10
