@@ -29,7 +29,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import sys
 import time
 from collections.abc import Sequence
@@ -73,7 +72,7 @@ def evaluation(task_id: str, throws: int, seed: int, **keywords: Any) -> tuple[A
 
     from agents.episodes import Batch
 
-    task = gym.make(task_id, **keywords).unwrapped.task
+    task = gym.make(task_id, **{"num_threads": 1, **keywords}).unwrapped.task
     return task, Batch.sample(task, throws, np.random.default_rng(seed), **episode(task_id))
 
 
@@ -138,7 +137,7 @@ def train(run: Run, log: Any = print) -> dict[str, Any]:
     resumed = bool(state["curve"])
     state["resumed"] += resumed
     env = make_sb3_env(params["n_envs"], seed=1000 * run.seed + len(state["curve"]),
-                       env_id=run.task_id, **params["env_kwargs"])
+                       env_id=run.task_id, num_threads=1, **params["env_kwargs"])
     model = run.model(env, resumed)
     task, curve_batch = evaluation(run.task_id, run.curve_throws, CURVE_SEED)
     pending = [p for p in run.points if p > model.num_timesteps]
@@ -275,7 +274,6 @@ def main(argv: Sequence[str] | None = None) -> int:
         parser.error(f"--seeds must be >= 0, got {args.seeds}")
     if args.quick and args.out.resolve() == RESULTS.resolve():
         parser.error("--quick needs --out: its numbers must not replace the kept results")
-    os.environ.setdefault("NUMBA_NUM_THREADS", "1")
     import torch
 
     torch.set_num_threads(1)
