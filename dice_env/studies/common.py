@@ -1,18 +1,22 @@
-"""What every study shares: the docs folder, figures, progress bar, throw count, code version."""
+"""What every study shares: docs folder, seed, figures, progress bar, throw count, code version."""
 
 from __future__ import annotations
 
 import subprocess
+from collections.abc import Iterator
 from pathlib import Path
 
 import matplotlib
 
-matplotlib.use("Agg")
+matplotlib.use("Agg")  # every study imports this module: its figures are written, not shown
 import matplotlib.pyplot as plt
 import numpy as np
 from tqdm import tqdm
 
+from dice_env.simulate import DiceArrays
+
 DOCS = Path(__file__).resolve().parents[2] / "docs"  # where the full studies write their pages
+SEED = 2026  # the studies' default seed
 
 
 def save_figure(fig: plt.Figure, path: Path) -> None:
@@ -25,6 +29,15 @@ def save_figure(fig: plt.Figure, path: Path) -> None:
 def progress(total: int, desc: str) -> tqdm:
     """The studies' progress bar."""
     return tqdm(total=total, desc=desc, unit="run", dynamic_ncols=True)
+
+
+def batches(state: DiceArrays, size: int, bar: tqdm | None = None) -> Iterator[DiceArrays]:
+    """``state``'s throws in consecutive batches of ``size``; ``bar`` advances by each when done."""
+    for start in range(0, state.batch_size, size):
+        batch = type(state)(*(a[start:start + size] for a in state._arrays()))
+        yield batch
+        if bar is not None:
+            bar.update(batch.batch_size)
 
 
 def checked_throws(throws: object, least: int) -> int | None:
