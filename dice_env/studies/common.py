@@ -40,12 +40,16 @@ def batches(state: DiceArrays, size: int, bar: tqdm | None = None) -> Iterator[D
             bar.update(batch.batch_size)
 
 
+def checked_int(name: str, value: object, least: int) -> int:
+    """``value`` as an int, checked: an int (not a bool) >= ``least``, else a ValueError."""
+    if not isinstance(value, (int, np.integer)) or isinstance(value, bool) or value < least:
+        raise ValueError(f"{name} must be an int >= {least}, got {value!r}")
+    return int(value)
+
+
 def checked_throws(throws: object, least: int) -> int | None:
     """A study's ``throws`` checked: None (the study's own size) or an int >= ``least``."""
-    if throws is not None and (not isinstance(throws, (int, np.integer))
-                               or isinstance(throws, bool) or throws < least):
-        raise ValueError(f"throws must be an int >= {least}, got {throws!r}")
-    return None if throws is None else int(throws)
+    return None if throws is None else checked_int("throws", throws, least)
 
 
 def code_version(tree: Path = DOCS.parent) -> str:

@@ -29,11 +29,7 @@ from dice_env.scene import Scene
 from dice_env.simulate import State
 from dice_env.studies.chunks import kept_chunks, prepare
 from dice_env.studies.common import DOCS, SEED, batches, checked_throws, progress, save_figure
-from dice_env.studies.fairness import (
-    random_directions,
-    random_orientations,
-    toward_table,
-)
+from dice_env.studies.fairness import random_directions, random_orientations, toward_table
 from dice_env.studies.markdown import bracket, markdown_table
 from dice_env.surroundings import TRAY, tray
 

@@ -37,11 +37,12 @@ from scipy import optimize, stats
 
 from dice_env.die import Die
 from dice_env.group import DieContact, GroupState, simulate_group
+from dice_env.intervals import Z95
 from dice_env.pips import Pips
 from dice_env.scene import Scene
 from dice_env.simulate import State
 from dice_env.studies.chunks import kept_chunks, prepare
-from dice_env.studies.common import DOCS, SEED, checked_throws, progress, save_figure
+from dice_env.studies.common import DOCS, SEED, checked_int, checked_throws, progress, save_figure
 from dice_env.studies.fairness import random_directions, random_orientations
 from dice_env.studies.markdown import estimate, markdown_table
 from dice_env.studies.shapes import Faces, throw_faces
@@ -52,7 +53,6 @@ WELDON_COUNTS = (185, 1149, 3265, 5475, 6114, 5194, 3067, 1331, 403, 105, 14, 4,
 DICE = 12
 SUCCESS = (5, 6)
 FAIR = 1 / 3
-Z95 = 1.959964
 MIN_EXPECTED = 5.0  # chi-square cells are pooled until each expects at least this many
 SIGNIFICANCE = 0.05
 RESOLVING_POWER = 0.8  # a test "resolves" a difference it detects with this probability
@@ -79,12 +79,11 @@ class Estimate:
     @classmethod
     def binomial(cls, successes: int, trials: int) -> Estimate:
         """``successes`` of ``trials`` independent trials: ``se = sqrt(p (1 - p) / n)``."""
-        if not isinstance(trials, (int, np.integer)) or trials < 1:
-            raise ValueError(f"trials must be an int >= 1, got {trials!r}")
+        trials = checked_int("trials", trials, 1)
         if not 0 <= successes <= trials:
             raise ValueError(f"successes must be in [0, trials={trials}], got {successes!r}")
         p = successes / trials
-        return cls(p, math.sqrt(p * (1 - p) / trials), int(trials))
+        return cls(p, math.sqrt(p * (1 - p) / trials), trials)
 
     @classmethod
     def per_throw(cls, successes: np.ndarray, dice: int = DICE) -> Estimate:
