@@ -26,9 +26,9 @@ def save_figure(fig: plt.Figure, path: Path) -> None:
     plt.close(fig)
 
 
-def progress(total: int, desc: str) -> tqdm:
-    """The studies' progress bar."""
-    return tqdm(total=total, desc=desc, unit="run", dynamic_ncols=True)
+def progress(total: int, desc: str, unit: str = "run") -> tqdm:
+    """The studies' progress bar, counting ``unit``."""
+    return tqdm(total=total, desc=desc, unit=unit, dynamic_ncols=True)
 
 
 def batches(state: DiceArrays, size: int, bar: tqdm | None = None) -> Iterator[DiceArrays]:

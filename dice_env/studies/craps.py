@@ -125,8 +125,7 @@ def run(out: Path = DOCS, quick: bool = False, throws: int | None = None,
     n = throws if throws is not None else QUICK if quick else FULL
     noises, speeds = (QUICK_NOISES, QUICK_SPEEDS) if quick else (NOISES, SPEEDS)
     rng = np.random.default_rng(seed)
-    bar = progress(n * len(noises) * len(speeds) * len(HANDS), "craps throws")
-    bar.unit = "throw"
+    bar = progress(n * len(noises) * len(speeds) * len(HANDS), "craps throws", "throw")
     start, cpu = time.perf_counter(), time.process_time()
     cells = {(noise, speed, way): tally(throw_cell(noise, speed, way == "set", n, rng, bar))
              for noise in noises for speed in speeds for way in HANDS}

@@ -28,7 +28,7 @@ from dice_env.studies.common import DOCS, SEED, checked_throws, progress, save_f
 from dice_env.studies.fairness import VIGOROUS, Vigour
 from dice_env.studies.markdown import estimate, markdown_table
 from dice_env.studies.shapes import Faces, hand_throws, throw_faces
-from dice_env.table import DIE_EDGE, RESTITUTION, damping_for_restitution
+from dice_env.table import DIE_EDGE, DIE_MASS, RESTITUTION, damping_for_restitution
 
 # x/y of the shapes thrown (1 is the cube).
 RATIOS = (0.45, 0.55, 0.65, 0.8, 0.9, 1.0, 1.1, 1.25, 1.5, 1.8, 2.2, 2.7)
@@ -42,7 +42,7 @@ GENTLE = Vigour(clearance=(1.0, 4.0), speed=(5.0, 25.0), spin=(2.0, 20.0))
 # damping recomputed for the same restitution.
 SOFT_STIFFNESS, SOFT_FRICTION = 1e4, 0.2
 SOFT = Ground(stiffness=SOFT_STIFFNESS, friction=SOFT_FRICTION,
-              damping=damping_for_restitution(RESTITUTION, SOFT_STIFFNESS, 0.0045))
+              damping=damping_for_restitution(RESTITUTION, SOFT_STIFFNESS, DIE_MASS))
 # (label, throws, table); the first is the prediction of record.
 CONDITIONS = (("vigorous, wooden table", VIGOROUS, Ground()),
               ("gentle, wooden table", GENTLE, Ground()),
@@ -87,8 +87,7 @@ def run(out: Path = DOCS, quick: bool = False, seed: int = SEED,
     n = throws if throws is not None else (QUICK if quick else FULL)
     ratios = QUICK_RATIOS if quick else RATIOS
     rng = np.random.default_rng(seed)
-    bar = progress(len(ratios) * len(CONDITIONS) * n, "cuboid throws")
-    bar.unit = "throw"
+    bar = progress(len(ratios) * len(CONDITIONS) * n, "cuboid throws", "throw")
     table = {}
     for label, vigour, ground in CONDITIONS:
         for ratio in ratios:

@@ -194,8 +194,7 @@ def run(out: Path = DOCS, quick: bool = False, seed: int = SEED) -> dict[str, fl
     scene = Scene()
     loaded_die = Die.loaded(face=1, fraction=0.1, edge=scene.die.size, mass=scene.die.mass)
     loaded_scene = scene.with_(die=loaded_die)
-    bar = progress(sum(sizes.values()), "fairness throws")
-    bar.unit = "throw"
+    bar = progress(sum(sizes.values()), "fairness throws", "throw")
     fair_state = vigorous_throws(scene, sizes["fair"], rng)
     fair = FaceCounts.of(throw_batches(scene, fair_state, bar))
     loaded_state = vigorous_throws(loaded_scene, sizes["loaded"], rng)

@@ -96,8 +96,7 @@ def run(out: Path = DOCS, quick: bool = False, throws: int | None = None,
     releases = {label: vigorous_throws(base, n, rng, hand)
                 for (label, hand), n in zip(KINDS, sizes, strict=True)}
     restitution = {name: materials.measured(name) for name in materials.MATERIALS}
-    bar = progress(len(materials.MATERIALS) * sum(sizes), "material throws")
-    bar.unit = "throw"
+    bar = progress(len(materials.MATERIALS) * sum(sizes), "material throws", "throw")
     results = {name: {label: throw(materials.scene(name, t_max=T_MAX), state, bar)
                       for label, state in releases.items()}
                for name in materials.MATERIALS}

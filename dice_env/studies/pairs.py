@@ -278,8 +278,7 @@ def run(out: Path = DOCS, quick: bool = False, throws: int | None = None,
     n = throws if throws is not None else QUICK if quick else FULL
     scene = tray_scene()
     dice = (scene.die, scene.die)
-    bar = progress(n, "two-dice throws")
-    bar.unit = "throw"
+    bar = progress(n, "two-dice throws", "throw")
     pairs, seconds, cpu = chunked_pairs(scene, dice, n, seed, keep, bar)
     bar.close()
     _plot(pairs, out / "figures" / "pairs.png")

@@ -237,8 +237,7 @@ def run(out: Path = DOCS, quick: bool = False, seed: int = SEED,
         sizes = {"fair": int(throws), "loaded": max(QUICK["loaded"], int(throws) // 2)}
     rng = np.random.default_rng(seed)
     seeds = iter(np.random.SeedSequence(seed).generate_state(2 * len(DICE)))
-    bar = progress(len(DICE) * (sizes["fair"] + sizes["loaded"]), "shapes throws")
-    bar.unit = "throw"
+    bar = progress(len(DICE) * (sizes["fair"] + sizes["loaded"]), "shapes throws", "throw")
 
     def thrown(scene: Scene, n: int) -> Faces:
         if faces_of is None:

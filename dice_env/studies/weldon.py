@@ -477,8 +477,7 @@ def run(out: Path = DOCS, quick: bool = False, seed: int = SEED,
         f" --throws {throws}" if throws is not None else "")
     rng = np.random.default_rng(seed)
     total = DICE * (sizes["together"] + sizes["alone"] + (len(VARIANTS) - 1) * sizes["variant"])
-    bar = progress(total, "weldon die-throws")
-    bar.unit = "die"
+    bar = progress(total, "weldon die-throws", "die")
     scene = Scene(die=variant_die(VARIANTS[0][2]))
     together = chunked_together(scene, sizes["together"], seed, keep, bar)
     alone = {}
