@@ -38,7 +38,7 @@ import time
 
 import numba
 import numpy as np
-from harness import benchmark_parser, write_json
+from harness import benchmark_parser, timed, write_json
 
 from dice_env import Scene, simulate
 from dice_env.die import Die
@@ -50,22 +50,12 @@ from dice_env.studies.pairs import hand_throws, tray_scene
 from dice_env.table import RESTITUTION, damping_ratio
 
 
-def cpu_best(fn: object, repeats: int) -> tuple[float, object]:
-    """Least CPU time of ``repeats`` calls of ``fn`` and the last call's result."""
-    best, result = math.inf, None
-    for _ in range(repeats):
-        start = time.process_time()
-        result = fn()
-        best = min(best, time.process_time() - start)
-    return best, result
-
-
 def ours_in_tray(n_dice: int, throws: int, repeats: int, seed: int, contact: DieContact) -> tuple:
     """The tray, ``n_dice`` d6, their seeded throws, our least CPU time and the result."""
     scene = tray_scene()
     dice = (Die(),) * n_dice
     state = hand_throws(scene, dice, throws, np.random.default_rng(seed))
-    seconds, res = cpu_best(lambda: simulate_group(scene, dice, state, stop_when_decided=True,
+    seconds, res = timed(lambda: simulate_group(scene, dice, state, stop_when_decided=True,
                                                    contact=contact, num_threads=1), repeats)
     return scene, dice, state, seconds, res
 
@@ -85,7 +75,7 @@ def measure(n_dice: int, throws: int, repeats: int, seed: int,
     if n_dice == 1:
         alone = state.die(0)
         for flight in (True, False):
-            seconds, one = cpu_best(lambda f=flight: simulate(
+            seconds, one = timed(lambda f=flight: simulate(
                 scene, alone, stop_when_decided=True, free_flight=f, num_threads=1), repeats)
             rows.append({"path": f"simulate(free_flight={flight})", "dice": 1, "throws": throws,
                          "cpu_s": seconds, "throws_per_s": throws / seconds,

@@ -1,4 +1,4 @@
-"""What the benchmarks share: their command line, the command that ran, the JSON they write."""
+"""What the benchmarks share: their command line, a timer, the command run, the JSON written."""
 
 from __future__ import annotations
 
@@ -6,6 +6,8 @@ import argparse
 import importlib.util
 import json
 import sys
+import time
+from collections.abc import Callable
 from pathlib import Path
 
 RESULTS = Path(__file__).resolve().parent / "results"
@@ -33,6 +35,22 @@ def parse_with_mujoco(parser: argparse.ArgumentParser) -> argparse.Namespace:
 def command_line() -> str:
     """The command line that ran this benchmark, from the repository root."""
     return " ".join(["python", f"benchmarks/{Path(sys.argv[0]).name}", *sys.argv[1:]])
+
+
+def timed(fn: Callable[[], object], repeats: int, threads: int = 1) -> tuple[float, object]:
+    """Smallest time of ``repeats`` calls of ``fn`` (s), and the last call's result.
+
+    Work on one thread (``threads=1``) is timed by this process's CPU time, which other
+    processes on shared cores do not inflate (not the calling thread's: a long ``simulate``
+    runs its kernel on a worker thread while the caller waits); parallel work by the wall clock.
+    """
+    clock = time.process_time if threads == 1 else time.perf_counter
+    times = []
+    for _ in range(repeats):
+        start = clock()
+        result = fn()
+        times.append(clock() - start)
+    return min(times), result
 
 
 def write_json(out: Path, record: dict, indent: int = 2) -> None:

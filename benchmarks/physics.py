@@ -47,7 +47,7 @@ from pathlib import Path
 
 import numba
 import numpy as np
-from harness import benchmark_parser, parse_with_mujoco, write_json
+from harness import benchmark_parser, parse_with_mujoco, timed, write_json
 
 from dice_env import Scene, State, simulate, vector_kernel
 from dice_env.calibration import table_scene
@@ -66,22 +66,6 @@ from listing_transcription import real_throw_cube as listing_throw  # noqa: E402
 def best_time(fn, repeats: int, threads: int = 1) -> float:
     """Smallest time of ``repeats`` calls of ``fn`` (s); see :func:`timed`."""
     return timed(fn, repeats, threads)[0]
-
-
-def timed(fn, repeats: int, threads: int = 1) -> tuple[float, object]:
-    """Smallest time of ``repeats`` calls of ``fn`` (s), and the last call's result.
-
-    Work on one thread (``threads=1``) is timed by this process's CPU time, which other
-    processes on shared cores do not inflate (not the calling thread's: a long ``simulate``
-    runs its kernel on a worker thread while the caller waits); parallel work by the wall clock.
-    """
-    clock = time.process_time if threads == 1 else time.perf_counter
-    times = []
-    for _ in range(repeats):
-        start = clock()
-        result = fn()
-        times.append(clock() - start)
-    return min(times), result
 
 
 def paper_throws(n: int, seed: int = 0) -> State:

@@ -25,8 +25,8 @@ import math
 import os
 
 import numpy as np
-from harness import benchmark_parser, parse_with_mujoco, write_json
-from physics import hand_throws, mujoco_model, mujoco_to_rest, timed
+from harness import benchmark_parser, parse_with_mujoco, timed, write_json
+from physics import hand_throws, mujoco_model, mujoco_to_rest
 
 from dice_env import Scene, State, simulate
 from dice_env.calibration import measured_restitution
