@@ -16,7 +16,6 @@ command after it (``pytest -n auto``). Prints a table and writes
 
 from __future__ import annotations
 
-import argparse
 import json
 import os
 import platform
@@ -25,6 +24,8 @@ import sys
 import tempfile
 import time
 from pathlib import Path
+
+from harness import benchmark_parser, command_line, write_json
 
 from dice_env.studies.common import code_version
 
@@ -130,12 +131,11 @@ def suite(cache: Path) -> dict[str, object]:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = benchmark_parser(__doc__, "cold_start")
     parser.add_argument("--warm-only", action="store_true",
                         help="time with the cache as it is (NUMBA_CACHE_DIR or numba's own)")
     parser.add_argument("--suite", action="store_true",
                         help="also time precompile and the test suite in an empty cache")
-    parser.add_argument("--out", type=Path, default=ROOT / "benchmarks/results/cold_start.json")
     args = parser.parse_args()
     runs, notices = {}, {}
     started = time.time()
@@ -168,15 +168,14 @@ def main() -> None:
         print(f"{'then pytest -n auto':40s}{tests['seconds']['tests']:9.1f}s  "
               f"({tests['summary']})")
     commit = code_version()
-    record = {"command": " ".join(["python", "benchmarks/cold_start.py", *sys.argv[1:]]),
+    record = {"command": command_line(),
               "commit": commit, "entry_points": names, "seconds": runs, "notices": notices,
               "threads": None if args.warm_only else threads,
               "first_throw": None if args.warm_only else first,
               "suite": tests, "cpus": os.cpu_count(),
               "load_average": os.getloadavg(), "python": platform.python_version(),
               "started": time.strftime("%Y-%m-%d %H:%M", time.gmtime(started))}
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    args.out.write_text(json.dumps(record, indent=2) + "\n")
+    write_json(args.out, record)
     print(f"wrote {args.out}")
 
 

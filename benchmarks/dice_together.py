@@ -31,48 +31,39 @@ its ``mj_step`` calls.
 
 from __future__ import annotations
 
-import argparse
-import json
 import math
 import os
 import platform
 import time
-from pathlib import Path
 
 import numba
 import numpy as np
+from harness import benchmark_parser, timed, write_json
 
 from dice_env import Scene, simulate
 from dice_env.die import Die
 from dice_env.group import DieContact, GroupState, group_step, simulate_group
 from dice_env.simulate import UP, lock_energy
 from dice_env.studies.common import code_version
-from dice_env.studies.pairs import hand_throws
-from dice_env.surroundings import tray
+from dice_env.studies.markdown import markdown_table
+from dice_env.studies.pairs import hand_throws, tray_scene
 from dice_env.table import RESTITUTION, damping_ratio
 
-ROOT = Path(__file__).resolve().parents[1]
-T_MAX = 10.0
 
-
-def cpu_best(fn: object, repeats: int) -> tuple[float, object]:
-    """Least CPU time of ``repeats`` calls of ``fn`` and the last call's result."""
-    best, result = math.inf, None
-    for _ in range(repeats):
-        start = time.process_time()
-        result = fn()
-        best = min(best, time.process_time() - start)
-    return best, result
+def ours_in_tray(n_dice: int, throws: int, repeats: int, seed: int, contact: DieContact) -> tuple:
+    """The tray, ``n_dice`` d6, their seeded throws, our least CPU time and the result."""
+    scene = tray_scene()
+    dice = (Die(),) * n_dice
+    state = hand_throws(scene, dice, throws, np.random.default_rng(seed))
+    seconds, res = timed(lambda: simulate_group(scene, dice, state, stop_when_decided=True,
+                                                   contact=contact, num_threads=1), repeats)
+    return scene, dice, state, seconds, res
 
 
 def measure(n_dice: int, throws: int, repeats: int, seed: int,
             contact: DieContact) -> list[dict]:
     """The rows of ``n_dice`` d6 meeting by ``contact`` (and the single-die path for one die)."""
-    scene = Scene(walls=tray(), t_max=T_MAX)
-    dice = (Die(),) * n_dice
-    state = hand_throws(scene, dice, throws, np.random.default_rng(seed))
-    seconds, res = cpu_best(lambda: simulate_group(scene, dice, state, stop_when_decided=True,
-                                                   contact=contact, num_threads=1), repeats)
+    scene, dice, state, seconds, res = ours_in_tray(n_dice, throws, repeats, seed, contact)
     steps = float(res.steps.sum())
     row = {"path": "simulate_group", "dice": n_dice, "throws": throws, "cpu_s": seconds,
            "throws_per_s": throws / seconds, "die_steps_per_s": steps * n_dice / seconds,
@@ -84,7 +75,7 @@ def measure(n_dice: int, throws: int, repeats: int, seed: int,
     if n_dice == 1:
         alone = state.die(0)
         for flight in (True, False):
-            seconds, one = cpu_best(lambda f=flight: simulate(
+            seconds, one = timed(lambda f=flight: simulate(
                 scene, alone, stop_when_decided=True, free_flight=f, num_threads=1), repeats)
             rows.append({"path": f"simulate(free_flight={flight})", "dice": 1, "throws": throws,
                          "cpu_s": seconds, "throws_per_s": throws / seconds,
@@ -151,7 +142,7 @@ def mujoco_decided(scene: Scene, state: GroupState, model) -> dict:
     floor = weight * float(die.resting_heights.min())  # each die's least energy, at rest
     inertia = np.diag(die.inertia_body)
     block = max(1, round(CHECK_EVERY / model.opt.timestep))
-    n_blocks = math.ceil(T_MAX / (block * model.opt.timestep))
+    n_blocks = math.ceil(scene.t_max / (block * model.opt.timestep))
     cpu, steps, decided, faces = 0.0, np.zeros(b, np.int64), np.zeros(b, bool), []
     for k in range(b):
         mujoco.mj_resetData(model, data)
@@ -184,11 +175,7 @@ def mujoco_decided(scene: Scene, state: GroupState, model) -> dict:
 
 def compare_mujoco(n_dice: int, throws: int, seed: int, contact: DieContact) -> dict:
     """Ours and MuJoCo (default and bouncing contact) on the same ``throws`` of ``n_dice``."""
-    scene = Scene(walls=tray(), t_max=T_MAX)
-    dice = (Die(),) * n_dice
-    state = hand_throws(scene, dice, throws, np.random.default_rng(seed))
-    seconds, ours = cpu_best(lambda: simulate_group(scene, dice, state, stop_when_decided=True,
-                                                    contact=contact, num_threads=1), 1)
+    scene, dice, state, seconds, ours = ours_in_tray(n_dice, throws, 1, seed, contact)
     bounce, dt = bouncing_contact(scene)
     rows = {"ours": {"throws_per_s": throws / seconds, "cpu_s": seconds,
                      "decided": float(ours.decided.mean()),
@@ -202,7 +189,7 @@ def compare_mujoco(n_dice: int, throws: int, seed: int, contact: DieContact) -> 
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser = benchmark_parser(__doc__, "dice_together")
     parser.add_argument("--dice", type=int, nargs="+", default=[1, 2, 5, 12])
     parser.add_argument("--throws", type=int, default=96,
                         help="throws of the single die (a group of N gets throws / N)")
@@ -213,7 +200,6 @@ def main() -> None:
     parser.add_argument("--die-friction", choices=["stick_slip", "regularized"],
                         default=DieContact().friction_law.name.lower(),
                         help="the die–die friction law (DieContact.friction_law)")
-    parser.add_argument("--out", type=Path, default=ROOT / "benchmarks/results/dice_together.json")
     args = parser.parse_args()
     contact = DieContact(friction_law=args.die_friction)
     for name in ("throws", "repeats"):
@@ -233,34 +219,30 @@ def main() -> None:
     base = next(r for r in rows if r["path"] == "simulate_group" and r["dice"] == min(args.dice))
     print(f"\nOne thread, CPU time, best of {args.repeats}, {contact.law} die–die friction; "
           f"load average {os.getloadavg()[0]:.2f} on {os.cpu_count()} cores.\n")
-    print("| path | dice | throws | throws/s | cost per throw / smallest group | "
-          "die-steps/s | decided | all dice read | dice met | simulated s per throw |")
-    print("|---|---|---|---|---|---|---|---|---|---|")
-    for r in rows:
-        print(f"| `{r['path']}` | {r['dice']} | {r['throws']} | {r['throws_per_s']:.2f} | "
-              f"{base['throws_per_s'] / r['throws_per_s']:.2f} | {r['die_steps_per_s']:,.0f} | "
-              f"{r['decided']:.0%} | {r['all_read']:.0%} | {r['met']:.0%} | "
-              f"{r['sim_s']:.2f} |")
+    print(markdown_table(
+        "path | dice | throws | throws/s | cost per throw / smallest group | die-steps/s | "
+        "decided | all dice read | dice met | simulated s per throw",
+        ((f"`{r['path']}`", r["dice"], r["throws"], f"{r['throws_per_s']:.2f}",
+          f"{base['throws_per_s'] / r['throws_per_s']:.2f}", f"{r['die_steps_per_s']:,.0f}",
+          f"{r['decided']:.0%}", f"{r['all_read']:.0%}", f"{r['met']:.0%}", f"{r['sim_s']:.2f}")
+         for r in rows)))
     mujoco_rows = []
     for n_dice in args.mujoco:
         mujoco_rows.append(compare_mujoco(n_dice, max(4, math.ceil(args.throws / n_dice)),
                                           args.seed, contact))
     if mujoco_rows:
         print("\nThe same throws in MuJoCo, one thread, CPU time, to decided faces:\n")
-        print("| dice | throws | ours throws/s | MuJoCo default (2 ms) throws/s | ours / it | "
-              "MuJoCo bouncing (step) throws/s | ours / it | simulated s: ours, default, "
-              "bouncing | decided: ours, default, bouncing |")
-        print("|---|---|---|---|---|---|---|---|---|")
-        for r in mujoco_rows:
-            o, d, c = r["ours"], r["mujoco_default"], r["mujoco_bouncing"]
-            print(f"| {r['dice']} | {r['throws']} | {o['throws_per_s']:.2f} | "
-                  f"{d['throws_per_s']:.2f} | {d['ours_vs_mujoco']:.3f} | "
-                  f"{c['throws_per_s']:.2f} ({c['dt_s'] * 1e6:.0f} us) | "
-                  f"{c['ours_vs_mujoco']:.2f} | {o['sim_s']:.2f}, {d['sim_s']:.2f}, "
-                  f"{c['sim_s']:.2f} | {o['decided']:.0%}, {d['decided']:.0%}, "
-                  f"{c['decided']:.0%} |")
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    args.out.write_text(json.dumps({"mujoco": mujoco_rows,
+        print(markdown_table(
+            "dice | throws | ours throws/s | MuJoCo default (2 ms) throws/s | ours / it | "
+            "MuJoCo bouncing (step) throws/s | ours / it | simulated s: ours, default, bouncing | "
+            "decided: ours, default, bouncing",
+            ((r["dice"], r["throws"], f"{o['throws_per_s']:.2f}", f"{d['throws_per_s']:.2f}",
+              f"{d['ours_vs_mujoco']:.3f}", f"{c['throws_per_s']:.2f} ({c['dt_s'] * 1e6:.0f} us)",
+              f"{c['ours_vs_mujoco']:.2f}", f"{o['sim_s']:.2f}, {d['sim_s']:.2f}, {c['sim_s']:.2f}",
+              f"{o['decided']:.0%}, {d['decided']:.0%}, {c['decided']:.0%}")
+             for r in mujoco_rows
+             for o, d, c in [(r["ours"], r["mujoco_default"], r["mujoco_bouncing"])])))
+    write_json(args.out, {"mujoco": mujoco_rows,
         "command": "python benchmarks/dice_together.py " + " ".join(
             f"--{k.replace('_', '-')} {' '.join(map(str, v)) if isinstance(v, list) else v}"
             for k, v in vars(args).items() if k != "out"),
@@ -269,7 +251,7 @@ def main() -> None:
         "die_friction": contact.law,
         "load_average": os.getloadavg()[0], "cpu_count": os.cpu_count(),
         "numba": numba.__version__, "python": platform.python_version(), "rows": rows},
-        indent=1))
+        indent=1)
 
 
 if __name__ == "__main__":

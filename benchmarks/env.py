@@ -14,15 +14,12 @@ the repeats) so that load from other processes hits both alike. Prints a table a
 
 from __future__ import annotations
 
-import argparse
-import json
 import os
-import sys
 import time
-from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
+from harness import benchmark_parser, command_line, write_json
 
 import dice_env  # noqa: F401  (registers DiceThrow-v0)
 from dice_env import State, simulate
@@ -78,11 +75,7 @@ def measure(until: str, n: int, repeats: int, n_single: int,
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("--quick", action="store_true", help="batch 64, fewer repeats")
-    parser.add_argument("--out", type=Path,
-                        default=Path(__file__).parent / "results" / "env.json")
-    args = parser.parse_args()
+    args = benchmark_parser(__doc__, "env", "batch 64, fewer repeats").parse_args()
     n, repeats, n_single = (64, 3, 32) if args.quick else (256, 5, 64)
     (rest, rest_faces), (decided, decided_faces) = (measure(until, n, repeats, n_single)
                                                     for until in ("rest", "decided"))
@@ -99,10 +92,7 @@ def main() -> None:
               f"{row['single_env_throws_per_s']:>13.0f} {row['mean_end_time_s']:>10.3f}")
     print(f"until='decided': {rows['decided_over_rest_vector_env']:.2f}x the vector env's "
           f"throws/s, the same faces: {rows['same_faces']}")
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    rows.update(command=" ".join(["python", "benchmarks/env.py", *sys.argv[1:]]),
-                commit=code_version())
-    args.out.write_text(json.dumps(rows, indent=2) + "\n")
+    write_json(args.out, rows | {"command": command_line(), "commit": code_version()})
 
 
 if __name__ == "__main__":

@@ -17,23 +17,19 @@ table and writes ``benchmarks/results/gpu.json``.
 
 from __future__ import annotations
 
-import argparse
-import json
 import os
-import sys
 import time
 from collections.abc import Callable
 from functools import partial
-from pathlib import Path
 
 import numba
+from harness import benchmark_parser, command_line, write_json
 from physics import hand_throws, paper_throws
 
 from dice_env import Scene, State, simulate
 from dice_env.paper import paper_scene
 from dice_env.studies.common import code_version
 
-ROOT = Path(__file__).resolve().parents[1]
 PAPER_T = 0.5  # s of the paper throw
 FIGURES = {"paper": "paper scene (die-steps/s)", "decided": "default scene to a decided face "
                                                            "(throws/s)"}
@@ -103,13 +99,12 @@ def sizes(top: int) -> list[int]:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser = benchmark_parser(__doc__, "gpu")
     parser.add_argument("--max-batch", type=int, default=1_000_000)
     parser.add_argument("--cpu-max-batch", type=int, default=8192)
     parser.add_argument("--repeats", type=int, default=2)
     parser.add_argument("--budget", type=float, default=60.0,
                         help="seconds a run may take before a device's batch stops growing")
-    parser.add_argument("--out", type=Path, default=ROOT / "benchmarks/results/gpu.json")
     args = parser.parse_args()
     for name in ("max_batch", "cpu_max_batch", "repeats"):
         if getattr(args, name) < 1:
@@ -135,15 +130,13 @@ def main() -> None:
         for device, table in results.items():
             cells = [f"{table[name][n]:,.0f}" if n in table[name] else "" for n in columns]
             print(f"| {label} | {device} | " + " | ".join(cells) + " |")
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    args.out.write_text(json.dumps({
-        "command": " ".join(["python", "benchmarks/gpu.py", *sys.argv[1:]]),
-        "commit": code_version(),
+    write_json(args.out, {
+        "command": command_line(), "commit": code_version(),
         "cpu_threads": numba.config.NUMBA_NUM_THREADS, "gpu": device_name,
         "no_gpu_reason": missing, "figures": FIGURES,
         "rates": {device: {name: {str(n): r for n, r in rows.items()}
                            for name, rows in table.items()}
-                  for device, table in results.items()}}, indent=1))
+                  for device, table in results.items()}}, indent=1)
 
 
 if __name__ == "__main__":

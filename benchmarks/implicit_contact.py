@@ -36,14 +36,11 @@ microseconds per throw, and the fractions settled and non-finite.
 
 from __future__ import annotations
 
-import argparse
-import json
 import math
-import sys
 import time
-from pathlib import Path
 
 import numpy as np
+from harness import benchmark_parser, command_line, write_json
 from numba import njit
 
 from dice_env.calibration import measured_restitution
@@ -53,8 +50,6 @@ from dice_env.simulate import State, simulate
 from dice_env.studies.common import code_version
 from dice_env.studies.convergence import RELEASES, T_THROW
 from dice_env.table import rebound
-
-ROOT = Path(__file__).resolve().parents[1]
 
 FACTORS = (0.15, 0.3, 0.6, 1.2, 2.4, 4.8)
 # (theta, onset): backward Euler and trapezoid as briefed, then each with the onset impulse
@@ -333,11 +328,8 @@ def _warm_up(scene: Scene) -> None:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("--quick", action="store_true", help="60 throws instead of 300")
+    parser = benchmark_parser(__doc__, "implicit_contact", "60 throws instead of 300")
     parser.add_argument("-n", type=int, default=None, help="number of gentle throws")
-    parser.add_argument("--out", type=Path,
-                        default=ROOT / "benchmarks/results/implicit_contact.json")
     args = parser.parse_args()
     n = args.n or (60 if args.quick else 300)
     scene = Scene()
@@ -358,8 +350,8 @@ def main() -> None:
           f"faces at step vs step/{REFINE}: {np.mean(ref.face == fine_ref.face):.1%}; "
           f"{ref.steps.mean():.0f} steps and {1e6 * ref_cpu / n:.0f} us per throw "
           f"(with its free-flight jumps), settled {ref.settled.mean():.1%}")
-    report = {"command": " ".join(["python", "benchmarks/implicit_contact.py", *sys.argv[1:]]),
-              "commit": code_version(), "throws": n, "critical_dt_s": crit,
+    report = {"command": command_line(), "commit": code_version(), "throws": n,
+              "critical_dt_s": crit,
               "default_safety": scene.safety, "timer": "process CPU time, one thread",
               "explicit_restitution_1mps": measured_restitution(scene),
               "validation": [], "rows": []}
@@ -433,8 +425,7 @@ def main() -> None:
               f"{run.steps.mean():8.0f} {'-':>8} {1e6 * cpu / n:9.0f} "
               f"{run.settled.mean():8.1%} {run.unstable.mean():7.1%}")
     print(f"\nwall time {time.perf_counter() - wall:.0f} s")
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    args.out.write_text(json.dumps(report, indent=1) + "\n")
+    write_json(args.out, report, indent=1)
     print(f"wrote {args.out}")
 
 

@@ -31,6 +31,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
+from harness import RESULTS, command_line, write_json
 
 from dice_env.studies.common import code_version
 
@@ -140,8 +141,7 @@ def main() -> None:
                         help="default: benchmarks/results/kernel_ab.json (kernel_ab_groups.json)")
     args = parser.parse_args()
     child, figures = (GROUP_CHILD, GROUP_FIGURES) if args.groups else (CHILD, FIGURES)
-    out = args.out or ROOT / "benchmarks/results" / (
-        "kernel_ab_groups.json" if args.groups else "kernel_ab.json")
+    out = args.out or RESULTS / ("kernel_ab_groups.json" if args.groups else "kernel_ab.json")
     runs = {"base": [], "this": []}
     for r in range(args.rounds):
         for name, tree in (("base", args.base.resolve()), ("this", args.this.resolve())):
@@ -164,13 +164,11 @@ def main() -> None:
         table[key] = {"base": base, "this": this, "ratios": ratios}
         print(f"| {label} | {_rate(np.median(base))} | {_rate(np.median(this))} | "
               f"{', '.join(f'{x:.3f}' for x in ratios)} |")
-    out.parent.mkdir(parents=True, exist_ok=True)
-    command = " ".join(["python", "benchmarks/kernel_ab.py", *sys.argv[1:]])
-    out.write_text(json.dumps({"command": command, "commit": code_version(args.this),
-                               "base": str(args.base), "base_commit": code_version(args.base),
-                               "this": str(args.this),
-                               "same_faces" if not args.groups else "bit_identical": same,
-                               "figures": table}, indent=1))
+    write_json(out, {"command": command_line(), "commit": code_version(args.this),
+                     "base": str(args.base), "base_commit": code_version(args.base),
+                     "this": str(args.this),
+                     "same_faces" if not args.groups else "bit_identical": same,
+                     "figures": table}, indent=1)
 
 
 if __name__ == "__main__":

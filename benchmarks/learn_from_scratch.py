@@ -25,14 +25,12 @@ import argparse
 import ast
 import importlib
 import inspect
-import json
-import sys
 import time
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 import torch
+from harness import benchmark_parser, command_line, write_json
 from stable_baselines3 import PPO
 from stable_baselines3.common.callbacks import BaseCallback
 from stable_baselines3.common.utils import LinearSchedule
@@ -161,7 +159,7 @@ def run(seed: int, args: argparse.Namespace) -> dict[str, Any]:
 
 def main() -> None:
     """Parse the options, train every seed, print and write the results."""
-    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser = benchmark_parser(__doc__, "learn_from_scratch")
     parser.add_argument("--throws", type=int, default=PPO_HYPERPARAMS[ENV_ID]["n_timesteps"])
     parser.add_argument("--seeds", type=int, nargs="+", default=[0])
     parser.add_argument("--every", type=int, default=50_000)
@@ -171,18 +169,16 @@ def main() -> None:
     parser.add_argument("--num-threads", type=int, default=None,
                         help="kernel threads (None: all cores); PyTorch uses --torch-threads")
     parser.add_argument("--torch-threads", type=int, default=1)
-    parser.add_argument("--out", default=str(Path(__file__).parent / "results"
-                                              / "learn_from_scratch.json"))
     args = parser.parse_args()
     settings(args.set)  # refuse a bad --set before any work
     torch.set_num_threads(args.torch_threads)
     report: dict[str, Any] = {
-        "command": " ".join(["python", *sys.argv]), "commit": code_version(),
+        "command": command_line(), "commit": code_version(),
         "throws": args.throws, "set": args.set,
         "hyperparams": {k: repr(v) for k, v in PPO_HYPERPARAMS[ENV_ID].items()}, "runs": []}
     for seed in args.seeds:  # written after each seed, so a long run keeps what it has done
         report["runs"].append(run(seed, args))
-        Path(args.out).write_text(json.dumps(report, indent=1) + "\n")
+        write_json(args.out, report, indent=1)
         print(f"wrote {args.out}")
 
 

@@ -35,9 +35,7 @@ the contact steps set, at the scalar step's cost and at the vectorised paper ste
 
 from __future__ import annotations
 
-import argparse
 import contextlib
-import importlib.util
 import json
 import os
 import platform
@@ -49,6 +47,7 @@ from pathlib import Path
 
 import numba
 import numpy as np
+from harness import benchmark_parser, parse_with_mujoco, timed, write_json
 
 from dice_env import Scene, State, simulate, vector_kernel
 from dice_env.calibration import table_scene
@@ -57,6 +56,7 @@ from dice_env.paper import paper_scene
 from dice_env.rotations import quaternion_to_matrix, random_rotations
 from dice_env.simulate import lock_energy
 from dice_env.studies.common import code_version
+from dice_env.studies.fairness import random_directions
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))
@@ -66,22 +66,6 @@ from listing_transcription import real_throw_cube as listing_throw  # noqa: E402
 def best_time(fn, repeats: int, threads: int = 1) -> float:
     """Smallest time of ``repeats`` calls of ``fn`` (s); see :func:`timed`."""
     return timed(fn, repeats, threads)[0]
-
-
-def timed(fn, repeats: int, threads: int = 1) -> tuple[float, object]:
-    """Smallest time of ``repeats`` calls of ``fn`` (s), and the last call's result.
-
-    Work on one thread (``threads=1``) is timed by this process's CPU time, which other
-    processes on shared cores do not inflate (not the calling thread's: a long ``simulate``
-    runs its kernel on a worker thread while the caller waits); parallel work by the wall clock.
-    """
-    clock = time.process_time if threads == 1 else time.perf_counter
-    times = []
-    for _ in range(repeats):
-        start = clock()
-        result = fn()
-        times.append(clock() - start)
-    return min(times), result
 
 
 def paper_throws(n: int, seed: int = 0) -> State:
@@ -95,14 +79,9 @@ def paper_throws(n: int, seed: int = 0) -> State:
 def hand_throws(scene: Scene, n: int, seed: int = 0) -> State:
     """Seeded hand throws: 5–15 cm up, 0.5–1 m/s, spin up to 30 rad/s, uniform orientation."""
     rng = np.random.default_rng(seed)
-
-    def directions() -> np.ndarray:
-        v = rng.normal(size=(n, 3))
-        return v / np.linalg.norm(v, axis=1, keepdims=True)
-
     position = np.column_stack([np.zeros((n, 2)), rng.uniform(0.05, 0.15, n)])
-    velocity = directions() * rng.uniform(0.5, 1.0, (n, 1))
-    spin = directions() * rng.uniform(0.0, 30.0, (n, 1))
+    velocity = random_directions(rng, n) * rng.uniform(0.5, 1.0, (n, 1))
+    spin = random_directions(rng, n) * rng.uniform(0.0, 30.0, (n, 1))
     return State.release(scene, position, velocity, spin, random_rotations(rng, n))
 
 
@@ -462,17 +441,11 @@ def scenes() -> dict[str, Scene]:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("--quick", action="store_true",
-                        help="small sizes and no cold compile: well under a minute")
-    parser.add_argument("--out", type=Path, default=ROOT / "benchmarks/results/physics.json")
-    parser.add_argument("--no-mujoco", action="store_true", help="skip the MuJoCo comparison")
+    parser = benchmark_parser(__doc__, "physics",
+                              "small sizes and no cold compile: well under a minute")
     parser.add_argument("--per-shape", action="store_true",
                         help="only the per-shape figures, updated in the existing JSON")
-    args = parser.parse_args()
-    if not args.no_mujoco and importlib.util.find_spec("mujoco") is None:
-        parser.error("mujoco is not installed (pip install -e '.[bench]'); --no-mujoco leaves "
-                     "the MuJoCo comparison out")
+    args = parse_with_mujoco(parser)
     if args.per_shape:
         report = json.loads(args.out.read_text()) if args.out.exists() else {}
         report["per_shape_decided"] = {"command": "python benchmarks/physics.py --per-shape",
@@ -480,7 +453,7 @@ def main() -> None:
                                        "dice": per_shape(args.quick)}
         if "table" in report:
             report["table"] = format_report(report)
-        args.out.write_text(json.dumps(report, indent=2) + "\n")
+        write_json(args.out, report)
         print(json.dumps(report["per_shape_decided"], indent=1))
         return
     report = {"command": "python benchmarks/physics.py" + (" --quick" if args.quick else ""),
@@ -513,8 +486,7 @@ def main() -> None:
                                    "dice": per_shape(args.quick)}
     report["machine"]["load_average_end"] = os.getloadavg()
     report["table"] = format_report(report)  # the printed table, quoted by docs/performance.md
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    args.out.write_text(json.dumps(report, indent=2) + "\n")
+    write_json(args.out, report)
     print(report["table"])
     print(f"wrote {args.out}")
 

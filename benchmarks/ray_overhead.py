@@ -17,21 +17,19 @@ writes ``benchmarks/results/ray_overhead.json``.
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import platform
 import time
-from pathlib import Path
 
 import numba
 import numpy as np
 import ray
+from harness import RESULTS, write_json
 
 from dice_env.scene import Scene
 from dice_env.studies.common import code_version
 from dice_env.studies.distributed import Spec, Tally, run_throws, throw_chunk
-
-ROOT = Path(__file__).resolve().parents[1]
+from dice_env.studies.markdown import markdown_table
 
 
 def timed(fn: object) -> tuple[float, Tally]:
@@ -89,16 +87,14 @@ def main() -> None:
         "load_average": os.getloadavg()[0], "numba": numba.__version__,
         "numpy": np.__version__, "python": platform.python_version(), "rows": rows,
     }
-    out = ROOT / "benchmarks" / "results" / "ray_overhead.json"
-    out.write_text(json.dumps(result, indent=1) + "\n")
+    write_json(RESULTS / "ray_overhead.json", result, indent=1)
     base = rows[0]["throws_per_s"]
     print(f"{result['command']}: {args.throws} default-d6 throws to a decided face, chunks of "
           f"{args.chunk}; Ray start {start_s:.1f} s (not counted); load average "
           f"{result['load_average']:.2f} on {os.cpu_count()} CPUs\n")
-    print("| path | throws/s | vs 1 thread here | same tally |\n|---|---|---|---|")
-    for r in rows:
-        print(f"| {r['path']} | {r['throws_per_s']:.0f} | {r['throws_per_s'] / base:.2f}x | "
-              f"{'yes' if r['same_tally'] else 'NO'} |")
+    print(markdown_table("path | throws/s | vs 1 thread here | same tally", (
+        (r["path"], f"{r['throws_per_s']:.0f}", f"{r['throws_per_s'] / base:.2f}x",
+         "yes" if r["same_tally"] else "NO") for r in rows)))
 
 
 if __name__ == "__main__":

@@ -21,15 +21,12 @@ Prints two tables and writes ``benchmarks/results/step_limit.json`` (``--out`` t
 
 from __future__ import annotations
 
-import argparse
-import importlib.util
-import json
 import math
 import os
-from pathlib import Path
 
 import numpy as np
-from physics import ROOT, hand_throws, mujoco_model, mujoco_to_rest, timed
+from harness import benchmark_parser, parse_with_mujoco, timed, write_json
+from physics import hand_throws, mujoco_model, mujoco_to_rest
 
 from dice_env import Scene, State, simulate
 from dice_env.calibration import measured_restitution
@@ -163,22 +160,14 @@ def format_report(r: dict) -> str:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("--quick", action="store_true", help="smaller sizes")
-    parser.add_argument("--out", type=Path, default=ROOT / "benchmarks/results/step_limit.json")
-    parser.add_argument("--no-mujoco", action="store_true", help="skip the MuJoCo comparison")
-    args = parser.parse_args()
-    if not args.no_mujoco and importlib.util.find_spec("mujoco") is None:
-        parser.error("mujoco is not installed (pip install -e '.[bench]'); --no-mujoco leaves "
-                     "the MuJoCo comparison out")
+    args = parse_with_mujoco(benchmark_parser(__doc__, "step_limit", "smaller sizes"))
     report = {"command": "python benchmarks/step_limit.py" + (" --quick" if args.quick else ""),
               "commit": code_version(),
               "load_average_start": os.getloadavg(), "step_sweep": step_sweep(args.quick)}
     if not args.no_mujoco:
         report["contact"] = contact_comparison(args.quick)
     report["load_average_end"] = os.getloadavg()
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    args.out.write_text(json.dumps(report, indent=2) + "\n")
+    write_json(args.out, report)
     print(format_report(report))
     print(f"wrote {args.out}")
 

@@ -16,16 +16,13 @@ Prints a table and writes ``benchmarks/results/tasks.json``.
 
 from __future__ import annotations
 
-import argparse
 import dataclasses
-import json
 import os
-import sys
 import time
-from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
+from harness import benchmark_parser, command_line, write_json
 
 from agents.baselines import rule_throwers
 from agents.episodes import EPISODE_KEYWORDS
@@ -88,11 +85,7 @@ def shown(rate: dict[str, object]) -> str:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("--quick", action="store_true", help="a smoke run, numbers meaningless")
-    parser.add_argument("--out", type=Path,
-                        default=Path(__file__).parent / "results" / "tasks.json")
-    args = parser.parse_args()
+    args = benchmark_parser(__doc__, "tasks", "a smoke run, numbers meaningless").parse_args()
     quick = QUICK if args.quick else {"throws": THROWS, "observations": None, "cem": None}
     start = time.perf_counter()
     rows = []
@@ -106,10 +99,8 @@ def main() -> None:
               f"  ({row['seconds']:.0f} s)", flush=True)
     report = {"tasks": rows, "seed": SEED, "threads": os.cpu_count(),
               "seconds": time.perf_counter() - start, "load_average": os.getloadavg()[0],
-              "command": " ".join(["python", "benchmarks/tasks.py", *sys.argv[1:]]),
-              "commit": code_version()}
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    args.out.write_text(json.dumps(report, indent=2) + "\n")
+              "command": command_line(), "commit": code_version()}
+    write_json(args.out, report)
     print(f"wrote {args.out} in {report['seconds'] / 60:.1f} min")
 
 

@@ -8,6 +8,8 @@ import pytest
 
 from dice_env import Die, Scene
 from dice_env.group import DieContact, simulate_group
+from dice_env.studies import collisions as co
+from dice_env.studies import craps as cr
 from dice_env.studies import pairs as pr
 from dice_env.studies import run as run_study
 from dice_env.surroundings import tray
@@ -104,15 +106,17 @@ def test_quick_study_writes_its_page(tmp_path):
     assert (tmp_path / "figures" / "pairs.png").stat().st_size > 10_000
 
 
-@pytest.mark.parametrize("throws", [pr.MIN_THROWS - 1, 0, 2.5, True, "100"])
-def test_a_bad_sample_size_is_refused_before_any_work(tmp_path, throws):
-    with pytest.raises(ValueError, match="throws must be an int >= 20"):
-        run_study("pairs", tmp_path, throws=throws)
+@pytest.mark.parametrize("name, least", [("pairs", pr.MIN_THROWS), ("collisions", co.MIN_THROWS),
+                                         ("craps", cr.MIN_THROWS)])
+@pytest.mark.parametrize("throws", [None, 0, 2.5, True, "100"])  # None: one below the least
+def test_a_bad_sample_size_is_refused_before_any_work(tmp_path, name, least, throws):
+    with pytest.raises(ValueError, match=f"throws must be an int >= {least}"):
+        run_study(name, tmp_path, throws=least - 1 if throws is None else throws)
     assert not any(tmp_path.iterdir())
 
 
 def test_chunks_kept_are_read_back_and_match_a_run_without_them(tmp_path):
-    scene = Scene(walls=tray(), t_max=pr.T_MAX)
+    scene = pr.tray_scene()
     dice = (scene.die, scene.die)
     fresh, seconds, cpu = pr.chunked_pairs(scene, dice, 5, seed=5, chunk=3)
     assert seconds > 0 and cpu > 0 and len(fresh.counted) == 5

@@ -23,9 +23,6 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
-import matplotlib
-
-matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numba
 import numpy as np
@@ -35,9 +32,18 @@ from dice_env.die import Die
 from dice_env.group import DieContact, GroupResult, GroupState, group_step, simulate_group
 from dice_env.intervals import wilson
 from dice_env.scene import Scene
-from dice_env.studies.common import DOCS, checked_throws, progress, save_figure
-from dice_env.studies.pairs import HAND, hand_throws, simulate_in_batches, void_reasons
-from dice_env.surroundings import TRAY, tray
+from dice_env.studies.common import DOCS, SEED, checked_throws, progress, save_figure
+from dice_env.studies.markdown import estimate, markdown_table
+from dice_env.studies.pairs import (
+    HAND,
+    T_MAX,
+    hand_throws,
+    not_void,
+    simulate_in_batches,
+    tray_scene,
+    void_reasons,
+)
+from dice_env.surroundings import TRAY
 
 # Every run takes each step (no flight jumps: a group's jumps depend on all its dice), so that
 # a die thrown apart moves bit for bit as in the pair until the dice first touch.
@@ -47,9 +53,6 @@ FLIGHT = False
 FULL, QUICK, MIN_THROWS = 2400, 24, 20
 # Added to die 1's release velocity along x (m/s) in the perturbed throws.
 PERTURBATION = 1e-6
-# Simulated time limit per throw (s): a throw not decided by then is voided.
-T_MAX = 10.0
-SEED = 2026
 QUANTILES = (0.05, 0.25, 0.5, 0.75, 0.95)
 # Bootstrap resamples of the entropy's interval.
 BOOTSTRAP = 2000
@@ -62,7 +65,7 @@ MEASURES = (("spin_change", "change of |angular velocity|", "rad/s"),
 
 def pair_scene() -> tuple[Scene, tuple[Die, Die]]:
     """The tray, with the pair's step fixed so that a die alone steps as in the pair."""
-    scene = Scene(walls=tray(), t_max=T_MAX)
+    scene = tray_scene()
     dice = (scene.die, scene.die)
     return scene.with_(dt=group_step(scene, dice)), dice
 
@@ -198,11 +201,10 @@ class Collisions:
     def counted(self) -> np.ndarray:
         """(M,) met throws counted in all four runs (together, nudged, apart, apart nudged)."""
         m = int(self.met.sum())
-        ok = [~np.any(list(void_reasons(r).values()), axis=0)
-              for r in (self.together, self.nudged)]
-        apart = ~np.any(list(void_reasons(self.apart).values()), axis=0)
-        nudged = ~np.any(list(void_reasons(self.apart_nudged).values()), axis=0)
-        return ok[0][self.met] & ok[1][self.met] & apart[:m] & apart[m:] & nudged
+        ok = [not_void(void_reasons(r)) for r in (self.together, self.nudged)]
+        apart = not_void(void_reasons(self.apart))
+        return (ok[0][self.met] & ok[1][self.met] & apart[:m] & apart[m:]
+                & not_void(void_reasons(self.apart_nudged)))
 
     def faces(self) -> dict[str, np.ndarray]:
         """Faces (C, 2) of the counted met throws: together, nudged, apart, apart nudged."""
@@ -274,8 +276,7 @@ def _numbers(study: Collisions, seconds: float, cpu: float,
     faces = study.faces()
     changed = {name: faces[name] != faces[nudged] for name, nudged in
                (("together", "nudged"), ("apart", "apart_nudged"))}
-    counted = ~np.any(list(void_reasons(together).values()), axis=0) & \
-        ~np.any(list(void_reasons(study.nudged).values()), axis=0)
+    counted = not_void(void_reasons(together)) & not_void(void_reasons(study.nudged))
     quiet = counted & ~study.met & (study.nudged.meet_steps[:, 0] < 0)
     first = study.first_contact
     n = {
@@ -358,27 +359,26 @@ def _plot(study: Collisions, n: dict, path: Path) -> None:
 
 
 def _quantile_rows(n: dict) -> str:
-    rows = []
-    for key, label, unit in MEASURES:
-        for case in ("together", "apart"):
-            cells = " | ".join(f"{v:.3g} [{lo:.3g}, {hi:.3g}]" for v, lo, hi in n[f"{case}_{key}"])
-            rows.append(f"| {label} ({unit}) | {case} | {cells} |")
-    return "\n".join(rows)
+    return markdown_table("measure | case | 5% | 25% | median | 75% | 95%", (
+        (f"{label} ({unit})", case, *(f"{v:.3g} [{lo:.3g}, {hi:.3g}]" for v, lo, hi in
+                                      n[f"{case}_{key}"]))
+        for key, label, unit in MEASURES for case in ("together", "apart")))
 
 
 def _share(value: tuple) -> str:
     """``share [low, high]``, and ``(hits / trials)`` where given."""
     counts = f" ({value[3]} / {value[4]})" if len(value) > 3 else ""
-    return f"{value[0]:.3f} [{value[1]:.3f}, {value[2]:.3f}]{counts}"
+    return estimate(value[0], value[1:3]) + counts
 
 
 def _markdown(study: Collisions, n: dict, seed: int) -> str:
     scene, _ = pair_scene()
     thrown = int(n["throws"])
-    entropy_rows = "\n".join(
-        f"| {case} | {_share(n[f'{case}_entropy1'])} | {n[f'{case}_uniform1']:.3g} | "
-        f"{_share(n[f'{case}_entropy2'])} | {n[f'{case}_uniform2']:.3g} | "
-        f"{_share(n[f'{case}_joint'])} |" for case in ("together", "apart"))
+    entropies = markdown_table(
+        "case | die 1 entropy | die 1 uniform p | die 2 entropy | die 2 uniform p | pair entropy",
+        ((case, _share(n[f"{case}_entropy1"]), f"{n[f'{case}_uniform1']:.3g}",
+          _share(n[f"{case}_entropy2"]), f"{n[f'{case}_uniform2']:.3g}",
+          _share(n[f"{case}_joint"])) for case in ("together", "apart")))
     quick_note = "" if thrown >= FULL else (
         f" (fewer than the default {FULL}: `python -m dice_env.studies collisions`)")
     significant = n["mcnemar_p"] < 0.01
@@ -433,8 +433,6 @@ alone over the same steps: what the throw would have done to it without the othe
 
 Quantiles over both dice of every first contact (value [distribution-free 95% interval]):
 
-| measure | case | 5% | 25% | median | 75% | 95% |
-|---|---|---|---|---|---|---|
 {_quantile_rows(n)}
 
 How they react: the collision changes a die's spin by a median {spin[2][0]:+.3g} rad/s
@@ -473,9 +471,7 @@ its sampling bias by the bootstrap [95% basic bootstrap interval]; a fair die
 {int(n['counted_met'])} throws sits about {35 / (2 * max(n['counted_met'], 1) * np.log(2)):.3f}
 bits low by sampling alone) and the chi-square p-value of each die's uniformity:
 
-| case | die 1 entropy | die 1 uniform p | die 2 entropy | die 2 uniform p | pair entropy |
-|---|---|---|---|---|---|
-{entropy_rows}
+{entropies}
 
 The release orientations are uniform, so every face is equally likely by construction
 whether or not the dice meet; what a collision changes is how much a small error in the

@@ -1,18 +1,22 @@
-"""What every study shares: the docs folder, figures, progress bar, throw count, code version."""
+"""What every study shares: docs folder, seed, figures, progress bar, throw count, code version."""
 
 from __future__ import annotations
 
 import subprocess
+from collections.abc import Iterator
 from pathlib import Path
 
 import matplotlib
 
-matplotlib.use("Agg")
+matplotlib.use("Agg")  # every study imports this module: its figures are written, not shown
 import matplotlib.pyplot as plt
 import numpy as np
 from tqdm import tqdm
 
+from dice_env.simulate import DiceArrays
+
 DOCS = Path(__file__).resolve().parents[2] / "docs"  # where the full studies write their pages
+SEED = 2026  # the studies' default seed
 
 
 def save_figure(fig: plt.Figure, path: Path) -> None:
@@ -22,17 +26,30 @@ def save_figure(fig: plt.Figure, path: Path) -> None:
     plt.close(fig)
 
 
-def progress(total: int, desc: str) -> tqdm:
-    """The studies' progress bar."""
-    return tqdm(total=total, desc=desc, unit="run", dynamic_ncols=True)
+def progress(total: int, desc: str, unit: str = "run") -> tqdm:
+    """The studies' progress bar, counting ``unit``."""
+    return tqdm(total=total, desc=desc, unit=unit, dynamic_ncols=True)
+
+
+def batches(state: DiceArrays, size: int, bar: tqdm | None = None) -> Iterator[DiceArrays]:
+    """``state``'s throws in consecutive batches of ``size``; ``bar`` advances by each when done."""
+    for start in range(0, state.batch_size, size):
+        batch = type(state)(*(a[start:start + size] for a in state._arrays()))
+        yield batch
+        if bar is not None:
+            bar.update(batch.batch_size)
+
+
+def checked_int(name: str, value: object, least: int) -> int:
+    """``value`` as an int, checked: an int (not a bool) >= ``least``, else a ValueError."""
+    if not isinstance(value, (int, np.integer)) or isinstance(value, bool) or value < least:
+        raise ValueError(f"{name} must be an int >= {least}, got {value!r}")
+    return int(value)
 
 
 def checked_throws(throws: object, least: int) -> int | None:
     """A study's ``throws`` checked: None (the study's own size) or an int >= ``least``."""
-    if throws is not None and (not isinstance(throws, (int, np.integer))
-                               or isinstance(throws, bool) or throws < least):
-        raise ValueError(f"throws must be an int >= {least}, got {throws!r}")
-    return None if throws is None else int(throws)
+    return None if throws is None else checked_int("throws", throws, least)
 
 
 def code_version(tree: Path = DOCS.parent) -> str:

@@ -25,6 +25,7 @@ from dice_env.calibration import measured_restitution
 from dice_env.rotations import quaternion_to_matrix, random_rotations
 from dice_env.scene import FrictionLaw, Scene, Scheme
 from dice_env.simulate import Result, State, simulate
+from dice_env.studies.markdown import markdown_table
 from dice_env.table import DAMPING, FRICTION, RESTITUTION, STIFFNESS
 
 # Throws whose faces are compared are simulated for at most this long (s); all settle sooner.
@@ -259,8 +260,10 @@ def run(out: Path, quick: bool = False) -> dict[str, float]:
     """Run the study and write ``out/error-vs-runtime.md`` and its figures; headline numbers."""
     from tqdm import tqdm
 
+    from dice_env.studies.common import SEED
+
     sizes = QUICK if quick else FULL
-    rng = np.random.default_rng(2026)
+    rng = np.random.default_rng(SEED)
     scene = Scene()
     compared = {"default": scene, LISTING_FRICTION: variants()[LISTING_FRICTION][0]}
     tasks = [*variants(), *(f"{r.name}, {label}" for label in compared for r in RELEASES),
@@ -504,12 +507,10 @@ def _scene_section(scene: Scene, restitution: dict[tuple[float, int], float],
         "spin-free landing; upward speed when the face recrosses the plane, over the impact "
         "speed; gravity on):",
         "",
-        "| impact speed (m/s) | at dt | at dt/4 |",
-        "|---|---|---|",
+        markdown_table("impact speed (m/s) | at dt | at dt/4", (
+            (speed, f"{restitution[(speed, 1)]:.4f}", f"{restitution[(speed, 4)]:.4f}")
+            for speed in (0.3, 1.0, 3.0))),
     ]
-    for speed in (0.3, 1.0, 3.0):
-        lines.append(f"| {speed} | {restitution[(speed, 1)]:.4f} | "
-                     f"{restitution[(speed, 4)]:.4f} |")
     return [
         *lines,
         "",
@@ -540,13 +541,12 @@ def _trajectory_section(sizes: Sizes, curves: dict[str, dict[str, np.ndarray]],
         "",
         "![work-precision](figures/error-vs-runtime.png)",
         "",
-        "| variant | dt (µs) | centre error (mm) | angle error (mrad) | CPU (µs/throw) |",
-        "|---|---|---|---|---|",
+        markdown_table(
+            "variant | dt (µs) | centre error (mm) | angle error (mrad) | CPU (µs/throw)",
+            ((name, f"{1e6 * c['dt'][j]:.2f}", f"{1e3 * c['position'][j]:.4f}",
+              f"{1e3 * c['angle'][j]:.3f}", f"{1e6 * c['cpu'][j]:.0f}")
+             for name, c in curves.items() for j in range(len(SAFETIES)))),
     ]
-    for name, c in curves.items():
-        for j in range(len(SAFETIES)):
-            lines.append(f"| {name} | {1e6 * c['dt'][j]:.2f} | {1e3 * c['position'][j]:.4f} | "
-                         f"{1e3 * c['angle'][j]:.3f} | {1e6 * c['cpu'][j]:.0f} |")
     lines += ["", "Observed order (slope of log error against log dt over the four smallest "
               "steps):", ""]
     lines += [f"- {name}: {order:.2f}" for name, order in orders.items()]
@@ -575,19 +575,12 @@ def _outcome_section(sizes: Sizes,
         "",
         "![outcomes](figures/outcome-statistics.png)",
         "",
-        "| scene | release | faces 1–6 at dt (%) | faces 1–6 at dt/4 (%) | P(success) dt | "
-        "P(success) dt/4 | ± s.e. | p faces | p success | settled | CPU ms/throw dt, dt/4 |",
-        "|---|---|---|---|---|---|---|---|---|---|---|",
+        markdown_table(
+            "scene | release | faces 1–6 at dt (%) | faces 1–6 at dt/4 (%) | P(success) dt | "
+            "P(success) dt/4 | ± s.e. | p faces | p success | settled | CPU ms/throw dt, dt/4",
+            (_outcome_row(scene_label, name, o) for scene_label, per in outcomes.items()
+             for name, o in per.items())),
     ]
-    for scene_label, name, o in ((a, b, o) for a, per in outcomes.items()
-                                 for b, o in per.items()):
-        freq = 100 * o["counts"] / o["counts"].sum(1, keepdims=True)
-        lines.append(
-            f"| {scene_label} | {name} | {' '.join(f'{v:.1f}' for v in freq[0])} | "
-            f"{' '.join(f'{v:.1f}' for v in freq[1])} | {o['success'][0]:.4f} | "
-            f"{o['success'][1]:.4f} | {o['se']:.4f} | {o['p_faces']:.3f} | "
-            f"{o['p_success']:.3f} | {100 * o['settled']:.1f} % | "
-            f"{1e3 * o['cpu']:.2f}, {1e3 * o['cpu_fine']:.2f} |")
     return [
         *lines,
         "",
@@ -597,6 +590,15 @@ def _outcome_section(sizes: Sizes,
             f"{r.sigma_velocity} m/s, {r.sigma_spin} rad/s, {r.sigma_angle} rad"
             for r in RELEASES) + ".",
     ]
+
+
+def _outcome_row(scene_label: str, name: str, o: dict[str, object]) -> tuple:
+    """The outcome table's row of one release in one scene."""
+    freq = 100 * o["counts"] / o["counts"].sum(1, keepdims=True)
+    return (scene_label, name, *(" ".join(f"{v:.1f}" for v in f) for f in freq[:2]),
+            f"{o['success'][0]:.4f}", f"{o['success'][1]:.4f}", f"{o['se']:.4f}",
+            f"{o['p_faces']:.3f}", f"{o['p_success']:.3f}", f"{100 * o['settled']:.1f} %",
+            f"{1e3 * o['cpu']:.2f}, {1e3 * o['cpu_fine']:.2f}")
 
 
 def _agreement_section(sizes: Sizes, height: np.ndarray,
@@ -636,21 +638,18 @@ def _gentle_section(sizes: Sizes, gentle: dict[str, dict[str, np.ndarray]],
         f"**Gentle release** ({sizes.gentle} throws of the 'gentle' release above: a 5 cm drop, "
         "spin σ = 0.5 rad/s), dt vs dt/4 and the chaos floor, per scheme and friction law:",
         "",
-        "| variant | dt (µs) | dt vs dt/4 (%) | chaos floor (%) |",
-        "|---|---|---|---|",
     ]
+    rows = []
     for name, g in gentle.items():
-        variant = variants()[name][0]
         p = g["step"].mean()
         err = math.sqrt(p * (1 - p) / g["step"].size)
-        lines.append(f"| {name} | {1e6 * variant.step:.2f} | {100 * p:.1f} ± {100 * err:.1f} | "
-                     f"{100 * g['floor'].mean():.1f} |")
-    lines += ["", "The default's gentle agreement as the step falls (the same throws):", "",
-              "| steps compared | agreement (%) |", "|---|---|"]
-    for a, p in gentle_steps.items():
-        first = "dt" if a == 1 else f"dt/{a}"
-        lines.append(f"| {first} vs dt/{4 * a} | {100 * p:.1f} |")
-    return lines
+        rows.append((name, f"{1e6 * variants()[name][0].step:.2f}",
+                     f"{100 * p:.1f} ± {100 * err:.1f}", f"{100 * g['floor'].mean():.1f}"))
+    return [*lines, markdown_table("variant | dt (µs) | dt vs dt/4 (%) | chaos floor (%)", rows),
+            "", "The default's gentle agreement as the step falls (the same throws):", "",
+            markdown_table("steps compared | agreement (%)", (
+                (f"{'dt' if a == 1 else f'dt/{a}'} vs dt/{4 * a}", f"{100 * p:.1f}")
+                for a, p in gentle_steps.items()))]
 
 
 def _references() -> list[str]:

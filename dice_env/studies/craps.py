@@ -14,12 +14,10 @@ test against 1/6, and Fisher's exact test of set against random.
 
 from __future__ import annotations
 
+import itertools
 import time
 from pathlib import Path
 
-import matplotlib
-
-matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numba
 import numpy as np
@@ -31,9 +29,17 @@ from dice_env.group import GroupResult
 from dice_env.intervals import wilson
 from dice_env.rotations import axis_angle
 from dice_env.scene import Scene
-from dice_env.studies.common import DOCS, checked_throws, progress, save_figure
+from dice_env.studies.common import DOCS, SEED, checked_throws, progress, save_figure
 from dice_env.studies.fairness import random_orientations
-from dice_env.studies.pairs import TOTALS, simulate_in_batches, triangle, void_reasons
+from dice_env.studies.markdown import estimate, markdown_table
+from dice_env.studies.pairs import (
+    T_MAX,
+    TOTALS,
+    not_void,
+    simulate_in_batches,
+    triangle,
+    void_reasons,
+)
 from dice_env.surroundings import CRAPS, craps
 
 # Throws per cell in the full and the quick run; the fewest a run takes per cell.
@@ -47,16 +53,12 @@ SPEEDS, QUICK_SPEEDS = (2.0, 2.8), (2.0,)
 LIFT, BACKSPIN, RELEASE_HEIGHT = 1.5, 20.0, 0.12
 # The hand's scales: an action component of 1 is this speed (m/s) or spin (rad/s).
 MAX_SPEED, MAX_SPIN = 4.0, 40.0
-# Simulated time limit per throw (s).
-T_MAX = 10.0
 # Index of the back wall in Scene.planes: the floor, then craps()'s walls, the back wall first.
 BACK_WALL = 1
-SEED = 2026
 SIGNIFICANT = 0.01
 HANDS = ("set", "random")
-_HEADER = ("| noise | speed (m/s) | dice | counted / thrown | sevens | P(seven) [95%] | "
-           "binomial p (1/6) | Fisher p (set vs random) | met |\n"
-           "|---|---|---|---|---|---|---|---|---|")
+_HEADER = ("noise | speed (m/s) | dice | counted / thrown | sevens | P(seven) [95%] | "
+           "binomial p (1/6) | Fisher p (set vs random) | met")
 
 
 def craps_scene() -> Scene:
@@ -105,7 +107,7 @@ def reasons(result: GroupResult) -> dict[str, np.ndarray]:
 def tally(result: GroupResult) -> dict[str, object]:
     """Counted throws, sevens, totals (11,) and voided throws by reason of one cell."""
     why = reasons(result)
-    counted = ~np.any(list(why.values()), axis=0)
+    counted = not_void(why)
     total = result.face.sum(axis=1)[counted]
     return {"n": int(counted.sum()), "sevens": int((total == 7).sum()),
             "totals": np.bincount(total, minlength=13)[2:],
@@ -123,8 +125,7 @@ def run(out: Path = DOCS, quick: bool = False, throws: int | None = None,
     n = throws if throws is not None else QUICK if quick else FULL
     noises, speeds = (QUICK_NOISES, QUICK_SPEEDS) if quick else (NOISES, SPEEDS)
     rng = np.random.default_rng(seed)
-    bar = progress(n * len(noises) * len(speeds) * len(HANDS), "craps throws")
-    bar.unit = "throw"
+    bar = progress(n * len(noises) * len(speeds) * len(HANDS), "craps throws", "throw")
     start, cpu = time.perf_counter(), time.process_time()
     cells = {(noise, speed, way): tally(throw_cell(noise, speed, way == "set", n, rng, bar))
              for noise in noises for speed in speeds for way in HANDS}
@@ -190,20 +191,18 @@ def _plot(cells: dict, noises: tuple, speeds: tuple, path: Path) -> None:
 def _markdown(cells: dict, noises: tuple, speeds: tuple, n: int, seconds: float, cpu: float,
               seed: int) -> str:
     rows = []
-    for noise in noises:
-        for speed in speeds:
-            for way in HANDS:
-                c = cells[(noise, speed, way)]
-                fisher = f"{c['fisher_p']:.3g}" if way == "set" else ""
-                rows.append(f"| {noise:g} | {speed:g} | {way} | {c['n']} / {c['thrown']} | "
-                            f"{c['sevens']} | {c['p7']:.3f} [{c['ci'][0]:.3f}, {c['ci'][1]:.3f}] "
-                            f"| {c['binom_p']:.3g} | {fisher} | {c['met']:.2f} |")
+    for noise, speed, way in itertools.product(noises, speeds, HANDS):
+        c = cells[(noise, speed, way)]
+        rows.append((f"{noise:g}", f"{speed:g}", way, f"{c['n']} / {c['thrown']}", c["sevens"],
+                     estimate(c["p7"], c["ci"]), f"{c['binom_p']:.3g}",
+                     f"{c['fisher_p']:.3g}" if way == "set" else "", f"{c['met']:.2f}"))
     voided = {}
     for c in cells.values():
         for k, v in c["voided"].items():
             voided[k] = voided.get(k, 0) + v
     thrown = sum(c["thrown"] for c in cells.values())
-    voided_rows = "\n".join(f"| {k} | {v} | {v / thrown:.2%} |" for k, v in voided.items())
+    voided_rows = markdown_table("reason | throws | share",
+                        ((k, v, f"{v / thrown:.2%}") for k, v in voided.items()))
     detected = [(k, c) for k, c in cells.items() if c["binom_p"] < SIGNIFICANT]
     controlled = sorted({(k[0], k[1]) for k, c in detected if k[2] == "set"})
     random_off = [k for k, c in detected if k[2] == "random"]
@@ -240,8 +239,6 @@ are decided or {T_MAX:g} s.
 whether a die had a corner in each plane at some step; plane {BACK_WALL} of `Scene.planes` is
 the back wall), or as in the pairs study:
 
-| reason | throws | share |
-|---|---|---|
 {voided_rows}
 
 ## The map
@@ -252,8 +249,7 @@ P(seven) per cell, its 95% Wilson interval, the exact binomial test of P(seven) 
 for the set cells Fisher's exact test of set against random at the same noise and speed;
 "met": the share of throws in which the dice touched each other.
 
-{_HEADER}
-{chr(10).join(rows)}
+{markdown_table(_HEADER, rows)}
 
 ## Conclusion
 

@@ -18,19 +18,17 @@ import re
 from pathlib import Path
 from typing import NamedTuple
 
-import matplotlib
-
-matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
 
 from dice_env.die import Die
 from dice_env.intervals import wilson
 from dice_env.scene import Ground, Scene
-from dice_env.studies.common import DOCS, checked_throws, progress, save_figure
+from dice_env.studies.common import DOCS, SEED, checked_throws, progress, save_figure
 from dice_env.studies.fairness import VIGOROUS, Vigour
+from dice_env.studies.markdown import estimate, markdown_table
 from dice_env.studies.shapes import Faces, hand_throws, throw_faces
-from dice_env.table import DIE_EDGE, RESTITUTION, damping_for_restitution
+from dice_env.table import DIE_EDGE, DIE_MASS, RESTITUTION, damping_for_restitution
 
 # x/y of the shapes thrown (1 is the cube).
 RATIOS = (0.45, 0.55, 0.65, 0.8, 0.9, 1.0, 1.1, 1.25, 1.5, 1.8, 2.2, 2.7)
@@ -44,7 +42,7 @@ GENTLE = Vigour(clearance=(1.0, 4.0), speed=(5.0, 25.0), spin=(2.0, 20.0))
 # damping recomputed for the same restitution.
 SOFT_STIFFNESS, SOFT_FRICTION = 1e4, 0.2
 SOFT = Ground(stiffness=SOFT_STIFFNESS, friction=SOFT_FRICTION,
-              damping=damping_for_restitution(RESTITUTION, SOFT_STIFFNESS, 0.0045))
+              damping=damping_for_restitution(RESTITUTION, SOFT_STIFFNESS, DIE_MASS))
 # (label, throws, table); the first is the prediction of record.
 CONDITIONS = (("vigorous, wooden table", VIGOROUS, Ground()),
               ("gentle, wooden table", GENTLE, Ground()),
@@ -79,7 +77,7 @@ def square_share(faces: Faces) -> tuple[float, np.ndarray]:
     return hits / faces.ended, wilson(hits, faces.ended)
 
 
-def run(out: Path = DOCS, quick: bool = False, seed: int = 2026,
+def run(out: Path = DOCS, quick: bool = False, seed: int = SEED,
         throws: int | None = None) -> dict[str, float]:
     """Regenerate ``cuboids.md`` and ``figures/cuboids.png`` under ``out``; the headline numbers.
 
@@ -89,8 +87,7 @@ def run(out: Path = DOCS, quick: bool = False, seed: int = 2026,
     n = throws if throws is not None else (QUICK if quick else FULL)
     ratios = QUICK_RATIOS if quick else RATIOS
     rng = np.random.default_rng(seed)
-    bar = progress(len(ratios) * len(CONDITIONS) * n, "cuboid throws")
-    bar.unit = "throw"
+    bar = progress(len(ratios) * len(CONDITIONS) * n, "cuboid throws", "throw")
     table = {}
     for label, vigour, ground in CONDITIONS:
         for ratio in ratios:
@@ -173,21 +170,15 @@ def _markdown(table: dict, ratios: tuple[float, ...], n: int, seed: int, quick: 
     command = "python -m dice_env.studies cuboids" + (" --quick" if quick else "") + (
         f" --throws {throws}" if throws is not None else "")
     labels = [label for label, _, _ in CONDITIONS]
-    header = "| x/y | y × x (mm) | solid angle | " + " | ".join(labels) + " |"
     rows = []
     for r in ratios:
-        die = square_cuboid(r)
-        y, x = die.vertices[0][0] * 2e3, die.vertices[0][2] * 2e3
-        cells = []
-        for label in labels:
-            p, (lo, hi) = table[label, r][1], table[label, r][2]
-            cells.append(f"{p:.3f} [{lo:.3f}, {hi:.3f}]")
-        rows.append(f"| {r:g} | {abs(y):.2f} × {abs(x):.2f} | {solid_angle_share(r):.3f} | "
-                    + " | ".join(cells) + " |")
+        y, x = np.abs(np.asarray(square_cuboid(r).vertices[0])[[0, 2]]) * 2e3
+        rows.append((f"{r:g}", f"{y:.2f} × {x:.2f}", f"{solid_angle_share(r):.3f}",
+                     *(estimate(*table[label, r][1:3]) for label in labels)))
     undecided = {label: sum(table[label, r][0].undecided for r in ratios) for label in labels}
     cube = {label: table[label, 1.0] for label in labels}
     cube_lines = "\n".join(
-        f"- {label}: {p:.3f} [{ci[0]:.3f}, {ci[1]:.3f}]: 1/3 is "
+        f"- {label}: {estimate(p, ci)}: 1/3 is "
         f"{'inside' if ci[0] <= 1 / 3 <= ci[1] else 'OUTSIDE'} the interval."
         for label, (_, p, ci) in cube.items())
     g = Ground()
@@ -222,9 +213,7 @@ Conditions (throws in units of the 16 mm edge, uniform random orientation and di
 P(lands on a square face) [95% Wilson interval]; "solid angle" is the share of directions the
 two square faces cover from the centre, a naive reference, not a fit.
 
-{header}
-|{'---|' * (3 + len(labels))}
-{chr(10).join(rows)}
+{markdown_table("x/y | y × x (mm) | solid angle | " + " | ".join(labels), rows)}
 
 Undecided throws (no face within 10 s, unstable or sunk; not counted), per condition over all
 shapes: {', '.join(f'{label} {k}' for label, k in undecided.items())}.

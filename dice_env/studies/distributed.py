@@ -48,6 +48,7 @@ from dice_env.die import STANDARD_SIZES, Die
 from dice_env.scene import Scene
 from dice_env.simulate import State, simulate
 from dice_env.studies.chunks import FolderError, identity, load, prepare, write_atomically
+from dice_env.studies.common import checked_int
 from dice_env.studies.shapes import Faces, counted, hand_throws
 
 # Per-throw outcomes a chunk keeps (``chunk_NNNNNN.npz`` holds these arrays).
@@ -87,11 +88,7 @@ class Spec:
             raise TypeError(f"scene must be a Scene or a standard die's name "
                             f"{tuple(STANDARD_SIZES)}, got {type(self.scene).__name__}")
         for name, low in (("throws", 1), ("chunk", 1), ("seed", 0)):
-            value = getattr(self, name)
-            if not isinstance(value, (int, np.integer)) or isinstance(value, bool) \
-                    or value < low:
-                raise ValueError(f"{name} must be an int >= {low}, got {value!r}")
-            object.__setattr__(self, name, int(value))
+            object.__setattr__(self, name, checked_int(name, getattr(self, name), low))
         if not callable(self.draw):
             raise TypeError(f"draw must be callable (scene, n, rng) -> State, got {self.draw!r}")
 
@@ -278,8 +275,7 @@ def run_throws(scene: Scene | str, throws: int, *, chunk: int = CHUNK, seed: int
     if workers is not None and (not isinstance(workers, int) or isinstance(workers, bool)
                                 or workers < 1):
         raise ValueError(f"workers must be None or an int >= 1, got {workers!r}")
-    if not isinstance(max_retries, int) or isinstance(max_retries, bool) or max_retries < 0:
-        raise ValueError(f"max_retries must be an int >= 0, got {max_retries!r}")
+    checked_int("max_retries", max_retries, 0)
     folder = None if out is None else prepare(Path(out), spec.record(), "out")
     tallies = {} if folder is None else _saved_tallies(folder, spec)
     todo = [i for i in range(spec.n_chunks) if i not in tallies]

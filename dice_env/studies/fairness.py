@@ -12,9 +12,6 @@ from __future__ import annotations
 from dataclasses import dataclass, fields
 from pathlib import Path
 
-import matplotlib
-
-matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
 from scipy import stats
@@ -24,7 +21,8 @@ from dice_env.die import Die
 from dice_env.intervals import wilson
 from dice_env.scene import Scene
 from dice_env.simulate import Result, State, simulate
-from dice_env.studies.common import DOCS, progress, save_figure
+from dice_env.studies.common import DOCS, SEED, batches, progress, save_figure
+from dice_env.studies.markdown import bracket, estimate, markdown_table
 
 # Batch size of one kernel call (the kernel runs the batch in parallel over dice).
 BATCH = 2048
@@ -144,10 +142,8 @@ def face_down(die: Die, orientation: np.ndarray, normal: np.ndarray) -> np.ndarr
 def throw_batches(scene: Scene, state: State, bar, batch: int = BATCH) -> Result:
     """Simulate ``state`` in batches of ``batch`` dice; concatenated face/settled/energy."""
     parts = []
-    for start in range(0, state.batch_size, batch):
-        chunk = State(*(getattr(state, f.name)[start:start + batch] for f in fields(State)))
+    for chunk in batches(state, batch, bar):
         parts.append(simulate(scene, chunk, t_max=T_MAX))
-        bar.update(chunk.batch_size)
     names = ("face", "settled", "decided", "rest_time", "impacts", "unstable", "energy_rise",
              "max_penetration", "sunk", "steps")
     joined = {f: np.concatenate([getattr(p, f) for p in parts]) for f in names}
@@ -191,15 +187,14 @@ class FaceCounts:
         return wilson(self.counts, self.total)
 
 
-def run(out: Path = DOCS, quick: bool = False, seed: int = 2026) -> dict[str, float]:
+def run(out: Path = DOCS, quick: bool = False, seed: int = SEED) -> dict[str, float]:
     """Regenerate ``fairness.md`` and its figures under ``out``; return the headline numbers."""
     sizes = QUICK if quick else FULL
     rng = np.random.default_rng(seed)
     scene = Scene()
     loaded_die = Die.loaded(face=1, fraction=0.1, edge=scene.die.size, mass=scene.die.mass)
     loaded_scene = scene.with_(die=loaded_die)
-    bar = progress(sum(sizes.values()), "fairness throws")
-    bar.unit = "throw"
+    bar = progress(sum(sizes.values()), "fairness throws", "throw")
     fair_state = vigorous_throws(scene, sizes["fair"], rng)
     fair = FaceCounts.of(throw_batches(scene, fair_state, bar))
     loaded_state = vigorous_throws(loaded_scene, sizes["loaded"], rng)
@@ -287,10 +282,10 @@ def _vigorous_sentence(m: dict) -> str:
         return (f"in the most vigorous bin (median {m['e_mid'][-1]:.3g} m g a) both are "
                 f"within their 95% intervals of 1/6: the memory is gone.")
     return (f"even the most vigorous bin (median {m['e_mid'][-1]:.3g} m g a) keeps a small "
-            f"memory: release-down {m['p_down'][-1]:.3f} [{down[0]:.3f}, {down[1]:.3f}], "
-            f"release-up {m['p_up'][-1]:.3f} [{up[0]:.3f}, {up[1]:.3f}]. Splitting this bin "
-            f"at the median share of spin in the energy ({m['low_spin'][2]:.2f}): release-down "
-            f"{_share(m['low_spin'])} with less spin, {_share(m['high_spin'])} with more. "
+            f"memory: release-down {estimate(m['p_down'][-1], down)}, release-up "
+            f"{estimate(m['p_up'][-1], up)}. Splitting this bin at the median share of spin in "
+            f"the energy ({m['low_spin'][2]:.2f}): release-down {estimate(*m['low_spin'][:2])} "
+            f"with less spin, {estimate(*m['high_spin'][:2])} with more. "
             + _spin_reading(m))
 
 
@@ -301,11 +296,6 @@ def _spin_reading(m: dict) -> str:
                 "in flight.")
     return ("The memory is no weaker with more spin, so it is not simply throws that keep "
             "their orientation in flight; we have not traced its cause.")
-
-
-def _share(entry: tuple) -> str:
-    p, ci, _ = entry
-    return f"{p:.3f} [{ci[0]:.3f}, {ci[1]:.3f}]"
 
 
 def _error_bars(p: np.ndarray, ci: np.ndarray) -> np.ndarray:
@@ -352,17 +342,19 @@ def _plot_memory(m: dict, path: Path) -> None:
 def _markdown(scene: Scene, loaded_die: Die, fair: FaceCounts, loaded: FaceCounts, m: dict,
               n: dict, fair_energy: np.ndarray, sizes: dict, seed: int) -> str:
     g = scene.ground
-    face_rows = "\n".join(
-        f"| {f} | {fair.counts[f - 1]} | {fair.counts[f - 1] / fair.total:.4f} | "
-        f"[{fair.intervals[f - 1, 0]:.4f}, {fair.intervals[f - 1, 1]:.4f}] | "
-        f"{loaded.counts[f - 1]} | {loaded.counts[f - 1] / loaded.total:.4f} | "
-        f"[{loaded.intervals[f - 1, 0]:.4f}, {loaded.intervals[f - 1, 1]:.4f}] |"
-        for f in range(1, 7))
-    mem_rows = "\n".join(
-        f"| {m['e_lo'][b]:.3g}–{m['e_hi'][b]:.3g} | {m['e_mid'][b]:.3g} | {m['n'][b]} | "
-        f"{m['p_down'][b]:.3f} [{m['ci_down'][b][0]:.3f}, {m['ci_down'][b][1]:.3f}] | "
-        f"{m['p_up'][b]:.3f} [{m['ci_up'][b][0]:.3f}, {m['ci_up'][b][1]:.3f}] |"
-        for b in range(len(m["n"])))
+
+    def cells(c: FaceCounts, f: int) -> tuple:
+        return c.counts[f - 1], f"{c.counts[f - 1] / c.total:.4f}", bracket(c.intervals[f - 1], 4)
+
+    faces = markdown_table(
+        "face | fair: count | p | 95% interval | loaded: count | p | 95% interval",
+        ((f, *cells(fair, f), *cells(loaded, f)) for f in range(1, 7)))
+    memory = markdown_table(
+        "energy (m g a) | median | settled | P(rests on release-down face) | P(rests on "
+        "release-up face)",
+        ((f"{m['e_lo'][b]:.3g}–{m['e_hi'][b]:.3g}", f"{m['e_mid'][b]:.3g}", m["n"][b],
+          estimate(m["p_down"][b], m["ci_down"][b]), estimate(m["p_up"][b], m["ci_up"][b]))
+         for b in range(len(m["n"]))))
     v = VIGOROUS
     return f"""# Fairness of the die
 
@@ -391,9 +383,7 @@ uniform axis (median energy {n['fair_energy_median']:.1f} m g a).
 
 ![faces](figures/fairness_faces.png)
 
-| face | fair: count | p | 95% interval | loaded: count | p | 95% interval |
-|---|---|---|---|---|---|---|
-{face_rows}
+{faces}
 
 ## Loaded die: {sizes['loaded']} throws
 
@@ -405,7 +395,7 @@ inertia from the mass distribution. Same throws as the fair die.
 - Settled: {loaded.total}; not settled: {100 * loaded.unsettled:.3f}%; flagged unstable:
   {loaded.unstable}; sunk: {loaded.sunk}.
 - Face 6 (opposite the weight) up: **{n['loaded_p6']:.4f}**
-  [{loaded.intervals[5, 0]:.4f}, {loaded.intervals[5, 1]:.4f}], a bias of
+  {bracket(loaded.intervals[5], 4)}, a bias of
   {n['loaded_p6'] - 1 / 6:+.4f} over 1/6; face 1 (the heavy face) up: {n['loaded_p1']:.4f}
   ({n['loaded_p1'] - 1 / 6:+.4f}). Chi-square against uniform: chi2 = {loaded.chi2:.1f},
   p = {loaded.p_value:.3g}.
@@ -420,9 +410,7 @@ equal numbers of settled throws (not settled: {100 * n['memory_unsettled']:.3f}%
 
 ![memory](figures/fairness_memory_vs_energy.png)
 
-| energy (m g a) | median | settled | P(rests on release-down face) | P(rests on release-up face) |
-|---|---|---|---|---|
-{mem_rows}
+{memory}
 
 ## Comparison with Kapitaniak, Strzalko, Grabski & Kapitaniak (Chaos 22, 047504, 2012)
 

@@ -13,12 +13,9 @@ the face that was down (or up) at release.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, fields
+from dataclasses import dataclass
 from pathlib import Path
 
-import matplotlib
-
-matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numba
 import numpy as np
@@ -27,22 +24,20 @@ from scipy import stats
 from dice_env import materials
 from dice_env.intervals import wilson
 from dice_env.simulate import UP, State, simulate
-from dice_env.studies.common import DOCS, checked_throws, progress, save_figure
+from dice_env.studies.common import DOCS, SEED, batches, checked_throws, progress, save_figure
 from dice_env.studies.cuboids import GENTLE
-from dice_env.studies.fairness import VIGOROUS, Vigour, throw_energy, vigorous_throws
-from dice_env.studies.shapes import BATCH, Faces
+from dice_env.studies.fairness import T_MAX, VIGOROUS, Vigour, throw_energy, vigorous_throws
+from dice_env.studies.markdown import estimate, markdown_table
+from dice_env.studies.shapes import BATCH, Faces, counted
 
 # Throws per material: (vigorous, gentle) in the full and the quick run.
 FULL, QUICK = (10_000, 5_000), (60, 40)
-# Simulated time limit per throw (s): a throw not decided by then is not counted.
-T_MAX = 20.0
 # (label, hand) of the two kinds of throw.
 KINDS = (("vigorous", VIGOROUS), ("gentle", GENTLE))
-SEED = 2026
 # p-value below which the materials' memories count as different.
 SIGNIFICANT = 0.01
-HEADER = ("| throws | preset | counted | not decided | faces 1–6 | chi2 | p | mean impacts | "
-          "time to decision, mean / median (s) | sink (mm) |")
+HEADER = ("throws | preset | counted | not decided | faces 1–6 | chi2 | p | mean impacts | "
+          "time to decision, mean / median (s) | sink (mm)")
 
 
 @dataclass
@@ -71,16 +66,13 @@ def throw(scene: object, state: State, bar: object = None) -> MaterialThrows:
     """Throw ``state`` on ``scene`` until each face is decided, in batches of ``BATCH``."""
     die = scene.die
     parts = []
-    for start in range(0, state.batch_size, BATCH):
-        chunk = State(*(getattr(state, f.name)[start:start + BATCH] for f in fields(State)))
+    for chunk in batches(state, BATCH, bar):
         res = simulate(scene, chunk, t_max=T_MAX, stop_when_decided=True)
-        ok = (res.decided | res.settled) & ~res.unstable & ~res.sunk
+        ok = counted(res)
         rests_on = die.face_read(res.final.orientation, -UP)
         down = rests_on == die.face_read(chunk.orientation, -UP)
         up = rests_on == die.face_read(chunk.orientation, UP)
         parts.append((ok, res.face, res.impacts, res.rest_time, down, up, res.max_penetration))
-        if bar is not None:
-            bar.update(chunk.batch_size)
     ok, face, impacts, when, down, up, sink = (np.concatenate(p) for p in zip(*parts,
                                                                                strict=True))
     counts = np.bincount(face[ok], minlength=die.n_faces + 1)[1:]
@@ -104,8 +96,7 @@ def run(out: Path = DOCS, quick: bool = False, throws: int | None = None,
     releases = {label: vigorous_throws(base, n, rng, hand)
                 for (label, hand), n in zip(KINDS, sizes, strict=True)}
     restitution = {name: materials.measured(name) for name in materials.MATERIALS}
-    bar = progress(len(materials.MATERIALS) * sum(sizes), "material throws")
-    bar.unit = "throw"
+    bar = progress(len(materials.MATERIALS) * sum(sizes), "material throws", "throw")
     results = {name: {label: throw(materials.scene(name, t_max=T_MAX), state, bar)
                       for label, state in releases.items()}
                for name in materials.MATERIALS}
@@ -175,10 +166,6 @@ def _hand(v: Vigour) -> str:
             f"{v.spin[1]:g} rad/s about a uniform axis, orientation uniform")
 
 
-def _share(p: float, ci: np.ndarray) -> str:
-    return f"{p:.3f} [{ci[0]:.3f}, {ci[1]:.3f}]"
-
-
 def _kapitaniak(results: dict, restitution: dict) -> str:
     """Whether the bouncier tables give more impacts and less memory, as a sentence."""
     order = sorted(results, key=restitution.get)
@@ -210,27 +197,28 @@ def _monotonic(values: list[float] | np.ndarray, word: str) -> str:
     return f"{word} in {int(np.sum(steps > 0))} of {len(steps)} steps"
 
 
+def _outcome(label: str, name: str, r: MaterialThrows) -> tuple:
+    """The outcome table's row of ``name``'s throws of kind ``label``."""
+    f = r.faces
+    return (label, name, f.ended, f.undecided, " ".join(f"{s:.3f}" for s in f.shares),
+            f"{f.chi2:.2f}", f"{f.p_value:.3g}", f"{r.impacts.mean():.2f}",
+            f"{r.time.mean():.3f} / {np.median(r.time):.3f}",
+            f"{np.quantile(r.sink, 0.99) * 1e3:.2f} / {r.sink.max() * 1e3:.2f}")
+
+
 def _markdown(results: dict, restitution: dict, energy: dict, sizes: tuple, seconds: float,
               seed: int) -> str:
-    preset_rows = "\n".join(
-        f"| {name} | {m.restitution:.2f} | {restitution[name]:.4f} | {m.friction:.2f} | "
-        f"{m.stiffness:.0e} | {materials.ground(name).damping:.4g} | "
-        f"{materials.scene(name).step * 1e6:.1f} | {m.source} |"
-        for name, m in materials.MATERIALS.items())
-    rows = []
-    for label, _ in KINDS:
-        for name, kinds in results.items():
-            r = kinds[label]
-            f = r.faces
-            rows.append(
-                f"| {label} | {name} | {f.ended} | {f.undecided} | "
-                f"{' '.join(f'{s:.3f}' for s in f.shares)} | {f.chi2:.2f} | {f.p_value:.3g} | "
-                f"{r.impacts.mean():.2f} | {r.time.mean():.3f} / {np.median(r.time):.3f} | "
-                f"{np.quantile(r.sink, 0.99) * 1e3:.2f} / {r.sink.max() * 1e3:.2f} |")
-    memory_rows = "\n".join(
-        f"| {label} | {name} | {_share(*kinds[label].memory('down'))} | "
-        f"{_share(*kinds[label].memory('up'))} |"
-        for label, _ in KINDS for name, kinds in results.items())
+    presets = markdown_table(
+        "preset | e target | e measured | mu | S (N/m) | D (N s/m) | step (µs) | source",
+        ((name, f"{m.restitution:.2f}", f"{restitution[name]:.4f}", f"{m.friction:.2f}",
+          f"{m.stiffness:.0e}", f"{materials.ground(name).damping:.4g}",
+          f"{materials.scene(name).step * 1e6:.1f}", m.source)
+         for name, m in materials.MATERIALS.items()))
+    outcomes = markdown_table(HEADER, (_outcome(label, name, kinds[label])
+                                       for label, _ in KINDS for name, kinds in results.items()))
+    memory = markdown_table("throws | preset | P(release-down face) | P(release-up face)", (
+        (label, name, estimate(*kinds[label].memory("down")), estimate(*kinds[label].memory("up")))
+        for label, _ in KINDS for name, kinds in results.items()))
     die = materials.scene("wood").die
     return f"""# Table materials
 
@@ -249,9 +237,7 @@ produces (`materials.measured`: the die dropped flat at 1 m/s, rebound speed ove
 speed, `tests/test_materials.py` holds it within 0.01 of the target). The step is the
 scene's automatic one (it grows as S falls).
 
-| preset | e target | e measured | mu | S (N/m) | D (N s/m) | step (µs) | source |
-|---|---|---|---|---|---|---|---|
-{preset_rows}
+{presets}
 
 Sources: dice on wooden tables, Kapitaniak, Strzalko, Grabski & Kapitaniak, Chaos 22, 047504
 (2012) and Strzalko et al., Physics Reports 469, 59 (2008); plastics on wood, Murase,
@@ -279,9 +265,7 @@ percentile / maximum.
 
 ![materials](figures/materials.png)
 
-{HEADER}
-|---|---|---|---|---|---|---|---|---|---|
-{chr(10).join(rows)}
+{outcomes}
 
 ## Memory of the release orientation
 
@@ -292,9 +276,7 @@ same on all four materials: vigorous p = {memory_differs(results, 'vigorous'):.3
 p = {memory_differs(results, 'gentle'):.3g} (conservative: the materials share their releases,
 which correlates their outcomes and narrows their true differences' spread).
 
-| throws | preset | P(release-down face) | P(release-up face) |
-|---|---|---|---|
-{memory_rows}
+{memory}
 
 ## Against Kapitaniak et al. (2012)
 

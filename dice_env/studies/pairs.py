@@ -17,9 +17,6 @@ import time
 from dataclasses import asdict, dataclass, fields
 from pathlib import Path
 
-import matplotlib
-
-matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numba
 import numpy as np
@@ -31,12 +28,9 @@ from dice_env.intervals import wilson
 from dice_env.scene import Scene
 from dice_env.simulate import State
 from dice_env.studies.chunks import kept_chunks, prepare
-from dice_env.studies.common import DOCS, checked_throws, progress, save_figure
-from dice_env.studies.fairness import (
-    random_directions,
-    random_orientations,
-    toward_table,
-)
+from dice_env.studies.common import DOCS, SEED, batches, checked_throws, progress, save_figure
+from dice_env.studies.fairness import random_directions, random_orientations, toward_table
+from dice_env.studies.markdown import bracket, markdown_table
 from dice_env.surroundings import TRAY, tray
 
 # Throws of the pair in the full and the quick run; throws per kernel call; throws per seeded
@@ -46,7 +40,6 @@ FULL, QUICK, BATCH, CHUNK = 100_000, 60, 500, 2_000
 MIN_THROWS = 20
 # Simulated time limit per throw (s): a throw not decided by then is voided.
 T_MAX = 10.0
-SEED = 2026
 # p-value below which a test counts as a detected departure.
 SIGNIFICANT = 0.01
 TOTALS = np.arange(2, 13)
@@ -75,6 +68,11 @@ class Hand:
 # The two-dice hand of the study: the fairness study's vigorous throw (8–32 cm up, 0.48–2.4 m/s,
 # 10–100 rad/s for the 16 mm die), given to both dice at once.
 HAND = Hand()
+
+
+def tray_scene() -> Scene:
+    """The 30 x 20 cm tray on the default table, each throw ending by :data:`T_MAX`."""
+    return Scene(walls=tray(), t_max=T_MAX)
 
 
 def layout(n_dice: int, hand: Hand = HAND) -> np.ndarray:
@@ -191,11 +189,8 @@ def simulate_in_batches(scene: Scene, dice: tuple[Die, ...], state: GroupState,
     :func:`simulate_group` (no recording).
     """
     parts = []
-    for start in range(0, state.batch_size, batch):
-        chunk = GroupState(*(a[start:start + batch] for a in state._arrays()))
+    for chunk in batches(state, batch, bar):
         parts.append(simulate_group(scene, dice, chunk, **keywords))
-        if bar is not None:
-            bar.update(chunk.batch_size)
     joined = {f.name: np.concatenate([getattr(p, f.name) for p in parts])
               for f in fields(GroupResult) if f.name not in ("final", "t", "x_cm",
                                                              "orientations")}
@@ -209,7 +204,7 @@ def throw_pairs(scene: Scene, dice: tuple[Die, ...], state: GroupState, bar: obj
     """Throw ``state`` until the faces are decided, in batches of ``batch``; count them."""
     result = simulate_in_batches(scene, dice, state, bar, batch, stop_when_decided=True)
     reasons = void_reasons(result)
-    counted = ~np.any(list(reasons.values()), axis=0)
+    counted = not_void(reasons)
     met = result.overlap > 0
     return Pairs(table=_table(result.face, counted), met=met, counted=counted,
                  voided={k: int(v.sum()) for k, v in reasons.items()}, impacts=result.impacts,
@@ -261,6 +256,11 @@ def void_reasons(result: GroupResult) -> dict[str, np.ndarray]:
                     strict=True))
 
 
+def not_void(reasons: dict[str, np.ndarray]) -> np.ndarray:
+    """The throws (B,) that none of ``reasons`` (as :func:`void_reasons` gives them) voids."""
+    return ~np.any(list(reasons.values()), axis=0)
+
+
 def _table(face: np.ndarray, which: np.ndarray) -> np.ndarray:
     """Counts of (die 1, die 2) faces over the throws ``which``, (6, 6)."""
     return np.bincount((face[which, 0] - 1) * 6 + face[which, 1] - 1,
@@ -276,10 +276,9 @@ def run(out: Path = DOCS, quick: bool = False, throws: int | None = None,
     """
     throws = checked_throws(throws, MIN_THROWS)
     n = throws if throws is not None else QUICK if quick else FULL
-    scene = Scene(walls=tray(), t_max=T_MAX)
+    scene = tray_scene()
     dice = (scene.die, scene.die)
-    bar = progress(n, "two-dice throws")
-    bar.unit = "throw"
+    bar = progress(n, "two-dice throws", "throw")
     pairs, seconds, cpu = chunked_pairs(scene, dice, n, seed, keep, bar)
     bar.close()
     _plot(pairs, out / "figures" / "pairs.png")
@@ -377,16 +376,16 @@ def _conclusion(pairs: Pairs, n: dict) -> str:
 
 def _markdown(pairs: Pairs, n: dict, scene: Scene, seed: int) -> str:
     ci = wilson(pairs.totals, pairs.n)
-    total_rows = "\n".join(
-        f"| {k} | {c} | {c / pairs.n:.4f} | [{lo:.4f}, {hi:.4f}] | {t:.4f} | "
-        f"{'yes' if lo <= t <= hi else 'no'} |"
-        for k, c, (lo, hi), t in zip(TOTALS, pairs.totals, ci, triangle(), strict=True))
-    table_rows = "\n".join(f"| **{i + 1}** | " + " | ".join(str(c) for c in row) + f" | "
-                           f"{row.sum()} |" for i, row in enumerate(pairs.table))
-    column_sums = " | ".join(str(c) for c in pairs.table.sum(axis=0))
+    totals = markdown_table("total | count | share | 95% interval | 2d6 | inside", (
+        (k, c, f"{c / pairs.n:.4f}", bracket((lo, hi), 4), f"{t:.4f}",
+         "yes" if lo <= t <= hi else "no")
+        for k, c, (lo, hi), t in zip(TOTALS, pairs.totals, ci, triangle(), strict=True)))
+    faces = markdown_table("die 1 \\ die 2 | 1 | 2 | 3 | 4 | 5 | 6 | sum", (
+        *((f"**{i + 1}**", *row, row.sum()) for i, row in enumerate(pairs.table)),
+        ("sum", *pairs.table.sum(axis=0), pairs.n)))
     thrown = len(pairs.counted)
-    voided_rows = "\n".join(f"| {reason} | {count} | {count / thrown:.4%} |"
-                            for reason, count in pairs.voided.items())
+    voided = markdown_table("reason | throws | share", ((reason, count, f"{count / thrown:.4%}")
+                                              for reason, count in pairs.voided.items()))
     chi2, _ = pairs.total_test()
     ind_chi2, _, dof = independence(pairs.table)
     h = HAND
@@ -429,9 +428,7 @@ impacts are `GroupResult.die_impacts`, studied in `collisions.md`) and was decid
 
 ## Voided throws (not counted)
 
-| reason | throws | share |
-|---|---|---|
-{voided_rows}
+{voided}
 
 Counted: **{pairs.n}** of {thrown} throws ({1 - n['voided']:.4%}); a throw may be voided
 for more than one reason.
@@ -443,18 +440,13 @@ for more than one reason.
 Chi-square goodness of fit of the totals 2–12 against `(6 - |k - 7|) / 36` (10 degrees of
 freedom): chi2 = {chi2:.2f}, **p = {n['total_p']:.3g}**.
 
-| total | count | share | 95% interval | 2d6 | inside |
-|---|---|---|---|---|---|
-{total_rows}
+{totals}
 
 ## The two faces
 
 Counts of (die 1 face, die 2 face) over the counted throws:
 
-| die 1 \\ die 2 | 1 | 2 | 3 | 4 | 5 | 6 | sum |
-|---|---|---|---|---|---|---|---|
-{table_rows}
-| sum | {column_sums} | {pairs.n} |
+{faces}
 
 - Independence (chi-square on the 6 x 6 table, {dof} dof): chi2 = {ind_chi2:.2f},
   **p = {n['independence_p']:.3g}**; on the throws in which the dice touched each other only:

@@ -13,6 +13,7 @@ import numpy as np
 from dice_env.die import Die
 from dice_env.pips import DRILLINGS, SOURCES, Pips, cap_properties
 from dice_env.studies.common import DOCS
+from dice_env.studies.markdown import markdown_table
 
 
 def run(out: Path = DOCS, quick: bool = False) -> dict[str, float]:
@@ -37,6 +38,19 @@ def _rows() -> list[tuple[str, Die, Pips]]:
         die = Die.standard("d6", casino.size, casino.density * casino.size**3, pips=pips)
         rows.append((f"`casino19`, {label}", die, pips))
     return rows
+
+
+def _mass_row(label: str, die: Die, pips: Pips) -> tuple:
+    """The mass-properties table's row of one die."""
+    volume = cap_properties(pips.radius, pips.depth)[0]
+    com = np.asarray(die.com)
+    inertia = die.inertia_body / (die.mass * die.size**2 / 6)
+    moments = np.linalg.eigvalsh(inertia) - 1
+    products = inertia[[1, 0, 0], [2, 2, 1]]
+    return (label, f"{100 * 21 * volume / die.size**3:.2f}",
+            ", ".join(f"{1e6 * c:.2f}" for c in com), f"{1e6 * np.linalg.norm(com):.2f}",
+            f"{np.linalg.norm(com) / die.size:.2e}", ", ".join(f"{1e3 * m:+.3f}" for m in moments),
+            ", ".join(f"{1e3 * m:+.3f}" for m in products))
 
 
 def _page(rows: list[tuple[str, Die, Pips]]) -> str:
@@ -72,15 +86,15 @@ def _page(rows: list[tuple[str, Die, Pips]]) -> str:
         "",
         "## Presets",
         "",
-        "| preset | edge (mm) | mass (g) | pip opening (mm) | depth (mm) | offset | paint "
-        "(g/cm³) | source |",
-        "|---|---|---|---|---|---|---|---|",
+        markdown_table(
+            "preset | edge (mm) | mass (g) | pip opening (mm) | depth (mm) | offset | paint "
+            "(g/cm³) | source",
+            ((f"`{name}`", f"{die.size * 1e3:.2f}", f"{die.mass * 1e3:.3f}",
+              f"{2e3 * pips.radius:g}", f"{1e3 * pips.depth:g}", f"{pips.offset:g}",
+              "empty" if pips.paint_density is None else f"{pips.paint_density / 1e3:g}",
+              preset.source)
+             for (name, preset), (_, die, pips) in zip(DRILLINGS.items(), rows, strict=False))),
     ]
-    for (name, preset), (_, die, pips) in zip(DRILLINGS.items(), rows, strict=False):
-        paint = "empty" if pips.paint_density is None else f"{pips.paint_density / 1e3:g}"
-        lines.append(f"| `{name}` | {die.size * 1e3:.2f} | {die.mass * 1e3:.3f} | "
-                     f"{2e3 * pips.radius:g} | {1e3 * pips.depth:g} | {pips.offset:g} | "
-                     f"{paint} | {preset.source} |")
     lines += [
         "",
         "## Mass properties",
@@ -88,22 +102,12 @@ def _page(rows: list[tuple[str, Die, Pips]]) -> str:
         "Centre of mass from the geometric centre; principal moments of inertia about it "
         "against the uniform cube of the same mass and edge, m s² / 6.",
         "",
-        "| die | cavities (% of the cube) | com x, y, z (µm) | \\|com\\| (µm) | \\|com\\| / edge "
-        "| principal moments / (m s²/6) − 1 (10⁻³) | products yz, xz, xy / (m s²/6) (10⁻³) |",
-        "|---|---|---|---|---|---|---|",
+        markdown_table(
+            "die | cavities (% of the cube) | com x, y, z (µm) | \\|com\\| (µm) | "
+            "\\|com\\| / edge | principal moments / (m s²/6) − 1 (10⁻³) | "
+            "products yz, xz, xy / (m s²/6) (10⁻³)",
+            (_mass_row(label, die, pips) for label, die, pips in rows)),
     ]
-    for label, die, pips in rows:
-        volume = cap_properties(pips.radius, pips.depth)[0]
-        com = np.asarray(die.com)
-        inertia = die.inertia_body / (die.mass * die.size**2 / 6)
-        moments = np.linalg.eigvalsh(inertia) - 1
-        products = inertia[[1, 0, 0], [2, 2, 1]]
-        lines.append(
-            f"| {label} | {100 * 21 * volume / die.size**3:.2f} | "
-            f"{', '.join(f'{1e6 * c:.2f}' for c in com)} | {1e6 * np.linalg.norm(com):.2f} | "
-            f"{np.linalg.norm(com) / die.size:.2e} | "
-            f"{', '.join(f'{1e3 * m:+.3f}' for m in moments)} | "
-            f"{', '.join(f'{1e3 * m:+.3f}' for m in products)} |")
     lines += [
         "",
         "The casino die is the uniform cube exactly when its paint weighs what the cellulose "

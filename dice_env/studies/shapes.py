@@ -17,12 +17,9 @@
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass, fields
+from dataclasses import dataclass
 from pathlib import Path
 
-import matplotlib
-
-matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
 from scipy import stats
@@ -31,7 +28,7 @@ from dice_env.die import STANDARD_SIZES, Die
 from dice_env.intervals import wilson
 from dice_env.scene import Scene
 from dice_env.simulate import UP, Result, State, simulate
-from dice_env.studies.common import DOCS, checked_throws, progress, save_figure
+from dice_env.studies.common import DOCS, SEED, batches, checked_throws, progress, save_figure
 from dice_env.studies.fairness import (
     VIGOROUS,
     Vigour,
@@ -39,6 +36,7 @@ from dice_env.studies.fairness import (
     random_orientations,
     vigorous_throws,
 )
+from dice_env.studies.markdown import estimate, markdown_table
 from dice_env.table import DIE_EDGE
 
 DICE = tuple(STANDARD_SIZES)
@@ -111,12 +109,9 @@ def throw_faces(scene: Scene, state: State, bar: object = None, batch: int = BAT
     """Throw ``state`` in ``scene`` until each face is decided; count the faces."""
     n_faces = scene.die.n_faces
     counts = np.zeros(n_faces, np.int64)
-    for start in range(0, state.batch_size, batch):
-        chunk = State(*(getattr(state, f.name)[start:start + batch] for f in fields(State)))
+    for chunk in batches(state, batch, bar):
         res = simulate(scene, chunk, stop_when_decided=True)
         counts += np.bincount(res.face[counted(res)], minlength=n_faces + 1)[1:]
-        if bar is not None:
-            bar.update(chunk.batch_size)
     return Faces.of(counts, state.batch_size)
 
 
@@ -225,7 +220,7 @@ def flight_dice() -> dict[str, Die]:
     return dice
 
 
-def run(out: Path = DOCS, quick: bool = False, seed: int = 2026,
+def run(out: Path = DOCS, quick: bool = False, seed: int = SEED,
         throws: int | None = None,
         faces_of: Callable[[Scene, int, int], Faces] | None = None) -> dict[str, float]:
     """Regenerate ``shapes.md`` and its figure under ``out``; return the headline numbers.
@@ -242,8 +237,7 @@ def run(out: Path = DOCS, quick: bool = False, seed: int = 2026,
         sizes = {"fair": int(throws), "loaded": max(QUICK["loaded"], int(throws) // 2)}
     rng = np.random.default_rng(seed)
     seeds = iter(np.random.SeedSequence(seed).generate_state(2 * len(DICE)))
-    bar = progress(len(DICE) * (sizes["fair"] + sizes["loaded"]), "shapes throws")
-    bar.unit = "throw"
+    bar = progress(len(DICE) * (sizes["fair"] + sizes["loaded"]), "shapes throws", "throw")
 
     def thrown(scene: Scene, n: int) -> Faces:
         if faces_of is None:
@@ -311,38 +305,32 @@ def _load_verdict(loaded: dict[str, Loaded]) -> str:
     return text
 
 
-def _header(*names: str) -> str:
-    """A markdown table's header and rule."""
-    return "| " + " | ".join(names) + " |\n|" + "---|" * len(names)
-
-
 def _markdown(fair: dict[str, Faces], loaded: dict[str, Loaded], flight: dict,
               sizes: dict, seed: int, quick: bool, throws: int | None, chunked: bool) -> str:
     command = "python -m dice_env.studies shapes" + (" --quick" if quick else "") + (
         f" --throws {throws}" if throws is not None else "") + (
         " --chunks DIR" if chunked else "")
     v, g = VIGOROUS, Scene().ground
-    rows = []
-    for name in DICE:
-        die, f = Die.standard(name), fair[name]
-        rows.append(f"| {name} | {die.n_faces} | {len(die.vertices)} | {die.size * 1e3:g} | "
-                    f"{die.mass * 1e3:.3g} | {f.ended} | {f.undecided} | {f.chi2:.1f} | "
-                    f"**{f.p_value:.3g}** | {f.max_deviation * die.n_faces:.3f} |")
-    load_rows = []
-    for name in DICE:
-        heavy = loaded[name]
-        lo, hi = heavy.interval
-        n = heavy.faces.counts.size
-        load_rows.append(
-            f"| {name} | {np.linalg.norm(heavy.die.com) / heavy.die.size:.3f} | "
-            f"{heavy.favoured} | {heavy.faces.ended} | {heavy.share:.4f} [{lo:.4f}, {hi:.4f}] "
-            f"| {1 / n:.4f} | {heavy.share * n:.2f} | {heavy.most_frequent} | "
-            f"{heavy.faces.p_value:.3g} |")
-    flight_rows = "\n".join(
-        f"| {name} | {'yes' if die.is_isotropic else 'no'} | "
-        + " | ".join(f"{flight[name][k][q]:.1e}" for k in (0, 1)
-                     for q in FLIGHT_COLUMNS) + " |"
-        for name, die in flight_dice().items())
+    fairness = markdown_table(
+        "die | faces | vertices | size (mm) | mass (g) | counted | undecided | chi2 | p | "
+        "largest deviation of share × n from 1",
+        ((name, die.n_faces, len(die.vertices), f"{die.size * 1e3:g}", f"{die.mass * 1e3:.3g}",
+          f.ended, f.undecided, f"{f.chi2:.1f}", f"**{f.p_value:.3g}**",
+          f"{f.max_deviation * die.n_faces:.3f}")
+         for name in DICE for die, f in [(Die.standard(name), fair[name])]))
+    loads = markdown_table(
+        "die | centre of mass offset (size) | predicted face | counted | its share [95%] | 1/n | "
+        "share × n | most frequent | chi2 p",
+        ((name, f"{np.linalg.norm(h.die.com) / h.die.size:.3f}", h.favoured, h.faces.ended,
+          estimate(h.share, h.interval, 4), f"{1 / h.die.n_faces:.4f}",
+          f"{h.share * h.die.n_faces:.2f}", h.most_frequent, f"{h.faces.p_value:.3g}")
+         for name, h in loaded.items()))
+    flights = markdown_table(
+        "die | isotropic | " + " | ".join(f"{mode}: {q}" for mode in ("jump", "stepped")
+                                          for q in FLIGHT_COLUMNS),
+        ((name, "yes" if die.is_isotropic else "no",
+          *(f"{flight[name][k][q]:.1e}" for k in (0, 1) for q in FLIGHT_COLUMNS))
+         for name, die in flight_dice().items()))
     full = FULL["fair"]
     note = ("" if sizes["fair"] >= full else
             f"\nThis page was made with {sizes['fair']} fair throws per die (the command's "
@@ -371,9 +359,7 @@ or {Scene().t_max:g} s; faces are read against gravity, the d4 by the face down.
 
 Chi-square test of uniformity over the n faces (n − 1 degrees of freedom).
 
-{_header("die", "faces", "vertices", "size (mm)", "mass (g)", "counted", "undecided",
-          "chi2", "p", "largest deviation of share × n from 1")}
-{chr(10).join(rows)}
+{fairness}
 
 ![faces](figures/shapes_faces.png)
 
@@ -384,9 +370,7 @@ the axis of face 1, at 0.8 of that face's distance from the centre. Predicted: t
 when face 1 lies on the table shows more than 1/n (the opposite face, or face 1 itself on the
 d4, read by the face down).
 
-{_header("die", "centre of mass offset (size)", "predicted face", "counted",
-          "its share [95%]", "1/n", "share × n", "most frequent", "chi2 p")}
-{chr(10).join(load_rows)}
+{loads}
 
 {_load_verdict(loaded)}
 
@@ -402,9 +386,7 @@ and its rotational part alone; height of the centre against the exact parabola, 
 drop g t²/2. With the analytic contact-free jumps (the default) and stepped one by one
 (`free_flight=False`).
 
-{_header("die", "isotropic", *(f"{mode}: {q}" for mode in ("jump", "stepped")
-                                for q in FLIGHT_COLUMNS))}
-{flight_rows}
+{flights}
 
 Velocity and angular momentum change only by gravity, to rounding. The energy of an
 isotropic die is constant to rounding (beyond the translational defect above, which is the

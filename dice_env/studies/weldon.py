@@ -30,9 +30,6 @@ import time
 from dataclasses import asdict, dataclass, fields
 from pathlib import Path
 
-import matplotlib
-
-matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numba
 import numpy as np
@@ -40,12 +37,14 @@ from scipy import optimize, stats
 
 from dice_env.die import Die
 from dice_env.group import DieContact, GroupState, simulate_group
+from dice_env.intervals import Z95
 from dice_env.pips import Pips
 from dice_env.scene import Scene
 from dice_env.simulate import State
 from dice_env.studies.chunks import kept_chunks, prepare
-from dice_env.studies.common import DOCS, checked_throws, progress, save_figure
+from dice_env.studies.common import DOCS, SEED, checked_int, checked_throws, progress, save_figure
 from dice_env.studies.fairness import random_directions, random_orientations
+from dice_env.studies.markdown import estimate, markdown_table
 from dice_env.studies.shapes import Faces, throw_faces
 
 # Weldon's data (Pearson 1900, Kemp & Kemp 1991): throws of twelve dice with 0..12 dice
@@ -54,7 +53,6 @@ WELDON_COUNTS = (185, 1149, 3265, 5475, 6114, 5194, 3067, 1331, 403, 105, 14, 4,
 DICE = 12
 SUCCESS = (5, 6)
 FAIR = 1 / 3
-Z95 = 1.959964
 MIN_EXPECTED = 5.0  # chi-square cells are pooled until each expects at least this many
 SIGNIFICANCE = 0.05
 RESOLVING_POWER = 0.8  # a test "resolves" a difference it detects with this probability
@@ -66,7 +64,6 @@ BATCH_TOGETHER = 125  # twelve-dice throws per kernel call (run in parallel: the
 # and short throws evenly)
 CHUNK_TOGETHER = 250  # twelve-dice throws per seeded chunk (see chunked_together)
 T_MAX_TOGETHER = 2.0  # s of simulated time; a throw not decided by then is not counted
-SEED = 2026
 
 
 # ---- comparison maths --------------------------------------------------------------------
@@ -82,12 +79,11 @@ class Estimate:
     @classmethod
     def binomial(cls, successes: int, trials: int) -> Estimate:
         """``successes`` of ``trials`` independent trials: ``se = sqrt(p (1 - p) / n)``."""
-        if not isinstance(trials, (int, np.integer)) or trials < 1:
-            raise ValueError(f"trials must be an int >= 1, got {trials!r}")
+        trials = checked_int("trials", trials, 1)
         if not 0 <= successes <= trials:
             raise ValueError(f"successes must be in [0, trials={trials}], got {successes!r}")
         p = successes / trials
-        return cls(p, math.sqrt(p * (1 - p) / trials), int(trials))
+        return cls(p, math.sqrt(p * (1 - p) / trials), trials)
 
     @classmethod
     def per_throw(cls, successes: np.ndarray, dice: int = DICE) -> Estimate:
@@ -481,8 +477,7 @@ def run(out: Path = DOCS, quick: bool = False, seed: int = SEED,
         f" --throws {throws}" if throws is not None else "")
     rng = np.random.default_rng(seed)
     total = DICE * (sizes["together"] + sizes["alone"] + (len(VARIANTS) - 1) * sizes["variant"])
-    bar = progress(total, "weldon die-throws")
-    bar.unit = "die"
+    bar = progress(total, "weldon die-throws", "die")
     scene = Scene(die=variant_die(VARIANTS[0][2]))
     together = chunked_together(scene, sizes["together"], seed, keep, bar)
     alone = {}
@@ -558,18 +553,19 @@ def _verdict(verdict: str) -> str:
     return f"**{verdict}**"
 
 
-def _interval(entry: dict, digits: int = 4) -> str:
-    lo, hi = entry["interval"]
-    return f"{entry['p']:.{digits}f} [{lo:.{digits}f}, {hi:.{digits}f}]"
+def p_text(entry: dict) -> str:
+    """An entry's ``p [low, high]`` (four decimals)."""
+    return estimate(entry["p"], entry["interval"], 4)
 
 
-def _cells(test: dict) -> str:
+def cells_text(test: dict) -> str:
+    """The pooled cells of a test's numbers: ``0–2, 3, 4, 5–12``."""
     return ", ".join(f"{a}" if a == b else f"{a}–{b}" for a, b in test["cells"])
 
 
 def _test(test: dict) -> str:
     return (f"chi2 = {test['statistic']:.2f}, {test['dof']} d.f., p = {test['p_value']:.3g} "
-            f"(cells {_cells(test)})")
+            f"(cells {cells_text(test)})")
 
 
 def markdown(n: dict) -> str:
@@ -578,20 +574,21 @@ def markdown(n: dict) -> str:
     sizes = meta["sizes"]
     ref = n["alone"][VARIANTS[0][0]]
     cup = CUP
-    rows = "\n".join(
-        f"| {k} | {w['counts'][k]} | {w['counts'][k] / sum(w['counts']):.4f} | "
-        f"{binomial_probabilities(FAIR)[k]:.4f} | {t['counts'][k]} |"
-        for k in range(DICE + 1))
-    variant_rows = "\n".join(
-        f"| {v['label']} | {v['edge_mm']:.2f} | {v['mass_g']:.3f} | "
-        f"{', '.join(f'{c:.1f}' for c in v['com_um'])} | {v['n']} | {_interval(v)} | "
-        f"{v['p'] - FAIR:+.4f} | {_verdict(v['vs_fair_p']['verdict'])} | "
-        f"{_verdict(v['vs_weldon_p']['verdict'])} |"
-        for v in n["alone"].values())
-    face_rows = "\n".join(
-        f"| {v['label']} | " + " | ".join(
-            f"{c / sum(v['counts']):.4f}" for c in v["counts"]) + " |"
-        for key, v in n["alone"].items() if key in ("drilled16", "casino19"))
+    successes = markdown_table(
+        "successes | Weldon | share | binomial at 1/3 | (a) together",
+        ((k, w["counts"][k], f"{w['counts'][k] / sum(w['counts']):.4f}",
+          f"{binomial_probabilities(FAIR)[k]:.4f}", t["counts"][k]) for k in range(DICE + 1)))
+    variants = markdown_table(
+        "die | edge (mm) | mass (g) | com x, y, z (µm) | die-throws | p(5 or 6) [95%] | − 1/3 | "
+        "vs 1/3 | vs Weldon",
+        ((v["label"], f"{v['edge_mm']:.2f}", f"{v['mass_g']:.3f}",
+          ", ".join(f"{c:.1f}" for c in v["com_um"]), v["n"], p_text(v),
+          f"{v['p'] - FAIR:+.4f}", _verdict(v["vs_fair_p"]["verdict"]),
+          _verdict(v["vs_weldon_p"]["verdict"])) for v in n["alone"].values()))
+    faces = markdown_table(
+        "die | 1 | 2 | 3 | 4 | 5 | 6",
+        ((v["label"], *(f"{c / sum(v['counts']):.4f}" for c in v["counts"]))
+         for key, v in n["alone"].items() if key in ("drilled16", "casino19")))
     return f"""# Weldon's dice: twelve pip-drilled dice, the chance of a 5 or a 6
 
 Generated by `{meta['command']}` (module `dice_env/studies/weldon.py`, seed {meta['seed']},
@@ -602,7 +599,7 @@ validation page (`validation.md`) reads. **Nothing is fitted to Weldon's numbers
 
 W. F. R. Weldon threw 12 dice 26,306 times and counted, each time, the dice showing a 5 or a
 6 (K. Pearson, Phil. Mag. 50, 157 (1900); A. W. Kemp & C. D. Kemp, The American
-Statistician 45, 216 (1991)): {w['n']:,} die-throws, p(5 or 6) = {_interval(w)}
+Statistician 45, 216 (1991)): {w['n']:,} die-throws, p(5 or 6) = {p_text(w)}
 (standard error {w['se']:.4f}), {w['effect']:+.4f} above 1/3. His distribution of successes
 against the binomial at 1/3: {_test(w['vs_fair'])}; against the binomial at his own p:
 {_test(w['vs_own_p'])}. The usual explanation is the drilled pips: the six face is the
@@ -653,9 +650,7 @@ below {EFFECT:.4f}).
 
 ## The distribution of successes per throw
 
-| successes | Weldon | share | binomial at 1/3 | (a) together |
-|---|---|---|---|---|
-{rows}
+{successes}
 
 {_distribution_text(t)}
 
@@ -665,18 +660,13 @@ Centre of mass from the geometric centre (µm, body axes: +x is face 2, +y face 
 The casino die's paint weighs what the drilled cellulose weighed, so it is the uniform cube:
 1/3 exactly by symmetry, a check of the throws.
 
-| die | edge (mm) | mass (g) | com x, y, z (µm) | die-throws | p(5 or 6) [95%] | − 1/3 \
-| vs 1/3 | vs Weldon |
-|---|---|---|---|---|---|---|---|---|
-{variant_rows}
+{variants}
 
 {_sensitivity_text(n)}
 
 Per-face probabilities predicted (single throws; faces 1–6):
 
-| die | 1 | 2 | 3 | 4 | 5 | 6 |
-|---|---|---|---|---|---|---|
-{face_rows}
+{faces}
 
 ![weldon](figures/weldon.png)
 """
@@ -697,13 +687,13 @@ def _together_reach(t: dict) -> str:
 
 def _p_rows(n: dict) -> str:
     w, t, ref = n["weldon"], n["together"], n["alone"][VARIANTS[0][0]]
-    rows = [f"| Weldon (1894) | {w['n']:,} | {_interval(w)} | | | |"]
+    rows = [f"| Weldon (1894) | {w['n']:,} | {p_text(w)} | | | |"]
     for label, entry in (("(a) together", t), ("(b) alone", ref)):
         if "p" not in entry:
             rows.append(f"| {label}, `drilled16` | {entry['counted'] * DICE} | too few throws "
                         "| | | |")
             continue
-        rows.append(f"| {label}, `drilled16` | {entry['n']:,} | {_interval(entry)} | "
+        rows.append(f"| {label}, `drilled16` | {entry['n']:,} | {p_text(entry)} | "
                     f"{entry['vs_weldon_p']['difference']:+.4f} | "
                     f"{_verdict(entry['vs_weldon_p']['verdict'])} | "
                     f"{_verdict(entry['vs_fair_p']['verdict'])} |")
