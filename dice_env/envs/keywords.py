@@ -1,9 +1,11 @@
 """The env's physical keywords: each validated where given, applied to a base scene.
 
-:func:`build_scene` turns ``gym.make`` keywords into a :class:`~dice_env.scene.Scene`. A keyword
-changes only what it names; every other field of the base scene (its die, ground, rest test,
-``t_max``, ...) is kept. A keyword that cannot be applied to the base scene (``mass`` on a loaded
-die) or that would have no effect (``safety`` with a fixed ``dt``) is refused, never dropped.
+:class:`SceneKeywords` holds the ``gym.make`` keywords that build the scene;
+:meth:`SceneKeywords.build` turns them into a :class:`~dice_env.scene.Scene`. A keyword changes
+only what it names; every other field of the base scene (its die, ground, rest test,
+``t_max``, ...) is kept. A keyword that cannot be applied to the base scene (``mass`` on a
+loaded die) or that would have no effect (``safety`` with a fixed ``dt``) is refused, never
+dropped.
 
 :func:`check_scene` refuses scenes the env cannot run as throws, whether built from keywords or
 passed as ``scene``: a die whose weight alone sinks it into the table, ``t_max`` or a rest hold
@@ -14,7 +16,7 @@ air drag keeps the die from falling.
 from __future__ import annotations
 
 import math
-from dataclasses import replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -44,66 +46,158 @@ def check_face(name: str, value: object, n_faces: int = 6) -> int:
     return int(value)
 
 
-def build_scene(
-    scene: Scene | None = None,
-    *,
-    t_max: float | None = None,
-    die: str | Die | None = None,
-    size: float | None = None,
-    edge: float | None = None,
-    mass: float | None = None,
-    load_face: int | None = None,
-    load_fraction: float | None = None,
-    load_depth: float | None = None,
-    stiffness: float | None = None,
-    damping: float | None = None,
-    friction: float | None = None,
-    tilt_deg: float | None = None,
-    contact_law: str | ContactLaw | None = None,
-    gravity: float | None = None,
-    dt: float | None = None,
-    safety: float | None = None,
-    rest_speed: float | None = None,
-    rest_hold: float | None = None,
-    energy_tol: float | None = None,
-    scheme: str | Scheme | None = None,
-    friction_law: str | FrictionLaw | None = None,
-    friction_vmin: float | None = None,
-    walls: str | tuple[Wall, ...] | None = None,
-) -> Scene:
-    """``scene`` (default ``Scene(t_max=DEFAULT_T_MAX)``) with the keywords given (not None).
+@dataclass(frozen=True)
+class SceneKeywords:
+    """The ``gym.make`` keywords that build the env's scene; each one None keeps the base's.
 
-    ``die`` replaces the scene's die: a :class:`Die` or a standard name ("d4" … "d20",
-    :meth:`Die.standard` with its default size and density). ``size`` (``edge``: the same, for
-    the d6 only), ``mass`` and ``load_*`` rebuild a uniform standard die (``load_fraction`` > 0:
-    :meth:`Die.load` toward ``load_face``, at ``load_depth``). ``walls`` replaces the scene's
-    walls: a preset name of :mod:`dice_env.surroundings` ("none", "tray", "craps") or a tuple of
-    :class:`Wall`. ``tilt_deg`` tilts the table about y from level; the enum keywords take a
-    member or its name (any case).
+    :meth:`build` applies the keywords given to a base scene (default
+    ``Scene(t_max=DEFAULT_T_MAX)``). ``size``, ``edge``, ``mass`` and ``load_*`` rebuild a uniform
+    standard die; the enum keywords take a member or its name (any case).
     """
-    if scene is None:
-        scene = Scene(t_max=DEFAULT_T_MAX)
-    if not isinstance(scene, Scene):
-        raise ValueError(f"scene must be a dice_env.Scene or None, got {type(scene).__name__}")
-    changes = _given(t_max=t_max, gravity=gravity, dt=dt, safety=safety, energy_tol=energy_tol,
-                     friction_vmin=friction_vmin)
-    for name, value, kind in (("scheme", scheme, Scheme),
-                              ("friction_law", friction_law, FrictionLaw)):
-        if value is not None:
-            changes[name] = as_enum(name, kind, value)
-    built = scene.with_(
-        die=_die(_base_die(scene.die, die), _size(die, size, edge), mass, load_face,
-                 load_fraction, load_depth, size_name="size" if edge is None else "edge"),
-        walls=scene.walls if walls is None else _walls(walls),
-        ground=_ground(scene.ground, stiffness, damping, friction, contact_law, tilt_deg),
-        rest=_rest(scene.rest, rest_speed, rest_hold), **changes)
-    if safety is not None and built.dt is not None:
-        raise ValueError(f"safety has no effect with a fixed step (dt={built.dt:g} s): give "
-                         "safety or dt, not both")
-    if friction_vmin is not None and built.friction_law != FrictionLaw.REGULARIZED:
-        raise ValueError("friction_vmin acts only with friction_law='regularized' (the scene's "
-                         f"is {built.friction_law.name.lower()!r}): give both or neither")
-    return built
+
+    t_max: float | None = None
+    """Simulated time limit per throw (s)."""
+    die: str | Die | None = None
+    """The die: a :class:`Die` or a standard name ("d4" … "d20", :meth:`Die.standard` with its
+    default size and density)."""
+    size: float | None = None
+    """The die's size (m, :attr:`Die.size`)."""
+    edge: float | None = None
+    """The d6's size (m): ``size`` under the d6's name, never with ``size``."""
+    mass: float | None = None
+    """The die's mass (kg)."""
+    load_face: int | None = None
+    """The face a loaded die favours (1 … n; default n)."""
+    load_fraction: float | None = None
+    """The load's share of the mass, [0, 1): > 0 loads the die (:meth:`Die.load`)."""
+    load_depth: float | None = None
+    """The load's depth toward ``load_face``, [0, 1)."""
+    stiffness: float | None = None
+    """The table's contact stiffness S (N/m)."""
+    damping: float | None = None
+    """The table's contact damping D (N s/m)."""
+    friction: float | None = None
+    """The table's friction coefficient μ."""
+    tilt_deg: float | None = None
+    """The table's tilt about y from level (degrees, [0, 90))."""
+    contact_law: str | ContactLaw | None = None
+    """The table's contact law, "gated" or "paper"."""
+    gravity: float | None = None
+    """Gravity (m/s²)."""
+    dt: float | None = None
+    """A fixed step (s); refuses ``safety``."""
+    safety: float | None = None
+    """The automatic step's safety factor."""
+    rest_speed: float | None = None
+    """The rest test's speed (> 0)."""
+    rest_hold: float | None = None
+    """How long a die stays quiet to count as settled (s, >= 0)."""
+    energy_tol: float | None = None
+    """The energy rise that flags a throw unstable."""
+    scheme: str | Scheme | None = None
+    """The contact step, "paper" or "midpoint"."""
+    friction_law: str | FrictionLaw | None = None
+    """Friction, "stick_slip" or "regularized"."""
+    friction_vmin: float | None = None
+    """The regularized friction's umin (m/s); refused with any other ``friction_law``."""
+    walls: str | tuple[Wall, ...] | None = None
+    """A preset of :mod:`dice_env.surroundings` ("none", "tray", "craps") or a tuple of
+    :class:`Wall`."""
+
+    def build(self, scene: Scene | None = None) -> Scene:
+        """``scene`` (default ``Scene(t_max=DEFAULT_T_MAX)``) with the keywords given (not None).
+
+        ``tilt_deg`` tilts the table from level; a keyword the scene cannot take, or one
+        without effect, is refused (see the module).
+        """
+        if scene is None:
+            scene = Scene(t_max=DEFAULT_T_MAX)
+        if not isinstance(scene, Scene):
+            raise ValueError(f"scene must be a dice_env.Scene or None, got {type(scene).__name__}")
+        changes = _given(t_max=self.t_max, gravity=self.gravity, dt=self.dt, safety=self.safety,
+                         energy_tol=self.energy_tol, friction_vmin=self.friction_vmin)
+        for name, kind in (("scheme", Scheme), ("friction_law", FrictionLaw)):
+            if getattr(self, name) is not None:
+                changes[name] = as_enum(name, kind, getattr(self, name))
+        built = scene.with_(
+            die=self._die(scene.die),
+            walls=scene.walls if self.walls is None else _walls(self.walls),
+            ground=self._ground(scene.ground), rest=self._rest(scene.rest), **changes)
+        if self.safety is not None and built.dt is not None:
+            raise ValueError(f"safety has no effect with a fixed step (dt={built.dt:g} s): give "
+                             "safety or dt, not both")
+        if self.friction_vmin is not None and built.friction_law != FrictionLaw.REGULARIZED:
+            raise ValueError("friction_vmin acts only with friction_law='regularized' (the "
+                             f"scene's is {built.friction_law.name.lower()!r}): give both or "
+                             "neither")
+        return built
+
+    def _die(self, base: Die) -> Die:
+        """``base`` or the ``die`` keyword's die, with the die keywords given.
+
+        Only a uniform standard die can take ``size`` (``edge``), ``mass`` and ``load_*``.
+        """
+        base = _base_die(base, self.die)
+        size = _size(self.die, self.size, self.edge)
+        size_name = "size" if self.edge is None else "edge"
+        load_face, load_fraction, load_depth = self.load_face, self.load_fraction, self.load_depth
+        if load_face is not None:
+            check_face("load_face", load_face, base.n_faces)
+        if load_fraction is not None:
+            check_range("load_fraction", load_fraction, 0.0, 1.0, high_open=True)
+        if load_depth is not None:
+            check_range("load_depth", load_depth, 0.0, 1.0, high_open=True)
+        given = _given(**{size_name: size}, mass=self.mass, load_face=load_face,
+                       load_fraction=load_fraction, load_depth=load_depth)
+        if not given:
+            return base
+        if base.name not in STANDARD_SIZES or base != Die.standard(base.name, base.size,
+                                                                   base.mass):
+            com = ", ".join(f"{c:g}" for c in base.com)
+            raise ValueError(
+                f"{', '.join(given)} cannot be applied to the scene's die: it is not a uniform "
+                f"die of a standard shape ({base!r}, com ({com}) m), so it cannot be rebuilt from "
+                "keywords without losing its shape or mass distribution. Build the die you want "
+                "in the scene (e.g. Die.standard(name, size, mass).load(face, fraction, depth)) "
+                f"and leave out {', '.join(given)}")
+        dims = {"size": base.size if size is None else size,
+                "mass": base.mass if self.mass is None else self.mass}
+        check_positive(size_name, dims["size"])
+        check_positive("mass", dims["mass"])
+        problem = (f"{size_name}={dims['size']:g} m, mass={dims['mass']:g} kg and load_fraction="
+                   f"{load_fraction} give no valid die (a {base.name})")
+        try:
+            die = Die.standard(base.name, **dims)
+            if load_fraction:
+                die = die.load(**_given(face=load_face if load_face is not None else die.n_faces,
+                                        fraction=load_fraction, depth=load_depth))
+        except ValueError as error:  # the inertia of an extreme size underflows
+            raise ValueError(f"{problem}: {error}") from error
+        with np.errstate(all="ignore"):
+            moments = np.linalg.eigvalsh(die.inertia_body)
+            usable = np.isfinite(moments).all() and np.isfinite(1.0 / moments).all()
+        if not (usable and moments[0] > 0):
+            raise ValueError(f"{problem}: its moments of inertia {moments} under- or overflow")
+        return die
+
+    def _ground(self, base: Ground) -> Ground:
+        """``base`` with the table keywords given."""
+        changes = _given(stiffness=self.stiffness, damping=self.damping, friction=self.friction)
+        if self.contact_law is not None:
+            changes["contact_law"] = as_enum("contact_law", ContactLaw, self.contact_law)
+        if self.tilt_deg is not None:
+            check_range("tilt_deg", self.tilt_deg, 0.0, 90.0, high_open=True)
+            changes["normal"] = Ground.tilted(self.tilt_deg).normal
+        return replace(base, **changes) if changes else base
+
+    def _rest(self, base: Rest) -> Rest:
+        """``base`` with ``rest_speed`` and ``rest_hold`` if given."""
+        if self.rest_speed is not None:
+            check_positive("rest_speed", self.rest_speed)
+        if self.rest_hold is not None:
+            check_nonnegative("rest_hold", self.rest_hold)
+        changes = _given(speed=self.rest_speed, hold=self.rest_hold)
+        return replace(base, **changes) if changes else base
 
 
 def check_scene(scene: Scene, release_height: float) -> None:
@@ -200,53 +294,6 @@ def _size(die: str | Die | None, size: float | None, edge: float | None) -> floa
     return edge
 
 
-def _die(
-    base: Die, size: float | None, mass: float | None, load_face: int | None,
-    load_fraction: float | None, load_depth: float | None, size_name: str = "size",
-) -> Die:
-    """``base`` with the die keywords given; only a uniform standard ``base`` can take them.
-
-    ``size_name``: the keyword that gave ``size`` ("size", or "edge" for a d6), for messages.
-    """
-    if load_face is not None:
-        check_face("load_face", load_face, base.n_faces)
-    if load_fraction is not None:
-        check_range("load_fraction", load_fraction, 0.0, 1.0, high_open=True)
-    if load_depth is not None:
-        check_range("load_depth", load_depth, 0.0, 1.0, high_open=True)
-    given = _given(**{size_name: size}, mass=mass, load_face=load_face, load_fraction=load_fraction,
-                   load_depth=load_depth)
-    if not given:
-        return base
-    if base.name not in STANDARD_SIZES or base != Die.standard(base.name, base.size, base.mass):
-        com = ", ".join(f"{c:g}" for c in base.com)
-        raise ValueError(
-            f"{', '.join(given)} cannot be applied to the scene's die: it is not a uniform die "
-            f"of a standard shape ({base!r}, com ({com}) m), so it cannot be rebuilt from keywords "
-            "without losing its shape or mass distribution. Build the die you want in the "
-            "scene (e.g. Die.standard(name, size, mass).load(face, fraction, depth)) and leave "
-            f"out {', '.join(given)}")
-    dims = {"size": base.size if size is None else size,
-            "mass": base.mass if mass is None else mass}
-    check_positive(size_name, dims["size"])
-    check_positive("mass", dims["mass"])
-    problem = (f"{size_name}={dims['size']:g} m, mass={dims['mass']:g} kg and load_fraction="
-               f"{load_fraction} give no valid die (a {base.name})")
-    try:
-        die = Die.standard(base.name, **dims)
-        if load_fraction:
-            die = die.load(**_given(face=load_face if load_face is not None else die.n_faces,
-                                    fraction=load_fraction, depth=load_depth))
-    except ValueError as error:  # the inertia of an extreme size underflows
-        raise ValueError(f"{problem}: {error}") from error
-    with np.errstate(all="ignore"):
-        moments = np.linalg.eigvalsh(die.inertia_body)
-        usable = np.isfinite(moments).all() and np.isfinite(1.0 / moments).all()
-    if not (usable and moments[0] > 0):
-        raise ValueError(f"{problem}: its moments of inertia {moments} under- or overflow")
-    return die
-
-
 def _walls(walls: str | tuple[Wall, ...]) -> tuple[Wall, ...]:
     """The ``walls`` keyword: a preset name or the walls themselves."""
     if isinstance(walls, str):
@@ -260,30 +307,6 @@ def _walls(walls: str | tuple[Wall, ...]) -> tuple[Wall, ...]:
         raise ValueError(f"walls must be one of {sorted(WALLS)} or a tuple of Wall, "
                          f"got {walls!r}")
     return tuple(walls)
-
-
-def _ground(
-    base: Ground, stiffness: float | None, damping: float | None, friction: float | None,
-    contact_law: str | ContactLaw | None, tilt_deg: float | None,
-) -> Ground:
-    """``base`` with the table keywords given."""
-    changes = _given(stiffness=stiffness, damping=damping, friction=friction)
-    if contact_law is not None:
-        changes["contact_law"] = as_enum("contact_law", ContactLaw, contact_law)
-    if tilt_deg is not None:
-        check_range("tilt_deg", tilt_deg, 0.0, 90.0, high_open=True)
-        changes["normal"] = Ground.tilted(tilt_deg).normal
-    return replace(base, **changes) if changes else base
-
-
-def _rest(base: Rest, speed: float | None, hold: float | None) -> Rest:
-    """``base`` with ``rest_speed`` and ``rest_hold`` if given."""
-    if speed is not None:
-        check_positive("rest_speed", speed)
-    if hold is not None:
-        check_nonnegative("rest_hold", hold)
-    changes = _given(speed=speed, hold=hold)
-    return replace(base, **changes) if changes else base
 
 
 def _given(**values: object) -> dict[str, object]:

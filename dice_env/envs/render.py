@@ -25,7 +25,7 @@ import sys
 from collections.abc import Iterator
 from dataclasses import dataclass
 from functools import lru_cache
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -230,8 +230,9 @@ def _render(scene: Scene, dice: _Dice, centre: np.ndarray, view: float,
         shade = 0.45 + 0.55 * np.maximum(0.0, planes[:, :3] @ light)
         image[near] = WALL_COLOUR * shade[face[near], None]
     nearest = np.full((height, width), np.inf)  # the nearest die drawn so far
+    shot = _Shot(camera, xs, ys, scale, light)
     for die, offset, orientation in dice:
-        _draw_die(image, depth, nearest, die, offset, orientation, camera, xs, ys, scale, light)
+        _draw_die(image, depth, nearest, die, offset, orientation, shot)
     return np.clip(image, 0, 255).astype(np.uint8)
 
 
@@ -411,13 +412,23 @@ def _box(points: np.ndarray, lines: _Lines, xs: np.ndarray,
 
 # --- the die ------------------------------------------------------------------------------
 
+class _Shot(NamedTuple):
+    """The camera's pixel lines (``xs``, ``ys``: their offsets, ``scale`` m per pixel) and light."""
+
+    camera: _Lines
+    xs: np.ndarray
+    ys: np.ndarray
+    scale: float
+    light: np.ndarray
+
+
 def _draw_die(image: np.ndarray, depth: np.ndarray, nearest: np.ndarray, die: Die,
-              offset: np.ndarray, orientation: np.ndarray, camera: _Lines, xs: np.ndarray,
-              ys: np.ndarray, scale: float, light: np.ndarray) -> None:
+              offset: np.ndarray, orientation: np.ndarray, shot: _Shot) -> None:
     """Draw the die into ``image`` in place; a nearer board stays in front, translucent.
 
     Drawn only where it is nearer than the dice in ``nearest`` (their depths, updated).
     """
+    camera, xs, ys, scale, light = shot
     rows, cols = _box(np.asarray(die.vertices) @ orientation.T + offset, camera, xs, ys)
     planes = _die_planes(die, orientation, offset)
     t, entry = _clip(planes, camera, xs[cols], ys[rows])

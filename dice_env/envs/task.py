@@ -24,7 +24,7 @@ import numpy as np
 
 from dice_env.checks import as_floats, check_nonnegative, check_positive, check_range
 from dice_env.die import Die
-from dice_env.envs.keywords import ENV_MAX_STEPS, build_scene, check_face, check_scene
+from dice_env.envs.keywords import ENV_MAX_STEPS, SceneKeywords, check_face, check_scene
 from dice_env.group import GroupResult, GroupState, group_step, simulate_group
 from dice_env.rotations import (
     orthonormality_error,
@@ -614,7 +614,7 @@ def make_task(*, num_dice: int | None = None, scene: Scene | None = None,
     """A validated :class:`ThrowTask` from flat keywords (the env's ``gym.make`` keywords).
 
     ``keywords``: the task's fields :data:`TASK_KEYWORDS` (``release_height``, ``max_speed``,
-    ..., ``target``, ``set_dice``), and :func:`~dice_env.envs.keywords.build_scene`'s keywords
+    ..., ``target``, ``set_dice``), and :class:`~dice_env.envs.keywords.SceneKeywords`' fields
     (``t_max``, ``die``, ``mass``, ``stiffness``, ...): each one given modifies ``scene``
     (default: ``Scene()`` with the env's ``t_max``,
     :data:`~dice_env.envs.keywords.DEFAULT_T_MAX`), whose other fields are kept, so changes to
@@ -627,7 +627,7 @@ def make_task(*, num_dice: int | None = None, scene: Scene | None = None,
     check_task_keywords(keywords)
     fields_given = {name: keywords.pop(name) for name in TASK_KEYWORDS if name in keywords}
     dice = check_num_dice(num_dice, keywords.pop("die", None))
-    scenes = [build_scene(scene, die=die, **keywords) for die in dice]
+    scenes = [SceneKeywords(die=die, **keywords).build(scene) for die in dice]
     return ThrowTask(scene=scenes[0], dice=tuple(s.die for s in scenes), **fields_given)
 
 
@@ -653,7 +653,7 @@ def check_num_dice(num_dice: object, die: object) -> tuple[Any, ...]:
 def task_keywords() -> set[str]:
     """The keywords :func:`make_task` takes: the task's, ``num_dice``, and the scene's."""
     return {*TASK_KEYWORDS, *inspect.signature(make_task).parameters,
-            *inspect.signature(build_scene).parameters} - {"keywords"}
+            *(f.name for f in fields(SceneKeywords))} - {"keywords"}
 
 
 def check_task_keywords(keywords: dict[str, object]) -> dict[str, object]:
