@@ -14,7 +14,7 @@ from typing import Protocol
 import numpy as np
 
 from dice_env.envs.task import ACTION_DIM, ORIENTATION_DIM, SET_ANGLE, ThrowTask
-from dice_env.rotations import matrix_to_rotation_vector
+from dice_env.model.rotations import matrix_to_rotation_vector
 from dice_env.studies import craps
 
 ROTATION_DIM = ORIENTATION_DIM  # the hand's orientation, a row-major 3x3 matrix, after the one-hot

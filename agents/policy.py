@@ -19,7 +19,7 @@ import torch
 from stable_baselines3.common.torch_layers import BaseFeaturesExtractor
 
 from agents.baselines import ROTATION_DIM, n_faces
-from dice_env.die import STANDARD_SIZES, Die
+from dice_env.model.die import STANDARD_SIZES, Die
 
 
 class TargetNormal(BaseFeaturesExtractor):

@@ -1,6 +1,6 @@
 """No silent waits: progress bars that can be turned off.
 
-A kernel about to compile says so itself (:mod:`dice_env.compile_notice`).
+A kernel about to compile says so itself (:mod:`dice_env.simulation.compile_notice`).
 """
 
 from __future__ import annotations

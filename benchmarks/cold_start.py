@@ -9,8 +9,8 @@ points below, timing each first call; the cold run gets an empty ``NUMBA_CACHE_D
 kernel a call needs compiles then), the warm run the cache the cold run left. The parallel
 loops' first calls (2 threads, :data:`THREADED`) and a new user's first throw, import included
 (:data:`FIRST_THROWS`), are timed each in a process and an empty cache of its own. ``--suite``
-then times, in a second empty cache, ``python -m dice_env.precompile`` and the README's test
-command after it (``pytest -n auto``). Prints a table and writes
+then times, in a second empty cache, ``python -m dice_env.simulation.precompile`` and the README's
+test command after it (``pytest -n auto``). Prints a table and writes
 ``benchmarks/results/cold_start.json`` (``--out`` to change).
 """
 
@@ -39,15 +39,15 @@ ENTRY_POINTS = (
      "rng.normal(0, 0.5, (64, 3)), rng.normal(0, 30, (64, 3)))"),
     ("simulate to rest (64 throws)", "simulate(scene, hand)"),
     ("simulate to a decided face", "simulate(scene, hand, stop_when_decided=True)"),
-    ("the paper scene (vector kernel)", "from dice_env.paper import paper_scene; "
+    ("the paper scene (vector kernel)", "from dice_env.simulation.paper import paper_scene; "
      "ps = paper_scene(t_max=1.0); simulate(ps, State.release(ps, np.tile([0.0, 0.0, 3.0], "
      "(64, 1)), rng.normal(0, 1, (64, 3)), rng.normal(0, 3, (64, 3))))"),
     ("gym.make + env.step", "import gymnasium as gym; env = gym.make('DiceThrow-v0'); "
      "env.reset(seed=0); env.step(env.action_space.sample())"),
     ("make_vec + step (8 envs)", "venv = gym.make_vec('DiceThrow-v0', num_envs=8, "
      "vectorization_mode=None); venv.reset(seed=0); venv.step(venv.action_space.sample())"),
-    ("simulate_group (two d6 in the tray)", "from dice_env.group import GroupState, "
-     "simulate_group; from dice_env.surroundings import tray; ts = Scene(walls=tray(), "
+    ("simulate_group (two d6 in the tray)", "from dice_env.simulation.group import GroupState, "
+     "simulate_group; from dice_env.model.surroundings import tray; ts = Scene(walls=tray(), "
      "t_max=2.0); simulate_group(ts, (dice_env.Die(),) * 2, GroupState.of([State.release("
      "ts, np.tile([0.0, y, 0.1], (4, 1)), rng.normal(0, 0.5, (4, 3)), rng.normal(0, 30, "
      "(4, 3))) for y in (-0.015, 0.015)]), stop_when_decided=True)"),
@@ -59,11 +59,12 @@ THREADED = (
     ("simulate on 2 threads (1024 throws)", "simulate(scene, State.release(scene, np.tile("
      "[0.0, 0.0, 0.1], (1024, 1)), rng.normal(0, 0.5, (1024, 3)), rng.normal(0, 30, "
      "(1024, 3))), stop_when_decided=True, num_threads=2)"),
-    ("the paper scene on 2 threads", "from dice_env.paper import paper_scene; "
+    ("the paper scene on 2 threads", "from dice_env.simulation.paper import paper_scene; "
      "ps = paper_scene(t_max=0.2); simulate(ps, State.release(ps, np.tile([0.0, 0.0, 3.0], "
      "(1024, 1)), rng.normal(0, 1, (1024, 3)), rng.normal(0, 3, (1024, 3))), num_threads=2)"),
-    ("simulate_group on 2 threads (512 throws)", "from dice_env.group import GroupState, "
-     "simulate_group; from dice_env.surroundings import tray; ts = Scene(walls=tray(), "
+    ("simulate_group on 2 threads (512 throws)",
+     "from dice_env.simulation.group import GroupState, simulate_group; "
+     "from dice_env.model.surroundings import tray; ts = Scene(walls=tray(), "
      "t_max=0.05); simulate_group(ts, (dice_env.Die(),) * 2, GroupState.of([State.release("
      "ts, np.tile([0.0, y, 0.1], (512, 1)), rng.normal(0, 0.5, (512, 3)), rng.normal(0, 30, "
      "(512, 3))) for y in (-0.015, 0.015)]), num_threads=2)"),
@@ -89,7 +90,8 @@ print(json.dumps(times))
 def run(cache: Path, entry_points: tuple = ENTRY_POINTS) -> tuple[list[float], list[str]]:
     """Seconds of each entry point's first call in a fresh process with ``cache``.
 
-    Also the compile notices the process wrote on stderr (:mod:`dice_env.compile_notice`).
+    Also the compile notices the process wrote on stderr
+    (:mod:`dice_env.simulation.compile_notice`).
     """
     env = {**os.environ, "NUMBA_CACHE_DIR": str(cache), "DICE_ENV_QUIET_COMPILE": ""}
     done = subprocess.run([sys.executable, "-c", PROBE, json.dumps(entry_points)], cwd=ROOT,
@@ -114,10 +116,10 @@ def alone(entry_points: tuple, setup: tuple = ()) -> tuple[dict[str, list], list
 
 
 def suite(cache: Path) -> dict[str, object]:
-    """Seconds of ``python -m dice_env.precompile`` and then the tests, with ``cache`` empty."""
+    """Seconds of the precompile and then the tests, with ``cache`` empty."""
     env = {**os.environ, "NUMBA_CACHE_DIR": str(cache)}
     seconds = {}
-    for name, command in (("precompile", ["-m", "dice_env.precompile"]),
+    for name, command in (("precompile", ["-m", "dice_env.simulation.precompile"]),
                           ("tests", ["-m", "pytest", "-n", "auto", "-p", "no:cacheprovider"])):
         start = time.perf_counter()
         done = subprocess.run([sys.executable, *command], cwd=ROOT, env=env,

@@ -23,8 +23,8 @@ walls), every geom with the table's friction (MuJoCo takes the larger of a pair'
 its default contact and 2 ms step, once with a contact that bounces like the table's (the
 ``solref`` time constant and damping ratio of our landing's spring, at a quarter of that time
 constant as its step, as ``benchmarks/step_limit.py`` found it needs). Each throw runs until
-the group rule of ``dice_env.group_kernel`` holds on MuJoCo's energies (no energy left in the
-throw can change any die's face: the total less the other dice's resting energy below each
+the group rule of ``dice_env.physics.group_kernel`` holds on MuJoCo's energies (no energy left in
+the throw can change any die's face: the total less the other dice's resting energy below each
 die's lock), checked every millisecond of simulated time, or 10 s; timed as the CPU time of
 its ``mj_step`` calls.
 """
@@ -41,13 +41,13 @@ import numpy as np
 from harness import benchmark_parser, timed, write_json
 
 from dice_env import Scene, simulate
-from dice_env.die import Die
-from dice_env.group import DieContact, GroupState, group_step, simulate_group
-from dice_env.simulate import UP, lock_energy
+from dice_env.model.die import Die
+from dice_env.model.table import RESTITUTION, damping_ratio
+from dice_env.simulation.group import DieContact, GroupState, group_step, simulate_group
+from dice_env.simulation.simulate import UP, lock_energy
 from dice_env.studies.common import code_version
 from dice_env.studies.markdown import markdown_table
 from dice_env.studies.pairs import hand_throws, tray_scene
-from dice_env.table import RESTITUTION, damping_ratio
 
 
 def ours_in_tray(n_dice: int, throws: int, repeats: int, seed: int, contact: DieContact) -> tuple:

@@ -19,8 +19,8 @@ Prints a table and writes ``benchmarks/results/physics.json`` (``--out`` to chan
 - MuJoCo (optional ``bench`` extra): a free box of the same size, mass and inertia, friction
   ``mu``, thrown from the same states onto a plane at its default 2 ms step, run until the same
   rest rule holds, and until the same decided-face rule holds (its kinetic and potential energy
-  below :func:`dice_env.simulate.lock_energy`), each timed as one ``mj_step(nstep=...)`` call
-  per throw, with ratios (our decided throws against its decided throws);
+  below :func:`dice_env.simulation.simulate.lock_energy`), each timed as one ``mj_step(nstep=...)``
+  call per throw, with ratios (our decided throws against its decided throws);
 - cost against batch size and against simulated time;
 - per shape: throws/s to a decided face on 2 threads for each standard die
   (``Die.standard``) on the default table, from the same kind of hand throws, with what the
@@ -49,12 +49,13 @@ import numba
 import numpy as np
 from harness import benchmark_parser, parse_with_mujoco, timed, write_json
 
-from dice_env import Scene, State, simulate, vector_kernel
-from dice_env.calibration import table_scene
-from dice_env.die import STANDARD_SIZES, Die
-from dice_env.paper import paper_scene
-from dice_env.rotations import quaternion_to_matrix, random_rotations
-from dice_env.simulate import lock_energy
+from dice_env import Scene, State, simulate
+from dice_env.model.die import STANDARD_SIZES, Die
+from dice_env.model.rotations import quaternion_to_matrix, random_rotations
+from dice_env.physics import vector_kernel
+from dice_env.simulation.calibration import table_scene
+from dice_env.simulation.paper import paper_scene
+from dice_env.simulation.simulate import lock_energy
 from dice_env.studies.common import code_version
 from dice_env.studies.fairness import random_directions
 
@@ -92,7 +93,7 @@ def subset(state: State, rows: slice) -> State:
 def kernel_speed(quick: bool) -> dict:
     """Die-steps/s in the paper scene, and the numpy listing on the same throw.
 
-    A batch runs in the vectorised kernel (:mod:`dice_env.vector_kernel`); the same batch in
+    A batch runs in the vectorised kernel (:mod:`dice_env.physics.vector_kernel`); the same batch in
     the scalar kernel is measured beside it.
     """
     out = {}
@@ -124,7 +125,9 @@ _START_SCRIPT = """
 import time
 t0 = time.perf_counter()
 import numpy as np
-from dice_env import Scene, State, simulate, vector_kernel
+from dice_env import Scene, State
+from dice_env import simulate
+from dice_env.physics import vector_kernel
 t1 = time.perf_counter()
 scene = Scene()
 simulate(scene, State.release(scene, [0, 0, 0.1], [0.5, 0, 0], [10.0, 5, 0]), num_threads=1)
@@ -433,7 +436,7 @@ def per_shape(quick: bool) -> dict:
 
 
 def scenes() -> dict[str, Scene]:
-    """The default scene, and the realistic table of ``dice_env.calibration`` if it differs."""
+    """The default scene, and the realistic table of the calibration if it differs."""
     out = {"Scene()": Scene()}
     if table_scene() != out["Scene()"]:
         out["table_scene()"] = table_scene()

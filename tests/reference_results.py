@@ -14,11 +14,11 @@ import numba
 import numpy as np
 
 from dice_env import Die, Scene, simulate
-from dice_env.group import simulate_group
-from dice_env.paper import paper_scene
+from dice_env.model.surroundings import tray
+from dice_env.simulation.group import simulate_group
+from dice_env.simulation.paper import paper_scene
 from dice_env.studies.fairness import vigorous_throws
 from dice_env.studies.pairs import hand_throws
-from dice_env.surroundings import tray
 
 PATH = Path(__file__).with_name("data") / "reference_results.npz"
 THROWS = 16

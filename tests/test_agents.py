@@ -9,7 +9,7 @@ from agents.oracle import CEM, score, score_noise, search
 from agents.replay import pick_throws
 from dice_env.envs import make_task
 from dice_env.intervals import wilson_bounds as wilson
-from dice_env.rotations import random_rotations
+from dice_env.model.rotations import random_rotations
 
 
 def test_help_shows_field_docs(capsys):

@@ -9,9 +9,10 @@ from pathlib import Path
 
 import pytest
 
-from dice_env import group_kernel, kernel, precompile, vector_kernel
-from dice_env.compile_notice import QUIET, _cached
-from dice_env.simulate import COMPILES
+from dice_env.physics import group_kernel, kernel, vector_kernel
+from dice_env.simulation import precompile
+from dice_env.simulation.compile_notice import QUIET, _cached
+from dice_env.simulation.simulate import COMPILES
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -25,7 +26,7 @@ KERNEL = textwrap.dedent("""
 CALL = textwrap.dedent("""
     import sys
     sys.path.insert(0, sys.argv[1])
-    from dice_env.compile_notice import announce
+    from dice_env.simulation.compile_notice import announce
     from tiny_kernel import double
     for _ in range(2):  # said once per process
         announce((double,), "the tiny kernel", 120.0)

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from dice_env import Scene, State
-from dice_env.scene import FrictionLaw, Scheme
+from dice_env.model.scene import FrictionLaw, Scheme
 from dice_env.studies import convergence as cv
 
 

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from dice_env import ContactLaw, Die, FrictionLaw, Ground, Scene, Scheme, State, simulate
-from dice_env.rotations import axis_angle, matrix_to_rotation_vector, random_rotations
+from dice_env.model.rotations import axis_angle, matrix_to_rotation_vector, random_rotations
 
 
 def random_throws(scene: Scene, n: int, seed: int = 0, height: float = 0.1) -> State:

@@ -2,8 +2,8 @@
 
 Without a GPU, numba's CUDA simulator runs the CUDA kernel in a child process
 (``NUMBA_ENABLE_CUDASIM`` must be set before ``numba.cuda`` is first imported, and
-``NUMBA_DISABLE_JIT`` makes the shared pieces of ``dice_env.kernel`` plain Python there too):
-the kernel's indexing, its per-thread scratch and the copies to and from the device, on the
+``NUMBA_DISABLE_JIT`` makes the shared pieces of ``dice_env.physics.kernel`` plain Python there
+too): the kernel's indexing, its per-thread scratch and the copies to and from the device, on the
 physics' own source. Python floats are IEEE doubles, stepped in the same operations and order
 as the compiled CPU kernel (which fuses no multiply-add) with the same ``libm``, so the two
 agree bit for bit (:data:`SIM_TOLERANCE`), and the outcomes must be equal. On a real GPU
@@ -24,9 +24,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from dice_env import Die, Scene, State, paper, simulate
-from dice_env.rotations import random_rotations
-from dice_env.surroundings import tray
+from dice_env import Die, Scene, State, simulate
+from dice_env.model.rotations import random_rotations
+from dice_env.model.surroundings import tray
+from dice_env.simulation import paper
 
 pytestmark = pytest.mark.skipif(importlib.util.find_spec("numba_cuda") is None,
                                 reason="numba-cuda is not installed (pip install 'dice_env[cuda]')")
@@ -107,8 +108,8 @@ def test_device_is_checked():
 
 
 def test_refusals_before_the_gpu():
-    from dice_env import cuda_kernel
-    from dice_env.simulate import _records, pack_run, pack_scene
+    from dice_env.physics import cuda_kernel
+    from dice_env.simulation.simulate import _records, pack_run, pack_scene
 
     scene = Scene(walls=tray())
     body, contact = pack_scene(scene)
@@ -145,8 +146,8 @@ def test_compiles_for_a_gpu():
     from numba import cuda
     from numba.cuda.cudadrv import nvvm
 
-    from dice_env import cuda_kernel, kernel
-    from dice_env.simulate import _records, pack_run, pack_scene
+    from dice_env.physics import cuda_kernel, kernel
+    from dice_env.simulation.simulate import _records, pack_run, pack_scene
 
     if not nvvm.is_available():
         pytest.skip("no NVVM (the CUDA toolkit: pip install 'dice_env[cuda]')")

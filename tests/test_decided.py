@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 from dice_env import Die, FrictionLaw, Ground, Scene, Scheme, State, simulate
-from dice_env.rotations import random_rotations
-from dice_env.simulate import LOCK_MARGIN, lock_energy
+from dice_env.model.rotations import random_rotations
+from dice_env.simulation.simulate import LOCK_MARGIN, lock_energy
 
 
 def throws(scene: Scene, n: int, seed: int, height=(0.05, 0.15), speed=(0.5, 1.0),

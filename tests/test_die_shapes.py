@@ -6,14 +6,14 @@ import numpy as np
 import pytest
 
 import dice_env
-from dice_env import die as die_module
-from dice_env import polyhedra
-from dice_env.die import STANDARD_SIZES, Die
-from dice_env.rotations import axis_angle, random_rotations
+from dice_env.model import die as die_module
+from dice_env.model import polyhedra
+from dice_env.model.die import STANDARD_SIZES, Die
+from dice_env.model.rotations import axis_angle, random_rotations
 
 PHI = (1 + math.sqrt(5)) / 2
-# The d6 as stated in dice_env/die.py: corner signs in the order of the paper's cube.m, outward
-# normals of faces 1-6 (opposite faces sum to 7, 1-2-3 counter-clockwise).
+# The d6 as stated in dice_env/model/die.py: corner signs in the order of the paper's cube.m,
+# outward normals of faces 1-6 (opposite faces sum to 7, 1-2-3 counter-clockwise).
 CUBE_CORNERS = np.array([[1, 1, 1], [1, -1, 1], [-1, -1, 1], [-1, 1, 1],
                          [1, 1, -1], [1, -1, -1], [-1, -1, -1], [-1, 1, -1]], dtype=np.float64)
 CUBE_NORMALS = np.array([[0, 0, 1], [1, 0, 0], [0, 1, 0], [0, -1, 0], [-1, 0, 0], [0, 0, -1]],

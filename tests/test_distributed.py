@@ -11,8 +11,8 @@ from dataclasses import dataclass
 import numpy as np
 import pytest
 
-from dice_env.die import Die
-from dice_env.scene import Scene
+from dice_env.model.die import Die
+from dice_env.model.scene import Scene
 from dice_env.studies import distributed as dist
 from dice_env.studies import run as run_study
 from dice_env.studies import shapes as sh

@@ -14,8 +14,8 @@ from agents.policy import TargetNormal
 from dice_env import Die, Scene
 from dice_env.envs import DiceThrowVectorEnv
 from dice_env.envs.task import face_up_rotation, make_task
-from dice_env.rotations import uniform_rotations
-from dice_env.surroundings import tray
+from dice_env.model.rotations import uniform_rotations
+from dice_env.model.surroundings import tray
 
 NAMES = ("d4", "d6", "d8", "d10", "d12", "d20")
 

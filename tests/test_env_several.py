@@ -13,7 +13,7 @@ from dice_env.envs.task import (
     ThrowTask,
     make_task,
 )
-from dice_env.group import GroupResult
+from dice_env.simulation.group import GroupResult
 
 FAST = {"until": "decided", "t_max": 1.5}  # group throws: ended when decided, short
 

@@ -3,7 +3,7 @@
 import numpy as np
 
 from dice_env import Die, Ground, Scene, State, simulate
-from dice_env.rotations import random_rotations
+from dice_env.model.rotations import random_rotations
 
 CASES = 300  # cases per test (each a short run: about 10 s in all)
 GROUND = {

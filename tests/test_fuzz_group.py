@@ -1,8 +1,8 @@
 """Several dice fuzzed: a result or a named refusal, nothing else (as tests/test_fuzz.py).
 
 Random dice sets, walls, states, die-die materials and flags go through
-:func:`dice_env.group.simulate_group`, and random keywords, reset options and actions through
-the several-dice env. Each case ends in a result whose promises hold (finite unless flagged
+:func:`dice_env.simulation.group.simulate_group`, and random keywords, reset options and actions
+through the several-dice env. Each case ends in a result whose promises hold (finite unless flagged
 unstable, faces read or 0 where not read, ``sunk`` exactly as the limit says, no pair left
 overlapping unflagged) or in a ``ValueError``/``TypeError`` naming what was wrong; never in
 another error, a hang or a non-finite output. Every run is capped at :data:`STEPS` steps, so
@@ -20,11 +20,18 @@ import pytest
 import dice_env  # noqa: F401  (registers DiceThrow-v0)
 from dice_env import Die, Ground, Scene, State, Wall
 from dice_env.envs.task import face_up_rotation
-from dice_env.group import MAX_DICE, DieContact, GroupResult, GroupState, group_step, overlaps
-from dice_env.group import simulate_group as run_group
-from dice_env.rotations import random_rotations
-from dice_env.scene import MAX_STEPS, Rest
-from dice_env.surroundings import craps, tray
+from dice_env.model.rotations import random_rotations
+from dice_env.model.scene import MAX_STEPS, Rest
+from dice_env.model.surroundings import craps, tray
+from dice_env.simulation.group import (
+    MAX_DICE,
+    DieContact,
+    GroupResult,
+    GroupState,
+    group_step,
+    overlaps,
+)
+from dice_env.simulation.group import simulate_group as run_group
 
 CASES = 300  # cases per test, each capped at STEPS steps (about 15 s in all, warm)
 ENV_CASES = 150

@@ -4,10 +4,10 @@ import numpy as np
 import pytest
 
 from dice_env import Die, Scene, State, simulate
-from dice_env.group import DieContact, GroupState, group_step, simulate_group
-from dice_env.rotations import axis_angle, random_rotations
-from dice_env.scene import FrictionLaw, Ground
-from dice_env.surroundings import craps, tray
+from dice_env.model.rotations import axis_angle, random_rotations
+from dice_env.model.scene import FrictionLaw, Ground
+from dice_env.model.surroundings import craps, tray
+from dice_env.simulation.group import DieContact, GroupState, group_step, simulate_group
 
 DIE = Die()
 EDGE = DIE.size

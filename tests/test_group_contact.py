@@ -6,10 +6,10 @@ import numpy as np
 import pytest
 
 from dice_env import Die, Scene, State
-from dice_env.group import GroupState, overlaps, simulate_group
-from dice_env.rotations import axis_angle, random_rotations, up_rotation
+from dice_env.model.rotations import axis_angle, random_rotations, up_rotation
+from dice_env.model.surroundings import tray
+from dice_env.simulation.group import GroupState, overlaps, simulate_group
 from dice_env.studies import pairs
-from dice_env.surroundings import tray
 
 SCENE = Scene(t_max=2.0)
 YAWS = np.radians([0.0, 1.0, 10.0, 30.0, 45.0, 60.0, 89.0])

@@ -53,8 +53,8 @@ def test_no_import_cycle():
 
 def test_the_table_is_the_bottom_layer():
     modules = _modules()
-    assert _imports(modules["dice_env.table"], "dice_env.table", modules) == {
-        "dice_env.checks"}
+    assert _imports(modules["dice_env.model.table"], "dice_env.model.table", modules) == {
+        "dice_env.model.checks"}
 
 
 def test_the_core_imports_no_study_agent_or_benchmark():
@@ -66,3 +66,34 @@ def test_the_core_imports_no_study_agent_or_benchmark():
         above = {m for m in _imports(path, module, modules)
                  if m.startswith(("dice_env.studies", "agents", "benchmarks"))}
         assert not above, f"{module} imports {above}"
+
+
+# The layers, bottom up: a module imports from its own layer and from those listed for it only
+# (the package itself, ``dice_env``, stands for the names it exports: the model, the
+# simulation and the envs).
+LAYERS = {
+    "dice_env.model": set(),
+    "dice_env.physics": set(),
+    "dice_env.intervals": set(),
+    "dice_env.simulation": {"dice_env.model", "dice_env.physics"},
+    "dice_env.envs": {"dice_env.model", "dice_env.simulation"},
+    "dice_env.viewer": {"dice_env", "dice_env.model", "dice_env.simulation", "dice_env.envs"},
+    "dice_env.studies": {"dice_env", "dice_env.model", "dice_env.physics", "dice_env.simulation",
+                         "dice_env.envs", "dice_env.intervals"},
+}
+
+
+def _layer(module: str) -> str:
+    return next((layer for layer in LAYERS if module == layer or module.startswith(layer + ".")),
+                module)
+
+
+def test_each_layer_imports_only_the_layers_below_it():
+    modules = _modules()
+    for module, path in modules.items():
+        if _layer(module) not in LAYERS:
+            continue
+        allowed = LAYERS[_layer(module)] | {_layer(module)}
+        wrong = {m for m in _imports(path, module, modules)
+                 if m.startswith("dice_env") and _layer(m) not in allowed}
+        assert not wrong, f"{module} imports {wrong}"

@@ -3,7 +3,9 @@
 import numpy as np
 import pytest
 
-from dice_env import Die, Ground, Scene, State, materials, table
+from dice_env import Die, Ground, Scene, State
+from dice_env.model import materials, table
+from dice_env.simulation.calibration import measured_restitution
 from dice_env.studies import materials as study
 from dice_env.studies import run as run_study
 from dice_env.studies.__main__ import main as studies_main
@@ -23,7 +25,8 @@ def test_each_preset_builds_and_gives_its_restitution(name):
     material = materials.MATERIALS[name]
     ground = materials.ground(name)
     assert (ground.stiffness, ground.friction) == (material.stiffness, material.friction)
-    assert materials.measured(name) == pytest.approx(material.restitution, abs=RESTITUTION_TOL)
+    assert measured_restitution(materials.scene(name)) == pytest.approx(material.restitution,
+                                                                        abs=RESTITUTION_TOL)
 
 
 def test_damping_follows_the_die_mass():

@@ -5,7 +5,8 @@ import pytest
 from listing_transcription import ground_cube as listing_ground
 from listing_transcription import real_throw_cube as listing_throw
 
-from dice_env import ContactLaw, paper
+from dice_env import ContactLaw
+from dice_env.simulation import paper
 
 TILTED = (0.2, -0.1, 1.0)
 

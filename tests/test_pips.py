@@ -7,8 +7,8 @@ import pytest
 from scipy.stats import qmc
 
 from dice_env import studies
-from dice_env.die import Die
-from dice_env.pips import DRILLINGS, Pips, cap_properties, drill, layout
+from dice_env.model.die import Die
+from dice_env.model.pips import DRILLINGS, Pips, cap_properties, drill, layout
 
 DRILLED = Pips(radius=1.5e-3, depth=1.0e-3)
 SHALLOW = Pips(radius=2.0e-3, depth=0.4e-3, offset=0.6)

@@ -12,10 +12,11 @@ import numpy as np
 import pytest
 from subprocess_signals import interruptible
 
-from dice_env import ContactLaw, Die, FrictionLaw, Ground, Scene, Scheme, State, paper
+from dice_env import ContactLaw, Die, FrictionLaw, Ground, Scene, Scheme, State
 from dice_env import simulate as run
-from dice_env.rotations import random_rotations
-from dice_env.scene import MAX_STEPS
+from dice_env.model.rotations import random_rotations
+from dice_env.model.scene import MAX_STEPS
+from dice_env.simulation import paper
 
 SCENE = Scene()
 ONE = np.zeros((1, 3))
@@ -173,8 +174,9 @@ def test_paper_listings_take_one_vector_only():
 def _script(body: str) -> list[str]:
     prelude = textwrap.dedent("""
         import numpy as np, sys
-        from dice_env import Scene, State, simulate
-        from dice_env.rotations import random_rotations
+        from dice_env import Scene, State
+        from dice_env import simulate
+        from dice_env.model.rotations import random_rotations
         scene = Scene()
         def throws(n, seed):
             rng = np.random.default_rng(seed)

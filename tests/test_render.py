@@ -6,10 +6,10 @@ import numpy as np
 import pytest
 from scipy import ndimage
 
-from dice_env.die import STANDARD_SIZES, Die
 from dice_env.envs.render import FIGURES, WALL_ALPHA, has_pips, main, render_die, resting
-from dice_env.scene import Scene
-from dice_env.surroundings import walls
+from dice_env.model.die import STANDARD_SIZES, Die
+from dice_env.model.scene import Scene
+from dice_env.model.surroundings import walls
 
 CUBOID = Die.cuboid((0.012, 0.016, 0.02))
 DICE = [Die.standard(name) for name in STANDARD_SIZES] + [CUBOID]

@@ -5,9 +5,10 @@ import pytest
 from listing_transcription import ground_cube as listing_ground
 from listing_transcription import real_throw_cube as listing_throw
 
-from dice_env import Die, Scene, State, paper, simulate
-from dice_env.rotations import random_rotations
-from dice_env.scene import Scheme
+from dice_env import Die, Scene, State, simulate
+from dice_env.model.rotations import random_rotations
+from dice_env.model.scene import Scheme
+from dice_env.simulation import paper
 
 
 def throws(scene: Scene, n: int, seed: int = 0) -> State:

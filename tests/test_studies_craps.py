@@ -4,9 +4,9 @@ import numpy as np
 import pytest
 
 from dice_env import Die, State
-from dice_env.group import GroupState, simulate_group
-from dice_env.rotations import axis_angle
-from dice_env.simulate import UP
+from dice_env.model.rotations import axis_angle
+from dice_env.simulation.group import GroupState, simulate_group
+from dice_env.simulation.simulate import UP
 from dice_env.studies import craps as cr
 
 

@@ -7,12 +7,12 @@ import numpy as np
 import pytest
 
 from dice_env import Die, Scene
-from dice_env.group import DieContact, simulate_group
+from dice_env.model.surroundings import tray
+from dice_env.simulation.group import DieContact, simulate_group
 from dice_env.studies import collisions as co
 from dice_env.studies import craps as cr
 from dice_env.studies import pairs as pr
 from dice_env.studies import run as run_study
-from dice_env.surroundings import tray
 
 
 def pairs_of(table):

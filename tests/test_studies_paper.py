@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from dice_env.paper import ground_cube
+from dice_env.simulation.paper import ground_cube
 from dice_env.studies import paper_figures as pf
 
 

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from dice_env.scene import ContactLaw
+from dice_env.model.scene import ContactLaw
 from dice_env.studies import stability as st
 
 

@@ -5,8 +5,10 @@ import math
 import numpy as np
 import pytest
 
-from dice_env import Die, Ground, Scene, State, calibration, simulate, table
-from dice_env.rotations import orthonormality_error, random_rotations, up_rotation
+from dice_env import Die, Ground, Scene, State, simulate
+from dice_env.model import table
+from dice_env.model.rotations import orthonormality_error, random_rotations, up_rotation
+from dice_env.simulation import calibration
 
 
 def test_classical_relation_and_its_inverse():

@@ -4,7 +4,9 @@ import numpy as np
 import pytest
 from listing_transcription import real_throw_cube as listing_throw
 
-from dice_env import Die, Rest, Scene, State, paper, simulate, vector_kernel
+from dice_env import Die, Rest, Scene, State, simulate
+from dice_env.physics import vector_kernel
+from dice_env.simulation import paper
 
 FIELDS = ("face", "settled", "decided", "rest_time", "impacts", "unstable", "energy_rise",
           "max_penetration", "steps")

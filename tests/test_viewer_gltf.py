@@ -12,9 +12,9 @@ import pygltflib as gl
 import pytest
 
 from dice_env import Die, Scene, State
-from dice_env.group import GroupState
-from dice_env.rotations import matrix_to_quaternion, quaternion_to_matrix
-from dice_env.surroundings import walls
+from dice_env.model.rotations import matrix_to_quaternion, quaternion_to_matrix
+from dice_env.model.surroundings import walls
+from dice_env.simulation.group import GroupState
 from dice_env.viewer import Recording, load, record
 from dice_env.viewer.gltf import ANIMATION, Z_UP, read_glb, write_glb
 from dice_env.viewer.textures import face_atlas, png_bytes

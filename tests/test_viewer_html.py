@@ -20,8 +20,8 @@ import numpy as np
 import pytest
 
 from dice_env import Die, Scene, State
-from dice_env.group import GroupState
-from dice_env.surroundings import walls
+from dice_env.model.surroundings import walls
+from dice_env.simulation.group import GroupState
 from dice_env.viewer import Recording, browser, load, record
 from dice_env.viewer.html import read_html, write_html
 from dice_env.viewer.recording import as_data

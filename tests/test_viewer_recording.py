@@ -4,12 +4,12 @@ import numpy as np
 import pytest
 
 from dice_env import Die, Scene, State, simulate
-from dice_env.codec import from_data, to_data
 from dice_env.envs.task import make_task
-from dice_env.group import DieContact, GroupState
-from dice_env.rotations import matrix_to_quaternion, quaternion_to_matrix, random_rotations
-from dice_env.scene import FrictionLaw, Ground
-from dice_env.surroundings import walls
+from dice_env.model.rotations import matrix_to_quaternion, quaternion_to_matrix, random_rotations
+from dice_env.model.scene import FrictionLaw, Ground
+from dice_env.model.surroundings import walls
+from dice_env.simulation.codec import from_data, to_data
+from dice_env.simulation.group import DieContact, GroupState
 from dice_env.viewer import Recording, ReplayError, load, record, replay, save
 from dice_env.viewer.throws import random_throws
 

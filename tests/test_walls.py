@@ -4,9 +4,9 @@ import numpy as np
 import pytest
 
 from dice_env import Scene, State, simulate
-from dice_env.rotations import axis_angle, random_rotations
-from dice_env.scene import Ground, Wall
-from dice_env.surroundings import craps, tray, walls
+from dice_env.model.rotations import axis_angle, random_rotations
+from dice_env.model.scene import Ground, Wall
+from dice_env.model.surroundings import craps, tray, walls
 
 
 def test_a_die_thrown_into_the_tray_stays_in_it_and_never_sinks_into_a_wall():

@@ -9,7 +9,6 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from dice_env.checks import as_floats
 from dice_env.envs.task import (
     ACTION_DIM,
     ORIENTATION_DIM,
@@ -18,6 +17,7 @@ from dice_env.envs.task import (
     check_rotation,
     make_task,
 )
+from dice_env.model.checks import as_floats
 
 RENDER_MODES = ("human", "rgb_array", "rgb_array_list")
 RENDER_FPS = 30
@@ -183,7 +183,7 @@ class DiceThrowEnv(gym.Env):
     | ``size`` (``edge``: d6), ``mass`` | Scene() | die size (m, Die.size) and mass (kg) |
     | ``load_face``, ``load_fraction``, ``load_depth`` | n, 0, 0.8 | a loaded die (Die.load) |
     | | | (``size``, ``mass``, ``load_*`` need a uniform standard die) |
-    | ``walls`` | "none" | "tray", "craps" (dice_env.surroundings) or a tuple of Wall |
+    | ``walls`` | "none" | "tray", "craps" (dice_env.model.surroundings) or a tuple of Wall |
     | ``stiffness``, ``damping``, ``friction`` | Scene() | table contact (N/m, N s/m, mu) |
     | ``tilt_deg`` | 0 | table tilt about y from level (degrees) |
     | ``contact_law`` | Scene() | "gated" or "paper" (or a ContactLaw; "paper" needs a tiny |

@@ -1,8 +1,8 @@
 """The env's physical keywords: each validated where given, applied to a base scene.
 
 :class:`SceneKeywords` holds the ``gym.make`` keywords that build the scene;
-:meth:`SceneKeywords.build` turns them into a :class:`~dice_env.scene.Scene`. A keyword changes
-only what it names; every other field of the base scene (its die, ground, rest test,
+:meth:`SceneKeywords.build` turns them into a :class:`~dice_env.model.scene.Scene`. A keyword
+changes only what it names; every other field of the base scene (its die, ground, rest test,
 ``t_max``, ...) is kept. A keyword that cannot be applied to the base scene (``mass`` on a
 loaded die) or that would have no effect (``safety`` with a fixed ``dt``) is refused, never
 dropped.
@@ -20,21 +20,21 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from dice_env.checks import check_nonnegative, check_positive, check_range
-from dice_env.die import STANDARD_SIZES, Die
-from dice_env.scene import ContactLaw, FrictionLaw, Ground, Rest, Scene, Scheme, Wall, as_enum
-from dice_env.surroundings import WALLS
-from dice_env.surroundings import walls as preset_walls
+from dice_env.model.checks import check_nonnegative, check_positive, check_range
+from dice_env.model.die import STANDARD_SIZES, Die
+from dice_env.model.scene import ContactLaw, FrictionLaw, Ground, Rest, Scene, Scheme, Wall, as_enum
+from dice_env.model.surroundings import WALLS
+from dice_env.model.surroundings import walls as preset_walls
 
 DEFAULT_T_MAX = 5.0
 """The env's simulated time limit per throw (s), the ``t_max`` of its scene when no ``scene``
-is given. Half of :class:`~dice_env.scene.Scene`'s 10 s, a bound for any run: the env's gentle
+is given. Half of :class:`~dice_env.model.scene.Scene`'s 10 s, a bound for any run: the env's gentle
 throws settle in well under 2 s, so 5 s leaves them room and halves the compute of a die that
 never settles."""
 ENV_MAX_STEPS = 10**7
 """The most steps of one env throw (``t_max`` or ``rest_hold`` over the step): 21 times the
 default throw's 4.8e5, so that no keyword makes one ``step`` run for minutes;
-:data:`dice_env.scene.MAX_STEPS` (10**9) bounds any run of the simulator."""
+:data:`dice_env.model.scene.MAX_STEPS` (10**9) bounds any run of the simulator."""
 MAX_SINK = 0.1  # the weight's sink of a flat die's corners into the table, in die sizes
 
 
@@ -101,7 +101,7 @@ class SceneKeywords:
     friction_vmin: float | None = None
     """The regularized friction's umin (m/s); refused with any other ``friction_law``."""
     walls: str | tuple[Wall, ...] | None = None
-    """A preset of :mod:`dice_env.surroundings` ("none", "tray", "craps") or a tuple of
+    """A preset of :mod:`dice_env.model.surroundings` ("none", "tray", "craps") or a tuple of
     :class:`Wall`."""
 
     def build(self, scene: Scene | None = None) -> Scene:

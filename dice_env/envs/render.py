@@ -29,12 +29,12 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from dice_env.checks import check_finite, check_positive, check_range
-from dice_env.die import Die
 from dice_env.envs.task import ThrowTask
-from dice_env.rotations import axis_angle
-from dice_env.scene import Scene
-from dice_env.surroundings import walls
+from dice_env.model.checks import check_finite, check_positive, check_range
+from dice_env.model.die import Die
+from dice_env.model.rotations import axis_angle
+from dice_env.model.scene import Scene
+from dice_env.model.surroundings import walls
 
 # In-face axes (u, v) of the d6's pip faces, body frame, so that u x v is the outward normal.
 FACE_U = np.array([[1, 0, 0], [0, 1, 0], [0, 0, 1], [0, 0, 1], [0, 0, 1], [0, 1, 0]], float)
@@ -675,8 +675,8 @@ def _figure_pair(frames: int = 6) -> np.ndarray:
 
     ``frames`` frames from the release to the decided faces, side by side.
     """
-    from dice_env.group import GroupState, simulate_group
-    from dice_env.simulate import State
+    from dice_env.simulation.group import GroupState, simulate_group
+    from dice_env.simulation.simulate import State
 
     scene = Scene(walls=walls("tray"), t_max=3.0)
     dice = (Die(), Die())

@@ -22,18 +22,18 @@ from typing import Any
 
 import numpy as np
 
-from dice_env.checks import as_floats, check_nonnegative, check_positive, check_range
-from dice_env.die import Die
 from dice_env.envs.keywords import ENV_MAX_STEPS, SceneKeywords, check_face, check_scene
-from dice_env.group import GroupResult, GroupState, group_step, simulate_group
-from dice_env.rotations import (
+from dice_env.model.checks import as_floats, check_nonnegative, check_positive, check_range
+from dice_env.model.die import Die
+from dice_env.model.rotations import (
     orthonormality_error,
     quaternion_to_matrix,
     uniform_rotations,
     up_rotation,
 )
-from dice_env.scene import Scene
-from dice_env.simulate import Result, State, lock_energy, simulate, thread_count
+from dice_env.model.scene import Scene
+from dice_env.simulation.group import GroupResult, GroupState, group_step, simulate_group
+from dice_env.simulation.simulate import Result, State, lock_energy, simulate, thread_count
 
 ORIENTATION_DIM = 9  # the observation's orientation, row-major 3x3, after the target's one-hot
 ACTION_DIM = 6  # release velocity (3) + angular velocity (3), world frame, in [-1, 1]
@@ -61,7 +61,7 @@ class ThrowTask:
     ``dice``: the 1 … :data:`MAX_NUM_DICE` dice in the hand, mixed shapes allowed (default: the
     scene's die alone); ``scene`` gives the table, walls and physics, and its die is set to the
     first die. One die is thrown with :func:`dice_env.simulate`, several together with
-    :func:`dice_env.group.simulate_group` (die against die, the planes of ``scene``).
+    :func:`dice_env.simulation.group.simulate_group` (die against die, the planes of ``scene``).
     Per-die arrays (targets, hands, faces, releases) have a die axis only for several dice:
     one die's target is a face, its hand (3, 3).
 
@@ -728,6 +728,6 @@ def face_up_rotation(die: Die, face: int) -> np.ndarray:
     """An orientation (body to world, 3x3) in which ``die`` reads ``face`` (a label).
 
     The face's reading direction (:attr:`Die.reading`) points to world +z
-    (:func:`dice_env.rotations.up_rotation`).
+    (:func:`dice_env.model.rotations.up_rotation`).
     """
     return up_rotation(die.reading[check_face("face", face, die.n_faces) - 1])

@@ -26,7 +26,7 @@ from dataclasses import dataclass
 from types import MappingProxyType
 from typing import Any
 
-from dice_env import materials
+from dice_env.model import materials
 
 _LAYOUT = materials.ground("craps")
 # The craps layout's cloth over padding (materials.MATERIALS["craps"]) for the default die.

@@ -7,7 +7,7 @@ thrown *apart*: each die alone, its own group, at the pair's step, so that a die
 bit for bit as in the pair until the dice first touch.
 
 - **The first collision**: each die's velocity and angular velocity when the dice first touch
-  and when that contact ends (:attr:`dice_env.group.GroupResult.meet_velocity`,
+  and when that contact ends (:attr:`dice_env.simulation.group.GroupResult.meet_velocity`,
   ``meet_spin``), against the same dice thrown apart over the same steps: the change of the
   spin's and the velocity's magnitude and the angle they turn, as quantiles with
   distribution-free 95% intervals.
@@ -28,10 +28,17 @@ import numba
 import numpy as np
 from scipy import stats
 
-from dice_env.die import Die
-from dice_env.group import DieContact, GroupResult, GroupState, group_step, simulate_group
 from dice_env.intervals import wilson
-from dice_env.scene import Scene
+from dice_env.model.die import Die
+from dice_env.model.scene import Scene
+from dice_env.model.surroundings import TRAY
+from dice_env.simulation.group import (
+    DieContact,
+    GroupResult,
+    GroupState,
+    group_step,
+    simulate_group,
+)
 from dice_env.studies.common import DOCS, SEED, checked_throws, progress, save_figure
 from dice_env.studies.markdown import estimate, markdown_table
 from dice_env.studies.pairs import (
@@ -43,7 +50,6 @@ from dice_env.studies.pairs import (
     tray_scene,
     void_reasons,
 )
-from dice_env.surroundings import TRAY
 
 # Every run takes each step (no flight jumps: a group's jumps depend on all its dice), so that
 # a die thrown apart moves bit for bit as in the pair until the dice first touch.
@@ -477,7 +483,7 @@ The release orientations are uniform, so every face is equally likely by constru
 whether or not the dice meet; what a collision changes is how much a small error in the
 release moves the outcome (the table above), not the faces' shares.
 
-Caveats: the die–die material is an estimate (`dice_env/group.py`, restitution 0.5,
+Caveats: the die–die material is an estimate (`dice_env/simulation/group.py`, restitution 0.5,
 {DieContact().law} friction 0.4); a first contact may be a graze; "apart" is the same die
 without the other, so after the first contact it follows another path (its later impacts
 differ from the pair's).

@@ -13,7 +13,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 from tqdm import tqdm
 
-from dice_env.simulate import DiceArrays
+from dice_env.simulation.simulate import DiceArrays
 
 DOCS = Path(__file__).resolve().parents[2] / "docs"  # where the full studies write their pages
 SEED = 2026  # the studies' default seed

@@ -21,12 +21,12 @@ from pathlib import Path
 
 import numpy as np
 
-from dice_env.calibration import measured_restitution
-from dice_env.rotations import quaternion_to_matrix, random_rotations
-from dice_env.scene import FrictionLaw, Scene, Scheme
-from dice_env.simulate import Result, State, simulate
+from dice_env.model.rotations import quaternion_to_matrix, random_rotations
+from dice_env.model.scene import FrictionLaw, Scene, Scheme
+from dice_env.model.table import DAMPING, FRICTION, RESTITUTION, STIFFNESS
+from dice_env.simulation.calibration import measured_restitution
+from dice_env.simulation.simulate import Result, State, simulate
 from dice_env.studies.markdown import markdown_table
-from dice_env.table import DAMPING, FRICTION, RESTITUTION, STIFFNESS
 
 # Throws whose faces are compared are simulated for at most this long (s); all settle sooner.
 T_THROW = 4.0
@@ -499,11 +499,13 @@ def _scene_section(scene: Scene, restitution: dict[tuple[float, int], float],
         "force, e = exp(−π ζ / √(1 − ζ²)) (the classical linear-dashpot result). The ground "
         "force is max(0, S dg − D un), so the corner leaves when the force reaches zero, "
         "before the spring is relaxed; then ω_d t* = π − atan2(2ζ√(1−ζ²), 1 − 2ζ²) and "
-        "e = −x'(t*)/v0, higher than the classical value [5, 6]. `dice_env.table` inverts the "
+        "e = −x'(t*)/v0, higher than the classical value [5, 6]. `dice_env.model.table` "
+        "inverts the "
         "clipped relation: ζ = 0.301 for e = 0.45 (the classical relation would give "
         "ζ = 0.246, which with the clip yields e ≈ 0.51).",
         "",
-        "**Restitution actually obtained** (`dice_env.calibration.measured_restitution`: a flat, "
+        "**Restitution actually obtained** "
+        "(`dice_env.simulation.calibration.measured_restitution`: a flat, "
         "spin-free landing; upward speed when the face recrosses the plane, over the impact "
         "speed; gravity on):",
         "",
@@ -680,7 +682,8 @@ def _references() -> list[str]:
         "",
         "The exact numbers of [1–4] were not re-read for this page (the full texts were not "
         "at hand): 0.45 and 0.4 are mid-range values for a plastic die on a wooden table, "
-        "and `dice_env.calibration.table_scene(restitution=..., friction=...)` changes them.",
+        "and `dice_env.simulation.calibration.table_scene(restitution=..., friction=...)` "
+        "changes them.",
     ]
 
 

@@ -2,13 +2,13 @@
 
 ``run(out, quick, throws)`` writes ``out/craps.md`` and ``out/figures/craps.png``. Two default
 d6 leave one hand (:class:`dice_env.envs.task.ThrowTask`, the env's hand with
-``num_dice=2``) on the craps layout (:func:`dice_env.materials.scene` ``"craps"``) toward the
-back wall 1 m ahead (:func:`dice_env.surroundings.craps`), with backspin, each throw until
+``num_dice=2``) on the craps layout (:func:`dice_env.model.materials.scene` ``"craps"``) toward the
+back wall 1 m ahead (:func:`dice_env.model.surroundings.craps`), with backspin, each throw until
 both faces are decided. The dice are either **set** in the hand (:func:`sevens_set`: every
 common turn about the roll axis shows a seven) or held in uniform random orientations, under
 hand noise of several sizes and at two throw speeds. A throw in which a die does not touch the
-back wall is voided (:attr:`dice_env.group.GroupResult.touched`), as are the throws the pairs
-study voids. Reported per cell: the chance of a seven with its 95% interval, an exact binomial
+back wall is voided (:attr:`dice_env.simulation.group.GroupResult.touched`), as are the throws the
+pairs study voids. Reported per cell: the chance of a seven with its 95% interval, an exact binomial
 test against 1/6, and Fisher's exact test of set against random.
 """
 
@@ -23,12 +23,13 @@ import numba
 import numpy as np
 from scipy import stats
 
-from dice_env import materials
 from dice_env.envs.task import ThrowTask, make_task
-from dice_env.group import GroupResult
 from dice_env.intervals import wilson
-from dice_env.rotations import axis_angle
-from dice_env.scene import Scene
+from dice_env.model import materials
+from dice_env.model.rotations import axis_angle
+from dice_env.model.scene import Scene
+from dice_env.model.surroundings import CRAPS, craps
+from dice_env.simulation.group import GroupResult
 from dice_env.studies.common import DOCS, SEED, checked_throws, progress, save_figure
 from dice_env.studies.fairness import random_orientations
 from dice_env.studies.markdown import estimate, markdown_table
@@ -40,7 +41,6 @@ from dice_env.studies.pairs import (
     triangle,
     void_reasons,
 )
-from dice_env.surroundings import CRAPS, craps
 
 # Throws per cell in the full and the quick run; the fewest a run takes per cell.
 FULL, QUICK, MIN_THROWS = 300, 8, 10

@@ -44,9 +44,9 @@ from pathlib import Path
 import numpy as np
 from tqdm import tqdm
 
-from dice_env.die import STANDARD_SIZES, Die
-from dice_env.scene import Scene
-from dice_env.simulate import State, simulate
+from dice_env.model.die import STANDARD_SIZES, Die
+from dice_env.model.scene import Scene
+from dice_env.simulation.simulate import State, simulate
 from dice_env.studies.chunks import FolderError, identity, load, prepare, write_atomically
 from dice_env.studies.common import checked_int
 from dice_env.studies.shapes import Faces, counted, hand_throws

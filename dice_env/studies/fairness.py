@@ -17,10 +17,10 @@ import numpy as np
 from scipy import stats
 from scipy.spatial.transform import Rotation
 
-from dice_env.die import Die
 from dice_env.intervals import wilson
-from dice_env.scene import Scene
-from dice_env.simulate import Result, State, simulate
+from dice_env.model.die import Die
+from dice_env.model.scene import Scene
+from dice_env.simulation.simulate import Result, State, simulate
 from dice_env.studies.common import DOCS, SEED, batches, progress, save_figure
 from dice_env.studies.markdown import bracket, estimate, markdown_table
 

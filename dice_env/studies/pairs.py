@@ -2,9 +2,9 @@
 
 ``run(out, quick, throws)`` writes ``out/pairs.md`` and ``out/figures/pairs.png``. Two default
 d6 leave one hand together (:func:`hand_throws`) into the 30 x 20 cm tray
-(:func:`dice_env.surroundings.tray`), colliding with each other and the walls
-(:func:`dice_env.group.simulate_group`), each throw until both faces are decided. Reported:
-the totals 2–12 against the triangle ``(6 - |k - 7|) / 36`` of two independent fair dice
+(:func:`dice_env.model.surroundings.tray`), colliding with each other and the walls
+(:func:`dice_env.simulation.group.simulate_group`), each throw until both faces are decided.
+Reported: the totals 2–12 against the triangle ``(6 - |k - 7|) / 36`` of two independent fair dice
 (chi-square, 10 degrees of freedom), the 6 x 6 table of (die 1, die 2) faces with a
 chi-square test of independence and each die's test of uniformity, how often the dice met,
 and the throws voided (not counted).
@@ -22,16 +22,22 @@ import numba
 import numpy as np
 from scipy import stats
 
-from dice_env.die import Die
-from dice_env.group import DieContact, GroupResult, GroupState, group_step, simulate_group
 from dice_env.intervals import wilson
-from dice_env.scene import Scene
-from dice_env.simulate import State
+from dice_env.model.die import Die
+from dice_env.model.scene import Scene
+from dice_env.model.surroundings import TRAY, tray
+from dice_env.simulation.group import (
+    DieContact,
+    GroupResult,
+    GroupState,
+    group_step,
+    simulate_group,
+)
+from dice_env.simulation.simulate import State
 from dice_env.studies.chunks import kept_chunks, prepare
 from dice_env.studies.common import DOCS, SEED, batches, checked_throws, progress, save_figure
 from dice_env.studies.fairness import random_directions, random_orientations, toward_table
 from dice_env.studies.markdown import bracket, markdown_table
-from dice_env.surroundings import TRAY, tray
 
 # Throws of the pair in the full and the quick run; throws per kernel call; throws per seeded
 # chunk (see chunked_pairs).
@@ -406,9 +412,9 @@ the cost per throw against the number of dice.
 
 Two default d6 (edge {scene.die.size * 1e3:g} mm, mass {scene.die.mass * 1e3:g} g) leave one
 hand together into the {TRAY[0] * 100:g} x {TRAY[1] * 100:g} cm tray
-(`dice_env.surroundings.tray()`, walls of the table's material), on the default table, with
+(`dice_env.model.surroundings.tray()`, walls of the table's material), on the default table, with
 the automatic step ({scene.step * 1e6:.1f} µs) and the default die–die contact
-(`dice_env.group.DieContact`, {DieContact().law} friction). The hand (`pairs.Hand`,
+(`dice_env.simulation.group.DieContact`, {DieContact().law} friction). The hand (`pairs.Hand`,
 `pairs.hand_throws`): the dice side by side, {h.spacing * 100:g} cm apart centre to centre,
 above the tray's centre at a common height of {h.clearance[0] * 100:g}–{h.clearance[1] * 100:g} cm
 above the height where a corner could touch; one hand velocity of
@@ -458,7 +464,7 @@ Counts of (die 1 face, die 2 face) over the counted throws:
 {_conclusion(pairs, n)}
 
 Caveats: the dice are the corner-node penalty model (sharp edges, no air); the die–die
-material is an estimate (see `dice_env/group.py`); the hand is one model of a two-dice throw,
-with uniform release orientations, which average any memory of the release out over the faces
-(see `docs/fairness.md`).
+material is an estimate (see `dice_env/simulation/group.py`); the hand is one model of a
+two-dice throw, with uniform release orientations, which average any memory of the release out
+over the faces (see `docs/fairness.md`).
 """

@@ -24,10 +24,11 @@ import matplotlib.pyplot as plt
 import numpy as np
 from scipy import stats
 
-from dice_env.die import STANDARD_SIZES, Die
 from dice_env.intervals import wilson
-from dice_env.scene import Scene
-from dice_env.simulate import UP, Result, State, simulate
+from dice_env.model.die import STANDARD_SIZES, Die
+from dice_env.model.scene import Scene
+from dice_env.model.table import DIE_EDGE
+from dice_env.simulation.simulate import UP, Result, State, simulate
 from dice_env.studies.common import DOCS, SEED, batches, checked_throws, progress, save_figure
 from dice_env.studies.fairness import (
     VIGOROUS,
@@ -37,7 +38,6 @@ from dice_env.studies.fairness import (
     vigorous_throws,
 )
 from dice_env.studies.markdown import estimate, markdown_table
-from dice_env.table import DIE_EDGE
 
 DICE = tuple(STANDARD_SIZES)
 # Throws per die: fair (the full run's default) and loaded; the quick run's sizes.

@@ -24,10 +24,10 @@ import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.colors import ListedColormap
 
-from dice_env.die import Die
-from dice_env.paper import paper_scene
-from dice_env.scene import MAX_STEPS, ContactLaw, Ground, Scene
-from dice_env.simulate import Result, State, simulate
+from dice_env.model.die import Die
+from dice_env.model.scene import MAX_STEPS, ContactLaw, Ground, Scene
+from dice_env.simulation.paper import paper_scene
+from dice_env.simulation.simulate import Result, State, simulate
 from dice_env.studies.common import DOCS, progress, save_figure
 from dice_env.studies.fairness import Vigour, vigorous_throws
 from dice_env.studies.markdown import markdown_table

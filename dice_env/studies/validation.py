@@ -7,8 +7,8 @@
 - **the initially-down face against throw energy** (Kapitaniak et al. 2012, the direction of
   their finding): thrown here, :func:`initial_face_memory`;
 - **restitution and friction of the default table** against the sources in
-  :mod:`dice_env.table`: measured here on the simulator (:func:`sliding_friction`,
-  :func:`dice_env.calibration.measured_restitution`);
+  :mod:`dice_env.model.table`: measured here on the simulator (:func:`sliding_friction`,
+  :func:`dice_env.simulation.calibration.measured_restitution`);
 - **square-cuboid dice**, a prediction: the numbers of ``out/cuboids.md``
   (:func:`dice_env.studies.cuboids.read_page`; run first when absent).
 
@@ -24,12 +24,12 @@ from pathlib import Path
 
 import numpy as np
 
-from dice_env import table
-from dice_env.calibration import measured_restitution
 from dice_env.intervals import wilson
-from dice_env.rotations import up_rotation
-from dice_env.scene import Scene
-from dice_env.simulate import UP, State, simulate
+from dice_env.model import table
+from dice_env.model.rotations import up_rotation
+from dice_env.model.scene import Scene
+from dice_env.simulation.calibration import measured_restitution
+from dice_env.simulation.simulate import UP, State, simulate
 from dice_env.studies import cuboids, weldon
 from dice_env.studies.common import DOCS, SEED
 from dice_env.studies.fairness import energy_throws, face_down, throw_energy
@@ -40,7 +40,7 @@ COMMAND = "python -m dice_env.studies validation"
 MEMORY_THROWS = {False: 4000, True: 300}
 ENERGY_RANGE = (0.01, 100.0)  # throw energy above a gentle release (m g a), log-uniform
 Z_ONE_SIDED = 1.644854  # 5% one-sided
-# The default table's sources (dice_env/table.py, docs/error-vs-runtime.md).
+# The default table's sources (dice_env/model/table.py, docs/error-vs-runtime.md).
 RESTITUTION_RANGE = (0.4, 0.5)
 RESTITUTION_SOURCE = ("dice on wooden tables, 0.4–0.5: Kapitaniak, Strzalko, Grabski & "
                       "Kapitaniak, Chaos 22, 047504 (2012); Strzalko et al., Physics Reports "
@@ -323,7 +323,7 @@ def _table_section(scene: Scene, restitution: dict[float, float], friction: floa
     body = f"""## Restitution and friction of the default table
 
 **Real dice.** Restitution of a die on a wooden table: {RESTITUTION_SOURCE}. Sliding
-friction: {FRICTION_SOURCE}. (`dice_env/table.py`; `docs/error-vs-runtime.md`.)
+friction: {FRICTION_SOURCE}. (`dice_env/model/table.py`; `docs/error-vs-runtime.md`.)
 
 **Simulator.** `{command}`: the default scene (16 mm, 4.5 g die; S = {g.stiffness:g} N/m,
 D = {g.damping:.4g} N s/m, mu = {g.friction:g} per corner).

@@ -8,8 +8,8 @@ Weldon threw 12 dice 26,306 times and counted the dice showing a 5 or a 6: 106,6
 with pip-drilled dice (``Die.standard("d6", pips=...)``) tipped from a cup onto the default
 wooden table, in two ways:
 
-- **together** (:func:`throw_together`, :func:`dice_env.group.simulate_group`): the twelve
-  dice of one cup fall and collide; the distribution of successes per throw and any
+- **together** (:func:`throw_together`, :func:`dice_env.simulation.group.simulate_group`): the
+twelve dice of one cup fall and collide; the distribution of successes per throw and any
   dependence between the dice of one throw, at the few hundred throws affordable here;
 - **alone** (:func:`throw_alone`, :func:`dice_env.simulate`): every die of the same cup
   releases thrown by itself, for the per-die probability only (independent by construction),
@@ -35,12 +35,12 @@ import numba
 import numpy as np
 from scipy import optimize, stats
 
-from dice_env.die import Die
-from dice_env.group import DieContact, GroupState, simulate_group
 from dice_env.intervals import Z95
-from dice_env.pips import Pips
-from dice_env.scene import Scene
-from dice_env.simulate import State
+from dice_env.model.die import Die
+from dice_env.model.pips import Pips
+from dice_env.model.scene import Scene
+from dice_env.simulation.group import DieContact, GroupState, simulate_group
+from dice_env.simulation.simulate import State
 from dice_env.studies.chunks import kept_chunks, prepare
 from dice_env.studies.common import DOCS, SEED, checked_int, checked_throws, progress, save_figure
 from dice_env.studies.fairness import random_directions, random_orientations
@@ -620,7 +620,7 @@ orientation. The table is the default wooden one (`Scene()`, no walls), the dice
 the default die–die contact (`DieContact()`, {DieContact().law} friction). Each throw runs
 until every face is decided (`stop_when_decided`).
 
-- **(a) Together** (`dice_env.group.simulate_group`): the twelve `drilled16` dice of each
+- **(a) Together** (`dice_env.simulation.group.simulate_group`): the twelve `drilled16` dice of each
   cup fall and collide. A throw counts when every die is decided and read within
   {T_MAX_TOGETHER:g} s; a die leaning on another ("cocked") is not read, and its throw is
   left out (Weldon's rule for such dice is not recorded). {t['thrown']:,} throws (Weldon's:

@@ -16,9 +16,9 @@ import argparse
 import sys
 from pathlib import Path
 
-from dice_env.die import STANDARD_SIZES
 from dice_env.envs.task import MAX_NUM_DICE, make_task
-from dice_env.surroundings import WALLS
+from dice_env.model.die import STANDARD_SIZES
+from dice_env.model.surroundings import WALLS
 from dice_env.viewer.files import ReplayError, load, replay
 from dice_env.viewer.recording import FPS
 from dice_env.viewer.throws import random_throws

@@ -25,10 +25,10 @@ from typing import Any
 import numpy as np
 import pygltflib as gl
 
-from dice_env.die import Die
 from dice_env.envs.render import TABLE_COLOUR, WALL_COLOUR
-from dice_env.rotations import matrix_to_quaternion
-from dice_env.scene import Plane
+from dice_env.model.die import Die
+from dice_env.model.rotations import matrix_to_quaternion
+from dice_env.model.scene import Plane
 from dice_env.viewer.recording import Recording, library_version
 from dice_env.viewer.textures import face_atlas, png_bytes
 

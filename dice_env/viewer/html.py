@@ -21,8 +21,8 @@ from typing import Any
 
 import numpy as np
 
-from dice_env.die import Die
-from dice_env.scene import Scene
+from dice_env.model.die import Die
+from dice_env.model.scene import Scene
 from dice_env.viewer.recording import Recording, as_data
 from dice_env.viewer.textures import face_atlas, png_bytes
 

@@ -2,8 +2,8 @@
 
 :func:`record` simulates throws and keeps, for each, what a viewer draws (every die's centre
 and orientation at a fixed frame rate, the outcome) and what a replay needs to throw it again
-(the scene, the dice and their contact as :mod:`dice_env.codec` data, the release state to
-the last bit, the run's keywords, the library version). The simulator is deterministic, so a
+(the scene, the dice and their contact as :mod:`dice_env.simulation.codec` data, the release state
+to the last bit, the run's keywords, the library version). The simulator is deterministic, so a
 replay lands the same faces; :func:`dice_env.viewer.files.replay` checks that it does.
 """
 
@@ -17,13 +17,13 @@ from typing import Any
 
 import numpy as np
 
-from dice_env.codec import from_data, to_data
-from dice_env.die import Die
 from dice_env.envs.task import UNTIL
-from dice_env.group import DieContact, GroupState, group_step, simulate_group
-from dice_env.rotations import matrix_to_quaternion, quaternion_to_matrix
-from dice_env.scene import Scene
-from dice_env.simulate import State, simulate
+from dice_env.model.die import Die
+from dice_env.model.rotations import matrix_to_quaternion, quaternion_to_matrix
+from dice_env.model.scene import Scene
+from dice_env.simulation.codec import from_data, to_data
+from dice_env.simulation.group import DieContact, GroupState, group_step, simulate_group
+from dice_env.simulation.simulate import State, simulate
 
 FORMAT = "dice_env.throw"  # what a file holding recordings says it holds
 FPS = 60.0  # frames per simulated second, by default
@@ -108,7 +108,7 @@ def record(scene: Scene, dice: Die | Sequence[Die], state: State | GroupState, *
     ``dice``: one die (``state`` a :class:`State` of B throws, the die in ``scene`` replaced
     by it) or several (``state`` a :class:`GroupState`). One die runs in
     :func:`dice_env.simulate` (``early_rest`` as there), several in
-    :func:`dice_env.group.simulate_group` with ``contact``; ``t_max`` and
+    :func:`dice_env.simulation.group.simulate_group` with ``contact``; ``t_max`` and
     ``stop_when_decided`` as there. Frames run from the release to the end of the throw.
     ``titles`` and ``voids`` (one per throw) caption the throws and override the void reason
     (e.g. a task's ``"foul"``; ``""`` keeps the simulation's). Returns one recording a throw.

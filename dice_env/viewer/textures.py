@@ -15,8 +15,8 @@ from functools import lru_cache
 
 import numpy as np
 
-from dice_env.die import Die
 from dice_env.envs.render import FACE_COLOUR, RIM_WIDTH, face_art, face_colour
+from dice_env.model.die import Die
 
 SUPERSAMPLE = 3  # subpixels a side averaged into one texture pixel (antialiasing)
 PADDING = 1 / 32  # a tile's margin around its face's square, in tile widths (against bleeding)

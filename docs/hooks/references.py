@@ -1,7 +1,7 @@
 """MkDocs hook: every Sphinx-style reference in the code's docstrings names something that exists.
 
-``:func:`dice_env.kernel.advance```, ``:class:`Scene``` and the like are resolved against the
-package (a bare name against the module it is written in); the build stops, listing each
+``:func:`dice_env.physics.kernel.advance```, ``:class:`Scene``` and the like are resolved against
+the package (a bare name against the module it is written in); the build stops, listing each
 reference that names nothing, so that a renamed or removed function cannot leave its old name
 in the documentation. Run by ``mkdocs build`` (``hooks:`` in ``mkdocs.yml``) and by
 ``tests/test_docs.py``.

@@ -1,6 +1,6 @@
 """Compile the CPU kernels into numba's cache ahead of use, two at a time.
 
-    python -m dice_env.precompile          # every kernel; quiet when the cache is warm
+    python -m dice_env.simulation.precompile          # every kernel; quiet when the cache is warm
 
 numba compiles a kernel at its first call, one at a time in a process. This runs a tiny
 throw through each kernel in its own process, as many at once as there are cores (at most
@@ -18,12 +18,12 @@ from concurrent.futures import ProcessPoolExecutor
 import numba
 import numpy as np
 
-from dice_env.group import GroupState, simulate_group
-from dice_env.paper import paper_scene
-from dice_env.scene import Scene
-from dice_env.simulate import SERIAL_FIRST, State, simulate
-from dice_env.surroundings import tray
-from dice_env.vector_kernel import TILE
+from dice_env.model.scene import Scene
+from dice_env.model.surroundings import tray
+from dice_env.physics.vector_kernel import TILE
+from dice_env.simulation.group import GroupState, simulate_group
+from dice_env.simulation.paper import paper_scene
+from dice_env.simulation.simulate import SERIAL_FIRST, State, simulate
 
 THREADS = min(2, numba.config.NUMBA_NUM_THREADS)  # 2 runs the parallel loop, 1 the serial
 BATCH = SERIAL_FIRST + TILE  # throws of a batch that takes the parallel loop, tiles whole
@@ -69,7 +69,7 @@ def main() -> None:
     start = time.perf_counter()
     with ProcessPoolExecutor(workers) as pool:
         times = dict(pool.map(_compile, KERNELS))
-    print("dice_env.precompile: " + ", ".join(f"{k} {s:.0f} s" for k, s in times.items())
+    print("dice_env.simulation.precompile: " + ", ".join(f"{k} {s:.0f} s" for k, s in times.items())
           + f"; {time.perf_counter() - start:.0f} s in all on {workers} process(es)",
           file=sys.stderr)
 

@@ -1,14 +1,14 @@
 """Preset surroundings: the walls of a dice tray and of a craps table.
 
-Every preset returns a tuple of :class:`~dice_env.scene.Wall` for ``Scene(walls=...)``,
+Every preset returns a tuple of :class:`~dice_env.model.scene.Wall` for ``Scene(walls=...)``,
 around the release point above the origin (the floor is the scene's ``ground``). Walls take
 the table's material unless given other ``stiffness``, ``damping``, ``friction``.
 """
 
 from __future__ import annotations
 
-from dice_env.checks import check_choice, check_positive
-from dice_env.scene import Wall
+from dice_env.model.checks import check_choice, check_positive
+from dice_env.model.scene import Wall
 
 # A common felt-lined dice tray: 30 cm x 20 cm inside.
 TRAY = (0.30, 0.20)

@@ -1,7 +1,7 @@
 """Several dice in one throw: die–die contact and the group's step (numba only).
 
 A throw of N dice is a group. Every die feels the planes exactly as a single die does
-(:func:`dice_env.kernel.vertex_on_plane`, the same stick-slip springs) and every other die
+(:func:`dice_env.physics.kernel.vertex_on_plane`, the same stick-slip springs) and every other die
 through penalty contacts:
 
 - the contact normal is the axis along which the two overlap least (:func:`least_overlap`,
@@ -39,10 +39,10 @@ on the planes or held by another die: a die left leaning on another rests too) o
 decision rule, when no energy left in the group can change any die's face: for every die
 ``i``, its own energy plus all that the others could give it (their energy above their
 least, ``Bodies.floor``) is below the lock of the face it reads. Each die's step on the planes
-is the single die's (:func:`dice_env.kernel.die_on_planes`, the group's dice one after
+is the single die's (:func:`dice_env.physics.kernel.die_on_planes`, the group's dice one after
 another in its per-vertex arrays), and so are the flight's closed form and the midpoint's
-extrapolation (:func:`dice_env.kernel.euler_steps`, :func:`dice_env.kernel.ahead`). This
-module imports nothing from the package but :mod:`dice_env.kernel`.
+extrapolation (:func:`dice_env.physics.kernel.euler_steps`, :func:`dice_env.physics.kernel.ahead`).
+This module imports nothing from the package but :mod:`dice_env.physics.kernel`.
 """
 
 from __future__ import annotations
@@ -53,7 +53,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit, prange
 
-from dice_env.kernel import (
+from dice_env.physics.kernel import (
     ABORT_EVERY,
     ABORTED,
     DECIDED,
@@ -146,8 +146,8 @@ class Pair(NamedTuple):
     """The die–die contact's law.
 
     ``stiffness`` S, ``damping`` D, ``friction`` mu. With ``stick``, a corner inside another
-    die feels the table's stick-slip friction (:func:`dice_env.kernel.stick_slip`): tied by a
-    tangential spring ``kt`` and damper ``ct`` to the point of the other die where it
+    die feels the table's stick-slip friction (:func:`dice_env.physics.kernel.stick_slip`): tied by
+    a tangential spring ``kt`` and damper ``ct`` to the point of the other die where it
     touched, slipping at ``mu fn``; ``dt_m``: the step over the pair's reduced mass. Edge
     contacts, and every contact without ``stick``, feel the regularised Coulomb friction at
     ``vmin``, capped at ``grip |vt|``: Coulomb's law at a contact that sticks asks for a force
@@ -189,7 +189,7 @@ class GroupDice(NamedTuple):
     """The state of G throws of N dice, updated in place.
 
     ``x``, ``u``, ``ang``, ``w`` (G, N, 3) and ``q`` (G, N, 3, 3), as
-    :class:`dice_env.kernel.Dice`.
+    :class:`dice_env.physics.kernel.Dice`.
     """
 
     x: np.ndarray
@@ -867,10 +867,10 @@ def _group_jump(planes: np.ndarray, lowest: np.ndarray, touching: np.ndarray, x:
     """Flight steps the whole group takes at once (at least 1); see :func:`flight_jump`.
 
     Called when every pair's bounding spheres are apart. No die touches a plane, each die's
-    flight steps are :func:`dice_env.kernel.flight_jump`'s, and a pair stays apart while its
+    flight steps are :func:`dice_env.physics.kernel.flight_jump`'s, and a pair stays apart while its
     centres' distance exceeds the spheres' reach: in flight both feel gravity alone, so the
     distance shrinks by at most ``dt |u_a - u_b|`` a step. One die alone jumps exactly as
-    :func:`dice_env.kernel.simulate_one` does.
+    :func:`dice_env.physics.kernel.simulate_one` does.
     """
     n_dice = x.shape[0]
     jump = limit

@@ -10,7 +10,7 @@ flush). The geometry (vertices, faces) stays the cube's.
 **Layout** (:func:`layout`): pip centres on each face at 0 or ``±offset`` times the face's
 half-width along the face's two axes: 1 in the centre; 2 and 3 on a diagonal; 4 at the
 corners; 5 at the corners and the centre; 6 in two rows of three. Handedness: the die is
-right-handed (faces 1, 2, 3 counter-clockwise about their corner, :mod:`dice_env.die`); with
+right-handed (faces 1, 2, 3 counter-clockwise about their corner, :mod:`dice_env.model.die`); with
 the 1 up, the 2 on the left and the 3 on the right, the 3's diagonal runs up from the left and
 the 2's diagonal down from the left, as described for casino dice by dice-play.com ("Casino
 Dice"): both diagonals end at the 2-3-6 corner, none touches the 1-2-3 corner. The rows of the
@@ -49,8 +49,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from dice_env.checks import check_choice, check_nonnegative, check_positive, check_range
-from dice_env.polyhedra import point_inertia
+from dice_env.model.checks import check_choice, check_nonnegative, check_positive, check_range
+from dice_env.model.polyhedra import point_inertia
 
 SHAPES = ("spherical cap",)
 # Cellulose acetate, the body of casino dice (kg/m^3): AZoM, "Cellulose Acetate" (Plascams

@@ -1,7 +1,7 @@
 """Calibration against the simulator: the table scene for any die, the restitution it produces.
 
-Above :func:`dice_env.simulate.simulate`; the measured values and the restitution formulas are
-in :mod:`dice_env.table`.
+Above :func:`dice_env.simulation.simulate.simulate`; the measured values and the restitution
+formulas are in :mod:`dice_env.model.table`.
 """
 
 from __future__ import annotations
@@ -10,12 +10,11 @@ import math
 
 import numpy as np
 
-from dice_env.checks import check_positive
-from dice_env.die import Die
-from dice_env.rotations import up_rotation
-from dice_env.scene import Ground, Scene
-from dice_env.simulate import State, simulate
-from dice_env.table import (
+from dice_env.model.checks import check_positive
+from dice_env.model.die import Die
+from dice_env.model.rotations import up_rotation
+from dice_env.model.scene import Ground, Scene
+from dice_env.model.table import (
     DIE_EDGE,
     DIE_MASS,
     FRICTION,
@@ -24,6 +23,7 @@ from dice_env.table import (
     damping_for_restitution,
     rebound,
 )
+from dice_env.simulation.simulate import State, simulate
 
 
 def table_scene(
@@ -50,7 +50,7 @@ def measured_restitution(scene: Scene, speed: float = 1.0) -> float:
 
     The die lands on the face where its centre of mass rests lowest (the least of
     :attr:`Die.resting_heights`; the uniform d6 on face 6, showing 1), turned so that it reads
-    that face (:func:`dice_env.rotations.up_rotation`): flat for every die whose faces come in
+    that face (:func:`dice_env.model.rotations.up_rotation`): flat for every die whose faces come in
     parallel pairs, and for the d4. It starts up to 1 mm above the plane (``normal`` along z),
     falling so that it meets the plane at ``speed`` (starting on the plane would put the
     contact onset exactly on a step and add a first-order error of its own); the result is

@@ -1,12 +1,12 @@
 """The one-die kernel on an NVIDIA GPU: one die per CUDA thread (numba-cuda).
 
-The physics is :func:`dice_env.kernel.advance`, the very source that
-:func:`~dice_env.kernel.simulate_one` runs on the CPU: numba-cuda compiles every ``@njit``
+The physics is :func:`dice_env.physics.kernel.advance`, the very source that
+:func:`~dice_env.physics.kernel.simulate_one` runs on the CPU: numba-cuda compiles every ``@njit``
 function that a CUDA kernel calls again as a device function, and so on down the calls, so
-each piece (:func:`~dice_env.kernel.vertex_on_plane`, :func:`~dice_env.kernel.rotate`, ...)
-has one definition and two targets. What the CPU kernel allocates per die lies here in each
-thread's local memory, of a size fixed when the kernel is compiled: up to
-:data:`GPU_MAX_VERTICES` vertices and :data:`MAX_PLANES` planes.
+each piece (:func:`~dice_env.physics.kernel.vertex_on_plane`,
+:func:`~dice_env.physics.kernel.rotate`, ...) has one definition and two targets. What the CPU
+kernel allocates per die lies here in each thread's local memory, of a size fixed when the kernel is
+compiled: up to :data:`GPU_MAX_VERTICES` vertices and :data:`MAX_PLANES` planes.
 
 The same step in the same double precision, but not bit for bit: the GPU's compiler fuses a
 multiply and an add into one operation with a single rounding (FMA), and its ``sin`` comes
@@ -16,7 +16,7 @@ many impacts can change a face; ``tests/test_cuda_kernel.py`` bounds them on sho
 Records are not kept on the GPU (:func:`run` refuses them), and a run cannot be interrupted
 while its kernel runs. The kernel compiles once per process, at its first run (a minute or two
 on 2 shared cores): numba's disk cache is keyed on this file alone and would keep a kernel
-compiled before a change to :mod:`dice_env.kernel`. Importing this module imports
+compiled before a change to :mod:`dice_env.physics.kernel`. Importing this module imports
 ``numba.cuda``; :mod:`dice_env` imports it only for ``simulate(..., device="cuda")``. Without
 a GPU, numba's CUDA simulator (``NUMBA_ENABLE_CUDASIM=1``, with ``NUMBA_DISABLE_JIT=1`` so that
 the pieces run as Python too) runs the same kernel.
@@ -29,7 +29,7 @@ import math
 import numpy as np
 from numba import cuda
 
-from dice_env.kernel import (
+from dice_env.physics.kernel import (
     Body,
     Contact,
     Dice,
@@ -47,10 +47,10 @@ MAX_PLANES = 8  # the most planes (a tray has 5)
 BLOCK = 128  # threads per block
 
 
-@cuda.jit  # no disk cache: it would not see a change in dice_env/kernel.py, whose code it runs
+@cuda.jit  # no disk cache: it would not see a change in physics/kernel.py, whose code it runs
 def simulate_cuda(dice: Dice, body: Body, contact: Contact, options: Options, stops: Stops,
                   records: Records, out: Outcome) -> None:
-    """:func:`dice_env.kernel.simulate_batch` on the GPU, die ``i`` on thread ``i``."""
+    """:func:`dice_env.physics.kernel.simulate_batch` on the GPU, die ``i`` on thread ``i``."""
     i = cuda.grid(1)
     if i < dice.x.shape[0]:
         advance(i, dice, body, contact, options, stops, records, out, Scratch(
@@ -67,8 +67,9 @@ def run(dice: Dice, body: Body, contact: Contact, options: Options, stops: Stops
         records: Records, out: Outcome) -> None:
     """Advance a batch of dice on the GPU, in place in the host arrays of ``dice`` and ``out``.
 
-    The groups are :func:`dice_env.kernel.simulate_batch`'s. Refused (``ValueError``): records,
-    a die of more than :data:`GPU_MAX_VERTICES` vertices, more than :data:`MAX_PLANES` planes.
+    The groups are :func:`dice_env.physics.kernel.simulate_batch`'s. Refused (``ValueError``):
+    records, a die of more than :data:`GPU_MAX_VERTICES` vertices, more than :data:`MAX_PLANES`
+    planes.
     """
     if records.x.shape[1] > 0:
         raise ValueError("record_every must be 0 with device='cuda': records are kept on the "

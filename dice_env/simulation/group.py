@@ -7,7 +7,7 @@
 
 The scene gives the planes, gravity, the scheme and the rest test; its ``die`` is not used (the
 dice are given). Dice touch each other through :class:`DieContact` (penalty springs, damping
-and Coulomb friction, regularised or stick-slip, :mod:`dice_env.group_kernel`). A die that
+and Coulomb friction, regularised or stick-slip, :mod:`dice_env.physics.group_kernel`). A die that
 ends touching another die with fewer than three corners on the planes leans on it (a
 "cocked" die) and is not read: its ``face`` is 0 and ``read`` False.
 """
@@ -21,11 +21,12 @@ from typing import ClassVar
 
 import numpy as np
 
-from dice_env import group_kernel
-from dice_env.checks import as_enum
-from dice_env.die import Die
-from dice_env.scene import FrictionLaw, Scene, check_material, critical_step
-from dice_env.simulate import (
+from dice_env.model.checks import as_enum
+from dice_env.model.die import Die
+from dice_env.model.scene import FrictionLaw, Scene, check_material, critical_step
+from dice_env.model.table import DIE_MASS, STIFFNESS, damping_for_restitution
+from dice_env.physics import group_kernel
+from dice_env.simulation.simulate import (
     UP,
     DiceArrays,
     RunResult,
@@ -40,7 +41,6 @@ from dice_env.simulate import (
     recorded,
     run_kernel,
 )
-from dice_env.table import DIE_MASS, STIFFNESS, damping_for_restitution
 
 # Die against die: plastic on plastic. Estimates: no measurement of dice striking dice is
 # known to us. Restitution 0.5, about the die's on a hard table; friction 0.4, within the
@@ -56,14 +56,14 @@ class DieContact:
     """The die–die material: stiffness, damping and friction of a contact.
 
     ``stiffness`` S (N/m per contact), ``damping`` D (N s/m), ``friction`` mu and its
-    ``friction_law`` (:class:`dice_env.scene.FrictionLaw`): ``STICK_SLIP`` (default), the
+    ``friction_law`` (:class:`dice_env.model.scene.FrictionLaw`): ``STICK_SLIP`` (default), the
     table's law for a corner inside another die (tied to where it touched by a spring and
     damper of ``tangential`` times S and D, slipping at ``mu fn``), so that a die leaning on
     another stays put, edge-on-edge contacts keeping the regularised law; or ``REGULARIZED``,
     Coulomb regularised at the scene's ``friction_vmin`` and capped so that a slip stops over
     a few steps (a die held by another creeps slowly). D defaults to the restitution
     :data:`DIE_RESTITUTION` of the default die's mass on the table's stiffness
-    (:func:`dice_env.table.damping_for_restitution`).
+    (:func:`dice_env.model.table.damping_for_restitution`).
     """
 
     stiffness: float = STIFFNESS
@@ -88,7 +88,8 @@ class GroupState(DiceArrays):
     """State of B throws of N dice: :class:`dice_env.State`'s arrays with a die axis.
 
     ``position``, ``velocity``, ``angular_momentum``, ``angular_velocity`` (B, N, 3) and
-    ``orientation`` (B, N, 3, 3); checked when built (:class:`dice_env.simulate.DiceArrays`).
+    ``orientation`` (B, N, 3, 3); checked when built
+    (:class:`dice_env.simulation.simulate.DiceArrays`).
     """
 
     LEAD: ClassVar[tuple[str, ...]] = ("B", "N")
@@ -204,11 +205,11 @@ def simulate_group(
     Keywords as :func:`dice_env.simulate`; ``free_flight`` takes the steps in which no die
     touches a plane or another die (their bounding spheres apart) at once, in closed form.
     ``stop_when_decided`` ends a throw when no energy left in it can change any die's
-    face (see :mod:`dice_env.group_kernel`); ``stop_at_rest`` when every die is at rest.
+    face (see :mod:`dice_env.physics.group_kernel`); ``stop_at_rest`` when every die is at rest.
     ``record_every`` > 0 records the centres (and with ``orientations`` the orientations).
     Refused: dice that overlap at the start, more than :data:`MAX_DICE` dice, a step count
-    above :data:`dice_env.scene.MAX_STEPS`, records above
-    :data:`dice_env.simulate.MAX_RECORD_BYTES`, a die-die step that underflows
+    above :data:`dice_env.model.scene.MAX_STEPS`, records above
+    :data:`dice_env.simulation.simulate.MAX_RECORD_BYTES`, a die-die step that underflows
     (:func:`group_step`), with ``stop_when_decided`` a gravity whose energies overflow.
     """
     dice = _dice(dice)
@@ -297,7 +298,7 @@ def _dice(dice: Sequence[Die]) -> tuple[Die, ...]:
 
 
 def _bodies(scenes: list[Scene], decide: bool) -> group_kernel.Bodies:
-    """The kernel's :class:`~dice_env.group_kernel.Bodies`, one scene per die."""
+    """The kernel's :class:`~dice_env.physics.group_kernel.Bodies`, one scene per die."""
     dice = [s.die for s in scenes]
     packed = [pack_scene(s)[0] for s in scenes]
     n = len(dice)
@@ -333,7 +334,7 @@ def _bodies(scenes: list[Scene], decide: bool) -> group_kernel.Bodies:
 
 
 def _hulls(scenes: list[Scene], bodies: group_kernel.Bodies) -> group_kernel.Hulls:
-    """The kernel's :class:`~dice_env.group_kernel.Hulls`, one scene per die."""
+    """The kernel's :class:`~dice_env.physics.group_kernel.Hulls`, one scene per die."""
     dice = [s.die for s in scenes]
     vertices = [bodies.vertices[i, :len(d.vertices)] for i, d in enumerate(dice)]
     axes = [d.face_normals[_distinct_axes(d.face_normals)] for d in dice]

@@ -54,16 +54,16 @@ The die is data: any number of vertices (the contact nodes) and face normals; so
 surroundings: any number of planes (a floor and walls), each with its own material. The kernel
 takes a few named groups (:class:`Body`, :class:`Contact`, :class:`Options`, :class:`Stops`,
 :class:`Records`, :class:`Dice`, :class:`Outcome`), built by
-:func:`dice_env.simulate.pack_scene` and :func:`dice_env.simulate.pack_run`; each piece of the
-physics is one small inlined function: a vertex on a plane (:func:`vertex_on_plane`,
-:func:`stick_slip`), one die's step on all the planes (:func:`die_on_planes`, also each die's
-in :mod:`dice_env.group_kernel`), the contact-free jump (:func:`free_steps`,
-:func:`euler_steps`, :func:`torque_free`), the face read and the decided-face test
-(:func:`face_read`, :func:`decided`), the rotation (:func:`rotate`); :func:`advance` loops
-them for one die in scratch arrays its caller gives, :func:`simulate_one` on the CPU and
-:mod:`dice_env.cuda_kernel` on a GPU, where numba-cuda compiles the same functions again.
-The hot loop hands those pieces numbers, not arrays: in numba each array handed on costs an
-atomic reference count, which cost the loop more than its arithmetic; the one piece that
+:func:`dice_env.simulation.simulate.pack_scene` and :func:`dice_env.simulation.simulate.pack_run`;
+each piece of the physics is one small inlined function: a vertex on a plane
+(:func:`vertex_on_plane`, :func:`stick_slip`), one die's step on all the planes
+(:func:`die_on_planes`, also each die's in :mod:`dice_env.physics.group_kernel`), the contact-free
+jump (:func:`free_steps`, :func:`euler_steps`, :func:`torque_free`), the face read and the
+decided-face test (:func:`face_read`, :func:`decided`), the rotation (:func:`rotate`);
+:func:`advance` loops them for one die in scratch arrays its caller gives, :func:`simulate_one` on
+the CPU and :mod:`dice_env.physics.cuda_kernel` on a GPU, where numba-cuda compiles the same
+functions again. The hot loop hands those pieces numbers, not arrays: in numba each array handed on
+costs an atomic reference count, which cost the loop more than its arithmetic; the one piece that
 takes arrays, :func:`die_on_planes`, is compiled without reference counts. This module imports
 nothing else from the package.
 """
@@ -590,7 +590,7 @@ def advance(i: int, dice: Dice, body: Body, contact: Contact, options: Options, 
     """:func:`simulate_one` in the :class:`Scratch` arrays given by the caller, for any target.
 
     Nothing here allocates or calls an array method, so the same source compiles as a CUDA
-    device function (:mod:`dice_env.cuda_kernel`).
+    device function (:mod:`dice_env.physics.cuda_kernel`).
     """
     qi, qj, contacts = scratch
     heights, anchors, tied, lowest = contacts.heights, contacts.anchors, contacts.tied, \

@@ -30,10 +30,10 @@ from typing import NamedTuple
 
 import numpy as np
 
-from dice_env import polyhedra
-from dice_env.checks import as_shaped, check_choice, check_positive, check_range
-from dice_env.pips import Pips, drill, with_defaults
-from dice_env.table import DIE_EDGE, DIE_MASS
+from dice_env.model import polyhedra
+from dice_env.model.checks import as_shaped, check_choice, check_positive, check_range
+from dice_env.model.pips import Pips, drill, with_defaults
+from dice_env.model.table import DIE_EDGE, DIE_MASS
 
 # The d6's corner signs in the order of the paper's cube.m (node k = row k).
 _CORNER_SIGNS = np.array(
@@ -130,9 +130,9 @@ class Die:
 
         ``size`` (m) as the field (default :data:`STANDARD_SIZES`); ``mass`` (kg) defaults to
         :data:`DENSITY` times the volume. ``pips`` (d6 only): None for the uniform solid, a
-        :class:`~dice_env.pips.Pips` or a preset name of :data:`dice_env.pips.DRILLINGS`
+        :class:`~dice_env.model.pips.Pips` or a preset name of :data:`dice_env.model.pips.DRILLINGS`
         (which also supplies the size and mass left None): the cube minus its drilled pips,
-        ``mass`` being the die's actual mass as weighed (:func:`dice_env.pips.drill`).
+        ``mass`` being the die's actual mass as weighed (:func:`dice_env.model.pips.drill`).
         Numbering (Wikipedia, "Dice" and "Pentagonal trapezohedron"): opposite faces sum to
         ``n + 1`` on the d6, d8, d12 and d20.
 

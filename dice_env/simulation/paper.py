@@ -21,10 +21,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from dice_env.checks import as_batch, check_positive
-from dice_env.die import Die
-from dice_env.scene import ContactLaw, FrictionLaw, Ground, Scene, Scheme
-from dice_env.simulate import Result, State, simulate
+from dice_env.model.checks import as_batch, check_positive
+from dice_env.model.die import Die
+from dice_env.model.scene import ContactLaw, FrictionLaw, Ground, Scene, Scheme
+from dice_env.simulation.simulate import Result, State, simulate
 
 
 @dataclass

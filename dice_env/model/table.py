@@ -21,9 +21,9 @@ Without the clip at zero its restitution is the classical
 force reaches zero, before the spring is relaxed, so ``e`` is higher; :func:`restitution`
 gives that exact value (Schwager & Pöschel 2007) and :func:`damping_for_restitution` inverts
 it, so the default damping gives the target restitution;
-:func:`dice_env.calibration.measured_restitution` measures what the simulator actually produces.
-This module is the package's bottom layer: it imports nothing from the rest of it but
-:mod:`dice_env.checks`.
+:func:`dice_env.simulation.calibration.measured_restitution` measures what the simulator actually
+produces. This module is the package's bottom layer: it imports nothing from the rest of it but
+:mod:`dice_env.model.checks`.
 """
 
 from __future__ import annotations
@@ -32,7 +32,7 @@ import math
 
 import numpy as np
 
-from dice_env.checks import check_positive, check_range
+from dice_env.model.checks import check_positive, check_range
 
 # A common 16 mm game die (m, kg).
 DIE_EDGE = 0.016

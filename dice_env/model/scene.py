@@ -13,8 +13,8 @@ from enum import IntEnum
 
 import numpy as np
 
-from dice_env import table
-from dice_env.checks import (
+from dice_env.model import table
+from dice_env.model.checks import (
     as_enum,
     as_shaped,
     check_bool,
@@ -23,7 +23,7 @@ from dice_env.checks import (
     check_positive,
     check_range,
 )
-from dice_env.die import Die
+from dice_env.model.die import Die
 
 MAX_STEPS = 10**9  # steps of one throw to t_max: more is refused (about a minute a die)
 
@@ -42,7 +42,7 @@ class ContactLaw(IntEnum):
 
 
 class Scheme(IntEnum):
-    """How a step treats the contact forces (see :mod:`dice_env.kernel`).
+    """How a step treats the contact forces (see :mod:`dice_env.physics.kernel`).
 
     ``MIDPOINT`` (default): damping and friction from the corner velocity extrapolated to the
     middle of the step's kick, and the damping of a corner that just touched weighted by its time
@@ -56,7 +56,7 @@ class Scheme(IntEnum):
 
 
 class FrictionLaw(IntEnum):
-    """How a corner in contact feels friction (see :mod:`dice_env.kernel`).
+    """How a corner in contact feels friction (see :mod:`dice_env.physics.kernel`).
 
     ``STICK_SLIP`` (default): Coulomb friction with sticking. A corner is tied by a tangential
     spring and damper (``tangential`` times the ground's S and D) to where it touched, until
@@ -81,8 +81,8 @@ class Plane:
     friction's spring and damper per vertex as a fraction of S and D (2/7, the usual choice
     for discrete elements since Silbert et al. 2001; the same fraction for both keeps the
     damping proportional to the stiffness, so the stable step stays exact). The defaults
-    are the wooden table of :mod:`dice_env.table` for the default 4.5 g die (restitution
-    0.45); :func:`dice_env.calibration.table_scene` recomputes D for another die.
+    are the wooden table of :mod:`dice_env.model.table` for the default 4.5 g die (restitution
+    0.45); :func:`dice_env.simulation.calibration.table_scene` recomputes D for another die.
     """
 
     stiffness: float = table.STIFFNESS
@@ -322,7 +322,7 @@ class Scene:
         """Steps of ``step`` (s) to reach ``t_max`` (s), refused above :data:`MAX_STEPS`.
 
         ``t_max`` defaults to the scene's, ``step`` to :attr:`step` (a run of several dice
-        takes the step of :func:`dice_env.group.group_step`).
+        takes the step of :func:`dice_env.simulation.group.group_step`).
         """
         t_max = self.t_max if t_max is None else t_max
         check_positive("t_max", t_max)

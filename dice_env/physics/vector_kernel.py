@@ -6,17 +6,17 @@ all 8 corners whether they touch or not, and the die never jumps. With no branch
 on the die but its end, one pass of a loop over a tile of ``TILE`` dice does one step of every
 die in it, and LLVM turns that pass into SIMD code (4 dice per instruction with AVX2).
 
-The arithmetic is :func:`dice_env.kernel.simulate_one`'s, operation for operation in the same
-order (no fast-math: no reassociation, no fused multiply-add), so its results are
+The arithmetic is :func:`dice_env.physics.kernel.simulate_one`'s, operation for operation in the
+same order (no fast-math: no reassociation, no fused multiply-add), so its results are
 bit-identical to that kernel's (``tests/test_vector_kernel.py`` checks it); what is a branch
 there is a select here. It serves the runs :func:`covers` accepts (the paper's law and
 friction, listing step, isotropic die, no records, no free-flight jumps); every other run
-goes to :mod:`dice_env.kernel`.
+goes to :mod:`dice_env.physics.kernel`.
 
 A die that ends (time limit, rest, decided face, or a state that stops being finite) keeps
 the state and step count it ended with, as in the scalar kernel, and its lane idles; a tile
 stops once all its dice have ended. A turn above 1/64 rad in one step (where ``R(w dt)``
-needs ``sin``) is done for that die after the vector pass by :func:`dice_env.kernel.rotate`.
+needs ``sin``) is done for that die after the vector pass by :func:`dice_env.physics.kernel.rotate`.
 """
 
 from __future__ import annotations
@@ -28,7 +28,7 @@ from collections.abc import Iterator
 import numpy as np
 from numba import njit, prange
 
-from dice_env.kernel import (
+from dice_env.physics.kernel import (
     ABORTED,
     DAMP,
     DECIDED,
@@ -82,7 +82,7 @@ def covers(scene: object, batch: int, flight: bool, records: bool) -> bool:
     The paper's contact law and friction with the listing's step, an isotropic eight-corner
     die that rotates, one plane, no free-flight jumps and no records; and at least a tile of
     dice (a tile costs the same for fewer); not inside :func:`disabled`. (``scene`` is a
-    :class:`dice_env.scene.Scene`, read by its fields' names: the kernels import nothing
+    :class:`dice_env.model.scene.Scene`, read by its fields' names: the kernels import nothing
     above them.)
     """
     return (_enabled and scene.ground.contact_law.name == "PAPER"
@@ -371,7 +371,7 @@ def _run_tile(first: int, last: int, dice: Dice, body: Body, contact: Contact, o
 @njit(cache=True, parallel=True, nogil=True)
 def simulate_batch(dice: Dice, body: Body, contact: Contact, options: Options, stops: Stops,
                    records: Records, out: Outcome) -> None:
-    """:func:`dice_env.kernel.simulate_batch` for a scene :func:`covers`, tiles in parallel.
+    """:func:`dice_env.physics.kernel.simulate_batch` for a scene :func:`covers`, tiles in parallel.
 
     The arguments are that function's (``records`` is empty: :func:`covers` admits no records).
     """

@@ -1,7 +1,7 @@
 """Scenes, dice and die contacts as JSON data, and back, exactly.
 
-:func:`to_data` turns a :class:`~dice_env.scene.Scene`, a :class:`~dice_env.die.Die`, a
-:class:`~dice_env.group.DieContact` (or any of their parts: planes, rest thresholds) into
+:func:`to_data` turns a :class:`~dice_env.model.scene.Scene`, a :class:`~dice_env.model.die.Die`, a
+:class:`~dice_env.simulation.group.DieContact` (or any of their parts: planes, rest thresholds) into
 plain JSON data: ``{"type": name, field: value, ...}``, floats as Python writes them (which
 JSON reads back to the same double), enums by name. :func:`from_data` builds the object
 again through its own checks, so a file edited into nonsense is refused as the constructor
@@ -14,10 +14,10 @@ import dataclasses
 from enum import Enum
 from typing import Any
 
-from dice_env.checks import check_choice
-from dice_env.die import Die
-from dice_env.group import DieContact
-from dice_env.scene import Ground, Rest, Scene, Wall
+from dice_env.model.checks import check_choice
+from dice_env.model.die import Die
+from dice_env.model.scene import Ground, Rest, Scene, Wall
+from dice_env.simulation.group import DieContact
 
 TYPES: dict[str, type] = {kind.__name__: kind
                           for kind in (Scene, Die, Ground, Wall, Rest, DieContact)}

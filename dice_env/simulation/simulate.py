@@ -15,11 +15,11 @@ from typing import ClassVar, Self
 import numba
 import numpy as np
 
-from dice_env import group_kernel, kernel, vector_kernel
-from dice_env.checks import as_batch, check_bool, check_choice, check_finite, check_range
-from dice_env.compile_notice import announce, ready
-from dice_env.rotations import orthonormality_error
-from dice_env.scene import ContactLaw, FrictionLaw, Scene, Scheme
+from dice_env.model.checks import as_batch, check_bool, check_choice, check_finite, check_range
+from dice_env.model.rotations import orthonormality_error
+from dice_env.model.scene import ContactLaw, FrictionLaw, Scene, Scheme
+from dice_env.physics import group_kernel, kernel, vector_kernel
+from dice_env.simulation.compile_notice import announce, ready
 
 
 @dataclass
@@ -169,7 +169,7 @@ class Result(RunResult):
     - ``unstable``: energy rose beyond the scene's tolerance, or the state stopped being finite;
       ``energy_rise``: the largest rise above the start in units of that tolerance;
     - ``max_penetration``: deepest corner below a plane (m); ``sunk``: deeper than the
-      scene's :attr:`~dice_env.scene.Scene.sink_limit` (a contact too soft for the load or the
+      scene's :attr:`~dice_env.model.scene.Scene.sink_limit` (a contact too soft for the load or the
       impact: physics the model cannot represent; never count such a throw's face);
     - ``steps``: steps taken; ``final``: the state at the end.
 
@@ -222,11 +222,11 @@ def simulate(
     not ``settled``.
 
     ``device``: ``"cpu"`` (numba's threads) or ``"cuda"``: one die per thread of an NVIDIA GPU
-    (:mod:`dice_env.cuda_kernel`; the extra ``dice_env[cuda]``), the same physics to
+    (:mod:`dice_env.physics.cuda_kernel`; the extra ``dice_env[cuda]``), the same physics to
     round-off, without records; ``num_threads`` does not apply there.
 
     Refused before any work (``ValueError``/``TypeError`` naming the argument): a step count
-    above :data:`dice_env.scene.MAX_STEPS`, records above :data:`MAX_RECORD_BYTES`, a state
+    above :data:`dice_env.model.scene.MAX_STEPS`, records above :data:`MAX_RECORD_BYTES`, a state
     starting deeper in the table than the scene's sink limit. Ctrl-C ends a long run within
     milliseconds and raises ``KeyboardInterrupt``.
     """
@@ -285,7 +285,7 @@ def pack_run(scene: Scene, *, n_steps: int, stop_at_rest: bool = True, free_flig
 
 
 def pack_scene(scene: Scene) -> tuple[kernel.Body, kernel.Contact]:
-    """The kernel's die and contact groups for ``scene`` (see :mod:`dice_env.kernel`)."""
+    """The kernel's die and contact groups for ``scene`` (see :mod:`dice_env.physics.kernel`)."""
     die, ground = scene.die, scene.ground
     inertia = die.inertia_body
     vertices = np.ascontiguousarray(die.vertices_body)
@@ -320,7 +320,7 @@ def _records(record: tuple[str, ...], record_every: int, b: int, n_steps: int,
 
 def check_run(scene: Scene, state: object, kind: type, record_every: object,
               num_threads: int | None, **flags: object) -> int:
-    """Check the keywords :func:`simulate` and :func:`dice_env.group.simulate_group` share.
+    """Check the keywords that :func:`simulate` and ``simulate_group`` share.
 
     ``state`` must be a ``kind``, ``record_every`` an int >= 0, each of ``flags`` a bool;
     returns the run's thread count (:func:`thread_count`).
@@ -406,7 +406,7 @@ RELEASE_SINK = 1e-3  # deepest corner of a release, as a fraction of the die's s
 MAX_RECORD_BYTES = 4 * 2**30  # records larger than this are refused before any work
 ROTATION_TOL = 1e-6  # State.orientation's allowed orthonormality error (a long run drifts)
 # The CPU kernel of each kind of run, its loop on numba's threads and its serial loop: a
-# single die, the paper's scene (dice_env.vector_kernel.covers), several dice together.
+# single die, the paper's scene (dice_env.physics.vector_kernel.covers), several dice together.
 BACKENDS: dict[str, tuple[Callable, Callable]] = {
     "die": (kernel.simulate_batch, kernel.simulate_serial),
     "paper": (vector_kernel.simulate_batch, vector_kernel.simulate_serial),
@@ -414,7 +414,7 @@ BACKENDS: dict[str, tuple[Callable, Callable]] = {
 }
 # Each CPU kernel (by its parallel loop): its costly functions, its name for a user and its
 # cold compile time on two cores (s, about; benchmarks/cold_start.py), said on stderr before
-# they compile (dice_env.compile_notice).
+# they compile (dice_env.simulation.compile_notice).
 COMPILES = {
     kernel.simulate_serial: ((kernel.simulate_one, kernel.simulate_serial), "the die's kernel",
                              8.0),
@@ -462,7 +462,7 @@ def _record_names(record: object) -> tuple[str, ...]:
 
 
 def _cuda_kernel() -> ModuleType:
-    """:mod:`dice_env.cuda_kernel`, once numba-cuda and a GPU (or its simulator) are there."""
+    """The CUDA kernel's module, once numba-cuda and a GPU (or its simulator) are there."""
     if importlib.util.find_spec("numba_cuda") is None:
         raise ImportError("device='cuda' needs numba-cuda: pip install 'dice_env[cuda]' (an "
                           "NVIDIA GPU and its driver too)")
@@ -472,7 +472,7 @@ def _cuda_kernel() -> ModuleType:
         raise RuntimeError("device='cuda' found no usable CUDA GPU (numba.cuda.is_available() "
                            "is False): it needs an NVIDIA GPU with its driver; "
                            "numba.cuda.detect() says what is missing")
-    from dice_env import cuda_kernel
+    from dice_env.physics import cuda_kernel
 
     return cuda_kernel
 

@@ -12,7 +12,7 @@ import math
 
 import numpy as np
 
-from dice_env.checks import check_finite
+from dice_env.model.checks import check_finite
 
 MAX_VERTICES = 64  # the hull search costs O(N^4) (64: 0.1 s); the d60 has 62 corners
 TOLERANCE = 1e-9  # of the vertex set's extent (largest coordinate range): closer is "on a plane"

@@ -2,7 +2,7 @@
 
 Each preset gives the normal restitution ``e`` of a flat landing and the sliding friction
 ``mu`` of a plastic (acrylic or cellulose acetate) die on that surface, and a ground stiffness
-``S`` per vertex; :func:`ground` turns them into S, D, mu as :mod:`dice_env.table` does for
+``S`` per vertex; :func:`ground` turns them into S, D, mu as :mod:`dice_env.model.table` does for
 the default table (``D = damping_for_restitution(e, S, m)`` for the die's mass ``m``; the
 step follows S through the scene's automatic step). ``wood`` is the default table exactly:
 ``ground("wood") == Ground()``.
@@ -45,20 +45,20 @@ J. Strzalko et al., Physics Reports 469, 59-92 (2008); Y. Murase, J. Fac. Agr. K
 28, 147-160 (1984); P. J. Blau, Tribology International 34, 585-591 (2001); S. F. Foerster,
 M. Y. Louge, H. Chang, K. Allia, Physics of Fluids 6, 1108-1115 (1994); D. G. Alciatore, "The
 amazing world of billiards physics" and billiards.colostate.edu; S. Haltom, "Table conditions",
-dicecoach.com; F. Scoblete, "Get yourself a table", goldentouchcraps.com. :func:`measured`
-gives the restitution the simulator produces for each preset (``docs/materials.md``).
+dicecoach.com; F. Scoblete, "Get yourself a table", goldentouchcraps.com.
+:func:`dice_env.simulation.calibration.measured_restitution` of :func:`scene` gives the
+restitution the simulator produces for each preset (``docs/materials.md``).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 
-from dice_env import table
-from dice_env.calibration import measured_restitution
-from dice_env.checks import check_choice, check_positive, check_range
-from dice_env.die import Die
-from dice_env.scene import Ground, Scene
-from dice_env.table import damping_for_restitution
+from dice_env.model import table
+from dice_env.model.checks import check_choice, check_positive, check_range
+from dice_env.model.die import Die
+from dice_env.model.scene import Ground, Scene
+from dice_env.model.table import damping_for_restitution
 
 
 @dataclass(frozen=True)
@@ -119,7 +119,3 @@ def scene(name: str, die: Die | None = None, **options: object) -> Scene:
     die = Die() if die is None else die
     return Scene(die=die, ground=ground(name, die), **options)
 
-
-def measured(name: str, speed: float = 1.0) -> float:
-    """Restitution the simulator gives the default die dropped flat at ``speed`` on ``name``."""
-    return measured_restitution(scene(name), speed)

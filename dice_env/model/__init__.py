@@ -1,0 +1,1 @@
+"""The model: dice, shapes, pips, materials, planes and scenes as frozen data (no physics)."""
