@@ -616,7 +616,7 @@ def advance_group(g: int, dice: GroupDice, bodies: Bodies, hulls: Hulls, pair: P
                    out: GroupOutcome) -> None:
     """Advance throw ``g`` (its N dice) in place; see :func:`simulate_groups`."""
     n_dice, n_planes = dice.x.shape[1], contact.planes.shape[0]
-    planes, gated, stick, vmin = contact.planes, contact.gated, contact.stick, contact.vmin
+    planes, contact_law, stick, vmin = contact.planes, contact.law, contact.stick, contact.vmin
     vertices, n_vertices, mass = bodies.vertices, bodies.n_vertices, bodies.mass
     inv_inertia, inv_iso, r_max = bodies.inv_inertia, bodies.inv_iso, bodies.r_max
     axes, directions = hulls.axes, hulls.directions  # taken once: see least_overlap
@@ -688,7 +688,7 @@ def advance_group(g: int, dice: GroupDice, bodies: Bodies, hulls: Hulls, pair: P
                 l0 * wl0 + l1 * wl1 + l2 * wl2)
             near[a] = stops.at_rest and kinetic[a] < 0.5 * m * stops.v_rest * stops.v_rest
             x0, x1, x2 = x[a, 0], x[a, 1], x[a, 2]
-            law = (gated, stick, vmin, midpoint, rotation, dt, dt / m, m * g_acc)
+            law = (contact_law, stick, vmin, midpoint, rotation, dt, dt / m, m * g_acc)
             (f0, f1, f2, t0, t1, t2, spring, spring_t, touching[a], approach[a], fastest[a],
              sink) = die_on_planes(
                 a, a * n_v, n_vertices[a], flat, planes, law, contacts,

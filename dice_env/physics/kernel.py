@@ -105,6 +105,9 @@ class Body(NamedTuple):
 # Columns of Contact.planes: unit normal (3), offset, stiffness, damping, friction, the
 # stick-slip spring and damper.
 NX, NY, NZ, OFFSET, STIFF, DAMP, MU, KT, CT = range(9)
+# The plane contact laws (Contact.law): the spring-dashpot on the vertices below a plane only,
+# and the listing's, on every vertex.
+GATED, PAPER = 0, 1
 
 
 class Contact(NamedTuple):
@@ -113,14 +116,14 @@ class Contact(NamedTuple):
     ``planes`` (P, 9): per plane its unit normal (pointing into the free side), offset,
     stiffness S, damping D, friction mu, and the stick-slip spring ``kt`` and damper ``ct``
     (columns ``NX`` ... ``CT``; one array, read element by element in the loop). Plane 0 is the
-    floor: the start height in the energy scale is taken against it. ``gated``: only
-    vertices below a plane feel it (else the listing's law on every vertex); ``stick``:
+    floor: the start height in the energy scale is taken against it. ``law``: the contact
+    law (``GATED``: only vertices below a plane feel it; ``PAPER``: every vertex); ``stick``:
     stick-slip friction (else the listing's ``-mu fn Ut/(|Ut| + vmin)``); ``vmin``: that
     law's speed.
     """
 
     planes: np.ndarray
-    gated: bool
+    law: int
     stick: bool
     vmin: float
 
@@ -471,7 +474,7 @@ def die_on_planes(die: int, first: int, count: int, vertices: np.ndarray, planes
 
     The die's ``count`` vertices are the rows from ``first`` on of ``vertices`` (body frame)
     and of ``contacts``' per-vertex arrays; its lowest heights are row ``die`` of
-    ``contacts.lowest``. ``law``: ``(gated, stick, vmin, midpoint, rotation, dt, dt_m,
+    ``contacts.lowest``. ``law``: ``(contact law, stick, vmin, midpoint, rotation, dt, dt_m,
     weight)``; ``q``: its rotation, nine numbers row by row; ``motion``: ``(x, u, w, cu,
     cw)``, its centre, velocity and angular velocity, and the last two at the midpoint
     forces' time. First every vertex's offset (and, near rest, the fastest vertex), then
@@ -483,7 +486,7 @@ def die_on_planes(die: int, first: int, count: int, vertices: np.ndarray, planes
     deepest sink. Compiled without reference counts (``_nrt=False``): it binds the arrays it
     is handed at every step, and numba cannot prune those counts across its loops.
     """
-    gated, stick, vmin, midpoint, rotation, dt, dt_m, weight = law
+    contact_law, stick, vmin, midpoint, rotation, dt, dt_m, weight = law
     q00, q01, q02, q10, q11, q12, q20, q21, q22 = q
     (x0, x1, x2), (u0, u1, u2), (w0, w1, w2), (cu0, cu1, cu2), (cw0, cw1, cw2) = motion
     offsets, heights, anchors, tied = contacts.offsets, contacts.heights, contacts.anchors, \
@@ -515,7 +518,7 @@ def die_on_planes(die: int, first: int, count: int, vertices: np.ndarray, planes
             heights[p, k] = height
             if height >= 0.0:
                 tied[p, k] = False
-                if gated:
+                if contact_law != PAPER:
                     continue
             velocity = (u0 + w1 * rk2 - w2 * rk1, u1 + w2 * rk0 - w0 * rk2,
                         u2 + w0 * rk1 - w1 * rk0)
@@ -598,7 +601,7 @@ def advance(i: int, dice: Dice, body: Body, contact: Contact, options: Options, 
     # the groups' arrays taken out once: each taking costs a reference count
     vertices, planes, faces, lock = body.vertices, contact.planes, body.faces, stops.lock
     inv_body, inv_iso, reads_down = body.inv_inertia, body.inv_iso, body.reads_down
-    gated, stick, vmin = contact.gated, contact.stick, contact.vmin
+    contact_law, stick, vmin = contact.law, contact.stick, contact.vmin
     n0, n1, n2, floor = planes[0, NX], planes[0, NY], planes[0, NZ], planes[0, OFFSET]
     up = (0.0, 0.0, 1.0)  # faces are read against gravity
     x0, x1, x2 = dice.x[i, 0], dice.x[i, 1], dice.x[i, 2]
@@ -608,7 +611,7 @@ def advance(i: int, dice: Dice, body: Body, contact: Contact, options: Options, 
     mass = body.mass
     w0, w1, w2 = (dice.w[i, 0], dice.w[i, 1], dice.w[i, 2]) if rotation else (0.0, 0.0, 0.0)
     dt_m = dt / mass
-    law = (gated, stick, vmin, midpoint, rotation, dt, dt_m, mass * g)
+    law = (contact_law, stick, vmin, midpoint, rotation, dt, dt_m, mass * g)
     n_steps, stride = stops.n_steps, records.stride
     for a in range(3):
         for c in range(3):

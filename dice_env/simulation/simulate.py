@@ -269,10 +269,10 @@ def pack_run(scene: Scene, *, n_steps: int, stop_at_rest: bool = True, free_flig
     scene into the kernel's groups.
     """
     ground, dt = scene.ground, scene.step
-    gated = ground.contact_law == ContactLaw.GATED
     options = kernel.Options(
         gravity=float(scene.gravity), dt=float(dt), rotation=bool(scene.rotation),
-        flight=bool(free_flight and (gated or ground.damping == 0)),
+        flight=bool(free_flight and (ground.contact_law != ContactLaw.PAPER
+                                     or ground.damping == 0)),
         midpoint=scene.scheme == Scheme.MIDPOINT)
     rest_energy, rest_excess = _rest_energy(scene, early_rest)
     stops = kernel.Stops(
@@ -282,6 +282,10 @@ def pack_run(scene: Scene, *, n_steps: int, stop_at_rest: bool = True, free_flig
         lock=lock_energy(scene) if stop_when_decided else np.full(scene.die.n_faces, -math.inf),
         energy_scale=float(scene.die.mass * scene.gravity * scene.die.size))
     return options, stops
+
+
+# each plane contact law's code in the kernel (kernel.Contact.law)
+CONTACT_LAWS = {ContactLaw.GATED: kernel.GATED, ContactLaw.PAPER: kernel.PAPER}
 
 
 def pack_scene(scene: Scene) -> tuple[kernel.Body, kernel.Contact]:
@@ -300,7 +304,7 @@ def pack_scene(scene: Scene) -> tuple[kernel.Body, kernel.Contact]:
                           plane.friction, plane.tangential * plane.stiffness,
                           plane.tangential * plane.damping] for plane in scene.planes],
                         dtype=np.float64),
-        gated=ground.contact_law == ContactLaw.GATED,
+        law=CONTACT_LAWS[ground.contact_law],
         stick=scene.friction_law == FrictionLaw.STICK_SLIP, vmin=float(scene.friction_vmin))
     return body, contact
 
