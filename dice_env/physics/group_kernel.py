@@ -54,7 +54,6 @@ import numpy as np
 from numba import njit, prange
 
 from dice_env.physics.kernel import (
-    ABORT_EVERY,
     ABORTED,
     DECIDED,
     NONFINITE,
@@ -67,6 +66,7 @@ from dice_env.physics.kernel import (
     Contact,
     Options,
     PlaneContacts,
+    aborted,
     ahead,
     angular_velocity,
     die_on_planes,
@@ -662,10 +662,10 @@ def advance_group(g: int, dice: GroupDice, bodies: Bodies, hulls: Hulls, pair: P
     n_steps, stride, n_rec = stops.n_steps, records.stride, records.x.shape[1]
     e_start, e_tol, e_max = 0.0, 1.0, -np.inf
     quiet, step, passes, next_record, end = 0, 0, 0, stride, RUNNING
-    overlap = out.overlap[g]
+    overlap, abort = out.overlap[g], out.abort
     while step < n_steps:
         passes += 1
-        if passes & (ABORT_EVERY - 1) == 0 and out.abort[0] != 0:
+        if aborted(passes, abort):
             end = ABORTED
             break
         step += 1

@@ -553,6 +553,12 @@ def die_on_planes(die: int, first: int, count: int, vertices: np.ndarray, planes
     return f0, f1, f2, t0, t1, t2, spring, spring_t, touching, approach, fastest, pen
 
 
+@njit(cache=True, forceinline=True, _nrt=False)
+def aborted(passes: int, abort: np.ndarray) -> bool:
+    """Whether another thread has set ``abort`` (looked at once every ``ABORT_EVERY`` passes)."""
+    return passes & (ABORT_EVERY - 1) == 0 and abort[0] != 0
+
+
 @njit(cache=True)
 def decided(lock: np.ndarray, faces: np.ndarray, reads_down: bool, q: np.ndarray, up: tuple,
             energy: float) -> bool:
@@ -600,6 +606,7 @@ def advance(i: int, dice: Dice, body: Body, contact: Contact, options: Options, 
         contacts.lowest
     # the groups' arrays taken out once: each taking costs a reference count
     vertices, planes, faces, lock = body.vertices, contact.planes, body.faces, stops.lock
+    abort = out.abort
     inv_body, inv_iso, reads_down = body.inv_inertia, body.inv_iso, body.reads_down
     contact_law, stick, vmin = contact.law, contact.stick, contact.vmin
     n0, n1, n2, floor = planes[0, NX], planes[0, NY], planes[0, NZ], planes[0, OFFSET]
@@ -640,7 +647,7 @@ def advance(i: int, dice: Dice, body: Body, contact: Contact, options: Options, 
             anchors[p, k, 0], anchors[p, k, 1], anchors[p, k, 2] = 0.0, 0.0, 0.0
     while step < n_steps:
         passes += 1
-        if passes & (ABORT_EVERY - 1) == 0 and out.abort[0] != 0:
+        if aborted(passes, abort):
             end = ABORTED
             break
         step += 1
