@@ -39,12 +39,14 @@ ROOT = Path(__file__).resolve().parents[1]
 CHILD = r"""
 import json, time
 import numpy as np
+from pathlib import Path
+import dice_env
 from dice_env import Scene, State, simulate
-try:
+if (Path(dice_env.__file__).parent / "physics").is_dir():
     from dice_env.physics import vector_kernel
     from dice_env.simulation.paper import paper_scene
     from dice_env.model.rotations import random_rotations
-except ImportError:  # a base tree from before the layers (model, physics, simulation)
+else:  # a base tree from before the layers (model, physics, simulation)
     from dice_env import vector_kernel
     from dice_env.paper import paper_scene
     from dice_env.rotations import random_rotations
@@ -87,11 +89,13 @@ GROUP_CHILD = r"""
 import hashlib, json, time
 import numpy as np
 from dice_env import Die, Scene
+from pathlib import Path
+import dice_env
 from dice_env.studies import pairs, weldon
-try:
+if (Path(dice_env.__file__).parent / "physics").is_dir():
     from dice_env.simulation.group import GroupState, simulate_group
     from dice_env.model.surroundings import tray
-except ImportError:  # a base tree from before the layers (model, physics, simulation)
+else:  # a base tree from before the layers (model, physics, simulation)
     from dice_env.group import GroupState, simulate_group
     from dice_env.surroundings import tray
 
