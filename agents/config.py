@@ -231,12 +231,12 @@ def check(config: Config) -> None:
         if high is not None and not low <= value <= high:
             raise OptionError(key, f"must be an integer in [{low}, {high}], got {value}")
     if config.num_threads is not None:
-        import numba
+        from dice_env.simulation.simulate import thread_count
 
-        cores = numba.config.NUMBA_NUM_THREADS
-        if not 1 <= config.num_threads <= cores:
-            raise OptionError("num_threads", f"must be in [1, {cores}] (numba's threads on this "
-                              f"machine), got {config.num_threads}")
+        try:
+            thread_count(config.num_threads)
+        except ValueError as error:
+            raise OptionError("num_threads", str(error).removeprefix("num_threads ")) from None
     if config.resume is not None:
         _check_resume(config)
         return

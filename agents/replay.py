@@ -41,8 +41,7 @@ def record_throw(task: ThrowTask, action: np.ndarray, target: Any, hand: np.ndar
                        np.asarray(hand)[None], np.asarray(noise)[None], record_every=every)
     result = throw.result
     shown = int(result.steps[0]) // every
-    start = task.release_position if task.n_dice == 1 else task.release_positions
-    poses = [(start, hand),
+    poses = [(task.hand_position, hand),
              *zip(result.x_cm[0, :shown], result.orientations[0, :shown], strict=True)]
     poses += [(result.final.position[0], result.final.orientation[0])] * round(HOLD * FPS)
     frames = [render_task(task, p, q, size=size) for p, q in poses]

@@ -29,7 +29,7 @@ def train_py(*args, **kwargs):
 @pytest.mark.parametrize(("args", "message"), [
     (["--n-envs", "0"], "argument --n-envs: must be an integer >= 1, got 0"),
     (["--seed", "-1"], "argument --seed: must be an integer in [0, 2147483647], got -1"),
-    (["--num-threads", "999"], "argument --num-threads: must be in [1, "),
+    (["--num-threads", "999"], "argument --num-threads: must be an int in [1, "),
     (["--eval-episodes", "0"], "argument --eval-episodes: must be an integer >= 1"),
     (["--total-timesteps", "-5"], "argument --total-timesteps: must be an integer >= 1"),
     (["--name", "../../x"], "argument --name: must be a plain folder name"),

@@ -20,7 +20,7 @@ from scipy.spatial.transform import Rotation
 from dice_env.intervals import wilson
 from dice_env.model.die import Die
 from dice_env.model.scene import Scene
-from dice_env.simulation.simulate import Result, State, simulate
+from dice_env.simulation.simulate import Result, RunResult, State, simulate
 from dice_env.studies.common import DOCS, SEED, batches, progress, save_figure
 from dice_env.studies.markdown import bracket, estimate, markdown_table
 
@@ -144,8 +144,7 @@ def throw_batches(scene: Scene, state: State, bar, batch: int = BATCH) -> Result
     parts = []
     for chunk in batches(state, batch, bar):
         parts.append(simulate(scene, chunk, t_max=T_MAX))
-    names = ("face", "settled", "decided", "rest_time", "impacts", "unstable", "energy_rise",
-             "max_penetration", "sunk", "steps")
+    names = [f.name for f in fields(RunResult) if f.name != "final"]
     joined = {f: np.concatenate([getattr(p, f) for p in parts]) for f in names}
     final = State(*(np.concatenate([getattr(p.final, f.name) for p in parts])
                     for f in fields(State)))

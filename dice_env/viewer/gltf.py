@@ -169,7 +169,7 @@ def _die_mesh(blob: _Blob, die: Die) -> int:
     coordinates, fanned into triangles.
     """
     image, uv = face_atlas(die)
-    vertices = np.asarray(die.vertices) - np.asarray(die.com)
+    vertices = die.vertices_body
     starts = np.cumsum([0, *(len(face) for face in die.faces)])
     triangles = np.array([(start, start + i, start + i + 1)
                           for start, face in zip(starts, die.faces, strict=False)

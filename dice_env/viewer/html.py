@@ -113,7 +113,7 @@ def _describe(value: Any) -> str:
 def _shape(die: Die) -> dict[str, Any]:
     """A die's triangles about its centre of mass, flat normals, texture coordinates, atlas."""
     image, uv = face_atlas(die, TEXTURE_PIXELS)
-    corners = np.asarray(die.vertices) - np.asarray(die.com)
+    corners = die.vertices_body
     normals = np.asarray(die.face_normals)
     position, normal, coordinates = [], [], []
     for k, face in enumerate(die.faces):
