@@ -119,10 +119,12 @@ class HandThrower:
 
 @dataclass(frozen=True)
 class SetThrower:
-    """The craps study's throw with the dice set in the all-sevens set (two d6, ``set_dice``).
+    """The craps study's throw with the dice set (two d6, ``set_dice``).
 
-    Each die's setting turns its drawn orientation into :func:`craps.sevens_set`'s; the hand
-    moves as :func:`craps.action` at the study's first speed, scaled to the task's maxima.
+    Each die's setting turns its drawn orientation into the set's: :func:`craps.sevens_set`
+    where the task rewards its total, :func:`craps.crossed_set` where it rewards avoiding it
+    (``target="avoid_sum"``). The hand moves as :func:`craps.action` at the study's first
+    speed, scaled to the task's maxima.
     """
 
     task: ThrowTask
@@ -130,7 +132,8 @@ class SetThrower:
     def __call__(self, observations: np.ndarray) -> np.ndarray:
         """Actions (n, 12): the throw, then each die's setting as a rotation vector / pi."""
         _, hands = self.task.decode(observations)
-        turns = craps.sevens_set() @ np.swapaxes(hands, -1, -2)
+        chosen = craps.crossed_set() if self.task.target == "avoid_sum" else craps.sevens_set()
+        turns = chosen @ np.swapaxes(hands, -1, -2)
         setting = (matrix_to_rotation_vector(turns) / SET_ANGLE).reshape(len(hands), -1)
         scale = np.r_[[craps.MAX_SPEED / self.task.max_speed] * 3,
                       [craps.MAX_SPIN / self.task.max_spin] * 3]

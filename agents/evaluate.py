@@ -89,13 +89,13 @@ def summary(success: np.ndarray, targets: np.ndarray,
 
 
 def target_values(task: ThrowTask) -> list[int]:
-    """The targets a summary splits by: one die's faces, the totals of "sum".
+    """The targets a summary splits by: one die's faces, the totals of "sum" and "avoid_sum".
 
     None for the faces of several dice (one per combination would be too many).
     """
     if task.n_dice == 1:
         return list(range(1, task.n_faces + 1))
-    return list(task.totals) if task.target == "sum" else []
+    return list(task.totals) if task.target != "faces" else []
 
 
 def paired_difference(a: np.ndarray, b: np.ndarray) -> dict[str, Any]:

@@ -6,10 +6,10 @@
 For each id of :data:`dice_env.envs.tasks.TASKS`, made with ``gym.make``, every thrower faces
 the same seeded throws (targets, hands, hand noise: ``agents.evaluate.compare``): uniform random
 actions and a rule (the hand-written thrower for one die; for the set dice of the craps task the
-craps study's throw, ``dice_env.studies.craps``: the all-sevens set, 2 m/s at the back wall with
-backspin) on ``throws`` throws each, Wilson 95 % intervals; the oracle (``agents.oracle``,
-started from their actions) on the first of those observations, each scored on 16 fresh noise
-draws, its interval Wilson's divided by the observations' design effect
+craps study's throw, ``dice_env.studies.craps``: the crossed set, against the seven, 2 m/s at
+the back wall with backspin) on ``throws`` throws each, Wilson 95 % intervals; the oracle
+(``agents.oracle``, started from their actions) on the first of those observations, each scored
+on 16 fresh noise draws, its interval Wilson's divided by the observations' design effect
 (``agents.evaluate.clustered``). The oracle's budget is ``agents.oracle.task_budget``'s.
 Prints a table and writes ``benchmarks/results/tasks.json``.
 """
@@ -40,14 +40,18 @@ QUICK = {"throws": 16, "observations": 2,
 
 
 def chance(task: ThrowTask, episode: dict[str, object]) -> float:
-    """Success of fair dice: 1 / faces for one die, else P(the total) averaged over targets."""
+    """Success of fair dice: 1 / faces for one die, else P(the total) over the targets.
+
+    One minus that where the task avoids the total.
+    """
     if task.n_dice == 1:
         return 1.0 / task.n_faces
     totals = np.ones(1)
     for faces in task.faces:
         totals = np.convolve(totals, np.full(faces, 1.0 / faces))
     fixed = episode.get("target_sum")
-    return float(totals[fixed - task.n_dice]) if fixed is not None else 1.0 / len(totals)
+    hit = float(totals[fixed - task.n_dice]) if fixed is not None else 1.0 / len(totals)
+    return 1.0 - hit if task.target == "avoid_sum" else hit
 
 
 def measure(named: NamedTask, throws: int, observations: int | None,

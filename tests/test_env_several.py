@@ -167,6 +167,17 @@ def test_sum_target_succeeds_when_the_faces_add_up(monkeypatch):
     np.testing.assert_array_equal(throw.info["target_sum"], [7, 5, 12])
 
 
+def test_avoid_sum_target_succeeds_on_any_other_total_and_fails_when_void(monkeypatch):
+    task = make_task(num_dice=2, target="avoid_sum", until="rest")
+    throw = throw_with(monkeypatch, task, [7, 7, 5, 7], [[3, 4], [2, 2], [2, 3], [6, 6]],
+                       np.array([[1, 1], [1, 1], [1, 1], [1, 0]], bool))
+    np.testing.assert_array_equal(throw.info["is_success"], [False, True, False, False])
+    np.testing.assert_array_equal(throw.info["void_reason"], ["", "", "", "leaning"])
+    np.testing.assert_array_equal(throw.info["target_sum"], [7, 7, 5, 7])
+    targets, _ = task.decode(throw.observation)
+    np.testing.assert_array_equal(targets, [7, 7, 5, 7])  # observed as the "sum" target is
+
+
 def test_faces_target_needs_every_die_and_shapes_by_the_mean_alignment(monkeypatch):
     task = make_task(num_dice=2, target="faces", until="rest", shaping=0.5)
     # Identity hands: face 1 (+z) up on both dice; face 2 (+x) on a side.
@@ -278,6 +289,8 @@ def test_frames_of_two_dice_come_at_render_fps():
     ({"num_dice": 2, "target": "faces", "target_sum": 7}, "target_sum"),
     ({"num_dice": 2, "target": "total"}, "target"),
     ({"target": "sum"}, "target"),                           # one die
+    ({"target": "avoid_sum"}, "target"),                     # one die
+    ({"num_dice": 2, "target": "avoid_sum", "target_face": (1, 2)}, "target_face"),
     ({"set_dice": True}, "set_dice"),                        # one die
     ({"num_dice": 2, "set_dice": "yes"}, "set_dice"),
     ({"num_dice": 12, "walls": (Wall.through((0.04, 0, 0), (-1, 0, 0)),)}, "walls"),

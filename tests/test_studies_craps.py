@@ -17,6 +17,15 @@ def test_the_sevens_set_shows_a_seven_while_both_dice_turn_alike_about_the_roll_
     assert die.face_read(turned, UP).sum() == 7
 
 
+def test_the_crossed_set_shows_a_seven_in_2_of_16_common_rolls():
+    die, roll = Die(), [0.0, 1.0, 0.0]
+    sevens = [die.face_read(axis_angle(roll, a * np.pi / 2)
+                            @ np.stack([cr.crossed_set()[0],
+                                        axis_angle(roll, b * np.pi / 2) @ cr.crossed_set()[1]]),
+                            UP).sum() == 7 for a in range(4) for b in range(4)]
+    assert sum(sevens) == 2
+
+
 def test_the_throw_goes_forward_with_backspin():
     a = cr.action(2.0)
     np.testing.assert_allclose(a[:3] * cr.MAX_SPEED, [2.0, 0.0, cr.LIFT])

@@ -197,9 +197,9 @@ class DiceThrowEnv(gym.Env):
     | ``num_threads`` | None | numba threads, 1 to NUMBA_NUM_THREADS (None: all cores) |
     | ``until`` | "rest" | "rest", or "decided": end a throw when its face is decided |
     | ``num_dice`` | 1 | dice per throw, 1 … 12 (``die`` may also be a tuple, one per die) |
-    | ``target`` | None | "faces" (one die; a face per die) or "sum" (a total: several dice's |
-    | | | default) |
-    | ``target_sum`` | None | fix the total (``target="sum"``) |
+    | ``target`` | None | "faces" (one die; a face per die), "sum" (a total: several dice's |
+    | | | default) or "avoid_sum" (any total but the target's) |
+    | ``target_sum`` | None | fix the total (``target="sum"`` or ``"avoid_sum"``) |
     | ``set_dice`` | False | several dice: the action also sets each die in the hand |
     | ``render_mode`` | None | "rgb_array", "rgb_array_list" or "human" |
     | ``render_width``, ``render_height`` | 320, 240 | frame size (pixels) |

@@ -48,7 +48,7 @@ RELEASE_HEIGHT = 0.015
 RELEASE_GAP = RELEASE_HEIGHT - math.sqrt(3.0) * 0.008
 # Several dice: how many, what the target names, how the hand holds them.
 MAX_NUM_DICE = 12
-TARGETS = ("faces", "sum")
+TARGETS = ("faces", "sum", "avoid_sum")
 HAND_ROW = 4  # dice per row in the hand
 HAND_GAP = 0.002  # m: the least gap between neighbours in the hand, in any orientations
 SET_ANGLE = math.pi  # rad: a dice-setting action of 1 turns its die by this much
@@ -95,7 +95,10 @@ class ThrowTask:
     per die. ``target="sum"`` (the default for several dice): a total N … sum of the faces is
     drawn uniformly and the throw succeeds when the faces read add up to it ("roll a seven"
     with two d6); the observation starts with one one-hot over the totals, and the shaping
-    term is 0 (no single face needs to be up). Then every die's orientation (9 numbers per die).
+    term is 0 (no single face needs to be up). ``target="avoid_sum"``: the same total, drawn
+    or fixed, is the one to avoid: the throw succeeds when the faces add up to any other
+    (a craps shooter after the point, who loses on a seven). Then every die's orientation
+    (9 numbers per die).
 
     **Void throws**, the first that applies: foul, unstable, sunk (any die), not settled or
     not decided, then "leaning": a die ended leaning on another die (not read).
@@ -174,8 +177,8 @@ class ThrowTask:
         if not isinstance(self.set_dice, bool):
             raise ValueError(f"set_dice must be True or False, got {self.set_dice!r}")
         if not several and self.target != "faces":
-            raise ValueError(f"target must be 'faces' for one die (target='sum' needs "
-                             f"num_dice >= 2), got {self.target!r}")
+            raise ValueError(f"target must be 'faces' for one die (target={self.target!r} "
+                             f"needs num_dice >= 2)")
         if not several and self.set_dice:
             raise ValueError(f"set_dice needs num_dice >= 2, got set_dice={self.set_dice!r}")
 
@@ -235,7 +238,7 @@ class ThrowTask:
 
     @property
     def target_dim(self) -> int:
-        """One one-hot per die ("faces") or one over :attr:`totals` ("sum")."""
+        """One one-hot per die ("faces") or one over :attr:`totals` (a total's targets)."""
         return sum(self.faces) if self.target == "faces" else len(self.totals)
 
     @property
@@ -295,18 +298,19 @@ class ThrowTask:
     def fixed_target(self, target_face: object = None, target_sum: object = None) -> Any:
         """The episode keywords ``target_face``/``target_sum`` as a fixed target (None: drawn).
 
-        "faces": ``target_face``, a face (one die) or a sequence of N faces; "sum":
-        ``target_sum``, an int in :attr:`totals`. The other is refused.
+        "faces": ``target_face``, a face (one die) or a sequence of N faces; "sum" and
+        "avoid_sum": ``target_sum``, an int in :attr:`totals`. The other is refused.
         """
         if self.target == "faces":
             if target_sum is not None:
                 raise ValueError(f"target_sum fixes the total of several dice with "
-                                 f"target='sum'; target is 'faces' (fix each die's face with "
-                                 f"target_face), got {target_sum!r}")
+                                 f"target='sum' or 'avoid_sum'; target is 'faces' (fix each "
+                                 f"die's face with target_face), got {target_sum!r}")
             return None if target_face is None else self._check_faces(target_face)
         if target_face is not None:
             raise ValueError(f"target_face fixes each die's face with target='faces'; target "
-                             f"is 'sum' (fix the total with target_sum), got {target_face!r}")
+                             f"is {self.target!r} (fix the total with target_sum), got "
+                             f"{target_face!r}")
         if target_sum is None:
             return None
         if isinstance(target_sum, bool) or not isinstance(target_sum, (int, np.integer)):
@@ -404,7 +408,7 @@ class ThrowTask:
                              f"{observations.shape[1]}")
         n, encoding = len(observations), observations[:, :self.target_dim]
         u, _, vt = np.linalg.svd(observations[:, self.target_dim:].reshape(-1, 3, 3))
-        if self.target == "sum":
+        if self.target != "faces":
             targets = encoding.argmax(axis=1) + self.totals[0]
         else:
             ends = np.cumsum(self.faces)
@@ -489,7 +493,8 @@ class ThrowTask:
             alignment = np.mean([target_alignment(final[:, i], die, per_die[:, i], normal)
                                  for i, die in enumerate(self.dice)], axis=0)
         else:
-            hit, alignment = faces.sum(axis=1) == targets, np.zeros(n)
+            hit = (faces.sum(axis=1) == targets) == (self.target == "sum")
+            alignment = np.zeros(n)
         success = counts & hit
         reward_success = success.astype(np.float64)
         shaping = np.where(counts, self.shaping * alignment, 0.0)

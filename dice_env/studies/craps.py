@@ -75,6 +75,16 @@ def sevens_set() -> np.ndarray:
     return np.stack([np.eye(3), axis_angle([0.0, 1.0, 0.0], np.pi)])
 
 
+def crossed_set() -> np.ndarray:
+    """The two dice's orientations in the hand (2, 3, 3): a set against the seven.
+
+    Die 2 is die 1 turned a quarter turn about x, the throw's direction: the four faces each
+    die rolls through about y share one opposite pair, so that 2 of their 16 pairings add to
+    seven (4 for dice set alike or in :func:`sevens_set`).
+    """
+    return np.stack([np.eye(3), axis_angle([1.0, 0.0, 0.0], np.pi / 2)])
+
+
 def hand(noise: float) -> ThrowTask:
     """The env's two-dice hand on the craps scene with hand and orientation noise ``noise``."""
     return make_task(num_dice=2, scene=craps_scene(), release_height=RELEASE_HEIGHT,
