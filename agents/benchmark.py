@@ -85,15 +85,25 @@ def success(model: Any, task: Any, batch: Any) -> dict[str, Any]:
 
 
 class Run:
-    """One (task, algorithm, seed): its files, its budget and its curve so far."""
+    """One (task, algorithm, seed): its files, its budget and its curve so far.
+
+    ``params`` (default: the benchmark's entry), ``name`` (default: ``algo-seed``) and
+    ``folder`` let the search (:mod:`agents.tune`) train other keywords into files of their
+    own; ``final_seed`` draws the final evaluation's throws.
+    """
 
     def __init__(self, task_id: str, algo: str, seed: int, out: Path, budget: int,
-                 curve_throws: int, final_throws: int) -> None:
+                 curve_throws: int, final_throws: int, *, params: dict[str, Any] | None = None,
+                 name: str | None = None, folder: str = "baselines",
+                 final_seed: int = 0) -> None:
         self.task_id, self.algo, self.seed, self.budget = task_id, algo, seed, budget
         self.curve_throws, self.final_throws = curve_throws, final_throws
-        self.result = out / "baselines" / task_id / f"{algo}-{seed}.json"
-        self.work = RUNS / out.name / task_id / f"{algo}-{seed}"
-        step = entry(task_id, algo)["n_envs"]  # throws per env step
+        self.params = entry(task_id, algo) if params is None else params
+        self.final_seed = final_seed
+        name = f"{algo}-{seed}" if name is None else name
+        self.result = out / folder / task_id / f"{name}.json"
+        self.work = RUNS / out.name / task_id / name
+        step = self.params["n_envs"]  # throws per env step
         self.points = sorted({-(-budget * (i + 1) // (CURVE_POINTS * step)) * step
                               for i in range(CURVE_POINTS)})
 
@@ -112,7 +122,7 @@ class Run:
             if (self.work / "buffer.pkl").exists():
                 model.load_replay_buffer(self.work / "buffer.pkl")
             return model
-        params = entry(self.task_id, self.algo)
+        params = self.params
         return cls(params["policy"], env, seed=self.seed, device="cpu",
                    **algorithm_kwargs(params, env.action_space.shape[0]))
 
@@ -132,7 +142,7 @@ def train(run: Run, log: Any = print) -> dict[str, Any]:
     from dice_env.envs.sb3 import make_sb3_env
     from dice_env.studies.common import code_version
 
-    params = entry(run.task_id, run.algo)
+    params = run.params
     state = run.state()
     resumed = bool(state["curve"])
     state["resumed"] += resumed
@@ -171,7 +181,7 @@ def train(run: Run, log: Any = print) -> dict[str, Any]:
     if remaining > 0:
         model.learn(remaining, callback=Checkpoints(), reset_num_timesteps=not resumed,
                     progress_bar=False)
-    task, final_batch = evaluation(run.task_id, run.final_throws, 0)
+    task, final_batch = evaluation(run.task_id, run.final_throws, run.final_seed)
     return {
         "task": run.task_id, "algo": run.algo, "seed": run.seed, "budget": run.budget,
         "throws": int(model.num_timesteps), "hyperparams": params,

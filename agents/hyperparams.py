@@ -83,11 +83,12 @@ BUDGETS: dict[str, int] = {
 }
 # Fewer throws per step where a throw costs more, so that a small budget still makes updates.
 _N_ENVS = {"DiceThrowTray2d6Sum-v0": 16, "DiceThrowCraps-v0": 8}
-# Per algorithm, the benchmark's keywords for every task: untuned, no search was run. PPO is the
+# Per algorithm, the starting point of the benchmark's keywords for every task. PPO is the
 # "scratch" recipe below with a rollout of ``n_envs`` x 4 throws, A2C the same rollout and
 # policy with Stable-Baselines3's learning rate decaying to 0; SAC and TD3 are
 # Stable-Baselines3's defaults for a one-step task (every episode one throw, so gamma does not
 # matter), with one gradient step per 4 throws and TD3 with rl-zoo3's usual exploration noise.
+# The benchmark uses the variant of :data:`SEARCH` named in :data:`TUNED`.
 _ALGORITHMS: dict[str, dict[str, Any]] = {
     "ppo": {"n_steps": 4, "batch_size": 64, "n_epochs": 10, "learning_rate": "lin_3e-4",
             "policy_kwargs": {"net_arch": [256, 256], "log_std_init": -2.0}},
@@ -100,13 +101,31 @@ _ALGORITHMS: dict[str, dict[str, Any]] = {
             "policy_kwargs": {"net_arch": [256, 256]}},
 }
 ALGOS = tuple(_ALGORITHMS)
+# The search (``python -m agents.tune``): per algorithm, these changes to its keywords above,
+# each trained once on DiceThrow-v0 for its benchmark budget (seed TUNE_SEED) and scored on
+# throws of their own (``benchmarks/results/tuning.json``); TUNED names the best, which the
+# benchmark trains on every task.
+SEARCH: dict[str, dict[str, dict[str, Any]]] = {
+    "ppo": {"as above": {}, "lr 1e-3": {"learning_rate": "lin_1e-3"},
+            "lr 3e-3": {"learning_rate": "lin_3e-3"},
+            "log_std -1": {"policy_kwargs": {"net_arch": [256, 256], "log_std_init": -1.0}}},
+    "a2c": {"as above": {}, "lr 2e-3": {"learning_rate": "lin_2e-3"},
+            "lr 5e-3": {"learning_rate": "lin_5e-3"},
+            "log_std -1": {"policy_kwargs": {"net_arch": [256, 256], "log_std_init": -1.0}}},
+    "sac": {"as above": {}, "lr 1e-3": {"learning_rate": 1e-3},
+            "lr 3e-3": {"learning_rate": 3e-3}, "entropy 0.01": {"ent_coef": 0.01}},
+    "td3": {"as above": {}, "lr 3e-3": {"learning_rate": 3e-3},
+            "noise 0.05": {"noise_std": 0.05}, "noise 0.2": {"noise_std": 0.2}},
+}
+TUNED = {"ppo": "as above", "a2c": "as above", "sac": "as above", "td3": "as above"}
 
 
-def _benchmark_entry(algo: str, env_id: str) -> dict[str, Any]:
-    """One (algorithm, task) entry of the benchmark."""
+def benchmark_entry(algo: str, env_id: str, variant: str | None = None) -> dict[str, Any]:
+    """One (algorithm, task) entry of the benchmark: :data:`SEARCH`'s ``variant`` (TUNED's)."""
     n_envs = _N_ENVS.get(env_id, 64)
     params = {"policy": "MlpPolicy", "n_envs": n_envs, "n_timesteps": BUDGETS[env_id],
-              "env_kwargs": {}, **copy.deepcopy(_ALGORITHMS[algo])}
+              "env_kwargs": {}, **copy.deepcopy(_ALGORITHMS[algo]),
+              **copy.deepcopy(SEARCH[algo][TUNED[algo] if variant is None else variant])}
     if algo in ("sac", "td3"):
         params["gradient_steps"] = max(1, n_envs // 4)
         params["buffer_size"] = BUDGETS[env_id]
@@ -140,7 +159,7 @@ _SCRATCH: dict[str, Any] = {
 }
 
 HYPERPARAMS: dict[str, dict[str, dict[str, dict[str, Any]]]] = {
-    env_id: {algo: {BENCHMARK: _benchmark_entry(algo, env_id)} for algo in ALGOS}
+    env_id: {algo: {BENCHMARK: benchmark_entry(algo, env_id)} for algo in ALGOS}
     for env_id in BUDGETS
 }
 HYPERPARAMS["DiceThrow-v0"]["ppo"].update(
