@@ -66,15 +66,17 @@ from dice_env.physics.kernel import (
     Contact,
     Options,
     PlaneContacts,
-    aborted,
     ahead,
     angular_velocity,
     die_on_planes,
     euler_steps,
     face_read,
     flight_jump,
+    next_pass,
     relative_rise,
+    rest_test,
     stick_slip,
+    stopped_at,
     torque_free,
 )
 
@@ -664,9 +666,8 @@ def advance_group(g: int, dice: GroupDice, bodies: Bodies, hulls: Hulls, pair: P
     quiet, step, passes, next_record, end = 0, 0, 0, stride, RUNNING
     overlap, abort = out.overlap[g], out.abort
     while step < n_steps:
-        passes += 1
-        if aborted(passes, abort):
-            end = ABORTED
+        passes, end = next_pass(passes, abort)
+        if end == ABORTED:
             break
         step += 1
         checked, tangential = 0.0, 0.0
@@ -763,7 +764,6 @@ def advance_group(g: int, dice: GroupDice, bodies: Bodies, hulls: Hulls, pair: P
             was[a] = now
         if energy < decisive and _decided(bodies, q, energy, floor_total, up):
             end = DECIDED
-            step -= 1
             break
         if stops.at_rest:
             quiet_now = True
@@ -772,15 +772,9 @@ def advance_group(g: int, dice: GroupDice, bodies: Bodies, hulls: Hulls, pair: P
                         and fastest[a] < stops.v_rest * stops.v_rest):
                     quiet_now = False
                     break
-            if quiet_now:
-                quiet += 1
-                if quiet > stops.hold_steps:
-                    out.rest_time[g] = (step - quiet) * dt
-                    end = SETTLED
-                    step -= 1
-                    break
-            else:
-                quiet = 0
+            quiet, end = rest_test(quiet_now, quiet, stops.hold_steps, False)
+            if end == SETTLED:
+                break
         jump = 1
         if options.flight and apart and touching.max() == 0:  # no record falls inside a jump:
             # it may end on one
@@ -816,13 +810,13 @@ def advance_group(g: int, dice: GroupDice, bodies: Bodies, hulls: Hulls, pair: P
                         q[a, r, c] = qa[r, c]
         if not finite:
             end = NONFINITE
-            step -= 1
             break
         step += jump - 1
         if step >= next_record:
             if step % stride == 0 and step // stride <= n_rec:
                 _record(records, step // stride - 1, g, x, q)
             next_record = (step // stride + 1) * stride
+    step, rest = stopped_at(end, step, quiet)
     for j in range(step // stride, n_rec):  # dice that stopped early stay where they are
         _record(records, j, g, x, q)
     _put(dice.x[g], x)
@@ -836,8 +830,7 @@ def advance_group(g: int, dice: GroupDice, bodies: Bodies, hulls: Hulls, pair: P
         out.touching[g, a] = die_touch[a]
     out.status[g] = end
     out.unstable[g] = end == NONFINITE
-    if end != SETTLED:
-        out.rest_time[g] = step * dt
+    out.rest_time[g] = rest * dt
     out.steps[g] = step
     out.overlap[g] = overlap
     out.meet_dice[g, 0], out.meet_dice[g, 1] = first_a, first_b

@@ -554,9 +554,39 @@ def die_on_planes(die: int, first: int, count: int, vertices: np.ndarray, planes
 
 
 @njit(cache=True, forceinline=True, _nrt=False)
-def aborted(passes: int, abort: np.ndarray) -> bool:
-    """Whether another thread has set ``abort`` (looked at once every ``ABORT_EVERY`` passes)."""
-    return passes & (ABORT_EVERY - 1) == 0 and abort[0] != 0
+def next_pass(passes: int, abort: np.ndarray) -> tuple[int, int]:
+    """A loop's pass count after one more pass, and its end so far.
+
+    ``ABORTED`` if another thread has set ``abort`` (looked at once every ``ABORT_EVERY``
+    passes), else ``RUNNING``.
+    """
+    passes += 1
+    return passes, ABORTED if passes & (ABORT_EVERY - 1) == 0 and abort[0] != 0 else RUNNING
+
+
+@njit(cache=True, forceinline=True, _nrt=False)
+def rest_test(quiet_now: bool, quiet: int, hold_steps: int, proven: bool) -> tuple[int, int]:
+    """The quiet steps in a row after this one, and ``SETTLED`` or ``RUNNING``.
+
+    Settled: quiet for more than ``hold_steps`` steps, or quiet now and ``proven`` to stay at
+    rest.
+    """
+    if not quiet_now:
+        return 0, RUNNING
+    quiet += 1
+    return quiet, SETTLED if quiet > hold_steps or proven else RUNNING
+
+
+@njit(cache=True, forceinline=True, _nrt=False)
+def stopped_at(end: int, step: int, quiet: int) -> tuple[int, int]:
+    """The steps a loop kept and the step its rest began, by how it ended.
+
+    A stop (decided, settled, non-finite) is found within a step that is not kept; a settled
+    die's rest began ``quiet`` steps before; otherwise the rest time is the run's end.
+    """
+    if end == DECIDED or end == SETTLED or end == NONFINITE:
+        return step - 1, step - quiet if end == SETTLED else step - 1
+    return step, step
 
 
 @njit(cache=True)
@@ -646,9 +676,8 @@ def advance(i: int, dice: Dice, body: Body, contact: Contact, options: Options, 
             tied[p, k] = False
             anchors[p, k, 0], anchors[p, k, 1], anchors[p, k, 2] = 0.0, 0.0, 0.0
     while step < n_steps:
-        passes += 1
-        if aborted(passes, abort):
-            end = ABORTED
+        passes, end = next_pass(passes, abort)
+        if end == ABORTED:
             break
         step += 1
         cu, cw = (u0, u1, u2), (w0, w1, w2)
@@ -686,18 +715,13 @@ def advance(i: int, dice: Dice, body: Body, contact: Contact, options: Options, 
         was_in_contact = touching > 0
         if energy < lock_max and decided(lock, faces, reads_down, qi, up, energy):
             end = DECIDED
-            step -= 1
             break
         if stops.at_rest:
-            if touching >= 3 and near_rest and fastest < stops.v_rest * stops.v_rest:
-                quiet += 1
-                if quiet > stops.hold_steps or energy - stops.rest_energy < stops.rest_excess:
-                    out.rest_time[i] = (step - quiet) * dt
-                    end = SETTLED
-                    step -= 1
-                    break
-            else:
-                quiet = 0
+            quiet, end = rest_test(
+                touching >= 3 and near_rest and fastest < stops.v_rest * stops.v_rest, quiet,
+                stops.hold_steps, energy - stops.rest_energy < stops.rest_excess)
+            if end == SETTLED:
+                break
         # 3. centre of mass: velocity first, then position with the new velocity
         dv0, dv1, dv2 = f0 * dt_m, f1 * dt_m, f2 * dt_m
         jump = 1
@@ -717,7 +741,6 @@ def advance(i: int, dice: Dice, body: Body, contact: Contact, options: Options, 
             nl0, nl1, nl2 = l0 + dt * t0, l1 + dt * t1, l2 + dt * t2
         if not math.isfinite(nu0 + nu1 + nu2 + nx0 + nx1 + nx2 + nl0 + nl1 + nl2):
             end = NONFINITE
-            step -= 1
             break
         if midpoint:
             pu0, pu1, pu2 = nu0 - dv0, nu1 - dv1, nu2 - dv2
@@ -731,6 +754,7 @@ def advance(i: int, dice: Dice, body: Body, contact: Contact, options: Options, 
                 _record(records, step // stride - 1, i, (x0, x1, x2), (u0, u1, u2),
                         (l0, l1, l2), qi, body, g)
             next_record = (step // stride + 1) * stride
+    step, rest = stopped_at(end, step, quiet)
     # a die that stopped early stays where it is for the rest of the record
     for j in range(step // stride, n_rec):
         _record(records, j, i, (x0, x1, x2), (u0, u1, u2), (l0, l1, l2), qi, body, g)
@@ -744,8 +768,7 @@ def advance(i: int, dice: Dice, body: Body, contact: Contact, options: Options, 
             dice.q[i, a, c] = qi[a, c]
     out.status[i] = end
     out.unstable[i] = end == NONFINITE
-    if end != SETTLED:
-        out.rest_time[i] = step * dt
+    out.rest_time[i] = rest * dt
     out.steps[i] = step
     out.max_pen[i] = pen
     out.impacts[i] = hits
