@@ -38,10 +38,10 @@ ENTRY_POINTS = (
      "hand = State.release(scene, np.tile([0.0, 0.0, 0.1], (64, 1)), "
      "rng.normal(0, 0.5, (64, 3)), rng.normal(0, 30, (64, 3)))"),
     ("simulate to rest (64 throws)", "simulate(scene, hand)"),
-    ("simulate to a decided face", "simulate(scene, hand, stop_when_decided=True)"),
+    ("simulate to a decided face", "simulate(scene, hand, until='decided')"),
     ("the paper scene (vector kernel)", "from dice_env.simulation.paper import paper_scene; "
-     "ps = paper_scene(t_max=1.0); simulate(ps, State.release(ps, np.tile([0.0, 0.0, 3.0], "
-     "(64, 1)), rng.normal(0, 1, (64, 3)), rng.normal(0, 3, (64, 3))))"),
+     "ps = paper_scene().with_(t_max=1.0); simulate(ps, State.release(ps, np.tile([0.0, 0.0, "
+     "3.0], (64, 1)), rng.normal(0, 1, (64, 3)), rng.normal(0, 3, (64, 3))))"),
     ("gym.make + env.step", "import gymnasium as gym; env = gym.make('DiceThrow-v0'); "
      "env.reset(seed=0); env.step(env.action_space.sample())"),
     ("make_vec + step (8 envs)", "venv = gym.make_vec('DiceThrow-v0', num_envs=8, "
@@ -50,7 +50,7 @@ ENTRY_POINTS = (
      "simulate_group; from dice_env.model.surroundings import tray; ts = Scene(walls=tray(), "
      "t_max=2.0); simulate_group(ts, (dice_env.Die(),) * 2, GroupState.of([State.release("
      "ts, np.tile([0.0, y, 0.1], (4, 1)), rng.normal(0, 0.5, (4, 3)), rng.normal(0, 30, "
-     "(4, 3))) for y in (-0.015, 0.015)]), stop_when_decided=True)"),
+     "(4, 3))) for y in (-0.015, 0.015)]), until='decided')"),
 )
 
 # the parallel loops (2 threads, batches above ``simulate.SERIAL_FIRST``), each the first
@@ -58,10 +58,10 @@ ENTRY_POINTS = (
 THREADED = (
     ("simulate on 2 threads (1024 throws)", "simulate(scene, State.release(scene, np.tile("
      "[0.0, 0.0, 0.1], (1024, 1)), rng.normal(0, 0.5, (1024, 3)), rng.normal(0, 30, "
-     "(1024, 3))), stop_when_decided=True, num_threads=2)"),
+     "(1024, 3))), until='decided', num_threads=2)"),
     ("the paper scene on 2 threads", "from dice_env.simulation.paper import paper_scene; "
-     "ps = paper_scene(t_max=0.2); simulate(ps, State.release(ps, np.tile([0.0, 0.0, 3.0], "
-     "(1024, 1)), rng.normal(0, 1, (1024, 3)), rng.normal(0, 3, (1024, 3))), num_threads=2)"),
+     "ps = paper_scene().with_(t_max=0.2); simulate(ps, State.release(ps, np.tile([0.0, 0.0, "
+     "3.0], (1024, 1)), rng.normal(0, 1, (1024, 3)), rng.normal(0, 3, (1024, 3))), num_threads=2)"),
     ("simulate_group on 2 threads (512 throws)",
      "from dice_env.simulation.group import GroupState, simulate_group; "
      "from dice_env.model.surroundings import tray; ts = Scene(walls=tray(), "

@@ -7,7 +7,7 @@
 Each group is thrown from the pairs study's hand (``dice_env.studies.pairs.hand_throws``: the
 dice side by side 3 cm apart in rows of four, one hand velocity plus each die's noise) into
 the tray (``Scene(walls=tray())``), seeded, each throw until every face is decided
-(``simulate_group(..., stop_when_decided=True)``, 10 s at most). Timed on one thread as this
+(``simulate_group(..., until="decided")``, 10 s at most). Timed on one thread as this
 process's CPU time (other processes on the shared cores inflate it less than wall-clock
 time), best of ``--repeats`` (default 1), after a warm-up that compiles the kernels.
 ``--throws`` is the number of throws of the single die; a group of N dice gets
@@ -55,7 +55,7 @@ def ours_in_tray(n_dice: int, throws: int, repeats: int, seed: int, contact: Die
     scene = tray_scene()
     dice = (Die(),) * n_dice
     state = hand_throws(scene, dice, throws, np.random.default_rng(seed))
-    seconds, res = timed(lambda: simulate_group(scene, dice, state, stop_when_decided=True,
+    seconds, res = timed(lambda: simulate_group(scene, dice, state, until="decided",
                                                    contact=contact, num_threads=1), repeats)
     return scene, dice, state, seconds, res
 
@@ -76,7 +76,7 @@ def measure(n_dice: int, throws: int, repeats: int, seed: int,
         alone = state.die(0)
         for flight in (True, False):
             seconds, one = timed(lambda f=flight: simulate(
-                scene, alone, stop_when_decided=True, free_flight=f, num_threads=1), repeats)
+                scene, alone, until="decided", free_flight=f, num_threads=1), repeats)
             rows.append({"path": f"simulate(free_flight={flight})", "dice": 1, "throws": throws,
                          "cpu_s": seconds, "throws_per_s": throws / seconds,
                          "die_steps_per_s": float(one.steps.sum()) / seconds,

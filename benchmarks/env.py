@@ -47,8 +47,7 @@ def measure(until: str, n: int, repeats: int, n_single: int,
         state = State.release(task.scene, task.release_position, final["release_velocity"],
                               final["release_spin"], final["release_orientation"])
         start = time.perf_counter()
-        result = simulate(task.scene, state, early_rest=until == "rest",  # as ThrowTask.throw
-                          stop_when_decided=until == "decided")
+        result = simulate(task.scene, state, until=task.run_until)  # as ThrowTask.throw
         kernel_s.append(time.perf_counter() - start)
         assert np.array_equal(result.face, final["face"])  # the very same throws
 

@@ -6,7 +6,7 @@
 Two figures, as ``benchmarks/kernel_ab.py`` measures them: the paper scene
 (``paper_scene()``, dt = 1e-4, the listing's throw with random spin, 0.5 s without a rest
 stop) in die-steps/s, and the default scene's hand throws to a decided face
-(``stop_when_decided=True``) in throws/s. Each at batch sizes 1000, 10^4, ... up to
+(``until="decided"``) in throws/s. Each at batch sizes 1000, 10^4, ... up to
 ``--max-batch`` on the GPU (``simulate(..., device="cuda")``) and up to ``--cpu-max-batch``
 on the CPU (numba's threads: every core of this machine); a device stops growing its batch once
 a run takes longer than ``--budget`` seconds. Wall-clock time of the whole ``simulate`` call
@@ -48,8 +48,8 @@ def decided_case(n: int) -> tuple[Scene, State, int]:
 
 
 CASES: dict[str, tuple[Callable, dict]] = {
-    "paper": (paper_case, {"t_max": PAPER_T, "stop_at_rest": False}),
-    "decided": (decided_case, {"stop_when_decided": True}),
+    "paper": (paper_case, {"t_max": PAPER_T, "until": "t_max"}),
+    "decided": (decided_case, {"until": "decided"}),
 }
 
 

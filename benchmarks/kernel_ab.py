@@ -37,7 +37,7 @@ from dice_env.studies.common import code_version
 
 ROOT = Path(__file__).resolve().parents[1]
 CHILD = r"""
-import json, time
+import inspect, json, time
 import numpy as np
 from pathlib import Path
 import dice_env
@@ -50,6 +50,10 @@ else:  # a base tree from before the layers (model, physics, simulation)
     from dice_env import vector_kernel
     from dice_env.paper import paper_scene
     from dice_env.rotations import random_rotations
+if "until" in inspect.signature(simulate).parameters:
+    TO_T_MAX, DECIDED = {"until": "t_max"}, {"until": "decided"}
+else:  # a base tree from before simulate's until
+    TO_T_MAX, DECIDED = {"stop_at_rest": False}, {"stop_when_decided": True}
 
 def cpu(fn):
     fn()  # compiled and warm
@@ -66,7 +70,7 @@ paper = paper_scene()
 spin = (rng.random((n, 3)) * 0.75 + 1e-6) / paper.die.inertia_body[0, 0]
 start = State.release(paper, [0.0, 0.0, 3.0], [5.0, 0.0, 5.0], spin)
 steps = n * round(0.5 / paper.step)
-run = lambda: simulate(paper, start, t_max=0.5, stop_at_rest=False, num_threads=1)
+run = lambda: simulate(paper, start, t_max=0.5, **TO_T_MAX, num_threads=1)
 vector = steps / cpu(run)
 with vector_kernel.disabled():
     scalar = steps / cpu(run)
@@ -77,8 +81,8 @@ d /= np.linalg.norm(d, axis=2, keepdims=True)
 hand = State.release(scene, np.column_stack([np.zeros((n, 2)), rng.uniform(0.05, 0.15, n)]),
                      d[0] * rng.uniform(0.5, 1.0, (n, 1)), d[1] * rng.uniform(0, 30, (n, 1)),
                      random_rotations(rng, n))
-faces = simulate(scene, hand, stop_when_decided=True, num_threads=1).face
-decided = n / cpu(lambda: simulate(scene, hand, stop_when_decided=True, num_threads=1))
+faces = simulate(scene, hand, **DECIDED, num_threads=1).face
+decided = n / cpu(lambda: simulate(scene, hand, **DECIDED, num_threads=1))
 print(json.dumps({"paper_vector": vector, "paper_scalar": scalar, "decided": decided,
                   "faces": int(faces.sum())}))
 """
@@ -86,7 +90,7 @@ FIGURES = {"paper_vector": "paper scene, vectorised kernel (die-steps/s)",
            "paper_scalar": "paper scene, scalar kernel (die-steps/s)",
            "decided": "default scene to a decided face (throws/s)"}
 GROUP_CHILD = r"""
-import hashlib, json, time
+import hashlib, inspect, json, time
 import numpy as np
 from dice_env import Die, Scene
 from pathlib import Path
@@ -98,6 +102,10 @@ if (Path(dice_env.__file__).parent / "physics").is_dir():
 else:  # a base tree from before the layers (model, physics, simulation)
     from dice_env.group import GroupState, simulate_group
     from dice_env.surroundings import tray
+if "until" in inspect.signature(simulate_group).parameters:
+    DECIDED = {"until": "decided"}
+else:  # a base tree from before simulate_group's until
+    DECIDED = {"stop_when_decided": True}
 
 def cpu(fn):
     fn()  # compiled and warm
@@ -115,14 +123,14 @@ out = {}
 table = Scene(die=weldon.variant_die("drilled16"))
 cups = GroupState.of(weldon.cup_throws(table, 8, np.random.default_rng(3)))
 seconds, res = cpu(lambda: simulate_group(table, (table.die,) * 12, cups, t_max=2.0,
-                                          stop_when_decided=True, num_threads=1))
+                                          **DECIDED, num_threads=1))
 out["twelve"], out["twelve_hash"] = 8 / seconds, digest(res)
 scene = Scene(walls=tray())
 for key, dice in (("two", (scene.die,) * 2),
                   ("mixed", (Die.standard("d20"), Die.standard("d8"), scene.die))):
     state = pairs.hand_throws(scene, dice, 64, np.random.default_rng(4))
     seconds, res = cpu(lambda: simulate_group(scene, dice, state, t_max=3.0,
-                                              stop_when_decided=True, num_threads=1))
+                                              **DECIDED, num_threads=1))
     out[key], out[key + "_hash"] = 64 / seconds, digest(res)
 print(json.dumps(out))
 """

@@ -14,7 +14,7 @@ Prints a table and writes ``benchmarks/results/physics.json`` (``--out`` to chan
 - settled throws/s in the default scene (``Scene()``: whatever the default table is) from a
   seeded set of hand throws (5–15 cm up, 0.5–1 m/s, spin up to 30 rad/s, uniform orientation),
   single throws and batches of 1024, 1 and 2 threads, with plain stepping beside for reference;
-  and the same throws ended when their face is decided (``stop_when_decided``: the face they
+  and the same throws ended when their face is decided (``until="decided"``: the face they
   come to rest on, checked here against the runs to rest);
 - MuJoCo (optional ``bench`` extra): a free box of the same size, mass and inertia, friction
   ``mu``, thrown from the same states onto a plane at its default 2 ms step, run until the same
@@ -100,13 +100,13 @@ def kernel_speed(quick: bool) -> dict:
     runs = [(1, 1, 2.0 if quick else 10.0, False), (1024, 1, 0.05 if quick else 0.3, False),
             (1024, 2, 0.05 if quick else 0.3, False), (1024, 2, 0.05 if quick else 0.3, True)]
     for batch, threads, t_max, scalar in runs:
-        scene = paper_scene(t_max=t_max)
+        scene = paper_scene().with_(t_max=t_max)
         start = paper_throws(batch)
         with vector_kernel.disabled() if scalar else contextlib.nullcontext():
-            simulate(scene, start, t_max=1e-3, stop_at_rest=False, record=(),
+            simulate(scene, start, t_max=1e-3, until="t_max", record=(),
                      num_threads=threads)  # load
             elapsed = best_time(lambda s=scene, st=start, th=threads: simulate(
-                s, st, stop_at_rest=False, record=(), num_threads=th), 2 if quick else 3,
+                s, st, until="t_max", record=(), num_threads=th), 2 if quick else 3,
                 threads)
         name = f"batch{batch}_threads{threads}" + ("_scalar_kernel" if scalar else "")
         out[name] = batch * scene.n_steps / elapsed
@@ -158,8 +158,8 @@ def start_times(cold: bool) -> dict:
 # How the throws are run: simulate() keywords. All but the last run to rest; the last ends
 # each throw when its face is decided (the same face, not at rest).
 MODES = {"plain stepping": {"free_flight": False}, "free flight": {},
-         "free flight + early rest": {"early_rest": True},
-         "free flight + decided face": {"stop_when_decided": True}}
+         "free flight + early rest": {"until": "early_rest"},
+         "free flight + decided face": {"until": "decided"}}
 FASTEST = "free flight + early rest"
 DECIDED = "free flight + decided face"
 
@@ -357,7 +357,7 @@ def step_budget(scene: Scene, start: State, quick: bool, vector_rate: float) -> 
     resting = State.release(scene, [0, 0, scene.die.resting_heights[0]], [0, 0, 0])
     resting = subset(resting, np.zeros(64, int))
     steps = round(0.2 / scene.step)
-    elapsed = best_time(lambda: simulate(scene, resting, t_max=0.2, stop_at_rest=False,
+    elapsed = best_time(lambda: simulate(scene, resting, t_max=0.2, until="t_max",
                                          num_threads=1), 2)
     ns_contact = 1e9 * elapsed / (64 * steps)
     floor = float(np.mean(contact)) * ns_contact * 1e-9
@@ -396,10 +396,10 @@ def time_scaling(scene: Scene, start: State, quick: bool) -> dict:
     plain_batch = subset(start, slice(0, 16))
     out = {}
     for t_max in (0.1, 0.25, 0.5, 1.0, 2.0, 4.0):
-        elapsed = best_time(lambda t=t_max: simulate(scene, batch, t_max=t, stop_at_rest=False,
+        elapsed = best_time(lambda t=t_max: simulate(scene, batch, t_max=t, until="t_max",
                                                      num_threads=1), 1)
         plain = best_time(lambda t=t_max: simulate(scene, plain_batch, t_max=t,
-                                                   stop_at_rest=False, num_threads=1,
+                                                   until="t_max", num_threads=1,
                                                    free_flight=False), 1)
         out[t_max] = {"ms_per_throw": 1e3 * elapsed / batch.batch_size,
                       "ms_per_throw_plain": 1e3 * plain / plain_batch.batch_size}
@@ -421,7 +421,7 @@ def per_shape(quick: bool) -> dict:
         start = hand_throws(scene, n, seed=3)
         simulate(scene, subset(start, slice(0, 2)), t_max=1e-3, num_threads=2)  # load
         elapsed, res = timed(lambda s=scene, st=start: simulate(
-            s, st, num_threads=2, stop_when_decided=True), 1 if quick else 2, threads=2)
+            s, st, num_threads=2, until="decided"), 1 if quick else 2, threads=2)
         time_to_face = float(res.rest_time.mean())
         out[name] = {"vertices": len(scene.die.vertices), "faces": scene.die.n_faces,
                      "dt_s": scene.step, "throws": n, "throws_per_s_2threads": n / elapsed,

@@ -42,7 +42,7 @@ def our_landing(scene: Scene, speed: float) -> dict:
     """Restitution and deepest corner sink (fraction of the edge) of a flat landing."""
     h = scene.die.resting_heights[0]  # lying on face 6, showing 1
     state = State.release(scene, [0.0, 0.0, h + 1e-4], [0.0, 0.0, -speed])
-    sink = simulate(scene, state, t_max=0.01, stop_at_rest=False).max_penetration[0]
+    sink = simulate(scene, state, t_max=0.01, until="t_max").max_penetration[0]
     return {"restitution": measured_restitution(scene, speed), "sink": sink / scene.die.size}
 
 
@@ -55,7 +55,7 @@ def step_sweep(quick: bool) -> list[dict]:
     for safety in SAFETIES:
         at = scene.with_(dt=safety * scene.critical_dt)
         agree = face_agreement(at, gentle)
-        timing, result = timed(lambda s=at: simulate(s, throws, early_rest=True, num_threads=2),
+        timing, result = timed(lambda s=at: simulate(s, throws, until="early_rest", num_threads=2),
                                1 if quick else 2, threads=2)
         rows.append({
             "safety": safety, "dt_s": at.step,
@@ -99,7 +99,7 @@ def contact_comparison(quick: bool) -> dict | None:
         return None
     scene = Scene()
     throws = hand_throws(scene, 32 if quick else 128)
-    ours, result = timed(lambda: simulate(scene, throws, early_rest=True, num_threads=1), 2)
+    ours, result = timed(lambda: simulate(scene, throws, until="early_rest", num_threads=1), 2)
     # our flat-landing mode, (m/4) x'' = -S x - D x': its period and damping ratio
     zeta = damping_ratio(RESTITUTION)
     omega = math.sqrt(4 * scene.ground.stiffness / scene.die.mass)

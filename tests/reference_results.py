@@ -46,7 +46,7 @@ def _group(n: int) -> Callable[[], dict[str, np.ndarray]]:
     def case() -> dict[str, np.ndarray]:
         scene, dice = Scene(walls=tray(), t_max=3.0), (Die(),) * n
         state = hand_throws(scene, dice, 4, np.random.default_rng(11))
-        result = simulate_group(scene, dice, state, stop_when_decided=True, num_threads=1)
+        result = simulate_group(scene, dice, state, until="decided", num_threads=1)
         final = result.final
         return {"face": result.face, "steps": result.steps,
                 "state": np.concatenate([final.position, final.velocity,
@@ -57,8 +57,8 @@ def _group(n: int) -> Callable[[], dict[str, np.ndarray]]:
 
 CASES: dict[str, Callable[[], dict[str, np.ndarray]]] = {
     "default_rest": _single(Scene()),
-    "default_decided": _single(Scene(), stop_when_decided=True),
-    "paper_vector": _single(paper_scene(t_max=3.0)),
+    "default_decided": _single(Scene(), until="decided"),
+    "paper_vector": _single(paper_scene().with_(t_max=3.0)),
     "d20_tray": _single(Scene(die=Die.standard("d20"), walls=tray())),
     "loaded": _single(Scene(die=Die.loaded())),
     "drilled": _single(Scene(die=Die.standard("d6", pips="drilled16"))),

@@ -114,11 +114,11 @@ def _flat_on(angle: float, scene: Scene) -> State:
 def test_stick_slip_holds_a_die_on_a_slope_the_listing_friction_lets_creep():
     # 15 degrees: tan 15 = 0.27 < mu = 0.4, so Coulomb friction holds the die
     held = Scene(ground=Ground.tilted(15.0))
-    moved = simulate(held, _flat_on(15.0, held), t_max=1.0, stop_at_rest=False)
+    moved = simulate(held, _flat_on(15.0, held), t_max=1.0, until="t_max")
     assert np.linalg.norm(moved.final.position - _flat_on(15.0, held).position) < 1e-6
     assert np.linalg.norm(moved.final.velocity) < 1e-9
     creeping = held.with_(friction_law=FrictionLaw.REGULARIZED, friction_vmin=0.05)
-    crept = simulate(creeping, _flat_on(15.0, creeping), t_max=1.0, stop_at_rest=False)
+    crept = simulate(creeping, _flat_on(15.0, creeping), t_max=1.0, until="t_max")
     assert np.linalg.norm(crept.final.velocity) > 0.05
 
 
@@ -126,7 +126,7 @@ def test_stick_slip_holds_a_die_on_a_slope_the_listing_friction_lets_creep():
 def test_a_die_slides_down_a_steep_slope_at_coulombs_acceleration(law):
     # 30 degrees: tan 30 = 0.58 > mu, so it slides with a = g (sin - mu cos)
     scene = Scene(ground=Ground.tilted(30.0), friction_law=law)
-    moved = simulate(scene, _flat_on(30.0, scene), t_max=1.0, stop_at_rest=False)
+    moved = simulate(scene, _flat_on(30.0, scene), t_max=1.0, until="t_max")
     a = np.radians(30.0)
     expected = scene.gravity * (np.sin(a) - scene.ground.friction * np.cos(a))
     assert np.linalg.norm(moved.final.velocity) == pytest.approx(expected, rel=2e-3)
@@ -172,7 +172,7 @@ def test_energy_never_rises_beyond_tolerance_at_the_automatic_step():
 
 def test_contact_laws_differ_only_for_corners_above_ground():
     die = Die.paper()
-    fall = {"t_max": 0.3, "stop_at_rest": False}
+    fall = {"t_max": 0.3, "until": "t_max"}
     results = [
         simulate(Scene(die=die, ground=Ground(stiffness=1e4, damping=0.0, friction=0.1,
                                               contact_law=law), gravity=9.8, dt=1e-4),
@@ -209,7 +209,7 @@ def test_critical_step_by_experiment(factor, blows_up, scheme):
     scene = base.with_(dt=factor * base.critical_dt, allow_unstable=True)
     sink = scene.die.mass * scene.gravity / (4 * scene.ground.stiffness)
     start = State.release(scene, [0, 0, scene.die.size / 2 - 1.5 * sink], [0, 0, 0])
-    res = simulate(scene, start, t_max=0.2, stop_at_rest=False)
+    res = simulate(scene, start, t_max=0.2, until="t_max")
     assert bool(res.unstable[0]) is blows_up
     assert bool(res.max_penetration[0] > 100 * sink) is blows_up
 

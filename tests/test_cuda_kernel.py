@@ -52,14 +52,14 @@ def cases() -> dict[str, tuple[Scene, State, dict]]:
     """Few dice each: the default scene to a decided face, a loaded d20 in a small tray
     (several planes, a die that is not isotropic) and the paper's scheme, law and friction."""
     d6, d20 = Scene(), Scene(die=Die.standard("d20").load(face=20), walls=tray(0.04, 0.04))
-    listing = paper.paper_scene(t_max=0.3)
+    listing = paper.paper_scene().with_(t_max=0.3)
     spin = np.random.default_rng(3).random((2, 3)) * 0.75 + 1e-6
     return {
-        "decided": (d6, hand(d6, 3, 0, (0.012, 0.016)), {"stop_when_decided": True}),
+        "decided": (d6, hand(d6, 3, 0, (0.012, 0.016)), {"until": "decided"}),
         "tray-d20": (d20, hand(d20, 2, 1, (0.014, 0.016)), {"t_max": 6000 * d20.step}),
         "paper": (listing, State.release(listing, [0.0, 0.0, 0.6], [2.0, 0.0, -1.0],
                                          spin / listing.die.inertia_body[0, 0]),
-                  {"stop_at_rest": False}),
+                  {"until": "t_max"}),
     }
 
 

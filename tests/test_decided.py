@@ -38,8 +38,8 @@ CASES = {
 def decided_against_rest(name: str, n: int, seed: int) -> tuple[np.ndarray, object, object]:
     scene, kwargs = CASES[name]
     start = throws(scene, n, seed, **kwargs)
-    rest = simulate(scene, start, early_rest=True)
-    decided = simulate(scene, start, stop_when_decided=True)
+    rest = simulate(scene, start, until="early_rest")
+    decided = simulate(scene, start, until="decided")
     return rest.face == decided.face, rest, decided
 
 
@@ -73,9 +73,9 @@ def test_a_die_balanced_on_an_edge_is_not_decided_and_one_lying_flat_is():
     on_edge = State.release(scene, [0, 0, math.sqrt(2) * h], [0, 0, 0],
                             orientation=_about_x(math.pi / 4))
     flat = State.release(scene, [0, 0, h + 1e-4], [0.05, 0, 0])
-    res = simulate(scene, on_edge, t_max=1e-3, stop_when_decided=True)
+    res = simulate(scene, on_edge, t_max=1e-3, until="decided")
     assert not res.decided[0]
-    res = simulate(scene, flat, stop_when_decided=True)
+    res = simulate(scene, flat, until="decided")
     assert res.decided[0] and res.steps[0] == 0 and res.face[0] == 1
 
 
@@ -93,7 +93,7 @@ def test_a_loaded_die_holds_its_heavy_face_down_harder():
 def test_no_lock_where_energy_does_not_bound_the_face(scene):
     assert (lock_energy(scene) == -math.inf).all()
     start = throws(scene, 2, seed=0)
-    assert not simulate(scene, start, t_max=0.5, stop_when_decided=True).decided.any()
+    assert not simulate(scene, start, t_max=0.5, until="decided").decided.any()
 
 
 def test_lock_margin_is_checked():
@@ -109,7 +109,7 @@ def test_decided_face_is_the_face_at_rest_in_thousands_of_throws(name):
     # rerun from the decided states (a restart, so the sticking springs start afresh)
     scene = CASES[name][0]
     start = decided.final
-    again = simulate(scene, start, early_rest=True)
+    again = simulate(scene, start, until="early_rest")
     die, weight = scene.die, scene.die.mass * scene.gravity
     kinetic = 0.5 * die.mass * (start.velocity**2).sum(1) + 0.5 * (
         start.angular_momentum * start.angular_velocity).sum(1)

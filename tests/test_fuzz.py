@@ -77,7 +77,7 @@ def random_scene_throw(rng):
     state = State.release(scene, [0, 0, 0.05 * rng.uniform(1, 100)], rng.normal(0, 2, (n, 3)),
                           rng.normal(0, 50, (n, 3)), random_rotations(rng, n))
     return simulate(scene, state, t_max=min(scene.t_max, 0.05),
-                    stop_when_decided=bool(rng.random() < 0.5)), scene
+                    until="decided" if rng.random() < 0.5 else "rest"), scene
 
 
 def test_random_scenes_end_in_a_result_or_a_named_error():

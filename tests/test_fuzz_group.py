@@ -70,8 +70,7 @@ CONTACT = {
 }
 RUN = {
     "t_max": ([1e-9, 1e-4, 0.01, 0.05, 0.3, None], [0.0, -1.0, np.nan, np.inf, "0.1"]),
-    "stop_at_rest": ([True, False, np.bool_(False)], ["no", 1]),
-    "stop_when_decided": ([True, True, False], [None]),
+    "until": (["rest", "decided", "decided", "t_max"], ["early_rest", "no", None, 1]),
     "free_flight": ([True, False], [0]),
     "record_every": ([0, 1, 7, 1000, 10**30, np.int64(5)], [-1, 1.5, True]),
     "orientations": ([True, False], ["yes"]),
@@ -341,9 +340,9 @@ def check(result, case):
     assert (result.max_penetration >= 0).all() and (result.overlap >= 0).all()
     assert not np.isnan(result.energy_rise).any(), "energy_rise NaN"
     assert not (result.settled & result.decided).any()
-    if not run.get("stop_when_decided", False):
+    if run.get("until", "rest") != "decided":
         assert not result.decided.any()
-    if not run.get("stop_at_rest", True):
+    if run.get("until") == "t_max":
         assert not result.settled.any()
     dt = group_step(scene, dice, contact)
     t_max = scene.t_max if run.get("t_max") is None else run["t_max"]
@@ -551,4 +550,4 @@ def test_a_gravity_that_overflows_the_decision_rule_is_refused_named():
     heavy = scene.with_(gravity=1e300)
     assert run_group(heavy, dice, state).final.position.shape == (1, 2, 3)  # was OverflowError
     with pytest.raises(ValueError, match="gravity=1e"):
-        run_group(heavy, dice, state, stop_when_decided=True)
+        run_group(heavy, dice, state, until="decided")

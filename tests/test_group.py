@@ -24,8 +24,9 @@ def hand(n, seed, height=0.08):
 def test_a_group_of_one_die_is_the_single_die_bit_for_bit(decided, flight):
     scene = Scene(t_max=1.5)
     start = hand(6, 0)
-    alone = simulate(scene, start, free_flight=flight, stop_when_decided=decided)
-    group = simulate_group(scene, (DIE,), GroupState.of([start]), stop_when_decided=decided,
+    until = "decided" if decided else "rest"
+    alone = simulate(scene, start, free_flight=flight, until=until)
+    group = simulate_group(scene, (DIE,), GroupState.of([start]), until=until,
                            free_flight=flight)
     np.testing.assert_array_equal(group.face[:, 0], alone.face)
     np.testing.assert_array_equal(group.steps, alone.steps)
@@ -63,7 +64,7 @@ def energy(state):
 @pytest.mark.parametrize("law", list(FrictionLaw))
 def test_a_collision_in_free_space_keeps_momentum_and_never_gains_energy(law):
     scene, start = free_pair([EDGE * 1.05, 0.003, 0.002], [0.6, 0.05, 0.0], spin=[3.0, -5.0, 8.0])
-    result = simulate_group(scene, (DIE, DIE), start, stop_at_rest=False,
+    result = simulate_group(scene, (DIE, DIE), start, until="t_max",
                             contact=DieContact(friction_law=law))
     assert result.overlap[0] > 0  # they met
     linear0, angular0 = momenta(start)
@@ -82,7 +83,7 @@ def test_edge_on_edge_at_a_right_angle_bounces():
     scene, start = free_pair([0.0, 0.0, -2 * half_diagonal - 1e-4], [0.0, 0.0, -0.3],
                              rot_a=axis_angle([1, 0, 0], np.pi / 4),
                              rot_b=axis_angle([0, 1, 0], np.pi / 4))
-    result = simulate_group(scene, (DIE, DIE), start, stop_at_rest=False)
+    result = simulate_group(scene, (DIE, DIE), start, until="t_max")
     assert result.overlap[0] > 0
     assert result.final.velocity[0, 0, 2] > 0 > result.final.velocity[0, 1, 2]  # bounced
     assert result.final.position[0, 0, 2] > result.final.position[0, 1, 2] + EDGE  # not through
@@ -115,7 +116,7 @@ def test_stick_slip_holds_a_die_stacked_on_another_on_a_slope_the_regularised_la
     apart = start.position[0, 1] - start.position[0, 0]
 
     def slid(law):
-        result = simulate_group(scene.with_(t_max=1.0), (DIE, DIE), start, stop_at_rest=False,
+        result = simulate_group(scene.with_(t_max=1.0), (DIE, DIE), start, until="t_max",
                                 contact=DieContact(friction_law=law))
         assert not result.unstable.any() and result.overlap[0] > 0
         moved = result.final.position[0, 1] - result.final.position[0, 0] - apart
@@ -154,7 +155,7 @@ def test_two_dice_and_a_d20_thrown_into_a_tray_land_and_are_read():
                             np.array([0.4, -0.2 * (i - 1), 0.0]) + rng.normal(0, 0.1, (n, 3)),
                             rng.normal(0, 20, (n, 3)), random_rotations(rng, n))
               for i, d in enumerate(dice)]
-    result = simulate_group(scene, dice, GroupState.of(states), stop_when_decided=True)
+    result = simulate_group(scene, dice, GroupState.of(states), until="decided")
     assert np.isfinite(result.final.position).all() and not result.unstable.any()
     assert result.decided.mean() >= 0.75
     read = result.face[result.decided]
@@ -184,9 +185,12 @@ def test_bad_arguments_are_refused():
         simulate_group(scene, (d for d in (DIE,)), state)
     with pytest.raises(TypeError, match="states must be a non-empty sequence of State"):
         GroupState.of(hand(2, 0))
-    for flag in ("stop_when_decided", "stop_at_rest", "free_flight", "orientations"):
+    for flag in ("free_flight", "orientations"):
         with pytest.raises(TypeError, match=f"{flag} must be a bool, got 'no'"):
             simulate_group(scene, (DIE,), state, **{flag: "no"})
+    for until in ("early_rest", "no", None):  # early rest: one die alone (simulate)
+        with pytest.raises(ValueError, match="until must be one of 'rest', 'decided', 't_max'"):
+            simulate_group(scene, (DIE,), state, until=until)
     many = GroupState.of([State.release(scene, [x, 0.0, 0.08], np.zeros((64, 3)))
                           for x in (-0.03, 0.03)])
     with pytest.raises(ValueError, match=r"record_every=1 records .* GiB\), more than the limit"):
@@ -202,9 +206,9 @@ def test_a_throw_alone_equals_the_same_throw_inside_a_batch():
                             np.array([0.5, -0.3 * (2 * i - 1), 0.0]) + rng.normal(0, 0.1, (n, 3)),
                             rng.normal(0, 20, (n, 3)), random_rotations(rng, n))
               for i in range(2)]
-    batch = simulate_group(scene, (DIE, DIE), GroupState.of(states), stop_when_decided=True)
+    batch = simulate_group(scene, (DIE, DIE), GroupState.of(states), until="decided")
     alone = simulate_group(scene, (DIE, DIE), _one(GroupState.of(states), 2),
-                           stop_when_decided=True)
+                           until="decided")
     for field in ("face", "steps", "decided", "overlap"):
         np.testing.assert_array_equal(getattr(alone, field)[0], getattr(batch, field)[2])
     np.testing.assert_array_equal(alone.final.position[0], batch.final.position[2])
@@ -228,7 +232,7 @@ def test_mirrored_throws_land_mirrored(law):
     a = State.release(scene, [0.0, 0.02, 0.1], [0.2, -0.5, 0.0], spin, rot)
     b = State.release(scene, [0.0, -0.02, 0.1], [0.2, 0.5, 0.0], -mirror @ spin,
                       mirror @ rot @ mirror)
-    result = simulate_group(scene, (DIE, DIE), GroupState.of([a, b]), stop_at_rest=False,
+    result = simulate_group(scene, (DIE, DIE), GroupState.of([a, b]), until="t_max",
                             contact=DieContact(friction_law=law))
     assert result.overlap[0] > 0  # they met
     end = result.final
@@ -246,7 +250,7 @@ def test_fast_dice_do_not_pass_through_each_other(speed):
         scene, start = free_pair([0.0, 0.0, -1.5 * EDGE], [0.0, 0.0, -speed],
                                  rot_a=rot_a, rot_b=rot_b)
         result = simulate_group(scene.with_(t_max=0.005), (DIE, DIE), start,
-                                stop_at_rest=False)
+                                until="t_max")
         assert np.isfinite(result.final.position).all()
         assert result.final.position[0, 0, 2] > result.final.position[0, 1, 2]
         assert result.final.velocity[0, 0, 2] > 0 > result.final.velocity[0, 1, 2]
@@ -268,20 +272,20 @@ def test_free_flight_jumps_only_where_no_die_can_touch_anything():
                                          spin[i], turn[i])
                            for i, x in enumerate((-0.02, 0.02))])
     runs = {flight: simulate_group(scene.with_(t_max=0.26), (DIE, DIE), start,
-                                   free_flight=flight, stop_at_rest=False)
+                                   free_flight=flight, until="t_max")
             for flight in (True, False)}
     assert (runs[False].overlap > 0).any() and runs[False].impacts.all()  # met and landed
     np.testing.assert_allclose(runs[True].final.position, runs[False].final.position,
                                rtol=0, atol=1e-6)
     np.testing.assert_allclose(runs[True].overlap, runs[False].overlap, rtol=1e-6)
     faces = [simulate_group(scene, (DIE, DIE), start, free_flight=flight,
-                            stop_when_decided=True).face for flight in (True, False)]
+                            until="decided").face for flight in (True, False)]
     assert (faces[0] == faces[1]).all(axis=1).mean() >= 0.75
 
 
 def test_the_first_meeting_records_the_velocities_before_and_after():
     scene, start = free_pair([EDGE * 1.05, 0.003, 0.002], [0.6, 0.05, 0.0], spin=[3.0, -5.0, 8.0])
-    result = simulate_group(scene, (DIE, DIE), start, stop_at_rest=False)
+    result = simulate_group(scene, (DIE, DIE), start, until="t_max")
     assert result.meet_dice.tolist() == [[0, 1]]
     begin, end = result.meet_steps[0]
     assert 0 < begin < end < result.steps[0]
@@ -307,14 +311,14 @@ def test_a_die_alone_moves_as_in_its_group_until_the_dice_meet():
                             np.array([0.3, 0.0, 0.0]) + rng.normal(0, 0.4, (n, 3)),
                             rng.normal(0, 20, (n, 3)), random_rotations(rng, n))
               for i in range(2)]
-    group = simulate_group(scene, (DIE, DIE), GroupState.of(states), stop_when_decided=True,
+    group = simulate_group(scene, (DIE, DIE), GroupState.of(states), until="decided",
                            free_flight=False)
     met = group.meet_steps[:, 0] >= 0
     np.testing.assert_array_equal(met, group.overlap > 0)
     assert 0 < met.sum() < n
     np.testing.assert_array_equal(group.die_impacts[~met], 0)
     assert (group.die_impacts[met] >= 1).all()
-    alone = [simulate_group(scene, (DIE,), GroupState.of([s]), stop_when_decided=True,
+    alone = [simulate_group(scene, (DIE,), GroupState.of([s]), until="decided",
                             free_flight=False) for s in states]
     for i in range(2):  # dice that never met land as if thrown alone
         np.testing.assert_array_equal(group.face[~met, i], alone[i].face[~met, 0])
@@ -323,7 +327,7 @@ def test_a_die_alone_moves_as_in_its_group_until_the_dice_meet():
         steps = int(group.meet_steps[throw, 0])
         one = GroupState(*(a[throw, :, None] for a in start._arrays()))  # each die a throw
         run = simulate_group(scene.with_(t_max=steps * scene.dt), (DIE,), one,
-                             stop_at_rest=False, free_flight=False)
+                             until="t_max", free_flight=False)
         assert (run.steps == steps).all()
         np.testing.assert_array_equal(run.final.velocity[:, 0], group.meet_velocity[throw, 0])
         np.testing.assert_array_equal(run.final.angular_velocity[:, 0],
@@ -348,7 +352,7 @@ def test_records_fall_on_the_same_steps_with_free_flight():
     start = GroupState.of([State.release(scene, [x, 0.0, 0.3], [0.0, 0.0, 0.0], [0, 0, 5.0])
                            for x in (-0.03, 0.03)])
     runs = [simulate_group(scene, (DIE, DIE), start, free_flight=flight, record_every=500,
-                           stop_at_rest=False) for flight in (True, False)]
+                           until="t_max") for flight in (True, False)]
     np.testing.assert_array_equal(runs[0].t, runs[1].t)
     np.testing.assert_allclose(runs[0].x_cm, runs[1].x_cm, rtol=0, atol=1e-9)
     assert (runs[0].x_cm[:, :, :, 2] < 0.3).all()  # the dice fell: every record written

@@ -153,7 +153,7 @@ def test_the_pairs_study_s_unstable_throws_are_counted():
                                            "orientation", "angular_velocity")))
     scene = Scene(walls=tray(), t_max=pairs.T_MAX)
     dice = (scene.die, scene.die)
-    result = simulate_group(scene, dice, state, stop_when_decided=True)
+    result = simulate_group(scene, dice, state, until="decided")
     assert not result.unstable.any(), result.energy_rise
     assert (result.decided | result.settled).all() and not result.sunk.any()
     assert result.read.all() and (result.die_impacts > 0).all()

@@ -5,7 +5,7 @@ import pytest
 from listing_transcription import ground_cube as listing_ground
 from listing_transcription import real_throw_cube as listing_throw
 
-from dice_env import ContactLaw
+from dice_env import ContactLaw, Die, FrictionLaw, Ground, Scene, Scheme
 from dice_env.simulation import paper
 
 TILTED = (0.2, -0.1, 1.0)
@@ -80,3 +80,14 @@ def test_paper_law_pushes_on_falling_corners_above_the_ground():
     k, t, g = 8 * 0.2, 0.5, 9.8
     fall_drag = g * t / k - (-1 + g / k) * (1 - np.exp(-k * t)) / k
     assert fall_paper == pytest.approx(fall_drag, rel=1e-2)
+
+
+def test_the_listing_scene_takes_other_fields_with_with_to_the_bit():
+    listing = paper.paper_scene(normal=TILTED, S=1e6, dt=None)
+    scene = listing.with_(dt=1e-3, t_max=3.0, allow_unstable=True,
+                          ground=listing.ground.with_(contact_law="gated"))
+    assert scene == Scene(
+        die=Die.paper(), ground=Ground(stiffness=1e6, damping=0.1, friction=0.1, normal=TILTED,
+                                       contact_law=ContactLaw.GATED),
+        gravity=9.8, dt=1e-3, t_max=3.0, friction_vmin=1e-6, allow_unstable=True,
+        scheme=Scheme.PAPER, friction_law=FrictionLaw.REGULARIZED)

@@ -56,7 +56,7 @@ def test_a_state_changed_after_it_was_built_is_checked_again_by_simulate():
 def test_integer_arrays_become_floats_instead_of_being_truncated():
     state = State(np.array([[0, 0, 1]]), np.zeros((1, 3), int), np.zeros((1, 3), int),
                   np.eye(3, dtype=int)[None], np.zeros((1, 3), int))
-    result = run(SCENE, state, t_max=0.1, stop_at_rest=False)
+    result = run(SCENE, state, t_max=0.1, until="t_max")
     z = result.final.position[0, 2]
     assert z == pytest.approx(1 - 0.5 * 9.81 * 0.1**2, abs=1e-3)  # falling, not stuck at 1
 
@@ -89,7 +89,9 @@ def test_runs_too_long_to_finish_are_refused_before_any_work(make):
     (lambda: run(SCENE, drop(), num_threads=0), "num_threads"),
     (lambda: run(SCENE, drop(), record="enrgy", record_every=10), "record must name only"),
     (lambda: run(SCENE, drop(), record=3, record_every=10), "record must be a name"),
-    (lambda: run(SCENE, drop(), stop_at_rest="no"), "stop_at_rest must be a bool"),
+    (lambda: run(SCENE, drop(), until="no"),
+     "until must be one of 'rest', 'early_rest', 'decided', 't_max', got 'no'"),
+    (lambda: run(SCENE, drop(), until=["rest"]), "until must be one of"),
     (lambda: run(SCENE, throws(SCENE, 64), record_every=1, record=("nodes",)),
      "more than the limit"),
 ])
@@ -117,7 +119,7 @@ def test_soft_tables_are_not_flagged_unstable(stiffness):
     # a slip re-ties the sticking spring to carry mu fn, damping share included: on a soft,
     # damped table that bookkeeping stored many times the throw's energy and flagged 60-100 %
     scene = Scene(ground=Ground(stiffness=stiffness))
-    result = run(scene, throws(scene, 48), stop_when_decided=True)
+    result = run(scene, throws(scene, 48), until="decided")
     assert not result.unstable.any()
     assert result.energy_rise.max() < 0.1
 
@@ -162,7 +164,7 @@ def test_impossible_sinks_are_flagged(scene, velocity):
 
 
 def test_realistic_throws_never_sink():
-    result = run(SCENE, throws(SCENE, 64), stop_when_decided=True)
+    result = run(SCENE, throws(SCENE, 64), until="decided")
     assert not result.sunk.any()
 
 
@@ -192,7 +194,7 @@ def test_ctrl_c_ends_a_long_run_promptly():
         simulate(scene, throws(2, 0), t_max=0.01)  # run: a compile cannot be interrupted
         print("running", flush=True)
         try:
-            simulate(scene, throws(2, 0), t_max=9000.0, stop_at_rest=False)
+            simulate(scene, throws(2, 0), t_max=9000.0, until="t_max")
         except KeyboardInterrupt:
             print("interrupted", flush=True)
             sys.exit(3)
@@ -215,7 +217,7 @@ def test_a_fork_started_pool_works_after_a_batched_run():
     code = _script("""
         import multiprocessing as mp
         def work(seed):
-            return int(simulate(scene, throws(32, seed), stop_when_decided=True).face.sum())
+            return int(simulate(scene, throws(32, seed), until="decided").face.sum())
         if __name__ == "__main__":
             before = [work(s) for s in (1, 2, 3)]
             with mp.get_context("fork").Pool(2) as pool:

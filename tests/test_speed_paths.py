@@ -30,7 +30,7 @@ def test_free_flight_agrees_with_plain_stepping_within_its_error(die, scheme, bo
     # under the listing's sign-like friction): compare it with the step's own error, per throw
     scene = Scene(die=die, t_max=0.3, scheme=scheme)
     start = throws(scene, 6, seed=1)
-    kwargs = {"stop_at_rest": False, "record_every": 50, "record": ("orientations",)}
+    kwargs = {"until": "t_max", "record_every": 50, "record": ("orientations",)}
     jumped = simulate(scene, start, **kwargs)
     plain = simulate(scene, start, free_flight=False, **kwargs)
     half = simulate(scene.with_(dt=scene.step / 2), start, free_flight=False,
@@ -46,8 +46,8 @@ def test_free_flight_agrees_with_plain_stepping_within_its_error(die, scheme, bo
 def test_a_fall_jumped_in_closed_form_lands_where_stepping_does():
     scene = Scene(t_max=0.2)
     start = State.release(scene, [0, 0, 0.3], [0.4, 0.1, 0.0], [5.0, -3.0, 2.0])
-    jumped = simulate(scene, start, stop_at_rest=False)
-    plain = simulate(scene, start, stop_at_rest=False, free_flight=False)
+    jumped = simulate(scene, start, until="t_max")
+    plain = simulate(scene, start, until="t_max", free_flight=False)
     # no contact within 0.2 s: jumped, equal to the 11,817 plain steps up to their round-off
     np.testing.assert_allclose(jumped.final.position, plain.final.position, rtol=0, atol=1e-11)
     np.testing.assert_allclose(jumped.final.velocity, plain.final.velocity, rtol=0, atol=1e-11)
@@ -98,7 +98,7 @@ def test_serial_and_parallel_paths_are_bit_identical():
 def test_early_rest_gives_the_rest_that_the_hold_confirms():
     scene = Scene(t_max=3.0)
     start = throws(scene, 24, seed=4)
-    early = simulate(scene, start, early_rest=True)
+    early = simulate(scene, start, until="early_rest")
     held = simulate(scene, start)
     assert early.settled.all()
     for name in ("face", "settled", "rest_time", "impacts", "max_penetration", "energy_rise"):
@@ -109,5 +109,5 @@ def test_early_rest_gives_the_rest_that_the_hold_confirms():
     for other in (scene.with_(die=Die.loaded(face=1, fraction=0.2)),
                   scene.with_(ground=scene.ground.tilted(10.0))):
         start = throws(other, 2, seed=5)
-        np.testing.assert_array_equal(simulate(other, start, early_rest=True).steps,
+        np.testing.assert_array_equal(simulate(other, start, until="early_rest").steps,
                                       simulate(other, start).steps)

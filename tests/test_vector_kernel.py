@@ -39,20 +39,20 @@ def overflowing(n: int) -> State:
     return start
 
 
-SETTLING = paper.paper_scene(t_max=10.0).with_(rest=Rest(speed=0.2))  # most dice rest by 9 s
-PLAIN = {"stop_at_rest": False, "record": ()}
+SETTLING = paper.paper_scene().with_(rest=Rest(speed=0.2))  # most dice rest by 9 s
+PLAIN = {"until": "t_max", "record": ()}
 
 
 @pytest.mark.parametrize(("scene", "start", "kwargs"), [
-    (paper.paper_scene(t_max=1.5), paper_throws(37), PLAIN),  # two full tiles and a part
-    (paper.paper_scene(t_max=1.5, normal=(0.2, -0.1, 1.0)), paper_throws(37), PLAIN),
-    (paper.paper_scene(t_max=1.0, mu=0.0), paper_throws(37), PLAIN),
-    (paper.paper_scene(t_max=1.0, D=0.0), paper_throws(37), {**PLAIN, "free_flight": False}),
-    (paper.paper_scene(t_max=0.5), paper_throws(37, spin=300.0), PLAIN),  # turns > 1/64 rad
-    (paper.paper_scene(t_max=1.0), overflowing(37), PLAIN),
+    (paper.paper_scene().with_(t_max=1.5), paper_throws(37), PLAIN),  # two full tiles and a part
+    (paper.paper_scene(normal=(0.2, -0.1, 1.0)).with_(t_max=1.5), paper_throws(37), PLAIN),
+    (paper.paper_scene(mu=0.0).with_(t_max=1.0), paper_throws(37), PLAIN),
+    (paper.paper_scene(D=0.0).with_(t_max=1.0), paper_throws(37), {**PLAIN, "free_flight": False}),
+    (paper.paper_scene().with_(t_max=0.5), paper_throws(37, spin=300.0), PLAIN),  # turns > 1/64 rad
+    (paper.paper_scene().with_(t_max=1.0), overflowing(37), PLAIN),
     (SETTLING, paper_throws(37), {}),
-    (SETTLING, paper_throws(37), {"early_rest": True}),
-    (paper.paper_scene(t_max=10.0), paper_throws(37), {"stop_when_decided": True}),
+    (SETTLING, paper_throws(37), {"until": "early_rest"}),
+    (paper.paper_scene(), paper_throws(37), {"until": "decided"}),
 ], ids=["paper", "tilted", "frictionless", "undamped", "fast-spin", "overflow", "rest",
         "early-rest", "decided"])
 def test_bit_identical_to_the_scalar_kernel(scene, start, kwargs):
@@ -63,19 +63,19 @@ def test_bit_identical_to_the_scalar_kernel(scene, start, kwargs):
     if start.velocity[0, 0] > 1e300:
         assert fast.unstable.all() and len(set(fast.steps)) > 30  # each at its own step
         assert (fast.steps < scene.n_steps).all() and np.isfinite(fast.final.position).all()
-    if "stop_at_rest" not in kwargs:  # the dice end at their own steps, most of them early
-        ended = fast.decided if kwargs.get("stop_when_decided") else fast.settled
+    if kwargs.get("until") != "t_max":  # the dice end at their own steps, most of them early
+        ended = fast.decided if kwargs.get("until") == "decided" else fast.settled
         assert ended.mean() > 0.5 and len(set(fast.steps[ended])) == ended.sum()
 
 
 def test_same_results_for_any_thread_count_and_batch():
-    scene = paper.paper_scene(t_max=0.5)
+    scene = paper.paper_scene().with_(t_max=0.5)
     start = paper_throws(40)
-    two = simulate(scene, start, stop_at_rest=False, record=(), num_threads=2)
-    one = simulate(scene, start, stop_at_rest=False, record=(), num_threads=1)
+    two = simulate(scene, start, until="t_max", record=(), num_threads=2)
+    one = simulate(scene, start, until="t_max", record=(), num_threads=1)
     assert_identical(two, one)
     rows = slice(5, 21)  # another tile, other neighbours
-    part = simulate(scene, State(*(a[rows] for a in start._arrays())), stop_at_rest=False,
+    part = simulate(scene, State(*(a[rows] for a in start._arrays())), until="t_max",
                     record=())
     np.testing.assert_array_equal(part.final.orientation, two.final.orientation[rows])
 
@@ -83,7 +83,7 @@ def test_same_results_for_any_thread_count_and_batch():
 def test_a_batch_of_paper_throws_ends_where_the_listing_does():
     # the independent transcription of real_throw_cube.m, 3000 steps of its own dt = 1e-4
     start = paper_throws(16, seed=3)
-    ours = simulate(paper.paper_scene(t_max=0.3), start, stop_at_rest=False, record=())
+    ours = simulate(paper.paper_scene().with_(t_max=0.3), start, until="t_max", record=())
     for k in (0, 7, 15):
         ref = listing_throw(start.angular_momentum[k], clockmax=3000, tmax=0.3)
         np.testing.assert_allclose(ours.final.position[k], ref["x_cm"][-1], rtol=0, atol=1e-9)

@@ -88,6 +88,17 @@ def test_several_dice_are_recorded_saved_and_replayed(tmp_path):
     assert replay(path)[0].outcome["faces"] == rec.outcome["faces"]
 
 
+def test_a_file_from_before_until_replays_with_its_run():
+    rec, = record(Scene(), Die(), _release(Scene()), until="decided")
+    data = rec.to_data()
+    assert data["run"] == {"t_max": None, "until": "decided"}
+    for old, until in (((True, False), "decided"), ((False, True), "early_rest"),
+                       ((False, False), "rest")):
+        data["run"] = {"t_max": None, "stop_when_decided": old[0], "early_rest": old[1]}
+        assert Recording.from_data(data).run == {"t_max": None, "until": until}
+    assert replay(Recording.from_data(data))[0].run["until"] == "rest"
+
+
 def test_a_replay_that_lands_elsewhere_is_refused(tmp_path):
     rec, = record(Scene(), Die(), _release(Scene()))
     data = rec.to_data()
@@ -118,7 +129,7 @@ def test_bad_arguments_name_the_parameter(tmp_path):
         record(scene, scene.die, _release(scene), titles=["a", "b"])
     with pytest.raises(ValueError, match="early_rest"):
         record(scene, (Die(), Die()), GroupState.of([_release(scene), _release(scene, y=0.03)]),
-               early_rest=True)
+               until="early_rest")
     with pytest.raises(ValueError, match="path must end in"):
         load(tmp_path / "throw.txt")
     with pytest.raises(ValueError, match="data must be a recording"):

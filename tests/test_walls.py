@@ -17,7 +17,7 @@ def test_a_die_thrown_into_the_tray_stays_in_it_and_never_sinks_into_a_wall():
     heading /= np.linalg.norm(heading, axis=1, keepdims=True)
     start = State.release(scene, [0, 0, 0.05], heading * rng.uniform(1.5, 3.0, (n, 1)),
                           rng.normal(0, 40, (n, 3)), random_rotations(rng, n))
-    result = simulate(scene, start, stop_when_decided=True)
+    result = simulate(scene, start, until="decided")
     x = result.final.position
     assert (np.abs(x[:, 0]) < 0.15).all() and (np.abs(x[:, 1]) < 0.10).all()
     assert result.impacts.max() > 1
@@ -36,8 +36,8 @@ def test_a_wall_at_any_angle_bounces_like_the_floor_rotated_to_it(tilt):
     wall = Wall.through(-0.5 * normal, normal)
     scene = Scene(gravity=0.0, walls=(wall,), ground=Ground(normal=(0, 0, 1), offset=-1.0))
     start = State.release(scene, -0.5 * normal + 0.009 * normal, -normal, orientation=turn)
-    a = simulate(base, floor, t_max=0.02, stop_at_rest=False)
-    b = simulate(scene, start, t_max=0.02, stop_at_rest=False)
+    a = simulate(base, floor, t_max=0.02, until="t_max")
+    b = simulate(scene, start, t_max=0.02, until="t_max")
     np.testing.assert_allclose(b.final.velocity[0], turn @ a.final.velocity[0], atol=1e-9)
     np.testing.assert_allclose(b.max_penetration, a.max_penetration, rtol=1e-6)
     assert a.final.velocity[0, 2] > 0.4  # it bounced

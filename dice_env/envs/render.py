@@ -685,7 +685,7 @@ def _figure_pair(frames: int = 6) -> np.ndarray:
                            rng.normal(0.0, 25.0, 3), axis_angle(rng.normal(size=3), 2.0))
              for side in (1.0, -1.0)]
     every = 40
-    result = simulate_group(scene, dice, GroupState.of(hands), stop_when_decided=True,
+    result = simulate_group(scene, dice, GroupState.of(hands), until="decided",
                             record_every=every, orientations=True)
     last = max(1, int(result.steps[0]) // every - 1)
     shown = np.linspace(0, last, frames).round().astype(int)

@@ -77,9 +77,9 @@ class ThrowTask:
     the dense term ``n_target . n_table`` at rest (1 target up, 0 on a side, -1 down; the mean
     over the dice). ``num_threads`` caps the kernel's threads (None: all cores). ``until``:
     "rest" simulates each throw to rest; "decided" ends it as soon as its faces are decided
-    (``stop_when_decided``: the same faces, 2–3 times faster; the final state, rest time and
-    impacts are those of that moment, and the shaping term is taken there; horizontal table
-    only).
+    (the same faces, 2–3 times faster; the final state, rest time and impacts are those of
+    that moment, and the shaping term is taken there; horizontal table only; see
+    :attr:`run_until`).
 
     **The hand** holds the dice in rows of up to :data:`HAND_ROW` along the table's y axis, the
     rows one behind the other along its x axis, die ``i`` in row ``i // 4``; neighbours' centres
@@ -521,20 +521,26 @@ class ThrowTask:
         return Throw(reward=reward_success + shaping, info=info, result=result,
                      observation=self.observe(targets, result.final.orientation))
 
+    @property
+    def run_until(self) -> str:
+        """The kernel's ``until`` of a throw (:data:`dice_env.simulation.simulate.ENDINGS`).
+
+        ``until``, but one die alone runs to rest as ``"early_rest"``: the same face, rest time
+        and impacts as waiting out the rest hold, ~3x faster (docs/performance.md); the state
+        at rest is taken when rest is proven.
+        """
+        return "early_rest" if self.until == "rest" and self.n_dice == 1 else self.until
+
     def _simulate(self, state: State | GroupState, record_every: int) -> Result | GroupResult:
-        """The kernel's run of the released dice: one die's (early rest), or the group's."""
-        decided = self.until == "decided"
+        """The kernel's run of the released dice (:attr:`run_until`): one die's, or the group's."""
         if isinstance(state, GroupState):
-            return simulate_group(self.scene, self.dice, state, stop_when_decided=decided,
+            return simulate_group(self.scene, self.dice, state, until=self.run_until,
                                   record_every=record_every, orientations=bool(record_every),
                                   num_threads=self.num_threads)
-        # Early rest: the same face, rest time and impacts as waiting out the rest hold, ~3x
-        # faster (docs/performance.md); the state at rest is taken when rest is proven.
-        result = simulate(self.scene, state, record_every=record_every,
+        result = simulate(self.scene, state, until=self.run_until, record_every=record_every,
                           record=("orientations",) if record_every else ("energy",),
-                          num_threads=self.num_threads, early_rest=not decided,
-                          stop_when_decided=decided)
-        return result if decided else _held_within_t_max(result, self.scene)
+                          num_threads=self.num_threads)
+        return result if self.until == "decided" else _held_within_t_max(result, self.scene)
 
 
 @dataclass

@@ -10,6 +10,7 @@ import functools
 import math
 from dataclasses import dataclass, field, replace
 from enum import IntEnum
+from typing import Self
 
 import numpy as np
 
@@ -105,6 +106,16 @@ class Plane:
     def height(self, points: np.ndarray) -> np.ndarray:
         """Signed distance (m) of ``points`` (..., 3) from the plane, > 0 on the free side."""
         return np.asarray(points) @ np.asarray(self.normal) - self.offset
+
+    def with_(self, **changes: object) -> Self:
+        """A copy with some fields changed (validated again), as :meth:`Scene.with_`.
+
+        An unchanged ``normal`` is kept to the bit (normalising it again can move it by an ulp).
+        """
+        plane = replace(self, **changes)
+        if "normal" not in changes:
+            object.__setattr__(plane, "normal", self.normal)
+        return plane
 
 
 @dataclass(frozen=True)

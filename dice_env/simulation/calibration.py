@@ -71,7 +71,7 @@ def measured_restitution(scene: Scene, speed: float = 1.0) -> float:
     # contact lasts about pi sqrt(m / 4 S); simulate ten times that, plus the fall
     span = 10.0 * math.pi * math.sqrt(die.mass / (4.0 * scene.ground.stiffness))
     span += (speed - start) / g if g > 0 else gap / speed
-    result = simulate(scene, state, t_max=span, stop_at_rest=False, record_every=1, record=())
+    result = simulate(scene, state, t_max=span, until="t_max", record_every=1, record=())
     z = result.x_cm[0, :, 2]
     e = rebound(z, np.diff(z, prepend=height + gap) / scene.step, height, g, speed)
     if e is None:

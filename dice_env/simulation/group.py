@@ -2,7 +2,7 @@
 
     dice = (Die(), Die.standard("d20"))
     state = GroupState.of([State.release(scene.with_(die=d), ...) for d in dice])
-    result = simulate_group(scene, dice, state, stop_when_decided=True)
+    result = simulate_group(scene, dice, state, until="decided")
     result.face      # (B, N): each die's face; 0 for a die not read (leaning on another)
 
 The scene gives the planes, gravity, the scheme and the rest test; its ``die`` is not used (the
@@ -33,6 +33,7 @@ from dice_env.simulation.simulate import (
     State,
     blank_outcome,
     check_run,
+    ending,
     lock_energy,
     outcome_fields,
     pack_run,
@@ -48,6 +49,7 @@ from dice_env.simulation.simulate import (
 DIE_RESTITUTION = 0.5
 DIE_FRICTION = 0.4
 MAX_DICE = 64  # dice in one throw: every pair is tested each step
+GROUP_UNTIL = ("rest", "decided", "t_max")  # simulate_group's until (early rest: one die alone)
 TOUCH = 1e-3  # dice released closer than this fraction of the smaller's size touch, not overlap
 
 
@@ -193,8 +195,7 @@ def simulate_group(
     *,
     contact: DieContact = DieContact(),
     t_max: float | None = None,
-    stop_at_rest: bool = True,
-    stop_when_decided: bool = False,
+    until: str = "rest",
     free_flight: bool = True,
     record_every: int = 0,
     orientations: bool = False,
@@ -204,18 +205,19 @@ def simulate_group(
 
     Keywords as :func:`dice_env.simulate`; ``free_flight`` takes the steps in which no die
     touches a plane or another die (their bounding spheres apart) at once, in closed form.
-    ``stop_when_decided`` ends a throw when no energy left in it can change any die's
-    face (see :mod:`dice_env.physics.group_kernel`); ``stop_at_rest`` when every die is at rest.
+    ``until`` (:data:`GROUP_UNTIL`): ``"rest"`` ends a throw when every die is at rest,
+    ``"decided"`` also when no energy left in it can change any die's face (see
+    :mod:`dice_env.physics.group_kernel`), ``"t_max"`` at the time limit alone.
     ``record_every`` > 0 records the centres (and with ``orientations`` the orientations).
     Refused: dice that overlap at the start, more than :data:`MAX_DICE` dice, a step count
     above :data:`dice_env.model.scene.MAX_STEPS`, records above
     :data:`dice_env.simulation.simulate.MAX_RECORD_BYTES`, a die-die step that underflows
-    (:func:`group_step`), with ``stop_when_decided`` a gravity whose energies overflow.
+    (:func:`group_step`), with ``until="decided"`` a gravity whose energies overflow.
     """
     dice = _dice(dice)
     threads = check_run(scene, state, GroupState, record_every, num_threads,
-                        stop_at_rest=stop_at_rest, stop_when_decided=stop_when_decided,
                         free_flight=free_flight, orientations=orientations)
+    ends = ending(until, GROUP_UNTIL)
     if not isinstance(contact, DieContact):
         raise TypeError(f"contact must be a DieContact, got {type(contact).__name__}")
     if state.n_dice != len(dice):
@@ -238,10 +240,10 @@ def simulate_group(
     _, contact_planes = pack_scene(scenes[0])
     options, _ = pack_run(scenes[0], n_steps=n_steps, free_flight=free_flight)
     stops = group_kernel.GroupStops(
-        n_steps=n_steps, at_rest=bool(stop_at_rest), v_rest=float(scene.rest.speed),
-        hold_steps=_hold_steps(scene.rest.hold / dt, n_steps), decide=bool(stop_when_decided),
+        n_steps=n_steps, at_rest=ends.at_rest, v_rest=float(scene.rest.speed),
+        hold_steps=_hold_steps(scene.rest.hold / dt, n_steps), decide=ends.decided,
         energy_scale=float(sum(d.mass * scene.gravity * d.size for d in dice)))
-    bodies = _bodies(scenes, stop_when_decided)
+    bodies = _bodies(scenes, ends.decided)
     stride, n_rec = record_plan(record_every, n_steps, b * n * (12 if orientations else 3),
                                 f"{b} throws of {n} dice")
     records = group_kernel.GroupRecords(
@@ -319,9 +321,9 @@ def _bodies(scenes: list[Scene], decide: bool) -> group_kernel.Bodies:
                 2.0 * scene.ground.stiffness)
         except OverflowError as error:  # (m g)^2 beyond floats: a gravity near 1e300
             raise ValueError(f"gravity={scene.gravity:g} m/s^2 overflows the energies of "
-                             f"stop_when_decided for die {i} ((m g)^2 / 2 S, mass "
-                             f"{die.mass:g} kg): lower gravity, or pass "
-                             "stop_when_decided=False") from error
+                             f"until='decided' for die {i} ((m g)^2 / 2 S, mass "
+                             f"{die.mass:g} kg): lower gravity, or pass an until other "
+                             "than 'decided'") from error
     return group_kernel.Bodies(
         vertices=vertices, n_vertices=np.array([len(d.vertices) for d in dice]),
         faces=faces, n_faces=np.array([d.n_faces for d in dice]),

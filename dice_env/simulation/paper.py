@@ -50,8 +50,9 @@ def real_throw_cube(L0: np.ndarray | None = None, *, seed: int | None = None, D:
     ``L0`` defaults to the listing's ``rand(3,1)*0.75 + 1e-6`` drawn from
     ``numpy.random.default_rng(seed)``. ``listing``: the listing's other values, as
     keywords of :func:`paper_scene` (``r``, ``total_mass``, ``normal``, ``S``, ``g``,
-    ``umin`` (default ``1e-6 * r``), ``contact_law``, ``allow_unstable``) or of the run
-    (``tmax`` = 10, ``x0`` = (0, 0, 3), ``u0`` = (5, 0, 5), ``record_nodes`` = False).
+    ``umin`` (default ``1e-6 * r``)) or of the run (``tmax`` = 10, ``x0`` = (0, 0, 3),
+    ``u0`` = (5, 0, 5), ``record_nodes`` = False), and the scene's ``contact_law`` (default
+    the paper's) and ``allow_unstable`` (default False).
     """
     if L0 is None:
         L0 = np.random.default_rng(seed).random(3) * 0.75 + 1e-6
@@ -71,28 +72,38 @@ def paper_scene(
     *, r: float = 1.0, total_mass: float = 1.0, normal: tuple[float, float, float] = (0, 0, 1),
     S: float = 1e4, D: float = 0.1, mu: float = 0.1, dt: float | None = 1e-4, g: float = 9.8,
     umin: float | None = None, rotation: bool = True,
-    contact_law: ContactLaw = ContactLaw.PAPER, allow_unstable: bool = False, t_max: float = 10.0,
 ) -> Scene:
-    """The paper's scene (real throw defaults) as a :class:`Scene`."""
+    """The paper's scene (real throw defaults: its listing's values, 10 s) as a :class:`Scene`.
+
+    Change the rest with :meth:`Scene.with_`: ``.with_(t_max=3.0)``; a step above the
+    critical one, ``.with_(dt=..., allow_unstable=True)`` (together: each scene is checked
+    when built); the gated contact law, ``.with_(ground=scene.ground.with_(contact_law=
+    ContactLaw.GATED))``.
+    """
     check_positive("r", r)
     return Scene(
         die=Die.paper(r, total_mass),
         ground=Ground(stiffness=S, damping=D, friction=mu, normal=normal,
-                      contact_law=contact_law),
-        gravity=g, dt=dt, t_max=t_max, rotation=rotation,
-        friction_vmin=1e-6 * r if umin is None else umin, allow_unstable=allow_unstable,
+                      contact_law=ContactLaw.PAPER),
+        gravity=g, dt=dt, t_max=10.0, rotation=rotation,
+        friction_vmin=1e-6 * r if umin is None else umin,
         scheme=Scheme.PAPER, friction_law=FrictionLaw.REGULARIZED,
     )
 
 
 def _run(L0: object, rotation: bool, *, clockmax: int, tmax: float = 10.0,
          x0: object = (0.0, 0.0, 3.0), u0: object = (5.0, 0.0, 5.0), record_nodes: bool = False,
+         contact_law: ContactLaw = ContactLaw.PAPER, allow_unstable: bool = False,
          **listing: object) -> PaperRun:
     """Either listing's run; ``listing``: :func:`paper_scene`'s other keywords."""
     if not isinstance(clockmax, (int, np.integer)) or clockmax < 1:
         raise ValueError(f"clockmax must be an int >= 1, got {clockmax!r}")
     check_positive("tmax", tmax)
-    scene = paper_scene(**listing, dt=tmax / clockmax, rotation=rotation, t_max=tmax)
+    # built at its own step, then checked once with the run's step, time and law
+    listing_scene = paper_scene(**listing, dt=None, rotation=rotation)
+    scene = listing_scene.with_(
+        dt=tmax / clockmax, t_max=tmax, allow_unstable=allow_unstable,
+        ground=listing_scene.ground.with_(contact_law=contact_law))
     L0 = _vector("L0", L0)
     position = _vector("x0", x0)
     sink = float(scene.sink(position, np.eye(3)[None])[0])
@@ -104,7 +115,7 @@ def _run(L0: object, rotation: bool, *, clockmax: int, tmax: float = 10.0,
         orientation=np.eye(3)[None].copy(), angular_velocity=np.zeros((1, 3)),
     )
     record = ("energy", "nodes") if record_nodes else ("energy",)
-    result = simulate(scene, state, stop_at_rest=False, record_every=1, record=record)
+    result = simulate(scene, state, until="t_max", record_every=1, record=record)
     return PaperRun(
         t=result.t, x_cm=result.x_cm[0], energy=result.energy[0],
         nodes=result.nodes[0] if record_nodes else None, L0=L0[0], result=result,

@@ -39,7 +39,7 @@ def _die() -> None:
 
 def _paper() -> None:
     """The paper scene's vector kernel, parallel and serial."""
-    scene = paper_scene(t_max=0.01)
+    scene = paper_scene().with_(t_max=0.01)
     for threads in (THREADS, 1):
         simulate(scene, State.release(scene, np.tile([0.0, 0.0, 3.0], (BATCH, 1)),
                                       [1.0, 0, 0]), num_threads=threads)

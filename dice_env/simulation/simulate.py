@@ -10,7 +10,7 @@ import threading
 from collections.abc import Callable
 from dataclasses import dataclass
 from types import ModuleType
-from typing import ClassVar, Self
+from typing import ClassVar, NamedTuple, Self
 
 import numba
 import numpy as np
@@ -164,7 +164,7 @@ class Result(RunResult):
       tilt; the d4's face down);
     - ``settled``: came to rest; ``rest_time``: when the rest began (s; the time simulated if
       not settled);
-    - ``decided``: ended by ``stop_when_decided`` with too little energy left to change face;
+    - ``decided``: ended by ``until="decided"`` with too little energy left to change face;
     - ``impacts``: airborne-to-contact transitions;
     - ``unstable``: energy rose beyond the scene's tolerance, or the state stopped being finite;
       ``energy_rise``: the largest rise above the start in units of that tolerance;
@@ -191,35 +191,35 @@ def simulate(
     state: State,
     *,
     t_max: float | None = None,
-    stop_at_rest: bool = True,
+    until: str = "rest",
     record_every: int = 0,
     record: tuple[str, ...] = ("energy",),
     num_threads: int | None = None,
     free_flight: bool = True,
-    early_rest: bool = False,
-    stop_when_decided: bool = False,
     device: str = "cpu",
 ) -> Result:
     """Run a batch of throws; ``state`` is not modified.
 
-    ``t_max`` overrides the scene's time limit. ``record_every`` > 0 stores the centre of mass
-    every that many steps, plus what ``record`` names among "energy", "orientations", "nodes".
-    ``num_threads`` caps numba's threads for this call (1 to ``NUMBA_NUM_THREADS``; default:
-    all of them); a single throw or one thread runs on the calling thread, and so do a batch
-    of at most :data:`SERIAL_FIRST` throws while the parallel loop is not compiled and every
-    run in a process forked after its parent ran threads (GNU OpenMP cannot be used across a
-    fork; :func:`_forked`). ``free_flight`` takes the contact-free steps in
-    analytic jumps (gated law, or no damping, where the paper law is the same); False steps them
-    one by one. ``early_rest`` ends a quiet die as soon as its energy proves it stays at rest
-    (fair die on a horizontal table): the same outcome (face, rest time, impacts) without the
-    cost of the hold, but the final state is taken then, still vibrating within the rest
-    thresholds. By default the hold ``scene.rest.hold`` is waited out. ``stop_when_decided``
-    ends a die as soon as its face up is decided: its total energy (kinetic, potential and
-    ground springs), which the ground can only store or dissipate, is below the least energy
-    of any orientation in which its face up ties with another (:func:`lock_energy`;
-    horizontal table, fair or loaded die). Its face is the one it would rest on, at a fraction
-    of the cost; the final state, rest time and impacts are those of that moment, and it is
-    not ``settled``.
+    ``t_max`` overrides the scene's time limit. ``until`` says what ends a die's run before it
+    (:data:`ENDINGS`): ``"rest"`` when it has been quiet for the hold ``scene.rest.hold``;
+    ``"early_rest"`` as soon as its energy proves it stays at rest (fair die on a horizontal
+    table; else as ``"rest"``): the same outcome (face, rest time, impacts) without the cost
+    of the hold, but the final state is taken then, still vibrating within the rest
+    thresholds; ``"decided"`` as soon as its face up is decided (or at rest): its total energy
+    (kinetic, potential and ground springs), which the ground can only store or dissipate, is
+    below the least energy of any orientation in which its face up ties with another
+    (:func:`lock_energy`; horizontal table, fair or loaded die). Its face is the one it would
+    rest on, at a fraction of the cost; the final state, rest time and impacts are those of
+    that moment, and it is not ``settled``. ``"t_max"``: nothing, the time limit alone.
+
+    ``record_every`` > 0 stores the centre of mass every that many steps, plus what ``record``
+    names among "energy", "orientations", "nodes". ``num_threads`` caps numba's threads for
+    this call (1 to ``NUMBA_NUM_THREADS``; default: all of them); a single throw or one thread
+    runs on the calling thread, and so do a batch of at most :data:`SERIAL_FIRST` throws while
+    the parallel loop is not compiled and every run in a process forked after its parent ran
+    threads (GNU OpenMP cannot be used across a fork; :func:`_forked`). ``free_flight`` takes
+    the contact-free steps in analytic jumps (gated law, or no damping, where the paper law is
+    the same); False steps them one by one.
 
     ``device``: ``"cpu"`` (numba's threads) or ``"cuda"``: one die per thread of an NVIDIA GPU
     (:mod:`dice_env.physics.cuda_kernel`; the extra ``dice_env[cuda]``), the same physics to
@@ -231,8 +231,8 @@ def simulate(
     milliseconds and raises ``KeyboardInterrupt``.
     """
     threads = check_run(scene, state, State, record_every, num_threads,
-                        stop_at_rest=stop_at_rest, free_flight=free_flight,
-                        early_rest=early_rest, stop_when_decided=stop_when_decided)
+                        free_flight=free_flight)
+    ending(until)
     record = _record_names(record)
     check_choice("device", device, DEVICES)
     body, contact = _packed_scene(scene)
@@ -242,9 +242,7 @@ def simulate(
     outcome = kernel.Outcome(**blank_outcome(scene, scene.sink(out.position, out.orientation),
                                              scene.die.size))
     records = _records(record, record_every, b, n_steps, len(body.vertices))
-    options, stops = pack_run(scene, n_steps=n_steps, stop_at_rest=stop_at_rest,
-                              free_flight=free_flight, early_rest=early_rest,
-                              stop_when_decided=stop_when_decided)
+    options, stops = pack_run(scene, n_steps=n_steps, until=until, free_flight=free_flight)
     inputs = (kernel.Dice(*out._arrays()), body, contact, options, stops, records)
     if device == "cuda":
         _cuda_kernel().run(*inputs, outcome)
@@ -260,26 +258,49 @@ def simulate(
                              {name: fields[name] for name in record}))
 
 
-def pack_run(scene: Scene, *, n_steps: int, stop_at_rest: bool = True, free_flight: bool = True,
-             early_rest: bool = False,
-             stop_when_decided: bool = False) -> tuple[kernel.Options, kernel.Stops]:
+class Ending(NamedTuple):
+    """What ends a die's run before the time limit: one ``until`` of :data:`ENDINGS`."""
+
+    at_rest: bool  # rest: quiet for the hold (scene.rest)
+    early_rest: bool  # with at_rest: rest proven by the energy, before the hold is out
+    decided: bool  # a decided face (:func:`lock_energy`)
+
+
+# simulate's ``until``: the rules that end a run (simulate_group takes GROUP_UNTIL of them)
+ENDINGS = {
+    "rest": Ending(at_rest=True, early_rest=False, decided=False),
+    "early_rest": Ending(at_rest=True, early_rest=True, decided=False),
+    "decided": Ending(at_rest=True, early_rest=False, decided=True),
+    "t_max": Ending(at_rest=False, early_rest=False, decided=False),
+}
+
+
+def ending(until: object, allowed: tuple[str, ...] = tuple(ENDINGS)) -> Ending:
+    """The :data:`ENDINGS` rules of ``until``, refused (``ValueError``) unless in ``allowed``."""
+    check_choice("until", until, allowed)
+    return ENDINGS[until]
+
+
+def pack_run(scene: Scene, *, n_steps: int, until: str = "rest",
+             free_flight: bool = True) -> tuple[kernel.Options, kernel.Stops]:
     """The kernel's integration options and stop rules for a run of ``n_steps`` in ``scene``.
 
     The keywords are :func:`simulate`'s. With :func:`pack_scene`, the one place that turns a
     scene into the kernel's groups.
     """
+    ends = ending(until)
     ground, dt = scene.ground, scene.step
     options = kernel.Options(
         gravity=float(scene.gravity), dt=float(dt), rotation=bool(scene.rotation),
         flight=bool(free_flight and (ground.contact_law != ContactLaw.PAPER
                                      or ground.damping == 0)),
         midpoint=scene.scheme == Scheme.MIDPOINT)
-    rest_energy, rest_excess = _rest_energy(scene, early_rest)
+    rest_energy, rest_excess = _rest_energy(scene, ends.early_rest)
     stops = kernel.Stops(
-        n_steps=int(n_steps), at_rest=bool(stop_at_rest), v_rest=float(scene.rest.speed),
+        n_steps=int(n_steps), at_rest=ends.at_rest, v_rest=float(scene.rest.speed),
         hold_steps=math.ceil(scene.rest.hold / dt), rest_energy=float(rest_energy),
         rest_excess=float(rest_excess),
-        lock=lock_energy(scene) if stop_when_decided else np.full(scene.die.n_faces, -math.inf),
+        lock=lock_energy(scene) if ends.decided else np.full(scene.die.n_faces, -math.inf),
         energy_scale=float(scene.die.mass * scene.gravity * scene.die.size))
     return options, stops
 

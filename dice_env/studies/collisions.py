@@ -89,7 +89,7 @@ def alone_after(scene: Scene, die: Die, state: GroupState, steps: np.ndarray,
     for b, n in enumerate(steps):
         one = GroupState(*(a[b, :, None] for a in state._arrays()))
         run = simulate_group(scene.with_(t_max=int(n) * scene.dt), (die,), one,
-                             stop_at_rest=False, free_flight=FLIGHT)
+                             until="t_max", free_flight=FLIGHT)
         velocity[b], spin[b] = run.final.velocity[:, 0], run.final.angular_velocity[:, 0]
         if bar is not None:
             bar.update(1)
@@ -229,17 +229,17 @@ def throw(n: int, seed: int = SEED, bar: object = None) -> Collisions:
     state = hand_throws(scene, dice, n, np.random.default_rng(seed))
     nudged = state.copy()
     nudged.velocity[:, 0, 0] += PERTURBATION
-    together = simulate_in_batches(scene, dice, state, bar, stop_when_decided=True,
+    together = simulate_in_batches(scene, dice, state, bar, until="decided",
                                    free_flight=FLIGHT)
-    twin = simulate_in_batches(scene, dice, nudged, bar, stop_when_decided=True,
+    twin = simulate_in_batches(scene, dice, nudged, bar, until="decided",
                                free_flight=FLIGHT)
     met = together.meet_steps[:, 0] >= 0
     chosen = GroupState(*(a[met] for a in state._arrays()))
-    apart = simulate_in_batches(scene, dice[:1], alone(chosen), stop_when_decided=True,
+    apart = simulate_in_batches(scene, dice[:1], alone(chosen), until="decided",
                                 free_flight=FLIGHT)
     apart_nudged = simulate_in_batches(
         scene, dice[:1], GroupState(*(a[met, :1] for a in nudged._arrays())),
-        stop_when_decided=True, free_flight=FLIGHT)
+        until="decided", free_flight=FLIGHT)
     window = together.meet_steps[:, 1] >= 0
     if bar is not None:
         bar.total = 2 * n + int(window.sum())

@@ -152,7 +152,7 @@ def run_at(scene: Scene, start: State, horizon: float, dt: float,
     """Run ``start`` to exactly ``horizon`` with the step nearest ``dt`` that divides it."""
     steps = max(1, round(horizon / dt))
     fixed = scene.with_(dt=horizon / steps, t_max=horizon, allow_unstable=True)
-    return timed(fixed, start, stop_at_rest=False, free_flight=free_flight, num_threads=1)
+    return timed(fixed, start, until="t_max", free_flight=free_flight, num_threads=1)
 
 
 def observed_order(dt: np.ndarray, error: np.ndarray) -> float:

@@ -105,7 +105,7 @@ def throw_cell(noise: float, speed: float, set_hand: bool, n: int, rng: np.rando
              else random_orientations(rng, 2 * n).reshape(n, 2, 3, 3))
     state, _ = task.release(np.tile(action(speed), (n, 1)), hands,
                             rng.standard_normal((n, task.noise_dim)))
-    return simulate_in_batches(task.scene, task.dice, state, bar, stop_when_decided=True)
+    return simulate_in_batches(task.scene, task.dice, state, bar, until="decided")
 
 
 def reasons(result: GroupResult) -> dict[str, np.ndarray]:

@@ -192,7 +192,7 @@ A square cuboid has two square faces of side y and height x along their normal
 (`Die.cuboid((y, y, x))`, square faces labelled 1 and 6). Every shape keeps the volume and
 mass of the default die (16 mm cube, 4.5 g, uniform), so its size changes with x/y (table);
 at x/y = 1 it is the default d6, whose six faces are alike, so the chance of a square face
-is 1/3 by symmetry. Each throw runs until its face is decided (`stop_when_decided`; the face
+is 1/3 by symmetry. Each throw runs until its face is decided (`until="decided"`; the face
 it rests on) or 10 s.
 
 Conditions (throws in units of the 16 mm edge, uniform random orientation and directions):

@@ -4,7 +4,7 @@
 :func:`~dice_env.studies.shapes.hand_throws`) into chunks of ``chunk``. Chunk ``i`` draws its
 throws from ``SeedSequence(seed, spawn_key=(i,))``, the ``i``-th child of
 ``SeedSequence(seed).spawn``: a chunk's throws depend on its index alone, never on the worker
-that runs it. Each chunk runs to a decided face (``simulate(..., stop_when_decided=True)``) and
+that runs it. Each chunk runs to a decided face (``simulate(..., until="decided")``) and
 is reduced to a :class:`Tally`; the tallies merge exactly (counts add, sums are ``math.fsum``
 of the chunks' ``math.fsum``), so the result is the same bit for bit in this process, on one
 Ray worker or on many.
@@ -239,7 +239,7 @@ def _moment(name: str) -> int:
 def throw_chunk(spec: Spec, index: int, num_threads: int | None = None) -> dict[str, np.ndarray]:
     """Per-throw outcomes (arrays named :data:`OUTCOMES`) of chunk ``index`` of ``spec``."""
     state = spec.draw(spec.scene, spec.size(index), spec.rng(index))
-    res = simulate(spec.scene, state, stop_when_decided=True, num_threads=num_threads)
+    res = simulate(spec.scene, state, until="decided", num_threads=num_threads)
     return {"face": res.face.astype(np.int16), "counted": counted(res), "decided": res.decided,
             "settled": res.settled, "unstable": res.unstable, "sunk": res.sunk, "steps": res.steps,
             "time": res.rest_time, "impacts": res.impacts.astype(np.int32)}

@@ -68,7 +68,7 @@ def throw(scene: object, state: State, bar: object = None) -> MaterialThrows:
     die = scene.die
     parts = []
     for chunk in batches(state, BATCH, bar):
-        res = simulate(scene, chunk, t_max=T_MAX, stop_when_decided=True)
+        res = simulate(scene, chunk, t_max=T_MAX, until="decided")
         ok = counted(res)
         rests_on = die.face_read(res.final.orientation, -UP)
         down = rests_on == die.face_read(chunk.orientation, -UP)
@@ -259,7 +259,7 @@ vigorous landing (the deepest sinks below), the depth of a felt and of a padded 
 The same releases on every material: **vigorous**, the fairness study's hand throws
 ({_hand(VIGOROUS)}; median energy {energy['vigorous']:.1f} m g a), and **gentle**, the cuboid
 study's ({_hand(GENTLE)}; median {energy['gentle']:.2f} m g a); edges of the default
-{die.size * 1e3:g} mm die. Each throw runs until its face is decided (`stop_when_decided`:
+{die.size * 1e3:g} mm die. Each throw runs until its face is decided (`until="decided"`:
 too little energy left to change face) or {T_MAX:g} s; impacts and time are counted up to the
 decision. Faces: shares of faces 1–6 among the counted throws, chi-square test of
 uniformity (5 degrees of freedom). Sink: the deepest corner below the table surface, 99th

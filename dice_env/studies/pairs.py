@@ -208,7 +208,7 @@ def simulate_in_batches(scene: Scene, dice: tuple[Die, ...], state: GroupState,
 def throw_pairs(scene: Scene, dice: tuple[Die, ...], state: GroupState, bar: object = None,
                 batch: int = BATCH) -> Pairs:
     """Throw ``state`` until the faces are decided, in batches of ``batch``; count them."""
-    result = simulate_in_batches(scene, dice, state, bar, batch, stop_when_decided=True)
+    result = simulate_in_batches(scene, dice, state, bar, batch, until="decided")
     reasons = void_reasons(result)
     counted = not_void(reasons)
     met = result.overlap > 0
@@ -422,7 +422,7 @@ above the height where a corner could touch; one hand velocity of
 own normal noise of {h.noise:g} m/s per component; each die its own uniform orientation and a
 spin of {h.spin[0]:g}–{h.spin[1]:g} rad/s about its own uniform
 axis (the fairness study's vigorous throw, given to both dice at once). Die 1 is the one at
-y < 0. Each throw runs (`simulate_group(..., stop_when_decided=True)`) until no energy left
+y < 0. Each throw runs (`simulate_group(..., until="decided")`) until no energy left
 in it can change either face, or {T_MAX:g} s.
 
 **The dice meet:** in {n['met']:.1%} of the throws the two dice touched each other at least

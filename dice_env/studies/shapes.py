@@ -5,7 +5,7 @@
 - Fairness: each standard die (:meth:`Die.standard`) thrown ``throws`` times (default
   100,000) on the default table with the vigorous hand throws of ``fairness.md``, in the
   same physical units for every die; each throw ends when its face is decided
-  (``stop_when_decided``); chi-square test of uniformity over the faces.
+  (``until="decided"``); chi-square test of uniformity over the faces.
 - Loaded dice: each die with a tenth of its mass moved toward face 1 (:meth:`Die.load`); the
   predicted face (:func:`favoured_face`: the face read when the weight is down, the opposite
   face on a die read up, the loaded face itself on the d4) must show more than ``1/n``.
@@ -110,7 +110,7 @@ def throw_faces(scene: Scene, state: State, bar: object = None, batch: int = BAT
     n_faces = scene.die.n_faces
     counts = np.zeros(n_faces, np.int64)
     for chunk in batches(state, batch, bar):
-        res = simulate(scene, chunk, stop_when_decided=True)
+        res = simulate(scene, chunk, until="decided")
         counts += np.bincount(res.face[counted(res)], minlength=n_faces + 1)[1:]
     return Faces.of(counts, state.batch_size)
 
@@ -174,7 +174,7 @@ def free_flight(die: Die, n: int = 8, seed: int = 0, step_by_step: bool = False,
     spin = random_directions(rng, n) * rng.uniform(20.0, 100.0, (n, 1))
     start = State.release(scene, position, velocity, spin, random_orientations(rng, n))
     every = max(1, scene.steps_for(t) // 200)
-    res = simulate(scene, start, t_max=t, stop_at_rest=False, record_every=every,
+    res = simulate(scene, start, t_max=t, until="t_max", record_every=every,
                    record=("orientations",), free_flight=not step_by_step, num_threads=1)
     if res.max_penetration.max() > 0 or res.impacts.any():
         raise RuntimeError("the free-flight throws touched a plane")
@@ -351,7 +351,7 @@ uniform over rotations, released {v.clearance[0] * DIE_EDGE * 100:g}–{v.cleara
 DIE_EDGE * 100:g} cm above touching, {v.speed[0] * DIE_EDGE:g}–{v.speed[1] * DIE_EDGE:g} m/s
 in a uniform direction toward the table, spin {v.spin[0]:g}–{v.spin[1]:g} rad/s about a
 uniform axis. Each throw runs until its face is decided (`simulate(...,
-stop_when_decided=True)`: its energy can no longer tip it, so this is the face it rests on)
+until="decided")`: its energy can no longer tip it, so this is the face it rests on)
 or {Scene().t_max:g} s; faces are read against gravity, the d4 by the face down.
 "Undecided": throws with no face by then, or flagged unstable or sunk; not counted.
 

@@ -52,9 +52,9 @@ def classify(result: Result, energy_tol: float) -> int:
 
 def map_cell(stiffness: float, ratio: float, law: ContactLaw, spins: int = 3) -> int:
     """Class of the paper's real throw at ``dt = ratio * critical_dt`` (``spins`` seeded L0)."""
-    bound = paper_scene(S=stiffness, dt=None, contact_law=law).critical_dt
-    scene = paper_scene(S=stiffness, dt=ratio * bound, contact_law=law, allow_unstable=True,
-                        t_max=MAP_T_MAX)
+    listing = paper_scene(S=stiffness, dt=None)
+    scene = listing.with_(dt=ratio * listing.critical_dt, allow_unstable=True, t_max=MAP_T_MAX,
+                          ground=listing.ground.with_(contact_law=law))
     rng = np.random.default_rng(0)
     spin = (rng.random((spins, 3)) * 0.75 + 1e-6) / scene.die.inertia_body[0, 0]
     state = State.release(scene, [0.0, 0.0, 3.0], [5.0, 0.0, 5.0], spin)

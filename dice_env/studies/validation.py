@@ -94,7 +94,7 @@ def initial_face_memory(n: int, rng: np.random.Generator, scene: Scene | None = 
         raise ValueError(f"scene.die must be a d6, got {scene.die.name!r}")
     excess = 10 ** rng.uniform(*np.log10(ENERGY_RANGE), n)
     state = energy_throws(scene, excess, rng)
-    result = simulate(scene, state, stop_when_decided=True)
+    result = simulate(scene, state, until="decided")
     ok = (result.decided | result.settled) & ~result.unstable & ~result.sunk
     down0 = face_down(scene.die, state.orientation, np.asarray(UP))
     final_down = 7 - result.face  # the d6's opposite face: the face it rests on

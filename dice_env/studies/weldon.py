@@ -353,7 +353,7 @@ def successes_of(faces: np.ndarray) -> np.ndarray:
 
 def throw_together(scene: Scene, cups: list[State], bar: object = None,
                    batch: int = BATCH_TOGETHER) -> Together:
-    """Throw each cup's twelve dice together (``stop_when_decided``) on ``scene``'s table."""
+    """Throw each cup's twelve dice together (``until="decided"``) on ``scene``'s table."""
     dice = (scene.die,) * len(cups)
     n = cups[0].batch_size
     kept, leaning, undecided = [], 0, 0
@@ -361,7 +361,7 @@ def throw_together(scene: Scene, cups: list[State], bar: object = None,
     for start in range(0, n, batch):
         group = GroupState.of([State(*(getattr(s, f.name)[start:start + batch]
                                        for f in fields(State))) for s in cups])
-        res = simulate_group(scene, dice, group, stop_when_decided=True, t_max=T_MAX_TOGETHER)
+        res = simulate_group(scene, dice, group, until="decided", t_max=T_MAX_TOGETHER)
         clean = ~res.unstable & ~res.sunk.any(axis=1)
         read = res.read.all(axis=1)
         ok = res.decided & read & clean
@@ -404,7 +404,7 @@ def chunked_together(scene: Scene, throws: int, seed: int, keep: Path | None = N
 
 
 def throw_alone(scene: Scene, cups: list[State], bar: object = None) -> Faces:
-    """Throw every die of ``cups`` alone (``stop_when_decided``); count the faces."""
+    """Throw every die of ``cups`` alone (``until="decided"``); count the faces."""
     state = State(*(np.concatenate([getattr(s, f.name) for s in cups]) for f in fields(State)))
     return throw_faces(scene, state, bar)
 
@@ -618,7 +618,7 @@ its own velocity (normal, {cup.scatter:g} edges/s per component),
 spins at {cup.spin[0]:g}–{cup.spin[1]:g} rad/s about a uniform axis and has a uniform
 orientation. The table is the default wooden one (`Scene()`, no walls), the dice meet with
 the default die–die contact (`DieContact()`, {DieContact().law} friction). Each throw runs
-until every face is decided (`stop_when_decided`).
+until every face is decided (`until="decided"`).
 
 - **(a) Together** (`dice_env.simulation.group.simulate_group`): the twelve `drilled16` dice of each
   cup fall and collide. A throw counts when every die is decided and read within

@@ -69,8 +69,8 @@ def replay(source: Recording | Sequence[Recording] | str | Path) -> list[Recordi
         state = old.release.die(0) if old.n_dice == 1 else old.release
         voids = [old.outcome["void"]] if old.outcome["void"] not in _OWN_VOIDS else None
         new = record(old.scene, dice, state, fps=old.fps, contact=old.contact,
-                     t_max=old.run["t_max"], stop_when_decided=old.run["stop_when_decided"],
-                     early_rest=old.run["early_rest"], titles=[old.title], voids=voids)[0]
+                     t_max=old.run["t_max"], until=old.run["until"], titles=[old.title],
+                     voids=voids)[0]
         if new.outcome["faces"] != old.outcome["faces"]:
             wrong.append(f"throw {k}: faces {old.outcome['faces']} recorded (dice_env "
                          f"{old.version}), {new.outcome['faces']} now (dice_env {new.version})")

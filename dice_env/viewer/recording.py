@@ -22,8 +22,14 @@ from dice_env.model.die import Die
 from dice_env.model.rotations import matrix_to_quaternion, quaternion_to_matrix
 from dice_env.model.scene import Scene
 from dice_env.simulation.codec import from_data, to_data
-from dice_env.simulation.group import DieContact, GroupState, group_step, simulate_group
-from dice_env.simulation.simulate import State, simulate
+from dice_env.simulation.group import (
+    GROUP_UNTIL,
+    DieContact,
+    GroupState,
+    group_step,
+    simulate_group,
+)
+from dice_env.simulation.simulate import ENDINGS, State, ending, simulate
 
 FORMAT = "dice_env.throw"  # what a file holding recordings says it holds
 FPS = 60.0  # frames per simulated second, by default
@@ -36,14 +42,14 @@ class Recording:
     """One throw of one or more dice, as recorded.
 
     ``scene``, ``dice``, ``contact`` (between dice) and ``release`` (a :class:`GroupState` of
-    one throw) are what was thrown, ``run`` the keywords it ran with (``t_max``,
-    ``stop_when_decided``, ``early_rest``) and ``fps`` its frame rate. Frames: ``t`` (n,)
-    from 0 (the release) to the end of the throw, ``position`` (n, N, 3) and ``orientation``
-    (n, N, 3, 3) (body to world). ``outcome``: ``faces`` and ``read`` (per die: the label
-    read, and False for a die left leaning on another), ``settled``, ``decided``,
-    ``unstable``, ``sunk``, ``time`` (s simulated) and ``void`` (why the throw does not
-    count: ``""``, ``"unstable"``, ``"sunk"``, ``"not_settled"``, ``"not_decided"``,
-    ``"leaning"``, or the caller's, e.g. a task's ``"foul"``). ``title``: a caption.
+    one throw) are what was thrown, ``run`` the keywords it ran with (``t_max``, ``until``)
+    and ``fps`` its frame rate. Frames: ``t`` (n,) from 0 (the release) to the end of the
+    throw, ``position`` (n, N, 3) and ``orientation`` (n, N, 3, 3) (body to world).
+    ``outcome``: ``faces`` and ``read`` (per die: the label read, and False for a die left
+    leaning on another), ``settled``, ``decided``, ``unstable``, ``sunk``, ``time`` (s
+    simulated) and ``void`` (why the throw does not count: ``""``, ``"unstable"``, ``"sunk"``,
+    ``"not_settled"``, ``"not_decided"``, ``"leaning"``, or the caller's, e.g. a task's
+    ``"foul"``). ``title``: a caption.
     """
 
     scene: Scene
@@ -85,7 +91,8 @@ class Recording:
         release = GroupState(*(np.array(data["release"][name], dtype=np.float64)[None]
                                for name in STATE_FIELDS))
         return cls(scene=from_data(data["scene"]), dice=from_data(data["dice"]),
-                   contact=from_data(data["contact"]), release=release, run=dict(data["run"]),
+                   contact=from_data(data["contact"]), release=release,
+                   run=_run_keywords(data["run"]),
                    fps=float(data["fps"]), t=np.array(data["t"], dtype=np.float64),
                    position=np.array(data["position"], dtype=np.float64),
                    orientation=quaternion_to_matrix(np.array(data["quaternion"])),
@@ -100,16 +107,15 @@ def library_version() -> str:
 
 def record(scene: Scene, dice: Die | Sequence[Die], state: State | GroupState, *,
            fps: float = FPS, contact: DieContact = DieContact(), t_max: float | None = None,
-           stop_when_decided: bool = False, early_rest: bool = False,
-           titles: Sequence[str] | None = None,
+           until: str = "rest", titles: Sequence[str] | None = None,
            voids: Sequence[str] | None = None) -> list[Recording]:
     """Simulate the throws of ``state`` and record each at ``fps`` frames per simulated second.
 
     ``dice``: one die (``state`` a :class:`State` of B throws, the die in ``scene`` replaced
     by it) or several (``state`` a :class:`GroupState`). One die runs in
-    :func:`dice_env.simulate` (``early_rest`` as there), several in
-    :func:`dice_env.simulation.group.simulate_group` with ``contact``; ``t_max`` and
-    ``stop_when_decided`` as there. Frames run from the release to the end of the throw.
+    :func:`dice_env.simulate`, several in :func:`dice_env.simulation.group.simulate_group`
+    with ``contact``; ``t_max`` and ``until`` as there. Frames run from the release to the
+    end of the throw.
     ``titles`` and ``voids`` (one per throw) caption the throws and override the void reason
     (e.g. a task's ``"foul"``; ``""`` keeps the simulation's). Returns one recording a throw.
     """
@@ -120,8 +126,7 @@ def record(scene: Scene, dice: Die | Sequence[Die], state: State | GroupState, *
     if not isinstance(state, State if single else GroupState):
         raise TypeError("state must be a State for one die and a GroupState for several, got "
                         f"a {type(state).__name__} for {len(dice)} dice")
-    if early_rest and not single:
-        raise ValueError("early_rest applies to one die only (simulate), got several dice")
+    ending(until, tuple(ENDINGS) if single else GROUP_UNTIL)
     release = GroupState.of([state]) if single else state.copy()
     dt = group_step(scene, dice, contact)
     stride = max(1, round(1.0 / (fps * dt)))
@@ -129,8 +134,7 @@ def record(scene: Scene, dice: Die | Sequence[Die], state: State | GroupState, *
     if limit / (stride * dt) * len(dice) > MAX_FRAMES:
         raise ValueError(f"t_max={limit:g} s at fps={fps:g} records more than {MAX_FRAMES} "
                          "die frames a throw: lower fps or t_max")
-    run = {"t_max": t_max, "stop_when_decided": bool(stop_when_decided),
-           "early_rest": bool(early_rest)}
+    run = {"t_max": t_max, "until": until}
     result, outcomes = _simulate(scene, dice, release, contact, stride, run)
     count = release.batch_size
     titles = [""] * count if titles is None else list(titles)
@@ -165,30 +169,37 @@ def as_data(recordings: Recording | Sequence[Recording]) -> list[dict[str, Any]]
 def _simulate(scene: Scene, dice: tuple[Die, ...], release: GroupState, contact: DieContact,
               stride: int, run: dict[str, Any]) -> tuple[Any, list[dict[str, Any]]]:
     """The recorded run and each throw's outcome."""
-    until = UNTIL["decided" if run["stop_when_decided"] else "rest"]
+    decided = run["until"] == "decided"
     if len(dice) == 1:
         result = simulate(scene.with_(die=dice[0]), release.die(0), t_max=run["t_max"],
-                          record_every=stride, record=("orientations",),
-                          early_rest=run["early_rest"],
-                          stop_when_decided=run["stop_when_decided"])
+                          until=run["until"], record_every=stride, record=("orientations",))
         faces, read, sunk = result.face[:, None], np.ones((len(result.face), 1), bool), \
             result.sunk[:, None]
     else:
         result = simulate_group(scene, dice, release, contact=contact, t_max=run["t_max"],
-                                stop_when_decided=run["stop_when_decided"],
-                                record_every=stride, orientations=True)
+                                until=run["until"], record_every=stride, orientations=True)
         faces, read, sunk = result.face, result.read, result.sunk
-    ended = result.decided if run["stop_when_decided"] else result.settled
+    ended = result.decided if decided else result.settled
+    unfinished = UNTIL["decided" if decided else "rest"]
     outcomes = []
     for b in range(len(faces)):
         void = ("unstable" if result.unstable[b] else "sunk" if sunk[b].any()
-                else until if not ended[b] else "leaning" if not read[b].all() else "")
+                else unfinished if not ended[b] else "leaning" if not read[b].all() else "")
         outcomes.append({
             "faces": faces[b].tolist(), "read": read[b].tolist(),
             "settled": bool(result.settled[b]), "decided": bool(result.decided[b]),
             "unstable": bool(result.unstable[b]), "sunk": bool(sunk[b].any()),
             "time": float(result.steps[b] * (result.t[0] / stride)), "void": void})
     return result, outcomes
+
+
+def _run_keywords(run: dict[str, Any]) -> dict[str, Any]:
+    """A recording's run keywords, those of a file from before ``until`` converted to it."""
+    if "until" in run:
+        return dict(run)
+    until = ("decided" if run["stop_when_decided"] else
+             "early_rest" if run["early_rest"] else "rest")
+    return {"t_max": run["t_max"], "until": until}
 
 
 def _per_die(frames: np.ndarray, single: bool) -> np.ndarray:

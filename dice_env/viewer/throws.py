@@ -21,7 +21,6 @@ def task_throws(task: ThrowTask, actions: np.ndarray, targets: Any, hands: np.nd
     """
     throw = task.throw(actions, targets, hands, noise)
     state, _ = task.release(actions, hands, noise)
-    decided = task.until == "decided"
     info = throw.info
     targets = info.get("target_sum", info.get("target_face"))
     if titles is None:
@@ -29,8 +28,7 @@ def task_throws(task: ThrowTask, actions: np.ndarray, targets: Any, hands: np.nd
                   f"{'success' if success else 'failure'}"
                   for target, success in zip(targets, info["is_success"], strict=True)]
     dice = task.scene.die if task.n_dice == 1 else task.dice
-    recordings = record(task.scene, dice, state, fps=fps, stop_when_decided=decided,
-                        early_rest=task.n_dice == 1 and not decided, titles=titles,
+    recordings = record(task.scene, dice, state, fps=fps, until=task.run_until, titles=titles,
                         voids=[str(v) for v in info["void_reason"]])
     for rec, target, success in zip(recordings, targets, info["is_success"], strict=True):
         rec.outcome.update(target=np.asarray(target).tolist(), success=bool(success))
