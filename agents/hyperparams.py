@@ -118,7 +118,7 @@ SEARCH: dict[str, dict[str, dict[str, Any]]] = {
     "td3": {"as above": {}, "lr 3e-3": {"learning_rate": 3e-3},
             "noise 0.05": {"noise_std": 0.05}, "noise 0.2": {"noise_std": 0.2}},
 }
-TUNED = {"ppo": "as above", "a2c": "as above", "sac": "as above", "td3": "as above"}
+TUNED = {"ppo": "as above", "a2c": "lr 5e-3", "sac": "as above", "td3": "as above"}
 
 
 def benchmark_entry(algo: str, env_id: str, variant: str | None = None) -> dict[str, Any]:
