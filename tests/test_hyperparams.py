@@ -60,3 +60,19 @@ def test_train_presets_are_the_tables_entries():
     for preset in PRESETS:
         assert Config(preset=preset).hyperparams() == HYPERPARAMS["DiceThrow-v0"]["ppo"][preset]
     assert Config(preset="best", total_timesteps=10, n_envs=4).hyperparams()["n_timesteps"] == 10
+
+
+def test_the_benchmark_trains_the_variant_the_kept_search_found_best():
+    import json
+    from pathlib import Path
+
+    from agents.hyperparams import ALGOS, HYPERPARAMS, SEARCH, TUNED
+
+    search = json.loads((Path(__file__).parents[1] / "benchmarks/results/tuning.json").read_text())
+    for algo in ALGOS:
+        ranked = search["algos"][algo]
+        assert [v["variant"] for v in ranked] == sorted(SEARCH[algo], key=lambda name: -next(
+            v["rate"] for v in ranked if v["variant"] == name))  # every variant, kept
+        assert TUNED[algo] == ranked[0]["variant"]
+        for key, value in SEARCH[algo][TUNED[algo]].items():
+            assert HYPERPARAMS["DiceThrow-v0"][algo]["benchmark"][key] == value
