@@ -75,7 +75,7 @@ NON_PPO_KEYS = NON_ALGORITHM_KEYS
 # dice in the tray about 100 and the craps throw about 20 (``benchmarks/env.json`` measures the
 # default task).
 BUDGETS: dict[str, int] = {
-    "DiceThrow-v0": 40_000,
+    "DiceThrow-v0": 120_000,
     "DiceThrowHigh-v0": 40_000,
     "DiceThrowD20-v0": 40_000,
     "DiceThrowTray2d6Sum-v0": 8_000,

@@ -5,7 +5,7 @@ r"""The search behind the benchmark's hyperparameters: a few variants per algori
     python -m agents.tune --quick --out DIR
 
 Each variant of :data:`agents.hyperparams.SEARCH` (changes to an algorithm's benchmark
-keywords) is trained once on :data:`TASK` for that task's benchmark budget, seed
+keywords) is trained once on :data:`TASK` for :data:`TUNE_BUDGET` throws, seed
 :data:`TUNE_SEED` (not one of the benchmark's seeds), and scored by its policy's mean action on
 :data:`TUNE_THROWS` throws of seed :data:`TUNE_THROWS_SEED`, not the throws the benchmark reports.
 Runs resume and are kept as :mod:`agents.benchmark`'s are (``tuning/<task>/tune-<algo>-<i>.json``
@@ -25,16 +25,17 @@ from pathlib import Path
 from typing import Any
 
 from agents.benchmark import CURVE_THROWS, QUICK_BUDGET, QUICK_THROWS, RESULTS, Run, train
-from agents.hyperparams import ALGOS, BUDGETS, SEARCH, benchmark_entry
+from agents.hyperparams import ALGOS, SEARCH, benchmark_entry
 
 TASK = "DiceThrow-v0"
+TUNE_BUDGET = 40_000
 TUNE_SEED = 100
 TUNE_THROWS, TUNE_THROWS_SEED = 400, 2
 
 
 def runs(algo: str, out: Path, quick: bool) -> list[tuple[str, Run]]:
     """One run per variant of ``algo``, with its name."""
-    return [(variant, Run(TASK, algo, TUNE_SEED, out, QUICK_BUDGET if quick else BUDGETS[TASK],
+    return [(variant, Run(TASK, algo, TUNE_SEED, out, QUICK_BUDGET if quick else TUNE_BUDGET,
                           QUICK_THROWS if quick else CURVE_THROWS,
                           QUICK_THROWS if quick else TUNE_THROWS,
                           params=benchmark_entry(algo, TASK, variant), name=f"tune-{algo}-{i}",
@@ -56,7 +57,7 @@ def gather(out: Path) -> dict[str, Any]:
                              "train_seconds": r["train_seconds"], "commit": r["commit"]})
         if kept:
             found[algo] = sorted(kept, key=lambda v: -v["rate"])
-    return {"task": TASK, "budget": BUDGETS[TASK], "seed": TUNE_SEED, "throws": TUNE_THROWS,
+    return {"task": TASK, "budget": TUNE_BUDGET, "seed": TUNE_SEED, "throws": TUNE_THROWS,
             "throws_seed": TUNE_THROWS_SEED, "algos": found, "command": "python -m agents.tune",
             "train_seconds": sum(v["train_seconds"] for a in found.values() for v in a)}
 
