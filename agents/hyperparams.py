@@ -104,7 +104,7 @@ ALGOS = tuple(_ALGORITHMS)
 # The search (``python -m agents.tune``): per algorithm, these changes to its keywords above,
 # each trained once on DiceThrow-v0 for its benchmark budget (seed TUNE_SEED) and scored on
 # throws of their own (``benchmarks/results/tuning.json``); TUNED names the best, which the
-# benchmark trains on every task. SAC's last variant was added when its best lay at the edge.
+# benchmark trains on every task.
 SEARCH: dict[str, dict[str, dict[str, Any]]] = {
     "ppo": {"as above": {}, "lr 1e-3": {"learning_rate": "lin_1e-3"},
             "lr 3e-3": {"learning_rate": "lin_3e-3"},
