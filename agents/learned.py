@@ -176,8 +176,9 @@ def main(argv: Sequence[str] | None = None) -> int:
               f"oracle's throws {r['on_oracle_throws']['learned']['rate']:.3f} against the "
               f"oracle's {oracle:.3f}", flush=True)
     ordered = [reports[t.id] for t in TASKS if t.id in reports]
-    path.write_text(json.dumps({"tasks": ordered, "command": "python -m agents.learned"},
-                               indent=1) + "\n")
+    commits = " ".join(sorted({r["commit"] for r in ordered}))  # the entries' own
+    path.write_text(json.dumps({"tasks": ordered, "command": "python -m agents.learned",
+                                "commit": commits}, indent=1) + "\n")
     print(f"wrote {path}")
     return 0
 

@@ -59,7 +59,8 @@ def gather(out: Path) -> dict[str, Any]:
             found[algo] = sorted(kept, key=lambda v: -v["rate"])
     return {"task": TASK, "budget": TUNE_BUDGET, "seed": TUNE_SEED, "throws": TUNE_THROWS,
             "throws_seed": TUNE_THROWS_SEED, "algos": found, "command": "python -m agents.tune",
-            "train_seconds": sum(v["train_seconds"] for a in found.values() for v in a)}
+            "train_seconds": sum(v["train_seconds"] for a in found.values() for v in a),
+            "commit": " ".join(sorted({v["commit"] for a in found.values() for v in a}))}
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -63,6 +63,7 @@ from dice_env.physics.kernel import (
     OFFSET,
     RUNNING,
     SETTLED,
+    UP,
     Contact,
     Options,
     PlaneContacts,
@@ -660,7 +661,6 @@ def advance_group(g: int, dice: GroupDice, bodies: Bodies, hulls: Hulls, pair: P
         decisive = np.inf
         for a in range(n_dice):
             decisive = min(decisive, bodies.lock[a].max() + floor_total - bodies.floor[a])
-    up = (0.0, 0.0, 1.0)
     n_steps, stride, n_rec = stops.n_steps, records.stride, records.x.shape[1]
     e_start, e_tol, e_max = 0.0, 1.0, -np.inf
     quiet, step, passes, next_record, end = 0, 0, 0, stride, RUNNING
@@ -762,7 +762,7 @@ def advance_group(g: int, dice: GroupDice, bodies: Bodies, hulls: Hulls, pair: P
             if now and not was[a] and approach[a] > stops.v_rest:
                 out.impacts[g, a] += 1
             was[a] = now
-        if energy < decisive and _decided(bodies, q, energy, floor_total, up):
+        if energy < decisive and _decided(bodies, q, energy, floor_total, UP):
             end = DECIDED
             break
         if stops.at_rest:

@@ -59,13 +59,14 @@ each piece of the physics is one small inlined function: a vertex on a plane
 (:func:`vertex_on_plane`, :func:`stick_slip`), one die's step on all the planes
 (:func:`die_on_planes`, also each die's in :mod:`dice_env.physics.group_kernel`), the contact-free
 jump (:func:`free_steps`, :func:`euler_steps`, :func:`torque_free`), the face read and the
-decided-face test (:func:`face_read`, :func:`decided`), the rotation (:func:`rotate`);
-:func:`advance` loops them for one die in scratch arrays its caller gives, :func:`simulate_one` on
-the CPU and :mod:`dice_env.physics.cuda_kernel` on a GPU, where numba-cuda compiles the same
-functions again. The hot loop hands those pieces numbers, not arrays: in numba each array handed on
-costs an atomic reference count, which cost the loop more than its arithmetic; the one piece that
-takes arrays, :func:`die_on_planes`, is compiled without reference counts. This module imports
-nothing else from the package.
+decided-face test (:func:`face_up`, :func:`face_read`, :func:`decided`; also
+:mod:`dice_env.physics.vector_kernel`'s), the rotation (:func:`rotate`); :func:`advance` loops them
+for one die in scratch arrays its caller gives, :func:`simulate_one` on the CPU and
+:mod:`dice_env.physics.cuda_kernel` on a GPU, where numba-cuda compiles the same functions again.
+The hot loop hands those pieces numbers, not arrays: in numba each array handed on costs an atomic
+reference count, which cost the loop more than its arithmetic; the one piece that takes arrays,
+:func:`die_on_planes`, is compiled without reference counts. This module imports nothing else
+from the package.
 """
 
 from __future__ import annotations
@@ -80,6 +81,7 @@ from numba import njit, prange
 RUNNING, SETTLED, NONFINITE, DECIDED, ABORTED = 0, 1, 2, 3, 4
 ABORT_EVERY = 4096  # loop passes between looks at the abort flag (a power of two)
 SERIES = 2.44140625e-4  # (1/64 rad)^2: below this squared turn, R's coefficients from series
+UP = (0.0, 0.0, 1.0)  # faces are read against gravity
 
 
 class Body(NamedTuple):
@@ -311,24 +313,43 @@ def angular_velocity(q: np.ndarray, inv_body: np.ndarray, inv_iso: float, l0: fl
     )
 
 
+@njit(cache=True, forceinline=True, _nrt=False)
+def body_frame(q: tuple, v0: float, v1: float, v2: float) -> tuple[float, float, float]:
+    """``Q^T v``: the world direction ``v`` in the body frame (``q`` nine numbers, row by row)."""
+    return (q[0] * v0 + q[3] * v1 + q[6] * v2, q[1] * v0 + q[4] * v1 + q[7] * v2,
+            q[2] * v0 + q[5] * v1 + q[8] * v2)
+
+
+@njit(cache=True, forceinline=True, _nrt=False)
+def face_up(faces: np.ndarray | tuple, reads_down: bool, up: tuple) -> int:
+    """Index of the face read, given ``up`` in the body frame.
+
+    Of ``faces`` (F outward normals: an (F, 3) array, or a tuple of F triples), the one
+    pointing most along ``up``, or most against it for a die read by the face down; the first
+    of equals. The one face test of both kernels: over a tuple of constant length its loop
+    unrolls to selects, so :mod:`dice_env.physics.vector_kernel` still vectorises.
+    """
+    sign = -1.0 if reads_down else 1.0
+    best, index = -np.inf, 0
+    for f in range(len(faces)):
+        face = faces[f]
+        value = sign * (face[0] * up[0] + face[1] * up[1] + face[2] * up[2])
+        if value > best:
+            best, index = value, f
+    return index
+
+
 @njit(cache=True)
 def face_read(q: np.ndarray, faces: np.ndarray, reads_down: bool, n0: float, n1: float,
               n2: float) -> int:
-    """Index (into ``faces`` (F, 3), outward normals) of the face read.
+    """Index (into ``faces`` (F, 3), outward normals) of the face read (:func:`face_up`).
 
     The face pointing most along ``n``, or most against it for a die read by the face down;
     the first of equals.
     """
-    up_x = q[0, 0] * n0 + q[1, 0] * n1 + q[2, 0] * n2  # n in the body frame, Q^T n
-    up_y = q[0, 1] * n0 + q[1, 1] * n1 + q[2, 1] * n2
-    up_z = q[0, 2] * n0 + q[1, 2] * n1 + q[2, 2] * n2
-    sign = -1.0 if reads_down else 1.0
-    best, index = -np.inf, 0
-    for f in range(faces.shape[0]):
-        value = sign * (faces[f, 0] * up_x + faces[f, 1] * up_y + faces[f, 2] * up_z)
-        if value > best:
-            best, index = value, f
-    return index
+    return face_up(faces, reads_down, body_frame(
+        (q[0, 0], q[0, 1], q[0, 2], q[1, 0], q[1, 1], q[1, 2], q[2, 0], q[2, 1], q[2, 2]),
+        n0, n1, n2))
 
 
 @njit(cache=True, inline="always")
@@ -640,7 +661,7 @@ def advance(i: int, dice: Dice, body: Body, contact: Contact, options: Options, 
     inv_body, inv_iso, reads_down = body.inv_inertia, body.inv_iso, body.reads_down
     contact_law, stick, vmin = contact.law, contact.stick, contact.vmin
     n0, n1, n2, floor = planes[0, NX], planes[0, NY], planes[0, NZ], planes[0, OFFSET]
-    up = (0.0, 0.0, 1.0)  # faces are read against gravity
+    up = UP
     x0, x1, x2 = dice.x[i, 0], dice.x[i, 1], dice.x[i, 2]
     u0, u1, u2 = dice.u[i, 0], dice.u[i, 1], dice.u[i, 2]
     l0, l1, l2 = dice.ang[i, 0], dice.ang[i, 1], dice.ang[i, 2]

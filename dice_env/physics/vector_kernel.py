@@ -9,9 +9,11 @@ die in it, and LLVM turns that pass into SIMD code (4 dice per instruction with 
 The arithmetic is :func:`dice_env.physics.kernel.simulate_one`'s, operation for operation in the
 same order (no fast-math: no reassociation, no fused multiply-add), so its results are
 bit-identical to that kernel's (``tests/test_vector_kernel.py`` checks it); what is a branch
-there is a select here. It serves the runs :func:`covers` accepts (the paper's law and
-friction, listing step, isotropic die, no records, no free-flight jumps); every other run
-goes to :mod:`dice_env.physics.kernel`.
+there is a select here. The face read and the rest test are that kernel's own functions
+(:func:`dice_env.physics.kernel.face_up`, :func:`dice_env.physics.kernel.rest_test`), inlined.
+It serves the runs :func:`covers` accepts (the paper's law and friction, listing step,
+isotropic hexahedron, no records, no free-flight jumps); every other run goes to
+:mod:`dice_env.physics.kernel`.
 
 A die that ends (time limit, rest, decided face, or a state that stops being finite) keeps
 the state and step count it ended with, as in the scalar kernel, and its lane idles; a tile
@@ -41,6 +43,7 @@ from dice_env.physics.kernel import (
     SERIES,
     SETTLED,
     STIFF,
+    UP,
     Body,
     Contact,
     Dice,
@@ -48,7 +51,10 @@ from dice_env.physics.kernel import (
     Outcome,
     Records,
     Stops,
+    body_frame,
+    face_up,
     relative_rise,
+    rest_test,
     rodrigues,
     rotate,
     rotation_series,
@@ -79,22 +85,35 @@ def disabled() -> Iterator[None]:
 def covers(scene: object, batch: int, flight: bool, records: bool) -> bool:
     """Whether a run of ``batch`` dice in ``scene`` takes this kernel (else the scalar one).
 
-    The paper's contact law and friction with the listing's step, an isotropic eight-corner
-    die that rotates, one plane, no free-flight jumps and no records; and at least a tile of
-    dice (a tile costs the same for fewer); not inside :func:`disabled`. (``scene`` is a
-    :class:`dice_env.model.scene.Scene`, read by its fields' names: the kernels import nothing
-    above them.)
+    The paper's contact law and friction with the listing's step, an isotropic die with eight
+    corners and six faces that rotates, one plane, no free-flight jumps and no records; and at
+    least a tile of dice (a tile costs the same for fewer); not inside :func:`disabled`.
+    (``scene`` is a :class:`dice_env.model.scene.Scene`, read by its fields' names: the kernels
+    import nothing above them.)
     """
     return (_enabled and scene.ground.contact_law.name == "PAPER"
             and scene.friction_law.name == "REGULARIZED" and scene.scheme.name == "PAPER"
             and scene.rotation and scene.die.is_isotropic and len(scene.die.vertices) == 8
-            and batch >= TILE and not flight and not records)
+            and len(scene.die.faces) == 6 and batch >= TILE and not flight and not records)
 
 
 @njit(cache=True, inline="always")
 def _max(a: float, b: float) -> float:
     """``max(a, b)`` as a select (numba's builtin is a call, which stops vectorisation)."""
     return b if b > a else a
+
+
+@njit(cache=True, inline="always")
+def _pick(values: tuple, index: int) -> float:
+    """``values[index]`` as selects.
+
+    A tuple's item at a varying index is a switch, and an array's a load that LLVM must assume
+    the tile's stores alias: either stops vectorisation.
+    """
+    picked = values[0]
+    for k in range(1, len(values)):
+        picked = values[k] if index == k else picked
+    return picked
 
 
 @njit(cache=True, inline="always")
@@ -180,8 +199,15 @@ def _tile_step(t: np.ndarray, body: Body, contact: Contact, options: Options, st
     n0, n1, n2 = normal[0], normal[1], normal[2]
     dt_m = dt / mass
     kinetic_rest = 0.5 * mass * v_rest * v_rest
-    lock0, lock1, lock2, lock3, lock4, lock5 = lock[0], lock[1], lock[2], lock[3], lock[4], lock[5]
-    lock_max = _max(_max(_max(lock0, lock1), _max(lock2, lock3)), _max(lock4, lock5))
+    # the hexahedron's six faces (covers): outward normals and locks, in label order
+    fn = body.faces
+    faces = ((fn[0, 0], fn[0, 1], fn[0, 2]), (fn[1, 0], fn[1, 1], fn[1, 2]),
+             (fn[2, 0], fn[2, 1], fn[2, 2]), (fn[3, 0], fn[3, 1], fn[3, 2]),
+             (fn[4, 0], fn[4, 1], fn[4, 2]), (fn[5, 0], fn[5, 1], fn[5, 2]))
+    locks = (lock[0], lock[1], lock[2], lock[3], lock[4], lock[5])
+    lock_max = _max(_max(_max(locks[0], locks[1]), _max(locks[2], locks[3])),
+                    _max(locks[4], locks[5]))
+    reads_down, up = body.reads_down, UP
     b0 = (vertices[0, 0], vertices[0, 1], vertices[0, 2])
     b1 = (vertices[1, 0], vertices[1, 1], vertices[1, 2])
     b2 = (vertices[2, 0], vertices[2, 1], vertices[2, 2])
@@ -231,31 +257,19 @@ def _tile_step(t: np.ndarray, body: Body, contact: Contact, options: Options, st
         end = RUNNING
         quiet, rest_t = t[QUIET * TILE + i], t[REST_T * TILE + i]
         if ends:
-            # the decided face (the lock of the face up; the d6's faces in label order)
-            up_x = q[0] * n0 + q[3] * n1 + q[6] * n2  # n in the body frame, Q^T n
-            up_y = q[1] * n0 + q[4] * n1 + q[7] * n2
-            up_z = q[2] * n0 + q[5] * n1 + q[8] * n2
-            best, face_lock = up_z, lock0
-            if up_x > best:
-                best, face_lock = up_x, lock1
-            if up_y > best:
-                best, face_lock = up_y, lock2
-            if -up_y > best:
-                best, face_lock = -up_y, lock3
-            if -up_x > best:
-                best, face_lock = -up_x, lock4
-            if -up_z > best:
-                best, face_lock = -up_z, lock5
+            # the decided face and the rest, by the scalar kernel's tests (face_up, rest_test)
+            up_body = body_frame(q, up[0], up[1], up[2])
+            face_lock = _pick(locks, face_up(faces, reads_down, up_body))
             if energy < lock_max and energy < face_lock:
                 end = DECIDED
             elif stop_at_rest:
-                if touching >= 3 and kinetic < kinetic_rest and fastest < v_rest * v_rest:
-                    quiet += 1.0
-                    if quiet > hold_steps or energy - rest_energy < rest_excess:
-                        rest_t = (step + 1.0 - quiet) * dt
-                        end = SETTLED
-                else:
-                    quiet = 0.0
+                near_rest = kinetic < kinetic_rest  # (the scalar kernel's: stop_at_rest holds)
+                # quiet: a whole number of steps, kept in a float (rest_test compiles for it)
+                quiet, end = rest_test(
+                    touching >= 3 and near_rest and fastest < v_rest * v_rest, quiet,
+                    hold_steps, energy - rest_energy < rest_excess)
+                if end == SETTLED:
+                    rest_t = (step + 1.0 - quiet) * dt
         # 3.-4. centre of mass, then angular momentum, angular velocity and orientation
         nu0, nu1, nu2 = u0 + f0 * dt_m, u1 + f1 * dt_m, u2 + f2 * dt_m
         nx0, nx1, nx2 = x0 + dt * nu0, x1 + dt * nu1, x2 + dt * nu2
