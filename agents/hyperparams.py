@@ -70,10 +70,10 @@ NON_ALGORITHM_KEYS = ("policy", "n_envs", "n_timesteps", "env_kwargs", "noise_ty
 NON_PPO_KEYS = NON_ALGORITHM_KEYS
 
 # The benchmark (``python -m agents.benchmark``): one budget in throws per named task, the same
-# for every algorithm. They are what two CPU cores train 3 seeds x 4 algorithms of every task
-# in about an hour and a half: the one-die tasks run 1,000-3,000 throws/s on one core, two
-# dice in the tray about 100 and the craps throw about 20 (``benchmarks/env.json`` measures the
-# default task).
+# for every algorithm. DiceThrow-v0's is where the best runs level off (SAC's best seed at the
+# oracle's success); the others are what two CPU cores train 3 seeds x 4 algorithms in about an
+# hour: the one-die tasks run 1,000-3,000 throws/s on one core, two dice in the tray about 100
+# and the craps throw about 20 (``benchmarks/env.json`` measures the default task).
 BUDGETS: dict[str, int] = {
     "DiceThrow-v0": 120_000,
     "DiceThrowHigh-v0": 40_000,
