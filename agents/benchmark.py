@@ -87,19 +87,18 @@ def success(model: Any, task: Any, batch: Any) -> dict[str, Any]:
 class Run:
     """One (task, algorithm, seed): its files, its budget and its curve so far.
 
-    ``params`` (default: the benchmark's entry), ``name`` (default: ``algo-seed``) and
-    ``folder`` let the search (:mod:`agents.tune`) train other keywords into files of their
-    own; ``final_seed`` draws the final evaluation's throws.
+    ``final``: the final evaluation's throws and the seed that draws them. ``params``
+    (default: the benchmark's entry), ``name`` (default: ``algo-seed``) and ``folder`` let the
+    search (:mod:`agents.tune`) train other keywords into files of their own.
     """
 
     def __init__(self, task_id: str, algo: str, seed: int, out: Path, budget: int,
-                 curve_throws: int, final_throws: int, *, params: dict[str, Any] | None = None,
-                 name: str | None = None, folder: str = "baselines",
-                 final_seed: int = 0) -> None:
+                 curve_throws: int, final: tuple[int, int], *,
+                 params: dict[str, Any] | None = None, name: str | None = None,
+                 folder: str = "baselines") -> None:
         self.task_id, self.algo, self.seed, self.budget = task_id, algo, seed, budget
-        self.curve_throws, self.final_throws = curve_throws, final_throws
+        self.curve_throws, (self.final_throws, self.final_seed) = curve_throws, final
         self.params = entry(task_id, algo) if params is None else params
-        self.final_seed = final_seed
         name = f"{algo}-{seed}" if name is None else name
         self.result = out / folder / task_id / f"{name}.json"
         self.work = RUNS / out.name / task_id / name
@@ -294,7 +293,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                     run = Run(task_id, algo, seed, args.out,
                               QUICK_BUDGET if args.quick else BUDGETS[task_id],
                               QUICK_THROWS if args.quick else CURVE_THROWS,
-                              QUICK_THROWS if args.quick else FINAL_THROWS)
+                              (QUICK_THROWS if args.quick else FINAL_THROWS, 0))
                     if run.result.exists():
                         continue
                     result = train(run)

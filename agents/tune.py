@@ -37,10 +37,9 @@ def runs(algo: str, out: Path, quick: bool) -> list[tuple[str, Run]]:
     """One run per variant of ``algo``, with its name."""
     return [(variant, Run(TASK, algo, TUNE_SEED, out, QUICK_BUDGET if quick else TUNE_BUDGET,
                           QUICK_THROWS if quick else CURVE_THROWS,
-                          QUICK_THROWS if quick else TUNE_THROWS,
+                          (QUICK_THROWS if quick else TUNE_THROWS, TUNE_THROWS_SEED),
                           params=benchmark_entry(algo, TASK, variant), name=f"tune-{algo}-{i}",
-                          folder="tuning",
-                          final_seed=TUNE_THROWS_SEED))
+                          folder="tuning"))
             for i, variant in enumerate(SEARCH[algo])]
 
 

@@ -12,7 +12,7 @@ TASK = "DiceThrow-v0"
 
 
 def _run(tmp_path, algo, budget=320):  # five env steps of 64 throws
-    return benchmark.Run(TASK, algo, 0, tmp_path / "results", budget, 8, 16)
+    return benchmark.Run(TASK, algo, 0, tmp_path / "results", budget, 8, (16, 0))
 
 
 def test_every_task_has_a_budget_and_every_algorithm_an_entry():
