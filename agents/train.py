@@ -273,6 +273,10 @@ def _learn(model: PPO, config: Config, run: Path, eval_env: VecEnv, fresh: bool)
                     tb_log_name="ppo", reset_num_timesteps=fresh)
     except KeyboardInterrupt:
         interrupted = True
+    except RuntimeError as error:  # Ctrl-C inside torch's zip writer, saving a checkpoint
+        if not isinstance(error.__context__, KeyboardInterrupt):
+            raise
+        interrupted = True  # that checkpoint is rewritten whole below (the same step)
     finally:
         model.save(run / "checkpoints" / f"{CHECKPOINT_PREFIX}_{model.num_timesteps}_steps")
         model.save(run / "model")
