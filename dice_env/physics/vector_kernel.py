@@ -49,7 +49,6 @@ from dice_env.physics.kernel import (
     Dice,
     Options,
     Outcome,
-    Records,
     Stops,
     body_frame,
     face_up,
@@ -95,6 +94,17 @@ def covers(scene: object, batch: int, flight: bool, records: bool) -> bool:
             and scene.friction_law.name == "REGULARIZED" and scene.scheme.name == "PAPER"
             and scene.rotation and scene.die.is_isotropic and len(scene.die.vertices) == 8
             and len(scene.die.faces) == 6 and batch >= TILE and not flight and not records)
+
+
+def stop_tests(stops: Stops) -> bool | None:
+    """The kernel's ``tests`` argument for a run with ``stops``: True, or None to the time limit.
+
+    Its type, not its value, tells a run that may stop at rest or on a decided face from one
+    that runs to the time limit: numba compiles the loop for each type when first used, and
+    for None without those tests (the bulk of a vectorised step's selects: about 1.2 times the
+    die-steps/s of the paper's listings to their end, ``benchmarks/kernel_ab.py``).
+    """
+    return True if stops.at_rest or stops.lock.max() > -np.inf else None
 
 
 @njit(cache=True, inline="always")
@@ -182,11 +192,12 @@ def _add(acc, corner):
 
 @njit(cache=True, error_model="numpy")
 def _tile_step(t: np.ndarray, body: Body, contact: Contact, options: Options, stops: Stops,
-               ends: bool) -> None:
+               tests: bool | None) -> None:
     """One step of every die of the tile ``t`` (rows of ``TILE`` lanes), in place.
 
-    ``ends`` enables the rest test and the decided face. Leaves in row ``TURN`` the squared
-    turn of each die that the series could not take (else 0).
+    ``tests`` (:func:`stop_tests`) True: the rest test and the decided face; None: neither,
+    compiled out. Leaves in row ``TURN`` the squared turn of each die that the series could
+    not take (else 0).
     """
     planes = contact.planes
     normal = (planes[0, NX], planes[0, NY], planes[0, NZ])
@@ -256,7 +267,7 @@ def _tile_step(t: np.ndarray, body: Body, contact: Contact, options: Options, st
             hits += 1.0
         end = RUNNING
         quiet, rest_t = t[QUIET * TILE + i], t[REST_T * TILE + i]
-        if ends:
+        if tests is not None:
             # the decided face and the rest, by the scalar kernel's tests (face_up, rest_test)
             up_body = body_frame(q, up[0], up[1], up[2])
             face_lock = _pick(locks, face_up(faces, reads_down, up_body))
@@ -320,7 +331,7 @@ def _all_ended(t: np.ndarray, lanes: int) -> bool:
 
 @njit(cache=True)
 def _run_tile(first: int, last: int, dice: Dice, body: Body, contact: Contact, options: Options,
-              stops: Stops, out: Outcome) -> None:
+              stops: Stops, tests: bool | None, out: Outcome) -> None:
     """Dice ``first`` to ``last - 1`` (at most ``TILE``) for ``stops.n_steps`` steps, in place."""
     x, u, ang, q, w = dice
     t = np.zeros(ROWS * TILE)
@@ -340,7 +351,6 @@ def _run_tile(first: int, last: int, dice: Dice, body: Body, contact: Contact, o
         t[WAS * TILE + i] = 1.0
         t[PEN * TILE + i] = out.max_pen[d]
         t[HITS * TILE + i] = out.impacts[d]
-    ends = stops.at_rest or stops.lock.max() > -np.inf
     for step in range(stops.n_steps):
         if step % CHECK_EVERY == 0:
             if out.abort[0] != 0:
@@ -350,7 +360,7 @@ def _run_tile(first: int, last: int, dice: Dice, body: Body, contact: Contact, o
                 break
             if _all_ended(t, lanes):
                 break
-        _tile_step(t, body, contact, options, stops, ends)
+        _tile_step(t, body, contact, options, stops, tests)
         for i in range(TILE):  # the rare large turn, exactly as the scalar kernel does it
             if t[TURN * TILE + i] > 0.0:
                 for a in range(3):
@@ -384,22 +394,23 @@ def _run_tile(first: int, last: int, dice: Dice, body: Body, contact: Contact, o
 
 @njit(cache=True, parallel=True, nogil=True)
 def simulate_batch(dice: Dice, body: Body, contact: Contact, options: Options, stops: Stops,
-                   records: Records, out: Outcome) -> None:
+                   tests: bool | None, out: Outcome) -> None:
     """:func:`dice_env.physics.kernel.simulate_batch` for a scene :func:`covers`, tiles in parallel.
 
-    The arguments are that function's (``records`` is empty: :func:`covers` admits no records).
+    The arguments are that function's, with :func:`stop_tests` where it takes its records
+    (:func:`covers` admits none).
     """
     n = dice.x.shape[0]
     for tile in prange((n + TILE - 1) // TILE):
         _run_tile(tile * TILE, min(n, (tile + 1) * TILE), dice, body, contact, options, stops,
-                  out)
+                  tests, out)
 
 
 @njit(cache=True, nogil=True)
 def simulate_serial(dice: Dice, body: Body, contact: Contact, options: Options, stops: Stops,
-                    records: Records, out: Outcome) -> None:
+                    tests: bool | None, out: Outcome) -> None:
     """:func:`simulate_batch` on the calling thread, with the same results."""
     n = dice.x.shape[0]
     for tile in range((n + TILE - 1) // TILE):
         _run_tile(tile * TILE, min(n, (tile + 1) * TILE), dice, body, contact, options, stops,
-                  out)
+                  tests, out)

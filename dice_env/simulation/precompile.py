@@ -38,11 +38,12 @@ def _die() -> None:
 
 
 def _paper() -> None:
-    """The paper scene's vector kernel, parallel and serial."""
+    """The paper scene's vector kernel, parallel and serial, with and without the stop tests."""
     scene = paper_scene().with_(t_max=0.01)
     for threads in (THREADS, 1):
-        simulate(scene, State.release(scene, np.tile([0.0, 0.0, 3.0], (BATCH, 1)),
-                                      [1.0, 0, 0]), num_threads=threads)
+        for until in ("rest", "t_max"):
+            simulate(scene, State.release(scene, np.tile([0.0, 0.0, 3.0], (BATCH, 1)),
+                                          [1.0, 0, 0]), until=until, num_threads=threads)
 
 
 def _group() -> None:

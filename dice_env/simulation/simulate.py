@@ -248,6 +248,8 @@ def simulate(
         _cuda_kernel().run(*inputs, outcome)
     else:
         paper = vector_kernel.covers(scene, b, options.flight, records.stride <= n_steps)
+        if paper:  # it keeps no records: in their place, which stop tests its loop runs
+            inputs = (*inputs[:-1], vector_kernel.stop_tests(stops))
         run_kernel("paper" if paper else "die", inputs, outcome, batch=b, threads=threads,
                    work=b * n_steps)
     fields = {"energy": records.energy, "orientations": records.orientation,
