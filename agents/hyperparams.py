@@ -70,8 +70,8 @@ NON_ALGORITHM_KEYS = ("policy", "n_envs", "n_timesteps", "env_kwargs", "noise_ty
 NON_PPO_KEYS = NON_ALGORITHM_KEYS
 
 # The benchmark (``python -m agents.benchmark``): one budget in throws per named task, the same
-# for every algorithm. DiceThrow-v0's is where the best algorithm levels off (TD3 still rose by
-# 0.1 per 24,000 throws at 120,000); the others are what two CPU cores train 3 seeds x 4 algorithms in about an
+# for every algorithm. DiceThrow-v0's is where the best algorithm (TD3) levels off at the
+# oracle's success (docs/benchmark.md); the others are what two CPU cores train 3 seeds x 4 algorithms in about an
 # hour: the one-die tasks run 1,000-3,000 throws/s on one core, two dice in the tray about 100
 # and the craps throw about 20 (``benchmarks/env.json`` measures the default task).
 BUDGETS: dict[str, int] = {
