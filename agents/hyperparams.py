@@ -71,9 +71,10 @@ NON_PPO_KEYS = NON_ALGORITHM_KEYS
 
 # The benchmark (``python -m agents.benchmark``): one budget in throws per named task, the same
 # for every algorithm. DiceThrow-v0's is where the best algorithm (TD3) levels off at the
-# oracle's success (docs/benchmark.md); the others are what two CPU cores train 3 seeds x 4 algorithms in about an
-# hour: the one-die tasks run 1,000-3,000 throws/s on one core, two dice in the tray about 100
-# and the craps throw about 20 (``benchmarks/env.json`` measures the default task).
+# oracle's success (docs/benchmark.md); the others are what two CPU cores train 3 seeds x 4
+# algorithms in about an hour: the one-die tasks run 1,000-3,000 throws/s on one core, two dice
+# in the tray about 100 and the craps throw about 20 (``benchmarks/env.json`` measures the
+# default task).
 BUDGETS: dict[str, int] = {
     "DiceThrow-v0": 240_000,
     "DiceThrowHigh-v0": 40_000,
