@@ -11,7 +11,9 @@ import pytest
 from dice_env.studies import numbers
 
 ROOT = Path(__file__).resolve().parents[1]
-PAGES = [ROOT / "README.md", *sorted((ROOT / "docs").glob("**/*.md"))]
+PAGES = [ROOT / "README.md", *sorted(p for p in (ROOT / "docs").glob("**/*.md")
+                                     if not p.is_relative_to(numbers.TEMPLATES))]
+TEMPLATES = sorted(numbers.TEMPLATES.glob("*.md"))
 HISTORY = re.compile(
     r"\b(reverted|the issue|issue's|used to|formerly|previously|an earlier (run|version)|"
     r"earlier figures|now (sticks|flagged|gives|runs|takes|costs|passes|fails|rests|reads)|"
@@ -46,6 +48,20 @@ def test_a_number_changed_by_hand_or_a_missing_json_is_found(tmp_path, monkeypat
         numbers.blocks(page)[0].render()
 
 
+def test_a_study_page_fills_its_template_and_names_a_missing_value(tmp_path, monkeypatch):
+    monkeypatch.setattr(numbers, "TEMPLATES", tmp_path)
+    (tmp_path / "study.md").write_text("p = {{ p | .3f }} over {{ len(faces) }} faces\n")
+    assert numbers.study_page("study", p=1 / 6, faces=range(6)) == "p = 0.167 over 6 faces\n"
+    with pytest.raises(ValueError, match=r"study\.md: \{\{ p \| \.3f \}\}: NameError"):
+        numbers.study_page("study", faces=range(6))
+
+
+@pytest.mark.parametrize("name", [p.stem for p in TEMPLATES])
+def test_every_study_template_is_filled_by_a_study(name):
+    studies = "".join(p.read_text() for p in (ROOT / "dice_env/studies").glob("*.py"))
+    assert f'study_page("{name}"' in studies
+
+
 @pytest.mark.parametrize("page", PAGES, ids=lambda p: p.name)
 def test_every_cited_json_is_in_the_repository(page):
     for cited in set(re.findall(r"[\w./-]+\.json\b", page.read_text())):
@@ -72,7 +88,7 @@ def test_every_docstring_reference_names_something():
     assert references.unresolved(ROOT) == []
 
 
-@pytest.mark.parametrize("path", [*PAGES, *sorted((ROOT / "dice_env").glob("**/*.py")),
+@pytest.mark.parametrize("path", [*PAGES, *TEMPLATES, *sorted((ROOT / "dice_env").glob("**/*.py")),
                                   *sorted((ROOT / "agents").glob("**/*.py"))],
                          ids=lambda p: str(p.relative_to(ROOT)))
 def test_pages_and_code_describe_rather_than_narrate(path):

@@ -27,6 +27,7 @@ from dice_env.model.table import DAMPING, FRICTION, RESTITUTION, STIFFNESS
 from dice_env.simulation.calibration import measured_restitution
 from dice_env.simulation.simulate import Result, State, simulate
 from dice_env.studies.markdown import markdown_table
+from dice_env.studies.numbers import study_page
 
 # Throws whose faces are compared are simulated for at most this long (s); all settle sooner.
 T_THROW = 4.0
@@ -719,15 +720,6 @@ def _conclusions(ratio: float, verdicts: dict[str, dict[str, float]], pen: np.nd
         "stick-slip friction ties a sticking corner with a tangential spring (it holds a die on "
         "a 15° table to 0.2 µm and slides it down a 30° table at Coulomb's acceleration, "
         "`tests/test_core.py`), and it takes the slip direction from the slip velocity.",
-        f"- The step: with the stick-slip friction, the paper's first-order step keeps the "
-        f"gentle release's face between dt and dt/4 in {100 * paper_gentle:.1f} % of throws; "
-        f"the default midpoint scheme in {100 * gentle_steps[1]:.1f} %, and "
-        f"{100 * gentle_steps[GENTLE_DIVISORS[-1]]:.1f} % between dt/{GENTLE_DIVISORS[-1]} and "
-        f"dt/{4 * GENTLE_DIVISORS[-1]} (tables above). It extrapolates the corner velocities to "
-        "the middle of the kick and weights the damping of a corner that just touched by its "
-        "time in contact; the friction limit μ·fn takes the unweighted normal force. "
-        f"Its stable step is smaller ({scene.critical_dt:.2g} "
-        f"s against {paper.critical_dt:.2g} s for the same m/{m_ratio:.0f} mode), so at the "
-        f"same safety it takes {paper.critical_dt / scene.critical_dt:.1f}× the steps of the "
-        "paper scheme.",
+        study_page("convergence", GENTLE_DIVISORS=GENTLE_DIVISORS, gentle_steps=gentle_steps,
+                   m_ratio=m_ratio, paper=paper, paper_gentle=paper_gentle, scene=scene),
     ]

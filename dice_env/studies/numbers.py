@@ -18,6 +18,10 @@ A source may name a part of its JSON, keys joined by ``/``:
 ``python -m dice_env.studies.numbers`` rewrites every block from its JSONs; ``--check`` lists
 the blocks whose text differs instead (``tests/test_docs.py`` runs it), so a number changed by
 hand, or a JSON regenerated without the pages, fails the tests.
+
+A study's page is written the same way: its text is ``docs/templates/NAME.md``, whose fields
+:func:`study_page` fills from the study's results (Python objects rather than JSONs), so the
+prose lives with the docs and the study's code only computes what the page quotes.
 """
 
 from __future__ import annotations
@@ -30,12 +34,13 @@ from dataclasses import dataclass
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[2]
+TEMPLATES = ROOT / "docs" / "templates"  # the studies' pages, filled by :func:`study_page`
 BLOCK = re.compile(r"<!-- numbers (?P<sources>[^\n]*)\n(?P<template>.*?)-->\n(?P<text>.*?)"
                    r"<!-- /numbers -->", re.S)
 FIELD = re.compile(r"\{\{(.+?)\}\}", re.S)
 SPEC = re.compile(r"[\w ,.%+<>=^#-]*")  # what may follow the last "|" of a field: a format spec
 HELPERS = {f.__name__: f for f in (min, max, len, sum, abs, round, sorted, all, any, enumerate,
-                                   zip, range)}
+                                   zip, range, int, float, str, repr)}
 
 
 class Tree(dict):
@@ -84,7 +89,7 @@ class Block:
 
     def render(self) -> str:
         """The block's text as its JSONs give it."""
-        names = {"__builtins__": {}, **HELPERS}
+        names = {}
         for name, (path, keys) in self.sources.items():
             if not path.is_file():
                 raise FileNotFoundError(f"{self.where}: {name}={_shown(path)} is not in the "
@@ -97,23 +102,35 @@ class Block:
                     raise KeyError(f"{self.where}: {name}: {_shown(path)} has no "
                                    f"{'/'.join(keys)}") from None
             names[name] = wrap(value)
-
-        def field(match: re.Match) -> str:
-            expression, sep, spec = match.group(1).rpartition("|")
-            if not sep or not SPEC.fullmatch(spec.strip()):  # a "|" inside the expression
-                expression, spec = match.group(1), ""
-            try:
-                value = eval(expression, names)  # globals: comprehensions see the names
-            except Exception as error:
-                raise ValueError(f"{self.where}: {{{{{match.group(1)}}}}}: {error!r}") from None
-            return format(value, spec.strip())
-
-        return FIELD.sub(field, self.template)
+        return substitute(self.template, names, self.where)
 
     @property
     def where(self) -> str:
         """``page:line`` of the block."""
         return f"{_shown(self.page)}:{self.line}"
+
+
+def substitute(template: str, names: dict[str, object], where: str) -> str:
+    """``template`` with each ``{{ expression | format }}`` evaluated over ``names``."""
+    scope = {"__builtins__": {}, **HELPERS, **names}
+
+    def field(match: re.Match) -> str:
+        expression, sep, spec = match.group(1).rpartition("|")
+        if not sep or not SPEC.fullmatch(spec.strip()):  # a "|" inside the expression
+            expression, spec = match.group(1), ""
+        try:
+            value = eval(expression, scope)  # globals: comprehensions see the names
+        except Exception as error:
+            raise ValueError(f"{where}: {{{{{match.group(1)}}}}}: {error!r}") from None
+        return format(value, spec.strip())
+
+    return FIELD.sub(field, template)
+
+
+def study_page(name: str, **names: object) -> str:
+    """The study page ``docs/templates/NAME.md`` with its fields filled from ``names``."""
+    path = TEMPLATES / f"{name}.md"
+    return substitute(path.read_text(), names, _shown(path))
 
 
 def _shown(path: Path) -> str:
