@@ -1,6 +1,7 @@
 """The README and docs/: numbers from their JSONs, cited files present, examples that run,
 docstring references that resolve, and pages that describe rather than narrate."""
 
+import inspect
 import json
 import re
 import sys
@@ -8,6 +9,8 @@ from pathlib import Path
 
 import pytest
 
+from dice_env.envs.dice_throw import configure
+from dice_env.envs.task import task_keywords
 from dice_env.studies import numbers
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -60,6 +63,15 @@ def test_a_study_page_fills_its_template_and_names_a_missing_value(tmp_path, mon
 def test_every_study_template_is_filled_by_a_study(name):
     studies = "".join(p.read_text() for p in (ROOT / "dice_env/studies").glob("*.py"))
     assert re.search(rf'study_page\(\s*"{re.escape(name)}"', studies)
+
+
+def test_the_environment_page_lists_every_keyword():
+    page = (ROOT / "docs/environment.md").read_text()
+    table = page[page.index("## Keywords"):page.index("### Keywords and a base scene")]
+    env = {name for name, p in inspect.signature(configure).parameters.items()
+           if p.kind is p.KEYWORD_ONLY or name == "render_mode"}
+    missing = [name for name in sorted(task_keywords() | env) if f"`{name}`" not in table]
+    assert missing == []
 
 
 @pytest.mark.parametrize("page", PAGES, ids=lambda p: p.name)

@@ -166,43 +166,8 @@ class DiceThrowEnv(gym.Env):
     ``release_spin`` (3), ``release_orientation`` (3, 3), ``action_clipped``.
 
     ## Arguments
-    | keyword | default | meaning |
-    |---|---|---|
-    | ``release_height`` | 0.015 | centre height above the table at release (m; higher for a |
-    | | | die whose corners reach further: ThrowTask) |
-    | ``max_speed`` | 1.0 | release speed per component at action ±1 (m/s) |
-    | ``max_spin`` | 40.0 | angular velocity per component at action ±1 (rad/s) |
-    | ``hand_noise`` | 0.05 | std of the noise on each action component (fraction of its max) |
-    | ``orientation_noise`` | 0.05 | std of each component of a rotation vector on the hand (rad) |
-    | ``min_speed``, ``min_spin`` | 0, 0 | fair-throw rule: slower releases are fouls (m/s, rad/s) |
-    | ``shaping`` | 0.0 | weight of the dense term |
-    | ``target_face`` | None | fix the target (1 … n) instead of drawing it |
-    | ``orientation_mode`` | "uniform" | how the hand orientation is drawn |
-    | ``t_max`` | 5.0 | time limit per throw (s; DEFAULT_T_MAX, or the ``scene``'s when given) |
-    | ``die`` | "d6" | "d4", "d6", "d8", "d10", "d12", "d20" (Die.standard) or a Die |
-    | ``size`` (``edge``: d6), ``mass`` | Scene() | die size (m, Die.size) and mass (kg) |
-    | ``load_face``, ``load_fraction``, ``load_depth`` | n, 0, 0.8 | a loaded die (Die.load) |
-    | | | (``size``, ``mass``, ``load_*`` need a uniform standard die) |
-    | ``walls`` | "none" | "tray", "craps" (dice_env.model.surroundings) or a tuple of Wall |
-    | ``stiffness``, ``damping``, ``friction`` | Scene() | table contact (N/m, N s/m, mu) |
-    | ``tilt_deg`` | 0 | table tilt about y from level (degrees) |
-    | ``contact_law`` | Scene() | "gated" or "paper" (or a ContactLaw; "paper" needs a tiny |
-    | | | ``damping``: its air drag 8·D·v must not outweigh the die, docs/environment.md) |
-    | ``gravity``, ``dt``, ``safety`` | Scene() | m/s², step (s; None = automatic), step safety |
-    | ``rest_speed``, ``rest_hold``, ``energy_tol`` | Scene() | rest detection, unstable flag |
-    | ``scheme``, ``friction_law`` | Scene() | names or members of Scheme, FrictionLaw |
-    | ``friction_vmin`` | Scene() | umin of friction_law="regularized" (refused otherwise) |
-    | ``scene`` | None | a base :class:`dice_env.Scene`: each keyword above changes only what |
-    | | | it names, the rest of the scene (t_max, die, table, ...) is kept |
-    | ``num_threads`` | None | numba threads, 1 to NUMBA_NUM_THREADS (None: all cores) |
-    | ``until`` | "rest" | "rest", or "decided": end a throw when its face is decided |
-    | ``num_dice`` | 1 | dice per throw, 1 … 12 (``die`` may also be a tuple, one per die) |
-    | ``target`` | None | "faces" (one die; a face per die), "sum" (a total: several dice's |
-    | | | default) or "avoid_sum" (any total but the target's) |
-    | ``target_sum`` | None | fix the total (``target="sum"`` or ``"avoid_sum"``) |
-    | ``set_dice`` | False | several dice: the action also sets each die in the hand |
-    | ``render_mode`` | None | "rgb_array", "rgb_array_list" or "human" |
-    | ``render_width``, ``render_height`` | 320, 240 | frame size (pixels) |
+    Every keyword of ``gym.make``, its default and its range: the table "Keywords" of
+    ``docs/environment.md`` (``tests/test_docs.py`` checks that it names them all).
 
     ## Named tasks
     Ids registered beside DiceThrow-v0, this env with keywords fixed:
