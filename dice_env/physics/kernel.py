@@ -1,26 +1,10 @@
 """The compiled integrator: the paper's step, written once, run over a batch of dice.
 
-One step of ``real_throw_cube.m`` for one die (the listing's order, "modified forward Euler"):
-
-1. corner offsets ``r_k = Q b_k`` and velocities ``U_k = u + w x r_k`` from the state;
-2. per corner and plane: ``dg = max(0, d - n.X_k)``, ``un = n.U_k``,
-   ``fn = max(0, S dg - D un)`` (only corners with ``n.X_k < d`` under the gated law),
-   friction ``-mu fn Ut/(|Ut| + vmin)`` (the listing's) or stick-slip (below);
-3. ``u += dt F/m`` (gravity included), then ``x += dt u`` with the new ``u``;
-4. ``L += dt sum_k r_k x F_k`` (offsets before rotating), ``w = I_world^-1 L`` with
-   ``I_world = Q I_body Q^T``, then ``Q = R(w dt) Q`` with the Rodrigues rotation
-   ``R = P + cos(|w|dt)(E - P) + sin(|w|dt) [w]x/|w|``; ``R = E`` exactly when ``w = 0``.
-
-Stick-slip friction (``stick``, the default scene's; Cundall and Strack 1979): a corner that
-touches the ground is tied to the point where it touched; the tangential force is a spring and
-damper ``-kt e - ct Ut`` on its tangential offset ``e`` from that point, and when that exceeds
-``mu fn`` the corner slips: the force is ``mu fn`` against the slip velocity (against the
-spring's pull while the corner is too slow for its direction to mean anything) and the tie
-point moves so that the spring alone carries it. Taking the slip direction from the velocity
-rather than from the lagging spring is what makes sliding converge (about 8 times smaller
-trajectory errors at the default step). The tie is released when the corner leaves the ground
-or its normal force vanishes. A sticking corner thus stays put instead of dithering about zero
-slip speed as a sign-like friction does.
+One step of ``real_throw_cube.m`` for one die, in the listing's order ("modified forward
+Euler": the planes' forces on the corners, ``u`` then ``x`` with the new ``u``, ``L`` then
+``w = I_world^-1 L`` and ``Q = R(w dt) Q`` with ``R = E`` exactly when ``w = 0``), with the
+default scene's stick-slip friction (``stick``) and midpoint contact forces (``midpoint``):
+``docs/model.md`` states each ("The physics", "Friction and the step of the default scene").
 
 Work a scene does not need is skipped, with the result of computing it as zero: no rotation
 when ``rotation`` is off, no friction when ``mu = 0``, no damping term when ``D = 0``, no
@@ -34,18 +18,6 @@ surely contact-free; all but the last (so a contact step always follows a plain 
 in one jump: the centre in the closed form of those Euler steps, the orientation by one
 rotation of angle ``N |w| dt`` (isotropic die: ``w`` is constant) or by the plain torque-free
 rotation steps (loaded die). Every other step is the plain step above.
-
-Midpoint contact forces (``midpoint``, ``Scheme.MIDPOINT``, the default scene's): the kick of a
-step stands for the interval from half a step before to half a step after the positions it
-uses, so the velocity-dependent forces (damping and friction) take the corner velocity
-extrapolated to the positions' time, ``u + (u - u_prev)/2`` and ``w + (w - w_prev)/2``, and a
-corner that entered contact during the last step (height ``h_prev > 0``, now ``h < 0``) gets
-its damping weighted by the time in contact within that interval,
-``1/2 - h / (h_prev - h)``. Both remove first-order errors of the listing's step at every
-impact; the sign-like friction of a tiny ``vmin`` keeps another one (``docs/error-vs-runtime.md``).
-The friction's limit ``mu fn`` takes the unweighted normal force: weighting it too left about
-6 % of gentle throws' faces unconverged between dt/8 and dt/16 (measured; with it unweighted,
-99 %+ agree).
 
 Dice are independent: each die steps until its time limit, rest, or a non-finite state, so
 results are bit-identical for any batch size or thread count (``prange`` over the batch).
@@ -423,7 +395,8 @@ def vertex_on_plane(plane: tuple, stick: bool, vmin: float, height: float, befor
     if midpoint:
         uk0, uk1, uk2 = middle
         un = n0 * uk0 + n1 * uk1 + n2 * uk2
-    friction_limit = fn  # normal force for the friction, without the onset weight
+    friction_limit = fn  # without the onset weight: weighting it too left 6 % of gentle faces
+    # unconverged between dt/8 and dt/16 (99 %+ agree with it unweighted)
     if damp > 0.0:
         friction_limit -= damp * un
         if midpoint and before > 0.0 and height < 0.0:
