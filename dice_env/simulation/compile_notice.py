@@ -2,8 +2,9 @@
 
 numba compiles each kernel at its first call and caches the machine code on disk
 (``NUMBA_CACHE_DIR``, else ``__pycache__`` beside the sources), so only a process that finds
-the cache empty or stale waits. :func:`announce` says so once per kernel and process, and
-is quiet when the cache is warm or when :data:`QUIET` is set in the environment.
+the cache empty or stale waits. :func:`announce` says so for a kernel loop neither compiled
+nor cached for the types of its arguments (a loop compiles once per signature: the
+vectorised loop has two), and is quiet when :data:`QUIET` is set in the environment.
 """
 
 from __future__ import annotations
@@ -11,38 +12,42 @@ from __future__ import annotations
 import os
 import pickle
 import sys
-from collections.abc import Sequence
 
 QUIET = "DICE_ENV_QUIET_COMPILE"
-_announced: set[str] = set()
+# (kernel, its arguments' classes) known to run without compiling: numba's own type of the
+# arguments takes a quarter of a millisecond, so it is worked out once per variant
+_ready: set[tuple[object, tuple[type, ...]]] = set()
 
 
-def announce(dispatchers: Sequence[object], what: str, seconds: float) -> None:
-    """Say on stderr that the kernel ``what`` compiles, unless its ``dispatchers`` need not.
+def announce(dispatcher: object, args: tuple, what: str, seconds: float) -> None:
+    """Say on stderr that the kernel ``what`` compiles, unless ``dispatcher`` runs ``args`` now.
 
-    ``dispatchers`` are the kernel's costly numba ``@njit(cache=True)`` functions and
-    ``seconds`` its cold compile time on two cores (``benchmarks/cold_start.py`` measures
-    it). Nothing is said when each dispatcher is compiled in this process or found in
-    numba's cache, when ``what`` was announced before, or when :data:`QUIET` is set to
-    anything but ``""`` or ``"0"``.
+    ``dispatcher`` is the kernel's numba ``@njit(cache=True)`` loop and ``seconds`` its cold
+    compile time on two cores (``benchmarks/cold_start.py`` measures it). Nothing is said
+    when the loop is compiled in this process or found in numba's cache for the types of
+    ``args``, or when :data:`QUIET` is set to anything but ``""`` or ``"0"``.
     """
-    if what in _announced or os.environ.get(QUIET, "") not in ("", "0"):
-        return
-    _announced.add(what)
-    if all(ready(d) for d in dispatchers):
+    if os.environ.get(QUIET, "") not in ("", "0") or ready(dispatcher, args):
         return
     minutes = f"{seconds / 60:.0f} min" if seconds >= 90 else f"{seconds:.0f} s"
     print(f"dice_env: compiling {what} (first use with this numba cache: about {minutes} on "
           f"2 cores, then cached; {QUIET}=1 silences this)", file=sys.stderr, flush=True)
 
 
-def ready(dispatcher: object) -> bool:
-    """Whether ``dispatcher`` runs without compiling: compiled in this process or cached."""
-    return bool(dispatcher.overloads) or _cached(dispatcher)
+def ready(dispatcher: object, args: tuple) -> bool:
+    """Whether ``dispatcher`` runs ``args`` without compiling: compiled or cached for them."""
+    key = (dispatcher, tuple(type(a) for a in args))
+    if key in _ready:
+        return True
+    types = tuple(dispatcher.typeof_pyval(a) for a in args)
+    if types in dispatcher.overloads or _cached(dispatcher, types):
+        _ready.add(key)
+        return True
+    return False
 
 
-def _cached(dispatcher: object) -> bool:
-    """Whether numba's on-disk cache holds a current compilation of ``dispatcher``.
+def _cached(dispatcher: object, types: tuple) -> bool:
+    """Whether numba's on-disk cache holds a current compilation of ``dispatcher`` for ``types``.
 
     A cache index written for other sources or another numba reads as empty.
     """
@@ -51,6 +56,6 @@ def _cached(dispatcher: object) -> bool:
     if index is None:  # not cached on disk: every process compiles it
         return False
     try:
-        return bool(index._load_index())
+        return any(key[0] == types for key in index._load_index())
     except (OSError, EOFError, pickle.UnpicklingError):  # numba recompiles: the notice is right
         return False

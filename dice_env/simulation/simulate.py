@@ -439,22 +439,15 @@ BACKENDS: dict[str, tuple[Callable, Callable]] = {
     "paper": (vector_kernel.simulate_batch, vector_kernel.simulate_serial),
     "dice": (group_kernel.simulate_groups, group_kernel.simulate_groups_serial),
 }
-# Each CPU kernel (by its parallel loop): its costly functions, its name for a user and its
-# cold compile time on two cores (s, about; benchmarks/cold_start.py), said on stderr before
-# they compile (dice_env.simulation.compile_notice).
+# Each CPU kernel loop: its name for a user and its cold compile time on two cores (s, about;
+# benchmarks/cold_start.py), said on stderr before it compiles (simulation.compile_notice).
 COMPILES = {
-    kernel.simulate_serial: ((kernel.simulate_one, kernel.simulate_serial), "the die's kernel",
-                             8.0),
-    kernel.simulate_batch: ((kernel.simulate_batch,), "the die's kernel on threads", 11.0),
-    vector_kernel.simulate_serial: ((vector_kernel._run_tile, vector_kernel.simulate_serial),
-                                    "the paper scene's kernel", 10.0),
-    vector_kernel.simulate_batch: ((vector_kernel.simulate_batch,),
-                                   "the paper scene's kernel on threads", 13.0),
-    group_kernel.simulate_groups_serial: ((group_kernel.advance_group,
-                                           group_kernel.simulate_groups_serial),
-                                          "the kernel of several dice", 20.0),
-    group_kernel.simulate_groups: ((group_kernel.simulate_groups,),
-                                   "the kernel of several dice on threads", 27.0),
+    kernel.simulate_serial: ("the die's kernel", 8.0),
+    kernel.simulate_batch: ("the die's kernel on threads", 11.0),
+    vector_kernel.simulate_serial: ("the paper scene's kernel", 10.0),
+    vector_kernel.simulate_batch: ("the paper scene's kernel on threads", 13.0),
+    group_kernel.simulate_groups_serial: ("the kernel of several dice", 20.0),
+    group_kernel.simulate_groups: ("the kernel of several dice on threads", 27.0),
 }
 SERIAL_FIRST = 256  # throws: a batch up to this size runs serially while its parallel loop
 # is not compiled (on a cold cache, a first small batch does not wait for that compile)
@@ -528,11 +521,12 @@ def run_kernel(kind: str, inputs: tuple, outcome: tuple, *, batch: int, threads:
     kernel about to compile is said on stderr first (:data:`COMPILES`).
     """
     parallel, serial = BACKENDS[kind]
+    args = (*inputs, outcome)
     serial_run = (batch == 1 or threads == 1 or _after_fork
-                  or (batch <= SERIAL_FIRST and not ready(parallel)))
+                  or (batch <= SERIAL_FIRST and not ready(parallel, args)))
     run = serial if serial_run else parallel
-    announce(*COMPILES[run])
-    _run_interruptibly(run, (*inputs, outcome), outcome.abort, threads, long=work > _LONG_RUN)
+    announce(run, args, *COMPILES[run])
+    _run_interruptibly(run, args, outcome.abort, threads, long=work > _LONG_RUN)
 
 
 def _run_interruptibly(run: Callable, args: tuple, abort: np.ndarray, threads: int, *,
