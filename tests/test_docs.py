@@ -1,16 +1,20 @@
 """The README and docs/: numbers from their JSONs, cited files present, examples that run,
 docstring references that resolve, and pages that describe rather than narrate."""
 
+import ast
 import inspect
 import json
 import re
 import sys
+from dataclasses import MISSING, fields
 from pathlib import Path
 
 import pytest
 
 from dice_env.envs.dice_throw import configure
-from dice_env.envs.task import task_keywords
+from dice_env.envs.task import ThrowTask, make_task, task_keywords
+from dice_env.model.die import Die
+from dice_env.model.surroundings import walls
 from dice_env.studies import numbers
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -72,6 +76,32 @@ def test_the_environment_page_lists_every_keyword():
            if p.kind is p.KEYWORD_ONLY or name == "render_mode"}
     missing = [name for name in sorted(task_keywords() | env) if f"`{name}`" not in table]
     assert missing == []
+
+
+def test_the_keyword_table_gives_the_code_defaults():
+    """Each default the table states as a value is the one the code uses (``Scene()`` and
+    formulas such as ``n`` are left to the text)."""
+    page = (ROOT / "docs/environment.md").read_text()
+    table = page[page.index("## Keywords"):page.index("### Keywords and a base scene")]
+    task, built = make_task(), {}
+    built.update({f.name: f.default for f in fields(ThrowTask) if f.default is not MISSING})
+    built.update({n: p.default for n, p in inspect.signature(configure).parameters.items()
+                  if p.default is not p.empty})
+    built.update(release_height=task.release_height, t_max=task.scene.t_max,
+                 num_dice=task.n_dice, die=task.scene.die, walls=task.scene.walls, scene=None,
+                 tilt_deg=0 if task.scene.ground.normal == (0.0, 0.0, 1.0) else None)
+    same = {"die": lambda name: Die.standard(name), "walls": walls}
+    checked = 0
+    for row in re.findall(r"^\| (`.*?) \| (.*?) \|", table, re.M):
+        names = re.findall(r"`(\w+)`", row[0].split("(")[0])
+        try:
+            values = ast.literal_eval(f"({row[1]},)")
+        except (ValueError, SyntaxError):
+            continue  # `Scene()` or a formula
+        for name, value in zip(names, values, strict=True):
+            assert built[name] == same.get(name, lambda v: v)(value), (name, value)
+            checked += 1
+    assert checked >= 20
 
 
 @pytest.mark.parametrize("page", PAGES, ids=lambda p: p.name)
