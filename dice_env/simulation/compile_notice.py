@@ -14,8 +14,9 @@ import pickle
 import sys
 
 QUIET = "DICE_ENV_QUIET_COMPILE"
-# (kernel, its arguments' classes) known to run without compiling: numba's own type of the
-# arguments takes a quarter of a millisecond, so it is worked out once per variant
+# Per (kernel, its arguments' classes): numba's types of the arguments (a quarter of a
+# millisecond to work out, so once per variant), and the variants known to run uncompiled
+_types: dict[tuple[object, tuple[type, ...]], tuple] = {}
 _ready: set[tuple[object, tuple[type, ...]]] = set()
 
 
@@ -39,7 +40,9 @@ def ready(dispatcher: object, args: tuple) -> bool:
     key = (dispatcher, tuple(type(a) for a in args))
     if key in _ready:
         return True
-    types = tuple(dispatcher.typeof_pyval(a) for a in args)
+    if key not in _types:
+        _types[key] = tuple(dispatcher.typeof_pyval(a) for a in args)
+    types = _types[key]
     if types in dispatcher.overloads or _cached(dispatcher, types):
         _ready.add(key)
         return True
