@@ -81,31 +81,12 @@ class ThrowTask:
     that moment, and the shaping term is taken there; horizontal table only; see
     :attr:`run_until`).
 
-    **The hand** holds the dice in rows of up to :data:`HAND_ROW` along the table's y axis, the
-    rows one behind the other along its x axis, die ``i`` in row ``i // 4``; neighbours' centres
-    are :attr:`hand_spacing` apart, each row centred on y = 0 and the rows on x = 0, so the
-    hand's centre is the release point (:attr:`hand_offsets`; one die sits on it). The hand is
-    rigid: one action gives the hand's velocity ``v`` and spin ``w``, and die ``i`` leaves it
-    with velocity ``v + w x r_i`` and spin ``w`` (``r_i`` its offset); each die has its own
-    hand noise (:data:`NOISE_DIM` standard normals per die, added to the action before that
-    product) and its own orientation in the hand, drawn per die.
-
-    **Targets.** ``target="faces"`` (one die's only target): a face per die, each drawn
-    uniformly, success when every die shows its own; the observation starts with one one-hot
-    per die. ``target="sum"`` (the default for several dice): a total N … sum of the faces is
-    drawn uniformly and the throw succeeds when the faces read add up to it ("roll a seven"
-    with two d6); the observation starts with one one-hot over the totals, and the shaping
-    term is 0 (no single face needs to be up). ``target="avoid_sum"``: the same total, drawn
-    or fixed, is the one to avoid: the throw succeeds when the faces add up to any other
-    (a craps shooter after the point, who loses on a seven). Then every die's orientation
-    (9 numbers per die).
-
-    **Void throws**, the first that applies: foul, unstable, sunk (any die), not settled or
-    not decided, then "leaning": a die ended leaning on another die (not read).
-
-    ``set_dice`` (several dice): the agent also sets each die in the hand, as craps "dice
-    setters" do: the action grows by 3 per die, a rotation vector ``SET_ANGLE * a`` (rad, world
-    frame) applied to that die's drawn orientation before the orientation noise.
+    The hand (rows of up to :data:`HAND_ROW` dice :attr:`hand_spacing` apart, rigid: die ``i``
+    leaves it with ``v + w x r_i`` and spin ``w``, each die with its own :data:`NOISE_DIM` noise
+    and orientation), the targets (``"faces"``, ``"sum"``, ``"avoid_sum"``), the void throws
+    (foul, unstable, sunk, not settled or not decided, then "leaning") and ``set_dice`` (a
+    rotation vector ``SET_ANGLE * a`` per die): ``docs/environment.md``, "Several dice in one
+    throw".
     """
 
     scene: Scene

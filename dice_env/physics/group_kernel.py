@@ -1,47 +1,24 @@
 """Several dice in one throw: die–die contact and the group's step (numba only).
 
-A throw of N dice is a group. Every die feels the planes exactly as a single die does
-(:func:`dice_env.physics.kernel.vertex_on_plane`, the same stick-slip springs) and every other die
-through penalty contacts:
+A throw of N dice is a group; the model (the contact's normal from separating axes, its points
+from the overlap's corners and edge crossings, the law and its two frictions, the end and the
+reading) is ``docs/model.md``, "Several dice in one throw". Here: :func:`least_overlap` finds
+the normal (the axis that separated a pair at the last step tried first, a face normal
+preferred unless an edge axis is clearly less, :data:`FACE_BIAS`), :func:`pair_contacts` the
+contact points and their forces (:func:`contact_force`, :func:`_push_tied` for the stick-slip
+ties), equal and opposite on the two dice, so a contact keeps the pair's momenta exactly. The
+shapes reach the contact test as the arrays of :class:`Hulls`, not as a group: an inlined
+function handed a group of arrays pays an atomic reference count for every array in it
+wherever numba cannot prune them (about 20 ns each; the whole :class:`Bodies` made a pair test
+cost 0.4–0.7 µs instead of tens of ns).
 
-- the contact normal is the axis along which the two overlap least (:func:`least_overlap`,
-  separating axes: the face normals of both, one per pair of opposite faces, and the cross
-  products of their edges, one per pair of classes of parallel edges: 3 + 3 and 9 axes for
-  two cubes, not 12 and 144); the axis that separated a pair at the last step is tried
-  first, and usually settles it; a face normal is preferred unless an edge axis is clearly
-  less (:data:`FACE_BIAS`);
-- the contacts are the corners of the region where the two overlap (:func:`pair_contacts`):
-  every corner of one die inside the other and every point where an edge of one passes
-  through a face of the other (two squares turned against each other face on face, or two
-  cubes meeting edge on edge at a right angle, have no corner inside the other), each
-  pushed out along the normal by its depth beyond the other die's extent along it.
-
-A contact's force is ``fn = S d - D vn`` (pushing only) along its normal plus the regularised
-Coulomb friction ``-mu fn vt / (|vt| + vmin)``, capped where it would reverse the slip within
-a step (:func:`contact_force`, :class:`Pair`), or, for a corner with ``Pair.stick``, the
-table's stick-slip friction tied to the other die (:func:`_push_tied`); it acts on one die at
-the contact point and, reversed, on the other at the same point, so a contact conserves the
-pair's linear and angular momentum exactly. Its spring stores energy and its damper and
-friction dissipate it; only a jump of the contact's normal or depth between steps (a new
-axis of least overlap) can add some, which the group's energy check flags. A bounding-sphere
-test leaves out pairs that are apart. The shapes reach the contact test as the arrays of
-:class:`Hulls`, not as a group: an inlined function handed a group of arrays pays an atomic
-reference count for every array in it wherever numba cannot prune them (about 20 ns each;
-passing the whole :class:`Bodies` made a pair test cost 0.4–0.7 µs instead of tens of ns).
-
-The parallel unit is the throw: one group per thread, its dice stepped together with the
-single die's scheme (velocity, then position; angular momentum, then the rotation). While no
-die touches a plane and every pair's bounding spheres are apart, the steps surely free of
-contact are taken at once in the single die's closed form (:func:`_group_jump`).
-
-The throw ends when every die is at rest (every corner slow, for the hold, on three corners
-on the planes or held by another die: a die left leaning on another rests too) or, with a
-decision rule, when no energy left in the group can change any die's face: for every die
-``i``, its own energy plus all that the others could give it (their energy above their
-least, ``Bodies.floor``) is below the lock of the face it reads. Each die's step on the planes
-is the single die's (:func:`dice_env.physics.kernel.die_on_planes`, the group's dice one after
-another in its per-vertex arrays), and so are the flight's closed form and the midpoint's
-extrapolation (:func:`dice_env.physics.kernel.euler_steps`, :func:`dice_env.physics.kernel.ahead`).
+The parallel unit is the throw: one group per thread, its dice stepped together. Each die's
+step on the planes is the single die's (:func:`dice_env.physics.kernel.die_on_planes`, the
+group's dice one after another in its per-vertex arrays), and so are the flight's closed form
+(:func:`_group_jump` while no die touches a plane and every pair's bounding spheres are apart)
+and the midpoint's extrapolation (:func:`dice_env.physics.kernel.euler_steps`,
+:func:`dice_env.physics.kernel.ahead`). The throw ends when every die is at rest or, with a
+decision rule, when no energy left in the group can change any die's face (:func:`_decided`).
 This module imports nothing from the package but :mod:`dice_env.physics.kernel`.
 """
 
