@@ -16,7 +16,7 @@ The parallel unit is the throw: one group per thread, its dice stepped together.
 step on the planes is the single die's (:func:`dice_env.physics.kernel.die_on_planes`, the
 group's dice one after another in its per-vertex arrays), and so are the flight's closed form
 (:func:`_group_jump` while no die touches a plane and every pair's bounding spheres are apart)
-and the midpoint's extrapolation (:func:`dice_env.physics.kernel.euler_steps`,
+and its move and the midpoint's extrapolation (:func:`dice_env.physics.kernel.die_move`,
 :func:`dice_env.physics.kernel.ahead`). The throw ends when every die is at rest or, with a
 decision rule, when no energy left in the group can change any die's face (:func:`_decided`).
 This module imports nothing from the package but :mod:`dice_env.physics.kernel`.
@@ -46,8 +46,8 @@ from dice_env.physics.kernel import (
     PlaneContacts,
     ahead,
     angular_velocity,
+    die_move,
     die_on_planes,
-    euler_steps,
     face_read,
     flight_jump,
     next_pass,
@@ -55,7 +55,6 @@ from dice_env.physics.kernel import (
     rest_test,
     stick_slip,
     stopped_at,
-    torque_free,
 )
 
 # Edges closer to parallel than this (|e_a x e_b|^2 over |e_a|^2 |e_b|^2) have no edge contact:
@@ -761,30 +760,25 @@ def advance_group(g: int, dice: GroupDice, bodies: Bodies, hulls: Hulls, pair: P
         for a in range(n_dice):
             dt_m = dt / mass[a]
             dv0, dv1, dv2 = force[a, 0] * dt_m, force[a, 1] * dt_m, force[a, 2] * dt_m
-            (nx0, nx1, nx2), (nu0, nu1, nu2) = euler_steps(
-                (x[a, 0], x[a, 1], x[a, 2]), (u[a, 0], u[a, 1], u[a, 2]), (dv0, dv1, dv2), dt,
-                jump)
-            nl0, nl1, nl2 = ang[a, 0], ang[a, 1], ang[a, 2]
-            if rotation:
-                nl0, nl1, nl2 = nl0 + dt * torque[a, 0], nl1 + dt * torque[a, 1], \
-                    nl2 + dt * torque[a, 2]
-            if not math.isfinite(nu0 + nu1 + nu2 + nx0 + nx1 + nx2 + nl0 + nl1 + nl2):
-                finite = False
+            for r in range(3):  # this die's rotation and inertia, as the single die's kernel
+                for c in range(3):  # takes them
+                    qa[r, c], inv_a[r, c] = q[a, r, c], inv_inertia[a, r, c]
+            finite, (x0, x1, x2), (nu0, nu1, nu2), (l0, l1, l2), (w0, w1, w2) = die_move(
+                (x[a, 0], x[a, 1], x[a, 2]), (u[a, 0], u[a, 1], u[a, 2]),
+                (ang[a, 0], ang[a, 1], ang[a, 2]), (w[a, 0], w[a, 1], w[a, 2]),
+                (dv0, dv1, dv2), (torque[a, 0], torque[a, 1], torque[a, 2]), qa, inv_a,
+                inv_iso[a], dt, jump, rotation)
+            if not finite:
                 break
             if midpoint:
                 pu[a, 0], pu[a, 1], pu[a, 2] = nu0 - dv0, nu1 - dv1, nu2 - dv2
                 pw[a, 0], pw[a, 1], pw[a, 2] = w[a, 0], w[a, 1], w[a, 2]
-            u[a, 0], u[a, 1], u[a, 2], x[a, 0], x[a, 1], x[a, 2] = nu0, nu1, nu2, nx0, nx1, nx2
-            ang[a, 0], ang[a, 1], ang[a, 2] = nl0, nl1, nl2
-            if rotation:
-                for r in range(3):
-                    for c in range(3):
-                        qa[r, c], inv_a[r, c] = q[a, r, c], inv_inertia[a, r, c]
-                w[a, 0], w[a, 1], w[a, 2] = torque_free(qa, inv_a, inv_iso[a], nl0, nl1, nl2, dt,
-                                                        jump)
-                for r in range(3):
-                    for c in range(3):
-                        q[a, r, c] = qa[r, c]
+            u[a, 0], u[a, 1], u[a, 2], x[a, 0], x[a, 1], x[a, 2] = nu0, nu1, nu2, x0, x1, x2
+            ang[a, 0], ang[a, 1], ang[a, 2] = l0, l1, l2
+            w[a, 0], w[a, 1], w[a, 2] = w0, w1, w2
+            for r in range(3):
+                for c in range(3):
+                    q[a, r, c] = qa[r, c]
         if not finite:
             end = NONFINITE
             break

@@ -716,7 +716,7 @@ def advance(i: int, dice: Dice, body: Body, contact: Contact, options: Options, 
                 stops.hold_steps, energy - stops.rest_energy < stops.rest_excess)
             if end == SETTLED:
                 break
-        # 3. centre of mass: velocity first, then position with the new velocity
+        # 3. the kick, and in free flight how many steps it takes at once
         dv0, dv1, dv2 = f0 * dt_m, f1 * dt_m, f2 * dt_m
         jump = 1
         if options.flight and touching == 0:
@@ -727,21 +727,17 @@ def advance(i: int, dice: Dice, body: Body, contact: Contact, options: Options, 
             if n_rec > 0:  # the records falling inside the jump (it does not depend on them)
                 _record_jump(records, i, step, jump, (x0, x1, x2), (u0, u1, u2), (l0, l1, l2),
                              (dv0, dv1, dv2), qi, qj, body, options)
-        (nx0, nx1, nx2), (nu0, nu1, nu2) = euler_steps((x0, x1, x2), (u0, u1, u2),
-                                                      (dv0, dv1, dv2), dt, jump)
-        # 4. angular momentum, angular velocity, orientation
-        nl0, nl1, nl2 = l0, l1, l2
-        if rotation:
-            nl0, nl1, nl2 = l0 + dt * t0, l1 + dt * t1, l2 + dt * t2
-        if not math.isfinite(nu0 + nu1 + nu2 + nx0 + nx1 + nx2 + nl0 + nl1 + nl2):
+        # 4. the move: centre of mass, angular momentum and orientation
+        finite, (x0, x1, x2), (nu0, nu1, nu2), (l0, l1, l2), (nw0, nw1, nw2) = die_move(
+            (x0, x1, x2), (u0, u1, u2), (l0, l1, l2), (w0, w1, w2), (dv0, dv1, dv2),
+            (t0, t1, t2), qi, inv_body, inv_iso, dt, jump, rotation)
+        if not finite:
             end = NONFINITE
             break
         if midpoint:
             pu0, pu1, pu2 = nu0 - dv0, nu1 - dv1, nu2 - dv2
             pw0, pw1, pw2 = w0, w1, w2
-        u0, u1, u2, x0, x1, x2, l0, l1, l2 = nu0, nu1, nu2, nx0, nx1, nx2, nl0, nl1, nl2
-        if rotation:
-            w0, w1, w2 = torque_free(qi, inv_body, inv_iso, l0, l1, l2, dt, jump)
+        u0, u1, u2, w0, w1, w2 = nu0, nu1, nu2, nw0, nw1, nw2
         step += jump - 1
         if step >= next_record:  # a multiple of the stride reached or jumped over
             if step % stride == 0 and step // stride <= n_rec:
@@ -786,6 +782,28 @@ def euler_steps(x: tuple, u: tuple, dv: tuple, dt: float, n: int) -> tuple:
     half = 0.5 * n * (n + 1)
     return ((x0 + dt * (n * u0 + half * dv0), x1 + dt * (n * u1 + half * dv1),
              x2 + dt * (n * u2 + half * dv2)), (u0 + n * dv0, u1 + n * dv1, u2 + n * dv2))
+
+
+@njit(cache=True, inline="always")
+def die_move(x: tuple, u: tuple, ang: tuple, w: tuple, dv: tuple, torque: tuple,
+             q: np.ndarray, inv_body: np.ndarray, inv_iso: float, dt: float, n: int,
+             rotation: bool) -> tuple:
+    """One die moved ``n`` steps by the kick ``dv`` and the ``torque``.
+
+    ``u`` then ``x`` (:func:`euler_steps`), ``L`` by the torque, then the rotation
+    (:func:`torque_free`, on ``q`` in place; ``rotation`` off keeps ``L`` and ``w``). Returns
+    whether the moved state is finite, then its ``x``, ``u``, ``L`` and ``w``; a state that is
+    not finite is not moved (nor is ``q``).
+    """
+    nx, (nu0, nu1, nu2) = euler_steps(x, u, dv, dt, n)
+    nl0, nl1, nl2 = ang
+    if rotation:
+        nl0, nl1, nl2 = nl0 + dt * torque[0], nl1 + dt * torque[1], nl2 + dt * torque[2]
+    if not math.isfinite(nu0 + nu1 + nu2 + nx[0] + nx[1] + nx[2] + nl0 + nl1 + nl2):
+        return False, x, u, ang, w
+    if rotation:
+        w = torque_free(q, inv_body, inv_iso, nl0, nl1, nl2, dt, n)
+    return True, nx, (nu0, nu1, nu2), (nl0, nl1, nl2), w
 
 
 @njit(cache=True, inline="always")
