@@ -784,7 +784,7 @@ def euler_steps(x: tuple, u: tuple, dv: tuple, dt: float, n: int) -> tuple:
              x2 + dt * (n * u2 + half * dv2)), (u0 + n * dv0, u1 + n * dv1, u2 + n * dv2))
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, forceinline=True, _nrt=False)
 def die_move(x: tuple, u: tuple, ang: tuple, w: tuple, dv: tuple, torque: tuple,
              q: np.ndarray, inv_body: np.ndarray, inv_iso: float, dt: float, n: int,
              rotation: bool) -> tuple:
@@ -793,7 +793,8 @@ def die_move(x: tuple, u: tuple, ang: tuple, w: tuple, dv: tuple, torque: tuple,
     ``u`` then ``x`` (:func:`euler_steps`), ``L`` by the torque, then the rotation
     (:func:`torque_free`, on ``q`` in place; ``rotation`` off keeps ``L`` and ``w``). Returns
     whether the moved state is finite, then its ``x``, ``u``, ``L`` and ``w``; a state that is
-    not finite is not moved (nor is ``q``).
+    not finite is not moved (nor is ``q``). Compiled without reference counts, as
+    :func:`die_on_planes`: it is handed two arrays at every step.
     """
     nx, (nu0, nu1, nu2) = euler_steps(x, u, dv, dt, n)
     nl0, nl1, nl2 = ang
