@@ -15,9 +15,8 @@ import sys
 
 QUIET = "DICE_ENV_QUIET_COMPILE"
 # Per (kernel, its arguments' classes): numba's types of the arguments (a quarter of a
-# millisecond to work out, so once per variant), and the variants known to run uncompiled
+# millisecond to work out, so once per variant)
 _types: dict[tuple[object, tuple[type, ...]], tuple] = {}
-_ready: set[tuple[object, tuple[type, ...]]] = set()
 
 
 def announce(dispatcher: object, args: tuple, what: str, seconds: float) -> None:
@@ -38,15 +37,10 @@ def announce(dispatcher: object, args: tuple, what: str, seconds: float) -> None
 def ready(dispatcher: object, args: tuple) -> bool:
     """Whether ``dispatcher`` runs ``args`` without compiling: compiled or cached for them."""
     key = (dispatcher, tuple(type(a) for a in args))
-    if key in _ready:
-        return True
     if key not in _types:
         _types[key] = tuple(dispatcher.typeof_pyval(a) for a in args)
-    types = _types[key]
-    if types in dispatcher.overloads or _cached(dispatcher, types):
-        _ready.add(key)
-        return True
-    return False
+    types = _types[key]  # a run compiles them, or loads them from the cache, into overloads
+    return types in dispatcher.overloads or _cached(dispatcher, types)
 
 
 def _cached(dispatcher: object, types: tuple) -> bool:
