@@ -1,4 +1,1 @@
-"""The physics: numba kernels only, importing nothing else from the package.
-
-Contact laws, one die's step, the flight, and the single, group, SIMD and CUDA loops.
-"""
+"""The numba kernels, importing nothing else from the package: one die, groups, SIMD, CUDA."""

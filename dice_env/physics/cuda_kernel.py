@@ -1,25 +1,13 @@
 """The one-die kernel on an NVIDIA GPU: one die per CUDA thread (numba-cuda).
 
-The physics is :func:`dice_env.physics.kernel.advance`, the very source that
-:func:`~dice_env.physics.kernel.simulate_one` runs on the CPU: numba-cuda compiles every ``@njit``
-function that a CUDA kernel calls again as a device function, and so on down the calls, so
-each piece (:func:`~dice_env.physics.kernel.vertex_on_plane`,
-:func:`~dice_env.physics.kernel.rotate`, ...) has one definition and two targets. What the CPU
-kernel allocates per die lies here in each thread's local memory, of a size fixed when the kernel is
-compiled: up to :data:`GPU_MAX_VERTICES` vertices and :data:`MAX_PLANES` planes.
-
-The same step in the same double precision, but not bit for bit: the GPU's compiler fuses a
-multiply and an add into one operation with a single rounding (FMA), and its ``sin`` comes
-from CUDA's libdevice. Round-off differences that chaotic throws amplify over
-many impacts can change a face; ``tests/test_cuda_kernel.py`` bounds them on short runs.
-
-Records are not kept on the GPU (:func:`run` refuses them), and a run cannot be interrupted
-while its kernel runs. The kernel compiles once per process, at its first run (a minute or two
-on 2 shared cores): numba's disk cache is keyed on this file alone and would keep a kernel
-compiled before a change to :mod:`dice_env.physics.kernel`. Importing this module imports
-``numba.cuda``; :mod:`dice_env` imports it only for ``simulate(..., device="cuda")``. Without
-a GPU, numba's CUDA simulator (``NUMBA_ENABLE_CUDASIM=1``, with ``NUMBA_DISABLE_JIT=1`` so that
-the pieces run as Python too) runs the same kernel.
+The physics is :func:`dice_env.physics.kernel.advance`, compiled again by numba-cuda as device
+functions, its scratch in each thread's local memory (up to :data:`GPU_MAX_VERTICES` vertices
+and :data:`MAX_PLANES` planes). Not bit for bit the CPU's: the GPU fuses multiplies and adds
+(FMA) and takes ``sin`` from libdevice, round-off that chaotic throws amplify
+(``tests/test_cuda_kernel.py`` bounds it on short runs). No records; a run cannot be
+interrupted; the kernel compiles at its first run in each process (no disk cache: see
+:func:`simulate_cuda`). Without a GPU, numba's simulator runs it (``NUMBA_ENABLE_CUDASIM=1``
+with ``NUMBA_DISABLE_JIT=1``).
 """
 
 from __future__ import annotations
@@ -67,9 +55,8 @@ def run(dice: Dice, body: Body, contact: Contact, options: Options, stops: Stops
         records: Records, out: Outcome) -> None:
     """Advance a batch of dice on the GPU, in place in the host arrays of ``dice`` and ``out``.
 
-    The groups are :func:`dice_env.physics.kernel.simulate_batch`'s. Refused (``ValueError``):
-    records, a die of more than :data:`GPU_MAX_VERTICES` vertices, more than :data:`MAX_PLANES`
-    planes.
+    Arguments as :func:`dice_env.physics.kernel.simulate_batch`'s. ``ValueError`` for records, a die
+    of more than :data:`GPU_MAX_VERTICES` vertices, or more than :data:`MAX_PLANES` planes.
     """
     if records.x.shape[1] > 0:
         raise ValueError("record_every must be 0 with device='cuda': records are kept on the "

@@ -1,25 +1,11 @@
 """Several dice in one throw: die–die contact and the group's step (numba only).
 
-A throw of N dice is a group; the model (the contact's normal from separating axes, its points
-from the overlap's corners and edge crossings, the law and its two frictions, the end and the
-reading) is ``docs/model.md``, "Several dice in one throw". Here: :func:`least_overlap` finds
-the normal (the axis that separated a pair at the last step tried first, a face normal
-preferred unless an edge axis is clearly less, :data:`FACE_BIAS`), :func:`pair_contacts` the
-contact points and their forces (:func:`contact_force`, :func:`_push_tied` for the stick-slip
-ties), equal and opposite on the two dice, so a contact keeps the pair's momenta exactly. The
-shapes reach the contact test as the arrays of :class:`Hulls`, not as a group: an inlined
-function handed a group of arrays pays an atomic reference count for every array in it
-wherever numba cannot prune them (about 20 ns each; the whole :class:`Bodies` made a pair test
-cost 0.4–0.7 µs instead of tens of ns).
-
-The parallel unit is the throw: one group per thread, its dice stepped together. Each die's
-step on the planes is the single die's (:func:`dice_env.physics.kernel.die_on_planes`, the
-group's dice one after another in its per-vertex arrays), and so are the flight's closed form
-(:func:`_group_jump` while no die touches a plane and every pair's bounding spheres are apart)
-and its move and the midpoint's extrapolation (:func:`dice_env.physics.kernel.die_move`,
-:func:`dice_env.physics.kernel.ahead`). The throw ends when every die is at rest or, with a
-decision rule, when no energy left in the group can change any die's face (:func:`_decided`).
-This module imports nothing from the package but :mod:`dice_env.physics.kernel`.
+The model is ``docs/model.md``, "Several dice in one throw"; what keeps the pair test cheap,
+``docs/performance.md``, "Several dice". :func:`least_overlap` finds a touching pair's normal,
+:func:`pair_contacts` its contact points and their equal and opposite forces;
+:func:`advance_group` steps one throw, each die on the planes as the single die's
+(:func:`dice_env.physics.kernel.die_on_planes`). This module imports nothing from the package but
+:mod:`dice_env.physics.kernel`.
 """
 
 from __future__ import annotations
@@ -62,10 +48,8 @@ from dice_env.physics.kernel import (
 PARALLEL = 1e-8
 # A slip is stopped by friction over at least 1 / GRIP steps (see Pair).
 GRIP = 0.25
-# An edge axis is the contact's only where the dice overlap along it by less than this
-# fraction of their least overlap along a face normal: dice meeting face on face, slightly
-# turned or tilted, overlap almost as little along the cross products of the two faces'
-# edges, and one edge contact there would let them sink into each other.
+# An edge axis is the contact's only where the overlap along it is less than this fraction of
+# the least along a face normal: dice face on face, a little turned, must not meet edge on edge.
 FACE_BIAS = 0.95
 # A corner bears on another die's face when inside it to this fraction of that die's reach
 # (corners exactly on a side plane, as in an aligned stack, must bear).
@@ -101,14 +85,12 @@ class Bodies(NamedTuple):
 class Hulls(NamedTuple):
     """The N dice's shapes as die–die contact sees them, body frames, padded by repetition.
 
-    ``axes`` (N, A, 3): the distinct face normals (one of each pair of opposite faces; a
-    smaller set repeats its first); ``directions`` (N, C, 3): one unit direction per class of
-    parallel edges (repeating the first likewise); ``edges`` (N, E, 2): vertex pairs, class by
-    class; ``classes`` (N, C + 1): where each class starts in ``edges`` (and the last ends; a
-    padded class is empty); ``planes`` (N, F, 4): the faces' planes ``n . r = offset`` (a
-    smaller set repeats its first), ``n_planes`` (N,) how many are the die's own;
-    ``n_vertices`` and ``r_max`` as :class:`Bodies`'. Repeated axes and planes change no
-    extent, overlap or inside test.
+    ``axes`` (N, A, 3): one of each pair of opposite face normals; ``directions`` (N, C, 3): one
+    unit direction per class of parallel edges; ``edges`` (N, E, 2): vertex pairs, class by class;
+    ``classes`` (N, C + 1): where each class starts in ``edges`` (and the last ends); ``planes``
+    (N, F, 4): the faces' planes ``n . r = offset``, ``n_planes`` (N,) how many are the die's own;
+    ``n_vertices`` and ``r_max`` as :class:`Bodies`'. A smaller set repeats its first entry (a
+    padded class is empty), which changes no extent, overlap or inside test.
     """
 
     axes: np.ndarray
@@ -122,18 +104,13 @@ class Hulls(NamedTuple):
 
 
 class Pair(NamedTuple):
-    """The die–die contact's law.
+    """The die–die contact's law (``docs/model.md``, "Several dice in one throw").
 
-    ``stiffness`` S, ``damping`` D, ``friction`` mu. With ``stick``, a corner inside another
-    die feels the table's stick-slip friction (:func:`dice_env.physics.kernel.stick_slip`): tied by
-    a tangential spring ``kt`` and damper ``ct`` to the point of the other die where it
-    touched, slipping at ``mu fn``; ``dt_m``: the step over the pair's reduced mass. Edge
-    contacts, and every contact without ``stick``, feel the regularised Coulomb friction at
-    ``vmin``, capped at ``grip |vt|``: Coulomb's law at a contact that sticks asks for a force
-    that ends the slip within a fraction of a step; the explicit step then overshoots and
-    the slip flips every step. ``grip`` (N s/m) is :data:`GRIP` of the smallest effective
-    mass of a pair over the step, so several contacts together stop a slip within a few
-    steps.
+    ``stiffness`` S, ``damping`` D, ``friction`` mu; with ``stick``, a corner inside another die
+    feels stick-slip friction (spring ``kt``, damper ``ct``, ``dt_m`` the step over the pair's
+    reduced mass); edge contacts, and all without ``stick``, the regularised Coulomb friction at
+    ``vmin``, capped at ``grip |vt|`` (``grip``, N s/m: :data:`GRIP` of the pair's smallest
+    effective mass over the step, so that the explicit step cannot overshoot a sticking slip).
     """
 
     stiffness: float
@@ -165,11 +142,7 @@ class GroupStops(NamedTuple):
 
 
 class GroupDice(NamedTuple):
-    """The state of G throws of N dice, updated in place.
-
-    ``x``, ``u``, ``ang``, ``w`` (G, N, 3) and ``q`` (G, N, 3, 3), as
-    :class:`dice_env.physics.kernel.Dice`.
-    """
+    """G throws of N dice, updated in place, as :class:`dice_env.physics.kernel.Dice`."""
 
     x: np.ndarray
     u: np.ndarray
@@ -189,16 +162,14 @@ class GroupRecords(NamedTuple):
 class GroupOutcome(NamedTuple):
     """What each throw gives, and the abort flag.
 
-    Per throw (G,) ``status``, ``unstable``, ``rest_time``, ``energy_rise``, ``steps``,
-    ``overlap`` (the deepest die–die overlap, separating axes); per die (G, N) ``impacts``,
-    ``max_pen`` (deepest sink into a plane), ``contacts`` (vertices on the planes at the end),
-    ``touching`` (in contact with another die at the end) and ``die_impacts`` (starts of a
-    contact with another die whose centre moves faster than the rest speed relative to this
-    one's); ``touched`` (G, N, P): the die had a corner in plane P at some step. The first
-    die–die contact of a throw: ``meet_dice`` (G, 2) the pair (-1: none), ``meet_steps``
-    (G, 2) the steps done when it starts and when it ends (-1: not ended), ``meet`` (G, 2, N,
-    6) every die's velocity and angular velocity then (before its first force, after its
-    last). ``abort`` (1,).
+    Per throw (G,) ``status``, ``unstable``, ``rest_time``, ``energy_rise``, ``steps``, ``overlap``
+    (the deepest die–die overlap); per die (G, N) ``impacts``, ``max_pen`` (deepest sink into a
+    plane), ``contacts`` (vertices on the planes at the end), ``touching`` (touches another die at
+    the end), ``die_impacts`` (contacts begun with another die whose centre moves faster than the
+    rest speed relative to this one's); ``touched`` (G, N, P): a corner was ever in plane P. The
+    throw's first die–die contact: ``meet_dice`` (G, 2) the pair (-1: none), ``meet_steps`` (G, 2)
+    the steps done when it starts and ends (-1: not ended), ``meet`` (G, 2, N, 6) every die's
+    velocity and angular velocity then (before its first force, after its last). ``abort`` (1,).
     """
 
     status: np.ndarray
@@ -242,10 +213,7 @@ def contact_force(depth: float, n: tuple, v: tuple, pair: Pair) -> tuple:
 @njit(cache=True, inline="always")
 def _relative_velocity(a: int, b: int, point: tuple, x: np.ndarray, cu: np.ndarray,
                        cw: np.ndarray) -> tuple:
-    """Die ``a``'s velocity at ``point`` relative to die ``b``'s, and the two lever arms.
-
-    ``cu``, ``cw`` (N, 3): the velocities the forces use.
-    """
+    """Die ``a``'s velocity at ``point`` relative to die ``b``'s, and the two lever arms."""
     ra0, ra1, ra2 = point[0] - x[a, 0], point[1] - x[a, 1], point[2] - x[a, 2]
     rb0, rb1, rb2 = point[0] - x[b, 0], point[1] - x[b, 1], point[2] - x[b, 2]
     va0 = cu[a, 0] + cw[a, 1] * ra2 - cw[a, 2] * ra1
@@ -260,11 +228,7 @@ def _relative_velocity(a: int, b: int, point: tuple, x: np.ndarray, cu: np.ndarr
 @njit(cache=True, inline="always")
 def _apply(a: int, b: int, f: tuple, ra: tuple, rb: tuple, force: np.ndarray,
            torque: np.ndarray) -> None:
-    """The force ``f`` on die ``a`` and ``-f`` on die ``b`` at one point.
-
-    ``ra``, ``rb``: the point's lever arms from the two centres. The pair's momentum and
-    angular momentum are kept exactly.
-    """
+    """The force ``f`` on die ``a`` and ``-f`` on die ``b``, at lever arms ``ra`` and ``rb``."""
     f0, f1, f2 = f
     ra0, ra1, ra2 = ra
     rb0, rb1, rb2 = rb
@@ -286,10 +250,7 @@ def _apply(a: int, b: int, f: tuple, ra: tuple, rb: tuple, force: np.ndarray,
 def _push(a: int, b: int, point: tuple, depth: float, n: tuple, x: np.ndarray,
           cu: np.ndarray, cw: np.ndarray, pair: Pair, force: np.ndarray,
           torque: np.ndarray) -> float:
-    """Apply a contact pushing die ``a`` along ``n`` and die ``b`` against it, at ``point``.
-
-    ``cu``, ``cw`` (N, 3): the velocities the forces use. Returns the spring's energy.
-    """
+    """A contact pushing die ``a`` along ``n``, ``b`` against it; returns the spring's energy."""
     v, ra, rb = _relative_velocity(a, b, point, x, cu, cw)
     f0, f1, f2, spring = contact_force(depth, n, v, pair)
     _apply(a, b, (f0, f1, f2), ra, rb, force, torque)
@@ -302,11 +263,9 @@ def _push_tied(a: int, b: int, first: int, k: int, point: tuple, depth: float, n
                ties: np.ndarray, fresh: bool, force: np.ndarray, torque: np.ndarray) -> tuple:
     """:func:`_push` for corner ``k`` of die ``first`` (``a`` or ``b``) with stick-slip friction.
 
-    The corner is tied to a point of the other die: ``ties`` (N, V, N, 4) holds it in that
-    die's body frame (0–2) and 1 while it is tied (3); ``fresh``: the pair did not touch at
-    the last step, so no tie holds. One array, as every array handed to an inlined function
-    costs a reference count. Returns the normal spring's and the
-    tangential spring's energy.
+    ``ties`` (N, V, N, 4): the point of the other die it is tied to, in that die's body frame
+    (0–2), and 1 while tied (3); ``fresh``: the pair did not touch at the last step. Returns the
+    normal and the tangential spring's energy.
     """
     other = b if first == a else a
     v, ra, rb = _relative_velocity(a, b, point, x, cu, cw)
@@ -338,10 +297,7 @@ def _push_tied(a: int, b: int, first: int, k: int, point: tuple, depth: float, n
 
 @njit(cache=True, inline="always")
 def _extent(die: int, n0: float, n1: float, n2: float, world: np.ndarray) -> tuple:
-    """The least and the largest projection of die ``die``'s corners on ``n``.
-
-    ``world`` (N, V, 3): every die's corners, a smaller die's padding repeating its first.
-    """
+    """The least and the largest projection on ``n`` of die ``die``'s corners in ``world``."""
     low, high = np.inf, -np.inf
     for k in range(world.shape[1]):
         along = n0 * world[die, k, 0] + n1 * world[die, k, 1] + n2 * world[die, k, 2]
@@ -359,10 +315,7 @@ def _turned(q: np.ndarray, die: int, v: tuple) -> tuple:
 
 @njit(cache=True, inline="always")
 def _cross_axis(e: tuple, h: tuple) -> tuple:
-    """The unit cross product of the unit vectors ``e`` and ``h``.
-
-    Returns it and False when they are parallel (:data:`PARALLEL`).
-    """
+    """The unit cross product of unit ``e`` and ``h``, and False if parallel (:data:`PARALLEL`)."""
     c0, c1, c2 = e[1] * h[2] - e[2] * h[1], e[2] * h[0] - e[0] * h[2], e[0] * h[1] - e[1] * h[0]
     size2 = c0 * c0 + c1 * c1 + c2 * c2
     if size2 <= PARALLEL:
@@ -373,10 +326,7 @@ def _cross_axis(e: tuple, h: tuple) -> tuple:
 
 @njit(cache=True, inline="always")
 def _axis_overlap(a: int, b: int, n: tuple, world: np.ndarray, x: np.ndarray) -> tuple:
-    """The overlap of dice ``a`` and ``b`` along the unit axis ``n``.
-
-    Returns it and ``n`` turned to point from ``b`` toward ``a``.
-    """
+    """Dice ``a`` and ``b``'s overlap along the unit axis ``n``, and ``n`` turned toward ``a``."""
     n0, n1, n2 = n
     low_a, high_a = _extent(a, n0, n1, n2, world)
     low_b, high_b = _extent(b, n0, n1, n2, world)
@@ -412,13 +362,10 @@ def least_overlap(a: int, b: int, world: np.ndarray, x: np.ndarray, q: np.ndarra
                   axes: np.ndarray, directions: np.ndarray, first: int) -> tuple:
     """The axis along which dice ``a`` and ``b`` overlap least (separating axes).
 
-    The candidates are the face normals of both dice (``axes``: one of each pair of
-    opposite faces) and the cross products of their edges' directions (``directions``: one
-    per class of parallel edges), :class:`Hulls`' arrays. ``first`` (-1: none) is a
-    candidate to try first: the one that separated the pair last time usually still does.
-    Returns ``(overlap, n, c)``: ``overlap`` <= 0 when an axis separates them, ``c`` that
-    axis (else -1); ``n`` the unit axis pointing from ``b`` toward ``a``. A face axis wins
-    unless an edge axis is clearly less (:data:`FACE_BIAS`): stacks rest face on face.
+    The candidates are :class:`Hulls`' face ``axes`` of both dice and the cross products of their
+    edge ``directions``; ``first`` (-1: none) is tried first. Returns ``(overlap, n, c)``:
+    ``overlap <= 0`` when axis ``c`` separates them (else ``c`` is -1), ``n`` the unit axis from
+    ``b`` toward ``a``. A face axis wins unless an edge axis is less by :data:`FACE_BIAS`.
     """
     if first >= 0:
         overlap, axis, real = _candidate_overlap(first, a, b, world, x, q, axes, directions)
@@ -482,11 +429,9 @@ def _crossings(a: int, b: int, first: int, other: int, n: tuple, high_b: float,
                gap2: float, force: np.ndarray, torque: np.ndarray) -> tuple:
     """Push every point where an edge of die ``first`` passes through a face of ``other``.
 
-    Each point inside ``other`` (to :data:`LATERAL` of its reach) and beyond its extent along
-    ``n`` (``high_b`` of ``b``, ``low_a`` of ``a``), pushed by that depth as
-    :func:`pair_contacts`' corners, unless within ``sqrt(gap2)`` across the axis of a point
-    already in ``seen`` (``n_seen`` of them). Returns the springs' energy and the count in
-    ``seen``.
+    Points inside ``other`` and beyond its extent along ``n`` (``high_b`` of ``b``, ``low_a`` of
+    ``a``), unless within ``sqrt(gap2)`` across the axis of one of the ``n_seen`` in ``seen``.
+    Returns the springs' energy and the new count in ``seen``.
     """
     n0, n1, n2 = n
     planes, edges = hulls.planes, hulls.edges
@@ -538,22 +483,13 @@ def _turned_back(q: np.ndarray, die: int, p: tuple, x: np.ndarray) -> tuple:
 def pair_contacts(a: int, b: int, n: tuple, world: np.ndarray, x: np.ndarray, q: np.ndarray,
                   cu: np.ndarray, cw: np.ndarray, hulls: Hulls, pair: Pair, ties: np.ndarray,
                   fresh: bool, seen: np.ndarray, force: np.ndarray, torque: np.ndarray) -> tuple:
-    """Every contact of dice ``a`` and ``b``, which overlap, their forces applied.
+    """Every contact of the overlapping dice ``a`` and ``b``, their forces applied.
 
-    ``n``: the axis of least overlap (:func:`least_overlap`). The contacts are the corners
-    of the region where the dice overlap, each pushed along ``n`` by its depth beyond the
-    other die's extent along it: every corner of one die inside the other (to
-    :data:`LATERAL` of its reach, so that corners exactly on a side plane, as in an aligned
-    stack, still bear), and every point where an edge of one die passes through a face of
-    the other (:func:`_crossings`: two squares turned against each other face on face have
-    no corner inside the other, nor two cubes meeting edge on edge at a right angle). The
-    same points along a face axis and an edge axis, so that the force changes little where
-    the axis of least overlap changes. With ``pair.stick`` the corners' friction is
-    stick-slip (:func:`_push_tied`; ``ties`` and ``fresh`` as there), the crossings' the
-    regularised law. ``seen`` (M, 3): room for the contacts' points across the axis, so
-    that a crossing where a corner already bears (an aligned stack's edges lie in the
-    other's faces) is not pushed twice. Returns the normal springs' and the tangential
-    springs' energy, and whether a contact bears.
+    ``n``: the axis of least overlap (:func:`least_overlap`). The contacts are the corners of one
+    die inside the other and the points of :func:`_crossings` (``docs/model.md``); with
+    ``pair.stick`` the corners' friction is :func:`_push_tied`'s (``ties``, ``fresh`` as there).
+    ``seen`` (M, 3): room for the contact points across the axis. Returns the normal and the
+    tangential springs' energy, and whether a contact bears.
     """
     n_vertices = hulls.n_vertices
     n0, n1, n2 = n
@@ -598,7 +534,7 @@ def advance_group(g: int, dice: GroupDice, bodies: Bodies, hulls: Hulls, pair: P
     planes, contact_law, stick, vmin = contact.planes, contact.law, contact.stick, contact.vmin
     vertices, n_vertices, mass = bodies.vertices, bodies.n_vertices, bodies.mass
     inv_inertia, inv_iso, r_max = bodies.inv_inertia, bodies.inv_iso, bodies.r_max
-    axes, directions = hulls.axes, hulls.directions  # taken once: see least_overlap
+    axes, directions = hulls.axes, hulls.directions  # taken once: each costs a reference count
     n0, n1, n2, floor = planes[0, NX], planes[0, NY], planes[0, NZ], planes[0, OFFSET]
     rotation, midpoint, dt, g_acc = options.rotation, options.midpoint, options.dt, options.gravity
     x, u, ang, q = dice.x[g].copy(), dice.u[g].copy(), dice.ang[g].copy(), dice.q[g].copy()
@@ -626,7 +562,7 @@ def advance_group(g: int, dice: GroupDice, bodies: Bodies, hulls: Hulls, pair: P
     fastest, approach = np.zeros(n_dice), np.zeros(n_dice)
     die_touch = np.zeros(n_dice, np.bool_)
     met = np.zeros((n_dice, n_dice), np.bool_)  # each pair touching after the last step
-    separating = np.full((n_dice, n_dice), -1, np.int64)  # see pair_contacts
+    separating = np.full((n_dice, n_dice), -1, np.int64)  # least_overlap's first axis per pair
     first_a, first_b, parted = -1, -1, False
     v_rest2 = stops.v_rest * stops.v_rest
     floor_total = 0.0
@@ -810,10 +746,7 @@ def advance_group(g: int, dice: GroupDice, bodies: Bodies, hulls: Hulls, pair: P
 
 @njit(cache=True, forceinline=True, _nrt=False)
 def _place(world: np.ndarray, a: int, count: int, x: np.ndarray, offsets: np.ndarray) -> None:
-    """Die ``a``'s corners in the world, ``world[a]``, from its vertex offsets this step.
-
-    A smaller die's padding repeats its first corner.
-    """
+    """Die ``a``'s corners in the world, ``world[a]``, from its vertex offsets this step."""
     first = a * world.shape[1]
     for k in range(count):
         r = first + k
@@ -828,12 +761,10 @@ def _place(world: np.ndarray, a: int, count: int, x: np.ndarray, offsets: np.nda
 def _group_jump(planes: np.ndarray, lowest: np.ndarray, touching: np.ndarray, x: np.ndarray,
                 u: np.ndarray, ang: np.ndarray, force: np.ndarray, bodies: Bodies,
                 rotation: bool, dt: float, limit: int) -> int:
-    """Flight steps the whole group takes at once (at least 1); see :func:`flight_jump`.
+    """Flight steps the whole group takes at once (at least 1), each die's as :func:`flight_jump`.
 
-    Called when every pair's bounding spheres are apart. No die touches a plane, each die's
-    flight steps are :func:`dice_env.physics.kernel.flight_jump`'s, and a pair stays apart while its
-    centres' distance exceeds the spheres' reach: in flight both feel gravity alone, so the
-    distance shrinks by at most ``dt |u_a - u_b|`` a step. One die alone jumps exactly as
+    Called when every pair's bounding spheres are apart: both dice of a pair feel gravity alone, so
+    their distance shrinks by at most ``dt |u_a - u_b|`` a step. One die alone jumps as
     :func:`dice_env.physics.kernel.simulate_one` does.
     """
     n_dice = x.shape[0]
@@ -863,11 +794,7 @@ def _group_jump(planes: np.ndarray, lowest: np.ndarray, touching: np.ndarray, x:
 @njit(cache=True)
 def _decided(bodies: Bodies, q: np.ndarray, energy: float, floor_total: float,
              up: tuple) -> bool:
-    """Whether no die's face can change: each die's lock exceeds all the group could give it.
-
-    A die holds at least its ``floor`` energy, so die ``i`` can at most hold ``energy``
-    minus the others' floors.
-    """
+    """Whether no die can reach its lock: ``energy`` less the other dice's floors is below it."""
     for a in range(q.shape[0]):
         most = energy - (floor_total - bodies.floor[a])
         lock = bodies.lock[a]
@@ -901,11 +828,7 @@ def _record(records: GroupRecords, j: int, g: int, x: np.ndarray, q: np.ndarray)
 
 @njit(cache=True)
 def _put(target: np.ndarray, values: np.ndarray) -> None:
-    """``target[...] = values`` for two arrays of one shape, element by element.
-
-    numba's slice assignment checks the shapes at run time, and the message of that check
-    alone takes seconds to compile.
-    """
+    """``target[...] = values`` element by element (numba's shape check is slow to compile)."""
     for index in np.ndindex(values.shape):
         target[index] = values[index]
 

@@ -1,44 +1,12 @@
-"""The compiled integrator: the paper's step, written once, run over a batch of dice.
+"""The compiled single-die integrator: the paper's step, written once, run over a batch of dice.
 
-One step of ``real_throw_cube.m`` for one die, in the listing's order ("modified forward
-Euler": the planes' forces on the corners, ``u`` then ``x`` with the new ``u``, ``L`` then
-``w = I_world^-1 L`` and ``Q = R(w dt) Q`` with ``R = E`` exactly when ``w = 0``), with the
-default scene's stick-slip friction (``stick``) and midpoint contact forces (``midpoint``):
-``docs/model.md`` states each ("The physics", "Friction and the step of the default scene").
-
-Work a scene does not need is skipped, with the result of computing it as zero: no rotation
-when ``rotation`` is off, no friction when ``mu = 0``, no damping term when ``D = 0``, no
-records unless asked (and then only every ``stride`` steps).
-
-Free flight (``flight``: gated law, or ``D = 0`` where the paper law is the same): a step whose
-corners are all above the plane feels gravity alone, and so do the following steps until a
-corner can reach the plane. A lower bound on the lowest corner (centre on its exact discrete
-parabola, corners moving at most ``|w| r_max`` along the normal) gives how many steps are
-surely contact-free; all but the last (so a contact step always follows a plain one) are taken
-in one jump: the centre in the closed form of those Euler steps, the orientation by one
-rotation of angle ``N |w| dt`` (isotropic die: ``w`` is constant) or by the plain torque-free
-rotation steps (loaded die). Every other step is the plain step above.
-
-Dice are independent: each die steps until its time limit, rest, or a non-finite state, so
-results are bit-identical for any batch size or thread count (``prange`` over the batch).
-
-The die is data: any number of vertices (the contact nodes) and face normals; so are its
-surroundings: any number of planes (a floor and walls), each with its own material. The kernel
-takes a few named groups (:class:`Body`, :class:`Contact`, :class:`Options`, :class:`Stops`,
-:class:`Records`, :class:`Dice`, :class:`Outcome`), built by
-:func:`dice_env.simulation.simulate.pack_scene` and :func:`dice_env.simulation.simulate.pack_run`;
-each piece of the physics is one small inlined function: a vertex on a plane
-(:func:`vertex_on_plane`, :func:`stick_slip`), one die's step on all the planes
-(:func:`die_on_planes`, also each die's in :mod:`dice_env.physics.group_kernel`), the contact-free
-jump (:func:`free_steps`, :func:`euler_steps`, :func:`torque_free`), the face read and the
-decided-face test (:func:`face_up`, :func:`face_read`, :func:`decided`; also
-:mod:`dice_env.physics.vector_kernel`'s), the rotation (:func:`rotate`); :func:`advance` loops them
-for one die in scratch arrays its caller gives, :func:`simulate_one` on the CPU and
-:mod:`dice_env.physics.cuda_kernel` on a GPU, where numba-cuda compiles the same functions again.
-The hot loop hands those pieces numbers, not arrays: in numba each array handed on costs an atomic
-reference count, which cost the loop more than its arithmetic; the one piece that takes arrays,
-:func:`die_on_planes`, is compiled without reference counts. This module imports nothing else
-from the package.
+The step, the contact laws and the default scene's stick-slip friction and midpoint forces are
+``docs/model.md``'s; the contact-free jump, what a scene skips, determinism and why the hot loop
+hands its pieces numbers rather than arrays, ``docs/performance.md``'s. :func:`advance` steps
+one die in scratch arrays its caller gives: :func:`simulate_one` on the CPU,
+:mod:`dice_env.physics.cuda_kernel` on a GPU. The groups (:class:`Body`, :class:`Contact`, ...)
+are built by :func:`dice_env.simulation.simulate.pack_scene` and
+:func:`dice_env.simulation.simulate.pack_run`. This module imports nothing else from the package.
 """
 
 from __future__ import annotations
@@ -59,11 +27,10 @@ UP = (0.0, 0.0, 1.0)  # faces are read against gravity
 class Body(NamedTuple):
     """The die, body frame about its centre of mass.
 
-    ``vertices`` (N, 3): the contact nodes; ``mass``; ``inv_inertia`` (3, 3): the inverse body
-    inertia; ``inv_iso``: ``1/I`` when the inertia is ``I`` times the identity, else 0;
-    ``inv_i_min``: the inverse of the smallest principal moment; ``r_max``: the farthest
-    vertex's distance; ``faces`` (F, 3): outward unit face normals, in the order of
-    ``Stops.lock``; ``reads_down``: the die is read by the face down (a d4), not up.
+    ``vertices`` (N, 3): the contact nodes; ``inv_inertia`` (3, 3): the inverse body inertia;
+    ``inv_iso``: ``1/I`` when the inertia is ``I`` times the identity, else 0; ``inv_i_min``: the
+    inverse of the smallest principal moment; ``r_max``: the farthest vertex's distance; ``faces``
+    (F, 3): outward unit normals, in ``Stops.lock``'s order; ``reads_down``: read by the face down.
     """
 
     vertices: np.ndarray
@@ -76,24 +43,20 @@ class Body(NamedTuple):
     reads_down: bool
 
 
-# Columns of Contact.planes: unit normal (3), offset, stiffness, damping, friction, the
-# stick-slip spring and damper.
+# Columns of Contact.planes: unit normal (3), offset, S, D, mu, stick-slip spring and damper.
 NX, NY, NZ, OFFSET, STIFF, DAMP, MU, KT, CT = range(9)
-# The plane contact laws (Contact.law): the spring-dashpot on the vertices below a plane only,
-# and the listing's, on every vertex.
+# Contact.law: the spring-dashpot on the vertices below a plane only, or the listing's on all.
 GATED, PAPER = 0, 1
 
 
 class Contact(NamedTuple):
     """The planes the die stays on, ``n . X >= offset``, and the contact laws.
 
-    ``planes`` (P, 9): per plane its unit normal (pointing into the free side), offset,
-    stiffness S, damping D, friction mu, and the stick-slip spring ``kt`` and damper ``ct``
-    (columns ``NX`` ... ``CT``; one array, read element by element in the loop). Plane 0 is the
-    floor: the start height in the energy scale is taken against it. ``law``: the contact
-    law (``GATED``: only vertices below a plane feel it; ``PAPER``: every vertex); ``stick``:
-    stick-slip friction (else the listing's ``-mu fn Ut/(|Ut| + vmin)``); ``vmin``: that
-    law's speed.
+    ``planes`` (P, 9): per plane the columns ``NX`` ... ``CT`` (unit normal into the free side,
+    offset, stiffness S, damping D, friction mu, stick-slip spring ``kt`` and damper ``ct``);
+    plane 0 is the floor, which the energy scale's start height is taken against. ``law``:
+    ``GATED`` or ``PAPER``; ``stick``: stick-slip friction, else the listing's
+    ``-mu fn Ut/(|Ut| + vmin)``.
     """
 
     planes: np.ndarray
@@ -103,11 +66,7 @@ class Contact(NamedTuple):
 
 
 class Options(NamedTuple):
-    """The integration.
-
-    ``gravity`` g along -z, step ``dt``; ``rotation`` (False translates only); ``flight``:
-    jump over contact-free steps; ``midpoint``: midpoint contact forces.
-    """
+    """The integration: ``gravity`` (-z), ``dt``, ``rotation``, ``flight`` jumps, ``midpoint``."""
 
     gravity: float
     dt: float
@@ -119,11 +78,10 @@ class Options(NamedTuple):
 class Stops(NamedTuple):
     """When a die ends.
 
-    After ``n_steps``; with ``at_rest``, after ``hold_steps`` quiet steps (three contacts,
-    every vertex slower than ``v_rest``) or at a quiet step whose total energy is less than
-    ``rest_excess`` above ``rest_energy``; whatever ``at_rest``, when its total energy falls
-    below ``lock`` (F,) of the face it reads (``-inf``: never). ``energy_scale`` is added to
-    the start's kinetic and potential energy to measure an energy gain in.
+    After ``n_steps``; with ``at_rest``, after ``hold_steps`` quiet steps (three contacts, every
+    vertex slower than ``v_rest``) or at a quiet step whose total energy is below ``rest_energy +
+    rest_excess``; whatever ``at_rest``, when its total energy falls below ``lock`` (F,) of the face
+    it reads (``-inf``: never). ``energy_scale``: added to the start's energy to measure a gain in.
     """
 
     n_steps: int
@@ -153,9 +111,8 @@ class Records(NamedTuple):
 class Dice(NamedTuple):
     """The state of B dice, updated in place.
 
-    ``x`` (B, 3) centre of mass, ``u`` (B, 3) its velocity, ``ang`` (B, 3) angular momentum
-    about it, ``q`` (B, 3, 3) body-to-world rotation, ``w`` (B, 3) the angular velocity used
-    for vertex velocities.
+    ``x`` (B, 3) centre of mass, ``u`` (B, 3) its velocity, ``ang`` (B, 3) angular momentum about
+    it, ``q`` (B, 3, 3) body-to-world rotation, ``w`` (B, 3) the angular velocity of the vertices.
     """
 
     x: np.ndarray
@@ -168,10 +125,10 @@ class Dice(NamedTuple):
 class Outcome(NamedTuple):
     """What each die's run gives (arrays (B,)), and the abort flag.
 
-    ``status``, ``unstable`` (a non-finite state), ``rest_time``, ``impacts``, ``max_pen``
-    the deepest sink, ``energy_rise`` the largest gain over the energy scale, ``steps``;
-    ``abort`` (1,): set non-zero from another thread, every die still running ends
-    ``ABORTED`` within ``ABORT_EVERY`` loop passes.
+    ``status``, ``unstable`` (a non-finite state), ``rest_time``, ``impacts``, ``max_pen`` the
+    deepest sink, ``energy_rise`` the largest gain over the energy scale, ``steps``; ``abort`` (1,):
+    set non-zero from another thread, every running die ends ``ABORTED`` within ``ABORT_EVERY``
+    loop passes.
     """
 
     status: np.ndarray
@@ -187,10 +144,10 @@ class Outcome(NamedTuple):
 class PlaneContacts(NamedTuple):
     """The vertices against the planes, kept from step to step (:func:`die_on_planes`).
 
-    Larger arrays are fine; their contents on entry do not matter. Per vertex row (V: a
-    group's dice one after another) and plane (P): ``offsets`` (V, 3) from the die's centre,
-    ``heights`` (P, V) entering the last step, ``anchors`` (P, V, 3) and ``tied`` (P, V) the
-    stick-slip ties; ``lowest`` (D, P) each die's lowest vertex height over each plane.
+    Larger arrays are fine; their contents on entry do not matter. Per vertex row (V: a group's dice
+    one after another) and plane (P): ``offsets`` (V, 3) from the die's centre, ``heights`` (P, V)
+    entering the last step, ``anchors`` (P, V, 3) and ``tied`` (P, V) the stick-slip ties;
+    ``lowest`` (D, P) each die's lowest vertex height over each plane.
     """
 
     offsets: np.ndarray
@@ -201,11 +158,7 @@ class PlaneContacts(NamedTuple):
 
 
 class Scratch(NamedTuple):
-    """One die's working arrays in :func:`advance`.
-
-    ``qi`` (3, 3) the orientation, ``qj`` (3, 3) one recorded within a jump, and the die's
-    :class:`PlaneContacts`.
-    """
+    """One die's scratch in :func:`advance`: orientation ``qi``, ``qj`` for records, contacts."""
 
     qi: np.ndarray
     qj: np.ndarray
@@ -214,10 +167,7 @@ class Scratch(NamedTuple):
 
 @njit(cache=True, inline="always")
 def rotation_series(t2: float) -> tuple[float, float]:
-    """``a = sin(t)/t`` and ``b = (1 - cos t)/t^2`` from their series in ``t^2 < SERIES``.
-
-    First omitted terms below 1e-25: no square root, division or library call.
-    """
+    """``sin(t)/t``, ``(1 - cos t)/t^2`` for ``t^2 < SERIES``: series to 1e-25, no call."""
     a = 1.0 - t2 * (1.0 / 6.0 - t2 * (1.0 / 120.0 - t2 * (1.0 / 5040.0 - t2 / 362880.0)))
     b = 0.5 - t2 * (1.0 / 24.0 - t2 * (1.0 / 720.0 - t2 * (1.0 / 40320.0 - t2 / 3628800.0)))
     return a, b
@@ -236,13 +186,7 @@ def rodrigues(v0: float, v1: float, v2: float, t2: float, a: float, b: float) ->
 
 @njit(cache=True, inline="always")
 def rotate(q: np.ndarray, w0: float, w1: float, w2: float, dt: float) -> None:
-    """Left-multiply the orientation ``q`` (3x3, in place) by the Rodrigues rotation R(w dt).
-
-    With ``v = w dt`` and ``t = |v|``: ``R = (1 - b t^2) E + a [v]x + b v v^T``,
-    ``a = sin(t)/t``, ``b = (1 - cos t)/t^2`` (the listing's ``P + cos(E - P) + sin [k]x``
-    rearranged). Below 1/64 rad, a step's rotation as a rule, ``a`` and ``b`` come from their
-    series (:func:`rotation_series`). ``R = E`` exactly when ``w = 0``.
-    """
+    """Turn ``q`` (3x3) in place: ``q = R(w dt) q`` (:func:`rodrigues`), ``R = E`` at ``w = 0``."""
     v0, v1, v2 = w0 * dt, w1 * dt, w2 * dt
     t2 = v0 * v0 + v1 * v1 + v2 * v2
     if t2 == 0.0:
@@ -265,11 +209,7 @@ def rotate(q: np.ndarray, w0: float, w1: float, w2: float, dt: float) -> None:
 @njit(cache=True, inline="always")
 def angular_velocity(q: np.ndarray, inv_body: np.ndarray, inv_iso: float, l0: float, l1: float,
                      l2: float) -> tuple[float, float, float]:
-    """``I_world^-1 L`` with ``I_world = Q I_body Q^T``; ``L * inv_iso`` when ``inv_iso > 0``.
-
-    ``inv_body`` (3, 3) the inverse body inertia (the hot loop passes arrays and numbers, not
-    the groups: taking an array out of a group costs a reference count).
-    """
+    """``I_world^-1 L`` with ``I_world = Q I_body Q^T``; ``L * inv_iso`` when ``inv_iso > 0``."""
     if inv_iso > 0.0:
         return l0 * inv_iso, l1 * inv_iso, l2 * inv_iso
     b0 = q[0, 0] * l0 + q[1, 0] * l1 + q[2, 0] * l2
@@ -296,10 +236,9 @@ def body_frame(q: tuple, v0: float, v1: float, v2: float) -> tuple[float, float,
 def face_up(faces: np.ndarray | tuple, reads_down: bool, up: tuple) -> int:
     """Index of the face read, given ``up`` in the body frame.
 
-    Of ``faces`` (F outward normals: an (F, 3) array, or a tuple of F triples), the one
-    pointing most along ``up``, or most against it for a die read by the face down; the first
-    of equals. The one face test of both kernels: over a tuple of constant length its loop
-    unrolls to selects, so :mod:`dice_env.physics.vector_kernel` still vectorises.
+    ``faces``: F outward normals, an (F, 3) array or a tuple of F triples (a tuple keeps
+    :mod:`dice_env.physics.vector_kernel` vectorised). The face most along ``up``, or against it
+    when ``reads_down``; the first of equals.
     """
     sign = -1.0 if reads_down else 1.0
     best, index = -np.inf, 0
@@ -314,11 +253,7 @@ def face_up(faces: np.ndarray | tuple, reads_down: bool, up: tuple) -> int:
 @njit(cache=True)
 def face_read(q: np.ndarray, faces: np.ndarray, reads_down: bool, n0: float, n1: float,
               n2: float) -> int:
-    """Index (into ``faces`` (F, 3), outward normals) of the face read (:func:`face_up`).
-
-    The face pointing most along ``n``, or most against it for a die read by the face down;
-    the first of equals.
-    """
+    """Index of the face read (:func:`face_up`) at orientation ``q``, ``n`` the world's up."""
     return face_up(faces, reads_down, body_frame(
         (q[0, 0], q[0, 1], q[0, 2], q[1, 0], q[1, 1], q[1, 2], q[2, 0], q[2, 1], q[2, 2]),
         n0, n1, n2))
@@ -329,11 +264,9 @@ def free_steps(lowest: float, un: float, spin: float, r_max: float, dvn: float, 
                limit: int) -> int:
     """Number of steps from now (1 to ``limit``) surely free of contact with one plane.
 
-    Given the lowest vertex height ``lowest >= 0`` above the plane entering this step.
-    After ``j`` flight steps the centre has moved ``dt (j un + dvn j(j+1)/2)`` along the normal
-    (``un`` its normal velocity, ``dvn`` the per-step change of it from gravity) and a vertex at
-    most ``j dt spin r_max`` relative to it; the count is the last ``j`` where that bound on the
-    lowest vertex is still >= 0, plus one.
+    ``lowest >= 0``: the lowest vertex's height above the plane entering this step; ``un`` the
+    centre's normal velocity, ``dvn`` its change per step, ``spin r_max`` a bound on a vertex's
+    speed about the centre (``docs/performance.md``, "Analytic free flight").
     """
     b = dt * (un - spin * r_max)
     a = -0.5 * dt * dvn  # >= 0 when gravity pulls toward the plane
@@ -353,11 +286,7 @@ def free_steps(lowest: float, un: float, spin: float, r_max: float, dvn: float, 
 @njit(cache=True, forceinline=True)
 def torque_free(q: np.ndarray, inv_body: np.ndarray, inv_iso: float, l0: float, l1: float,
                 l2: float, dt: float, n: int) -> tuple[float, float, float]:
-    """``n`` rotation steps at constant ``L``, in place on ``q``; returns the last ``w``.
-
-    An isotropic die spins at the constant ``w = L / I``: one rotation of angle ``n |w| dt``.
-    Any other takes the ``n`` plain steps (``w`` follows ``I_world``).
-    """
+    """``n`` rotation steps of ``q`` at constant ``L`` (one if isotropic); the last ``w``."""
     w0, w1, w2 = angular_velocity(q, inv_body, inv_iso, l0, l1, l2)
     turns, h = (1, n * dt) if inv_iso > 0.0 else (n, dt)
     for k in range(turns):
@@ -373,16 +302,11 @@ def vertex_on_plane(plane: tuple, stick: bool, vmin: float, height: float, befor
                     dt_m: float, anchor: tuple, tied: bool) -> tuple:
     """The force of a plane on one vertex, and the step's books.
 
-    ``plane``: its row of ``Contact.planes`` as numbers (arrays passed into the hot loop
-    cost a reference count each).
-
-    ``height`` of the vertex above the plane now and ``before`` (entering the last step);
-    ``position`` its world position, ``velocity`` its velocity entering the step and
-    ``middle`` that velocity at the middle of the kick (used for damping and friction when
-    ``midpoint``); ``anchor`` and ``tied``: the stick-slip spring's tie point and whether it
-    is tied. Returns the force (3), the energy in the normal and in the tangential spring,
-    whether the vertex is below the plane, its sink, its approach speed, and the tie point (3)
-    and tie after the step.
+    ``plane``: its row of ``Contact.planes`` as numbers; ``height`` above it now and ``before``
+    (entering the last step); ``velocity`` entering the step and ``middle`` at the middle of the
+    kick (for damping and friction when ``midpoint``); ``anchor``, ``tied``: the stick-slip tie.
+    Returns the force (3), the normal and the tangential spring's energy, whether the vertex is
+    below the plane, its sink, its approach speed, and the tie point (3) and tie after the step.
     """
     n0, n1, n2, _, stiff, damp, mu, _, _ = plane
     uk0, uk1, uk2 = velocity
@@ -395,8 +319,7 @@ def vertex_on_plane(plane: tuple, stick: bool, vmin: float, height: float, befor
     if midpoint:
         uk0, uk1, uk2 = middle
         un = n0 * uk0 + n1 * uk1 + n2 * uk2
-    friction_limit = fn  # without the onset weight: weighting it too left 6 % of gentle faces
-    # unconverged between dt/8 and dt/16 (99 %+ agree with it unweighted)
+    friction_limit = fn  # without the onset weight (docs/model.md, "Midpoint step")
     if damp > 0.0:
         friction_limit -= damp * un
         if midpoint and before > 0.0 and height < 0.0:
@@ -426,10 +349,10 @@ def vertex_on_plane(plane: tuple, stick: bool, vmin: float, height: float, befor
 @njit(cache=True, inline="always")
 def stick_slip(plane: tuple, height: float, before: float, position: tuple, ut: tuple,
                 cap: float, dt: float, dt_m: float, anchor: tuple, tied: bool) -> tuple:
-    """Stick-slip friction (see the module docstring).
+    """Stick-slip friction (``docs/model.md``, "Friction and the step of the default scene").
 
-    Returns the tangential force (3), the energy of its spring and the tie point (3) after
-    the step (tied now, where it crossed the plane during the last step if it was not).
+    Returns the tangential force (3), its spring's energy and the tie point (3) after the step
+    (tied now, where it crossed the plane during the last step if it was not).
     """
     n0, n1, n2, _, _, _, _, kt, ct = plane
     p0, p1, p2 = position
@@ -445,9 +368,8 @@ def stick_slip(plane: tuple, height: float, before: float, position: tuple, ut: 
     ft0, ft1, ft2 = -kt * e0 - ct * ut0, -kt * e1 - ct * ut1, -kt * e2 - ct * ut2
     size = math.sqrt(ft0 * ft0 + ft1 * ft1 + ft2 * ft2)
     if size > cap:
-        # slip: Coulomb's force against the slip velocity, or along the spring's pull while
-        # the vertex is slower than one step's friction kick on a quarter of the die could
-        # make it (then its direction means nothing); the tie point follows the vertex
+        # slip: against the slip velocity, or along the spring's pull while slower than a step's
+        # friction kick on a quarter of the die (its direction then means nothing)
         speed = math.sqrt(ut0 * ut0 + ut1 * ut1 + ut2 * ut2)
         if speed > 4.0 * cap * dt_m:
             ratio = -cap / speed
@@ -466,19 +388,14 @@ def die_on_planes(die: int, first: int, count: int, vertices: np.ndarray, planes
                   near_rest: bool) -> tuple:
     """One die's step on the planes: their forces and torques on it, and the step's books.
 
-    The die's ``count`` vertices are the rows from ``first`` on of ``vertices`` (body frame)
-    and of ``contacts``' per-vertex arrays; its lowest heights are row ``die`` of
-    ``contacts.lowest``. ``law``: ``(contact law, stick, vmin, midpoint, rotation, dt, dt_m,
-    weight)``; ``q``: its rotation, nine numbers row by row; ``motion``: ``(x, u, w, cu,
-    cw)``, its centre, velocity and angular velocity, and the last two at the midpoint
-    forces' time. First every vertex's offset (and, near rest, the fastest vertex), then
-    plane by plane the vertices' heights, and velocities only where a vertex feels the plane.
-
-    Returns the force (3, gravity's ``-weight`` included), the torque (3), the energy in the
-    normal and in the tangential springs, how many vertices are below a plane, the fastest
-    approach among them, the largest squared vertex speed (near rest only, else 0) and the
-    deepest sink. Compiled without reference counts (``_nrt=False``): it binds the arrays it
-    is handed at every step, and numba cannot prune those counts across its loops.
+    The die's ``count`` vertices are the rows from ``first`` on of ``vertices`` (body frame) and of
+    ``contacts``' per-vertex arrays; its lowest heights go to row ``die`` of ``contacts.lowest``.
+    ``law``: ``(contact law, stick, vmin, midpoint, rotation, dt, dt_m, weight)``; ``q``: its
+    rotation, nine numbers row by row; ``motion``: ``(x, u, w, cu, cw)``, its centre, velocity and
+    angular velocity, and the last two at the midpoint forces' time. Returns the force (3, with
+    ``-weight``), the torque (3), the normal and the tangential springs' energy, how many vertices
+    are below a plane, their fastest approach, the largest squared vertex speed (``near_rest``
+    only, else 0) and the deepest sink. Compiled without reference counts (``_nrt=False``).
     """
     contact_law, stick, vmin, midpoint, rotation, dt, dt_m, weight = law
     q00, q01, q02, q10, q11, q12, q20, q21, q22 = q
@@ -549,10 +466,9 @@ def die_on_planes(die: int, first: int, count: int, vertices: np.ndarray, planes
 
 @njit(cache=True, forceinline=True, _nrt=False)
 def next_pass(passes: int, abort: np.ndarray) -> tuple[int, int]:
-    """A loop's pass count after one more pass, and its end so far.
+    """A loop's pass count after one more pass, and ``ABORTED`` or ``RUNNING``.
 
-    ``ABORTED`` if another thread has set ``abort`` (looked at once every ``ABORT_EVERY``
-    passes), else ``RUNNING``.
+    ``abort`` is looked at once every ``ABORT_EVERY`` passes.
     """
     passes += 1
     return passes, ABORTED if passes & (ABORT_EVERY - 1) == 0 and abort[0] != 0 else RUNNING
@@ -562,8 +478,7 @@ def next_pass(passes: int, abort: np.ndarray) -> tuple[int, int]:
 def rest_test(quiet_now: bool, quiet: int, hold_steps: int, proven: bool) -> tuple[int, int]:
     """The quiet steps in a row after this one, and ``SETTLED`` or ``RUNNING``.
 
-    Settled: quiet for more than ``hold_steps`` steps, or quiet now and ``proven`` to stay at
-    rest.
+    Settled: quiet for more than ``hold_steps`` steps, or quiet now and ``proven`` to stay at rest.
     """
     if not quiet_now:
         return 0, RUNNING
@@ -586,19 +501,13 @@ def stopped_at(end: int, step: int, quiet: int) -> tuple[int, int]:
 @njit(cache=True)
 def decided(lock: np.ndarray, faces: np.ndarray, reads_down: bool, q: np.ndarray, up: tuple,
             energy: float) -> bool:
-    """Whether the die's total ``energy`` is below the ``lock`` (F,) of the face it reads.
-
-    Call it only below the largest lock (most steps are above it, and a call binds arrays).
-    """
+    """Whether ``energy`` is below the ``lock`` of the face read (call only below the largest)."""
     return energy < lock[face_read(q, faces, reads_down, up[0], up[1], up[2])]
 
 
 @njit(cache=True)
 def relative_rise(e_max: float, e_start: float, e_tol: float) -> float:
-    """The largest energy gain ``e_max - e_start`` over the scale ``e_tol``.
-
-    With nothing to measure against (no gravity, no motion), any gain is infinite.
-    """
+    """The energy gain ``e_max - e_start`` over the scale ``e_tol`` (any gain infinite at 0)."""
     rise = e_max - e_start
     if e_tol > 0.0:
         return rise / e_tol
@@ -677,7 +586,6 @@ def advance(i: int, dice: Dice, body: Body, contact: Contact, options: Options, 
         cu, cw = (u0, u1, u2), (w0, w1, w2)
         if midpoint:
             cu, cw = ahead(cu, (pu0, pu1, pu2)), ahead(cw, (pw0, pw1, pw2))
-        # kinetic energy of the state entering this step; near rest, the fastest vertex
         wl0, wl1, wl2 = angular_velocity(qi, inv_body, inv_iso, l0, l1, l2)
         kinetic = 0.5 * mass * (u0 * u0 + u1 * u1 + u2 * u2) + 0.5 * (
             l0 * wl0 + l1 * wl1 + l2 * wl2
@@ -691,11 +599,8 @@ def advance(i: int, dice: Dice, body: Body, contact: Contact, options: Options, 
              qi[2, 2]),
             ((x0, x1, x2), (u0, u1, u2), (w0, w1, w2), cu, cw), near_rest)
         pen = max(pen, sink)
-        # energy of the state entering this step. The gain check leaves out the tangential
-        # springs: a slip re-ties a spring to carry the whole force mu fn, damping share
-        # included, which can stretch it beyond what the vertex's motion put in (on a soft,
-        # heavily damped table, many times the throw's energy) and is shed again as the
-        # force falls; the decided-face lock counts them, which only delays it
+        # the gain check leaves out the tangential springs, the decided-face lock counts them
+        # (docs/model.md, "Friction and the step of the default scene")
         checked = kinetic + mass * g * x2 + spring
         energy = checked + spring_t
         if step == 1:
@@ -790,11 +695,10 @@ def die_move(x: tuple, u: tuple, ang: tuple, w: tuple, dv: tuple, torque: tuple,
              rotation: bool) -> tuple:
     """One die moved ``n`` steps by the kick ``dv`` and the ``torque``.
 
-    ``u`` then ``x`` (:func:`euler_steps`), ``L`` by the torque, then the rotation
-    (:func:`torque_free`, on ``q`` in place; ``rotation`` off keeps ``L`` and ``w``). Returns
-    whether the moved state is finite, then its ``x``, ``u``, ``L`` and ``w``; a state that is
-    not finite is not moved (nor is ``q``). Compiled without reference counts, as
-    :func:`die_on_planes`: it is handed two arrays at every step.
+    ``u`` then ``x`` (:func:`euler_steps`), ``L``, then the rotation of ``q`` in place
+    (:func:`torque_free`; ``rotation`` off keeps ``L`` and ``w``). Returns whether the moved state
+    is finite, then its ``x``, ``u``, ``L`` and ``w``; a non-finite state is not moved (nor ``q``).
+    Compiled without reference counts, as :func:`die_on_planes`.
     """
     nx, (nu0, nu1, nu2) = euler_steps(x, u, dv, dt, n)
     nl0, nl1, nl2 = ang
@@ -817,11 +721,7 @@ def ahead(v: tuple, before: tuple) -> tuple:
 @njit(cache=True, inline="always")
 def flight_jump(planes: np.ndarray, lowest: np.ndarray, die: int, u: tuple, spin: float,
                 r_max: float, dv: tuple, dt: float, limit: int) -> int:
-    """Flight steps to take at once (at least 1), for die ``die`` of ``lowest`` (D, P).
-
-    All but the last of those surely free of every plane, so the step before a contact is a
-    plain one.
-    """
+    """Flight steps for die ``die`` to take at once (at least 1), all but the last contact-free."""
     free = limit
     for p in range(planes.shape[0]):
         n0, n1, n2 = planes[p, NX], planes[p, NY], planes[p, NZ]
@@ -834,11 +734,7 @@ def flight_jump(planes: np.ndarray, lowest: np.ndarray, die: int, u: tuple, spin
 def _record_jump(records: Records, i: int, step: int, jump: int, x: tuple, u: tuple,
                  ang: tuple, dv: tuple, qi: np.ndarray, qj: np.ndarray, body: Body,
                  options: Options) -> None:
-    """Record the states that fall inside a jump of ``jump`` flight steps from ``step``.
-
-    From the jump's own closed form (:func:`euler_steps`) and ``j`` torque-free rotation steps
-    of ``qi`` (in the scratch ``qj``).
-    """
+    """Record the states inside a jump of ``jump`` flight steps from ``step`` (its closed form)."""
     stride, n_rec, dt = records.stride, records.x.shape[1], options.dt
     l0, l1, l2 = ang
     for s in range((step + stride - 1) // stride * stride, step + jump - 1, stride):
@@ -889,9 +785,8 @@ def simulate_batch(dice: Dice, body: Body, contact: Contact, options: Options, s
                    records: Records, out: Outcome) -> None:
     """Advance a batch of dice in place, in parallel over dice.
 
-    The groups' docstrings say what each holds. Dice are independent: the results do not
-    depend on the batch or the threads. The kernel releases the GIL, so another thread can
-    set ``out.abort``.
+    The results do not depend on the batch or the threads. It releases the GIL, so another thread
+    can set ``out.abort``.
     """
     for i in prange(dice.x.shape[0]):  # prange's index is unsigned: one signature for both
         simulate_one(np.int64(i), dice, body, contact, options, stops, records, out)
@@ -900,9 +795,6 @@ def simulate_batch(dice: Dice, body: Body, contact: Contact, options: Options, s
 @njit(cache=True, nogil=True)
 def simulate_serial(dice: Dice, body: Body, contact: Contact, options: Options, stops: Stops,
                     records: Records, out: Outcome) -> None:
-    """:func:`simulate_batch` on the calling thread, with the same results.
-
-    Saves the start of a parallel region: for a single throw or one thread.
-    """
+    """:func:`simulate_batch` on the calling thread (no parallel region), same results."""
     for i in range(dice.x.shape[0]):
         simulate_one(i, dice, body, contact, options, stops, records, out)

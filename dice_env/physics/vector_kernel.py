@@ -1,24 +1,11 @@
 """The listing's own scene, stepped across dice at once (SIMD): the paper scene at full speed.
 
-Under the paper's contact law every corner does the same work at every step: the force
-``max(0, S dg - D un)`` with the listing's friction ``-mu fn Ut/(|Ut| + vmin)`` is computed for
-all 8 corners whether they touch or not, and the die never jumps. With no branch that depends
-on the die but its end, one pass of a loop over a tile of ``TILE`` dice does one step of every
-die in it, and LLVM turns that pass into SIMD code (4 dice per instruction with AVX2).
-
-The arithmetic is :func:`dice_env.physics.kernel.simulate_one`'s, operation for operation in the
-same order (no fast-math: no reassociation, no fused multiply-add), so its results are
-bit-identical to that kernel's (``tests/test_vector_kernel.py`` checks it); what is a branch
-there is a select here. The face read and the rest test are that kernel's own functions
-(:func:`dice_env.physics.kernel.face_up`, :func:`dice_env.physics.kernel.rest_test`), inlined.
-It serves the runs :func:`covers` accepts (the paper's law and friction, listing step,
-isotropic hexahedron, no records, no free-flight jumps); every other run goes to
-:mod:`dice_env.physics.kernel`.
-
-A die that ends (time limit, rest, decided face, or a state that stops being finite) keeps
-the state and step count it ended with, as in the scalar kernel, and its lane idles; a tile
-stops once all its dice have ended. A turn above 1/64 rad in one step (where ``R(w dt)``
-needs ``sin``) is done for that die after the vector pass by :func:`dice_env.physics.kernel.rotate`.
+Under the paper's law every corner does the same work at every step, so one pass over a tile of
+``TILE`` dice steps them all, branch-free, and LLVM vectorises it. The arithmetic is
+:func:`dice_env.physics.kernel.simulate_one`'s in the same order (no fast-math), so the results
+are bit-identical to it (``tests/test_vector_kernel.py``); a die that ends keeps its state and
+its lane idles. It serves the runs :func:`covers` accepts; ``docs/performance.md``, "The paper
+scene, vectorised across dice", says more.
 """
 
 from __future__ import annotations
@@ -99,10 +86,8 @@ def covers(scene: object, batch: int, flight: bool, records: bool) -> bool:
 def stop_tests(stops: Stops) -> bool | None:
     """The kernel's ``tests`` argument for a run with ``stops``: True, or None to the time limit.
 
-    Its type, not its value, tells a run that may stop at rest or on a decided face from one
-    that runs to the time limit: numba compiles the loop for each type when first used, and
-    for None without those tests (the bulk of a vectorised step's selects: about 1.2 times the
-    die-steps/s of the paper's listings to their end, ``benchmarks/kernel_ab.py``).
+    Its type, not its value, matters: numba compiles the loop for None without the rest and
+    decided-face tests.
     """
     return True if stops.at_rest or stops.lock.max() > -np.inf else None
 
@@ -115,11 +100,7 @@ def _max(a: float, b: float) -> float:
 
 @njit(cache=True, inline="always")
 def _pick(values: tuple, index: int) -> float:
-    """``values[index]`` as selects.
-
-    A tuple's item at a varying index is a switch, and an array's a load that LLVM must assume
-    the tile's stores alias: either stops vectorisation.
-    """
+    """``values[index]`` as selects: a switch, or a load that may alias, stops vectorising."""
     picked = values[0]
     for k in range(1, len(values)):
         picked = values[k] if index == k else picked
@@ -130,8 +111,8 @@ def _pick(values: tuple, index: int) -> float:
 def _corner(q, x, w, u, b0, b1, b2, ground):
     """One corner's force and torque under the paper's law, without branches.
 
-    Returns the force and torque it adds (zero unless it pushes), its spring energy, whether
-    it is below the plane, its approach speed, its sink and its squared speed.
+    Returns whether it pushes, the force and torque it adds (zero unless it pushes), its spring
+    energy, whether it is below the plane, its approach speed, its sink and its squared speed.
     """
     q00, q01, q02, q10, q11, q12, q20, q21, q22 = q
     x0, x1, x2 = x
@@ -195,9 +176,8 @@ def _tile_step(t: np.ndarray, body: Body, contact: Contact, options: Options, st
                tests: bool | None) -> None:
     """One step of every die of the tile ``t`` (rows of ``TILE`` lanes), in place.
 
-    ``tests`` (:func:`stop_tests`) True: the rest test and the decided face; None: neither,
-    compiled out. Leaves in row ``TURN`` the squared turn of each die that the series could
-    not take (else 0).
+    ``tests``: :func:`stop_tests`'s. Leaves in row ``TURN`` the squared turn of each die that the
+    series could not take (else 0).
     """
     planes = contact.planes
     normal = (planes[0, NX], planes[0, NY], planes[0, NZ])
@@ -397,8 +377,7 @@ def simulate_batch(dice: Dice, body: Body, contact: Contact, options: Options, s
                    tests: bool | None, out: Outcome) -> None:
     """:func:`dice_env.physics.kernel.simulate_batch` for a scene :func:`covers`, tiles in parallel.
 
-    The arguments are that function's, with :func:`stop_tests` where it takes its records
-    (:func:`covers` admits none).
+    Its arguments, with :func:`stop_tests` instead of the records.
     """
     n = dice.x.shape[0]
     for tile in prange((n + TILE - 1) // TILE):
