@@ -53,10 +53,9 @@ class Contact(NamedTuple):
     """The planes the die stays on, ``n . X >= offset``, and the contact laws.
 
     ``planes`` (P, 9): per plane the columns ``NX`` ... ``CT`` (unit normal into the free side,
-    offset, stiffness S, damping D, friction mu, stick-slip spring ``kt`` and damper ``ct``);
-    plane 0 is the floor, which the energy scale's start height is taken against. ``law``:
-    ``GATED`` or ``PAPER``; ``stick``: stick-slip friction, else the listing's
-    ``-mu fn Ut/(|Ut| + vmin)``.
+    offset, S, D, mu, stick-slip spring ``kt`` and damper ``ct``); plane 0 is the floor (the energy
+    scale's start height). ``law``: ``GATED`` or ``PAPER``; ``stick``: stick-slip friction, else the
+    listing's ``-mu fn Ut/(|Ut| + vmin)``.
     """
 
     planes: np.ndarray
@@ -466,10 +465,7 @@ def die_on_planes(die: int, first: int, count: int, vertices: np.ndarray, planes
 
 @njit(cache=True, forceinline=True, _nrt=False)
 def next_pass(passes: int, abort: np.ndarray) -> tuple[int, int]:
-    """A loop's pass count after one more pass, and ``ABORTED`` or ``RUNNING``.
-
-    ``abort`` is looked at once every ``ABORT_EVERY`` passes.
-    """
+    """Pass count + 1, and ``ABORTED`` or ``RUNNING`` (``abort`` read every ``ABORT_EVERY``)."""
     passes += 1
     return passes, ABORTED if passes & (ABORT_EVERY - 1) == 0 and abort[0] != 0 else RUNNING
 
@@ -673,11 +669,7 @@ def advance(i: int, dice: Dice, body: Body, contact: Contact, options: Options, 
 
 @njit(cache=True, inline="always")
 def euler_steps(x: tuple, u: tuple, dv: tuple, dt: float, n: int) -> tuple:
-    """``n`` steps of velocity then position under a constant kick ``dv``: ``(x_n, u_n)``.
-
-    One step is the listing's ``u += dv; x += dt u``; ``n`` of them in closed form,
-    ``u_n = u + n dv`` and ``x_n = x + dt (n u + dv n(n+1)/2)`` (the same bits at ``n = 1``).
-    """
+    """``(x_n, u_n)``: ``n`` steps ``u += dv; x += dt u`` in closed form (bit-exact at n = 1)."""
     x0, x1, x2 = x
     u0, u1, u2 = u
     dv0, dv1, dv2 = dv
