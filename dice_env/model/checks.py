@@ -38,10 +38,28 @@ def check_range(name: str, value: float, low: float, high: float, *, low_open: b
         raise ValueError(f"{name} must be in {interval}, got {value!r}")
 
 
+def check_int(name: str, value: object, low: int, high: int | None = None, *,
+              also: str = "") -> None:
+    """Raise ``ValueError`` unless ``value`` is an int (not a bool) in ``[low, high]``.
+
+    No ``high``: ``>= low``; ``also`` is added to the allowed range in the message.
+    """
+    if (not isinstance(value, (int, np.integer)) or isinstance(value, bool) or value < low
+            or (high is not None and value > high)):
+        allowed = f">= {low}" if high is None else f"in [{low}, {high}]"
+        raise ValueError(f"{name} must be an int {allowed}{also}, got {value!r}")
+
+
 def check_bool(name: str, value: object) -> None:
     """Raise ``TypeError`` unless ``value`` is a bool (Python's or numpy's)."""
     if not isinstance(value, (bool, np.bool_)):
         raise TypeError(f"{name} must be a bool, got {value!r}")
+
+
+def check_type(name: str, value: object, kind: type) -> None:
+    """Raise ``TypeError`` unless ``value`` is a ``kind``."""
+    if not isinstance(value, kind):
+        raise TypeError(f"{name} must be a {kind.__name__}, got {type(value).__name__}")
 
 
 def check_choice(name: str, value: object, choices: Iterable[object], *,

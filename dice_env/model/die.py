@@ -1,48 +1,29 @@
 """The die: a convex polyhedron whose corners are the contact nodes, its mass and its faces.
 
 Body frame: origin at the geometric centre (the uniform solid's centroid); the centre of mass
-``com`` is measured from it. Faces are stored in label order: face ``k`` (0-based) carries the
-printed label ``k + 1``.
-
-The d6 (the default, :class:`Die` ``()``) follows a standard (right-handed, "Western") die:
-opposite faces sum to 7 and the faces 1, 2, 3 meet at the corner (+, +, +) and run
-counter-clockwise seen from outside that corner.
-
-======  ==========  ======  ==========
-face    outward     face    outward
-======  ==========  ======  ==========
-1       +z          6       -z
-2       +x          5       -x
-3       +y          4       -y
-======  ==========  ======  ==========
-
-The other standard dice (:meth:`Die.standard`) and any convex vertex set
-(:meth:`Die.from_vertices`) are described there.
+``com`` is measured from it. Face ``k`` (0-based) carries the printed label ``k + 1``. The d6
+(:class:`Die` ``()``) is the standard right-handed die of ``docs/model.md`` (1 +z, 2 +x, 3 +y;
+opposite faces sum to 7); :meth:`Die.standard` and :meth:`Die.from_vertices` give the others.
 """
 
 from __future__ import annotations
 
 import itertools
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from functools import cache, cached_property
 from typing import NamedTuple
 
 import numpy as np
 
 from dice_env.model import polyhedra
-from dice_env.model.checks import as_shaped, check_choice, check_positive, check_range
+from dice_env.model.checks import as_shaped, check_choice, check_int, check_positive, check_range
 from dice_env.model.pips import Pips, drill, with_defaults
 from dice_env.model.table import DIE_EDGE, DIE_MASS
 
 # The d6's corner signs in the order of the paper's cube.m (node k = row k).
-_CORNER_SIGNS = np.array(
-    [
-        [1, 1, 1], [1, -1, 1], [-1, -1, 1], [-1, 1, 1],
-        [1, 1, -1], [1, -1, -1], [-1, -1, -1], [-1, 1, -1],
-    ],
-    dtype=np.float64,
-)
+_CORNER_SIGNS = np.array([[1, 1, 1], [1, -1, 1], [-1, -1, 1], [-1, 1, 1],
+                          [1, 1, -1], [1, -1, -1], [-1, -1, -1], [-1, 1, -1]], dtype=np.float64)
 # The d6's outward body-frame normal of face k+1.
 _CUBE_NORMALS = np.array(
     [[0, 0, 1], [1, 0, 0], [0, 1, 0], [0, -1, 0], [-1, 0, 0], [0, 0, -1]], dtype=np.float64
@@ -51,9 +32,8 @@ _CUBE_NORMALS = np.array(
 # Default density (kg/m^3), the default d6's: 4.5 g at 16 mm, 1099 kg/m^3 (acrylic/resin).
 DIE_VOLUME = DIE_EDGE * DIE_EDGE * DIE_EDGE
 DENSITY = DIE_MASS / DIE_VOLUME
-# Default sizes (m): the least height of the die lying on a face (across faces; the d4's
-# height). Round figures for a common acrylic polyhedral set next to the 16 mm d6: our
-# estimate of retail dice, not a measured sample; pass ``size=`` for a measured die.
+# Default sizes (m), the least height on a face: our estimate of a common acrylic set next to
+# the 16 mm d6, not a measured sample; pass ``size=`` for a measured die.
 STANDARD_SIZES = {"d4": 0.014, "d6": DIE_EDGE, "d8": 0.014, "d10": 0.014, "d12": 0.018,
                   "d20": 0.020}
 # Tipping heights sample each tie arc at most this far apart (rad): the cube's end spacing
@@ -64,9 +44,8 @@ ARC_STEP = 1.0 / (2000.0 * math.sqrt(2.0))
 def paper_side_length(r: float) -> float:
     """The paper's side length for corner distance ``r``: ``s = -sqrt(2) + 2*sqrt(0.5 + r^2)``.
 
-    A quirk kept for paper mode only: a cube whose corners lie at distance ``r`` from its centre
-    has ``s = 2r/sqrt(3)`` (1.1547 for r = 1); this formula gives 1.0353, and the resulting
-    corners lie at ``s*sqrt(3)/2`` = 0.8966 from the centre, not at ``r``.
+    A quirk kept for paper mode only: its corners lie at ``s*sqrt(3)/2`` (0.8966 for r = 1)
+    from the centre, not at ``r`` (that cube's side would be ``2r/sqrt(3)``).
     """
     return -math.sqrt(2.0) + 2.0 * math.sqrt(0.5 + r * r)
 
@@ -88,17 +67,15 @@ class _Shape(NamedTuple):
 class Die:
     """A convex polyhedral die; its corners are the contact nodes.
 
-    ``Die(edge, mass, com, inertia)`` is the cubic d6 of edge ``edge`` (the default: 16 mm,
-    4.5 g, uniform solid, the paper's inertia ``(1/6) m s^2``); other shapes come from
-    :meth:`standard`, :meth:`cuboid` and :meth:`from_vertices`, loaded dice from :meth:`load`.
+    ``Die(edge, mass, com, inertia)`` is the cubic d6 (default 16 mm, 4.5 g, uniform solid);
+    other shapes come from :meth:`standard`, :meth:`cuboid` and :meth:`from_vertices`, loaded
+    dice from :meth:`load`.
 
     Fields (hashable): ``name``; ``vertices`` (body frame, about the geometric centre);
     ``faces`` (corner indices, counter-clockwise seen from outside, in label order); ``size``
-    (m: the least height of the die lying on a face, i.e. the least distance between a face and
-    the farthest corner from it: the cube's edge, a cuboid's shortest side, the distance
-    between opposite faces of the d8, d10, d12 and d20, the d4's height ``sqrt(2/3)`` edge);
-    ``mass``; ``com`` (centre of mass from the geometric centre); ``inertia`` (about the
-    centre of mass, body frame); ``reads_down`` (True for the d4, read by the face down).
+    (m: the least height of the die lying on a face: the cube's edge, a cuboid's shortest side,
+    the d4's height); ``mass``; ``com`` (centre of mass from the geometric centre); ``inertia``
+    (about the centre of mass, body frame); ``reads_down`` (True for the d4, read face down).
     """
 
     name: str
@@ -110,18 +87,12 @@ class Die:
     inertia: tuple[tuple[float, float, float], ...]
     reads_down: bool
 
-    def __init__(
-        self,
-        edge: float = DIE_EDGE,
-        mass: float = DIE_MASS,
-        com: tuple[float, float, float] = (0.0, 0.0, 0.0),
-        inertia: tuple[tuple[float, ...], ...] | None = None,
-    ) -> None:
+    def __init__(self, edge: float = DIE_EDGE, mass: float = DIE_MASS,
+                 com: tuple[float, float, float] = (0.0, 0.0, 0.0),
+                 inertia: tuple[tuple[float, ...], ...] | None = None) -> None:
         check_positive("edge", edge)
         shape = _unit_shape("d6")
         self._set("d6", shape.vertices * edge, shape.faces, edge, mass, com, inertia, False)
-
-    # --- constructors ---------------------------------------------------------------------
 
     @classmethod
     def standard(cls, name: str = "d6", size: float | None = None,
@@ -129,29 +100,22 @@ class Die:
         """A standard die: "d4", "d6", "d8", "d10", "d12" or "d20", uniform unless ``pips``.
 
         ``size`` (m) as the field (default :data:`STANDARD_SIZES`); ``mass`` (kg) defaults to
-        :data:`DENSITY` times the volume. ``pips`` (d6 only): None for the uniform solid, a
-        :class:`~dice_env.model.pips.Pips` or a preset name of :data:`dice_env.model.pips.DRILLINGS`
-        (which also supplies the size and mass left None): the cube minus its drilled pips,
-        ``mass`` being the die's actual mass as weighed (:func:`dice_env.model.pips.drill`).
-        Numbering (Wikipedia, "Dice" and "Pentagonal trapezohedron"): opposite faces sum to
-        ``n + 1`` on the d6, d8, d12 and d20.
+        :data:`DENSITY` times the volume. ``pips`` (d6 only): a
+        :class:`~dice_env.model.pips.Pips` or a preset of :data:`dice_env.model.pips.DRILLINGS`
+        (which also supplies a size and mass left None); ``mass`` is then the weighed mass
+        (:func:`dice_env.model.pips.drill`). Opposite faces sum to ``n + 1`` on the d6, d8,
+        d12 and d20.
 
-        - d4: regular tetrahedron with corners ``(1, 1, 1), (1, -1, -1), (-1, 1, -1),
-          (-1, -1, 1)`` (scaled); face ``k`` lies opposite corner ``k``. Read by the face down,
-          i.e. the corner up, as players read it.
-        - d6: the cube above (``Die.standard("d6") == Die()``).
-        - d8: regular octahedron, corners on the axes; the odd faces 1, 3, 5, 7 meet at the
-          +z corner (counter-clockwise from azimuth 45 degrees), the even ones at -z.
-        - d10: the pentagonal trapezohedron dual to the uniform pentagonal antiprism
-          (:func:`polyhedra.pentagonal_trapezohedron`), apexes on the z axis. Labels 1–10 are
-          the printed digits 0–9 plus one, so opposite faces sum to 11 (digits to 9); going
-          counter-clockwise around the zigzag from the face at azimuth 0, the digits read
-          0, 7, 4, 1, 6, 9, 2, 5, 8, 3 (the common configuration): labels 1, 3, 5, 7, 9 meet at
-          the +z apex. Real d10s are often squatter than this canonical shape.
-        - d12, d20: regular dodecahedron and icosahedron lying on face 1 (its normal +z);
-          the upper faces take 1 … n/2 by descending height, then counter-clockwise azimuth
-          from +x; each lower face takes ``n + 1`` minus its opposite's label. Beyond the
-          opposite sums, this arrangement is ours, not a manufacturer's.
+        - d4: regular tetrahedron, corners ``(1, 1, 1), (1, -1, -1), (-1, 1, -1),
+          (-1, -1, 1)`` (scaled); face ``k`` lies opposite corner ``k``; read face down.
+        - d8: regular octahedron, corners on the axes; the odd faces meet at the +z corner
+          (counter-clockwise from azimuth 45 degrees), the even ones at -z.
+        - d10: :func:`polyhedra.pentagonal_trapezohedron`, apexes on the z axis. Labels 1–10
+          are the digits 0–9 plus one (opposite digits sum to 9); counter-clockwise around the
+          zigzag from azimuth 0 the digits read 0, 7, 4, 1, 6, 9, 2, 5, 8, 3.
+        - d12, d20: regular dodecahedron and icosahedron lying on face 1 (normal +z); the
+          upper faces take 1 … n/2 by descending height, then counter-clockwise azimuth from
+          +x; each lower face takes ``n + 1`` minus its opposite's label (our arrangement).
         """
         check_choice("name", name, STANDARD_SIZES)
         if pips is not None:
@@ -163,8 +127,7 @@ class Die:
         vertices = shape.vertices * size
         volume = size * size * size if name == "d6" else polyhedra.mass_properties(
             vertices, shape.faces)[0]
-        die = cls._make(name, vertices, shape.faces, size, _mass(mass, volume),
-                        shape.reads_down)
+        die = cls._make(name, vertices, shape.faces, size, _mass(mass, volume), shape.reads_down)
         mass_properties = None if pips is None else drill(size, die.mass, pips)
         return die if mass_properties is None else die._with_mass(die.mass, *mass_properties)
 
@@ -172,9 +135,8 @@ class Die:
     def cuboid(cls, sides: tuple[float, float, float], mass: float | None = None) -> Die:
         """A uniform rectangular box of ``sides`` (x, y, z) (m), numbered like the d6.
 
-        1 = +z, 6 = -z, 2 = +x, 5 = -x, 3 = +y, 4 = -y; ``size`` is the shortest side. Equal
-        sides give the d6 of :meth:`standard`. ``mass`` defaults to :data:`DENSITY` times the
-        volume.
+        ``size`` is the shortest side; equal sides give the d6 of :meth:`standard`. ``mass``
+        defaults to :data:`DENSITY` times the volume.
         """
         sides = np.asarray(sides, dtype=np.float64)
         if sides.shape != (3,) or not np.all(np.isfinite(sides)) or np.any(sides <= 0):
@@ -184,21 +146,17 @@ class Die:
         if x == y == z:
             return cls.standard("d6", size=x, mass=mass)
         shape = _unit_shape("d6")
-        vertices = shape.vertices * sides
-        return cls._make("cuboid", vertices, shape.faces, min(x, y, z), _mass(mass, x * y * z),
-                         False)
+        return cls._make("cuboid", shape.vertices * sides, shape.faces, min(x, y, z),
+                         _mass(mass, x * y * z), False)
 
     @classmethod
     def from_vertices(cls, vertices: np.ndarray, labels: np.ndarray | None = None,
                       mass: float | None = None, *, reads_down: bool = False) -> Die:
-        """A uniform die on any convex vertex set (N, 3) (m): its corners are the contact nodes.
+        """A uniform die on any convex vertex set (N, 3) (m), centred on the solid's centroid.
 
-        The faces come from the convex hull (coplanar corners make one polygon face); every
-        point must be a corner (:func:`polyhedra.convex_faces`). ``labels`` gives the label of
-        each hull face in the order of :func:`polyhedra.convex_faces` (the faces of
-        ``Die.from_vertices(vertices).faces``), a permutation of 1 … F; default 1 … F in that
-        order. The vertices are moved so that the solid's centroid is the origin. ``mass``
-        defaults to :data:`DENSITY` times the volume; ``reads_down`` reads the face down.
+        Every point must be a hull corner (:func:`polyhedra.convex_faces`, whose face order
+        ``labels`` follows: a permutation of 1 … F, default 1 … F). ``mass`` defaults to
+        :data:`DENSITY` times the volume; ``reads_down`` reads the face down.
         """
         _check_mass(mass)
         if not isinstance(reads_down, (bool, np.bool_)):
@@ -220,14 +178,8 @@ class Die:
         return cls(edge=paper_side_length(r), mass=mass)
 
     @classmethod
-    def loaded(
-        cls,
-        face: int = 6,
-        fraction: float = 0.1,
-        depth: float = 0.8,
-        edge: float = DIE_EDGE,
-        mass: float = DIE_MASS,
-    ) -> Die:
+    def loaded(cls, face: int = 6, fraction: float = 0.1, depth: float = 0.8,
+               edge: float = DIE_EDGE, mass: float = DIE_MASS) -> Die:
         """The d6 of ``edge`` and ``mass`` loaded toward ``face``: ``Die(edge, mass).load(...)``."""
         return cls(edge=edge, mass=mass).load(face, fraction, depth)
 
@@ -241,21 +193,17 @@ class Die:
         total = float(masses.sum())
         corners = np.asarray(die.vertices)
         com = masses @ corners / total
-        rel = corners - com
-        inertia = sum(mk * polyhedra.point_inertia(rk) for mk, rk in zip(masses, rel, strict=True))
+        inertia = sum(mk * polyhedra.point_inertia(rk)
+                      for mk, rk in zip(masses, corners - com, strict=True))
         return die._with_mass(total, com, inertia)
 
     def load(self, face: int, fraction: float = 0.1, depth: float = 0.8) -> Die:
         """A copy with ``fraction`` of the mass moved into a point weight toward ``face``.
 
         The weight sits on the axis of face ``face`` (a label) at ``depth`` times that face's
-        distance from the geometric centre; the rest of the mass keeps its distribution. The
-        heavy face tends to land down: on a die read up its opposite shows more often, on the
-        d4 (read down) the loaded face itself.
+        distance from the geometric centre; the rest of the mass keeps its distribution.
         """
-        n = self.n_faces
-        if not isinstance(face, (int, np.integer)) or isinstance(face, bool) or not 1 <= face <= n:
-            raise ValueError(f"face must be an int in [1, {n}], got {face!r}")
+        check_int("face", face, 1, self.n_faces)
         check_range("fraction", fraction, 0.0, 1.0, high_open=True)
         check_range("depth", depth, 0.0, 1.0, high_open=True)
         p = self.face_normals[face - 1] * depth * self._face_distances[face - 1]
@@ -285,10 +233,9 @@ class Die:
 
     @cached_property
     def reading(self) -> np.ndarray:
-        """Reading directions (F, 3), body frame, in label order (read-only).
+        """Reading directions (F, 3), body frame, in label order: the normals, negated for the d4.
 
-        Face ``k + 1`` is read when its direction points most along ``up``: the outward
-        normals, negated for a die that :attr:`reads_down` (the d4).
+        Face ``k + 1`` is read when its direction points most along ``up`` (read-only).
         """
         return _frozen(-self.face_normals if self.reads_down else self.face_normals)
 
@@ -317,8 +264,8 @@ class Die:
     def face_read(self, orientation: np.ndarray, up: np.ndarray) -> np.ndarray:
         """The label read in each orientation (..., 3, 3) (body to world): int array (...).
 
-        The face whose outward normal points most along ``up`` (3,) (against gravity); for a
-        die that :attr:`reads_down` (the d4), the face pointing most along ``-up``.
+        Along :attr:`reading`: the face pointing most along ``up`` (3,), the d4's most along
+        ``-up``.
         """
         orientation = np.asarray(orientation, dtype=np.float64)
         up = np.asarray(up, dtype=np.float64)
@@ -332,8 +279,7 @@ class Die:
     def resting_heights(self) -> np.ndarray:
         """Height (m) of the centre of mass above its lowest corner, each face read, (F,).
 
-        In the orientation where the face's reading direction (its normal, or minus it for
-        the d4) points straight up: lying flat on the opposite face (on the face, for the d4).
+        With the face's :attr:`reading` direction straight up.
         """
         return _heights_above_lowest_corner(self.vertices_body, self.reading)
 
@@ -341,13 +287,9 @@ class Die:
     def tipping_heights(self) -> np.ndarray:
         """Least height (m) of the centre of mass above its lowest corner as each face tips, (F,).
 
-        A die can stop showing face ``F`` only through an orientation in which ``F`` ties
-        with another face ``G``, both read at least as much as any other: the up direction
-        ``u`` lies on an arc of the great circle ``(a_F - a_G) . u = 0`` (``a``: the reading
-        directions). Each such arc is found exactly and sampled at most :data:`ARC_STEP`
-        apart; the minimum is lowered by the height's Lipschitz bound (the largest corner
-        distance) times half the gap, so it is never above the true minimum (fair cube:
-        ``sqrt(2)`` half edges, balanced on an edge). Computed once per die (read-only).
+        The minimum over the orientations where the face ties with another (``docs/
+        performance.md``), each tie arc sampled :data:`ARC_STEP` apart and lowered by the
+        Lipschitz bound, so never above the true minimum (fair cube: ``sqrt(2)`` half edges).
         """
         corners, reading = self.vertices_body, self.reading
         out = np.full(self.n_faces, np.inf)
@@ -379,10 +321,7 @@ class Die:
 
     @property
     def is_fair(self) -> bool:
-        """True when every face is alike by symmetry.
-
-        A standard die, centred, with isotropic inertia or the uniform solid's.
-        """
+        """True for a standard die, centred, with isotropic inertia or the uniform solid's."""
         return (not any(self.com) and self.name in STANDARD_SIZES
                 and (self.is_isotropic or self.inertia_body.tolist() == _solid_inertia(
                     self.name, np.array(self.vertices), self.faces, self.size,
@@ -392,30 +331,28 @@ class Die:
     def from_fields(cls, name: str, vertices: tuple, faces: tuple, size: float, mass: float,
                     com: tuple, inertia: tuple, reads_down: bool) -> Die:
         """The die whose fields are these (as :func:`dataclasses.asdict` gives them), checked."""
-        die = object.__new__(cls)
         faces = tuple(tuple(int(k) for k in face) for face in faces)
-        die._set(str(name), np.asarray(vertices, dtype=np.float64), faces, size, mass, com,
-                 _as_tuple(np.asarray(inertia, dtype=np.float64)), bool(reads_down))
-        return die
-
-    # --- internals ------------------------------------------------------------------------
+        return cls._new(str(name), np.asarray(vertices, dtype=np.float64), faces, size, mass, com,
+                        _as_tuple(np.asarray(inertia, dtype=np.float64)), bool(reads_down))
 
     def __repr__(self) -> str:
         com = "" if not any(self.com) else f", com={tuple(round(c, 9) for c in self.com)}"
         return f"Die({self.name!r}, size={self.size:g}, mass={self.mass:g}{com})"
 
     @classmethod
-    def _make(cls, name: str, vertices: np.ndarray, faces: tuple[tuple[int, ...], ...],
-              size: float, mass: float, reads_down: bool) -> Die:
+    def _new(cls, *values: object) -> Die:
         die = object.__new__(cls)
-        die._set(name, vertices, faces, size, mass, (0.0, 0.0, 0.0), None, reads_down)
+        die._set(*values)
         return die
 
+    @classmethod
+    def _make(cls, name: str, vertices: np.ndarray, faces: tuple[tuple[int, ...], ...],
+              size: float, mass: float, reads_down: bool) -> Die:
+        return cls._new(name, vertices, faces, size, mass, (0.0, 0.0, 0.0), None, reads_down)
+
     def _with_mass(self, mass: float, com: np.ndarray, inertia: np.ndarray) -> Die:
-        die = object.__new__(type(self))
-        die._set(self.name, np.array(self.vertices), self.faces, self.size, mass, com,
-                 _as_tuple(inertia), self.reads_down)
-        return die
+        return self._new(self.name, np.array(self.vertices), self.faces, self.size, mass, com,
+                         _as_tuple(inertia), self.reads_down)
 
     def _set(self, name: str, vertices: np.ndarray, faces: tuple[tuple[int, ...], ...],
              size: float, mass: float, com: tuple[float, ...] | np.ndarray,
@@ -429,20 +366,17 @@ class Die:
         if inertia is None:
             inertia = _solid_inertia(name, vertices, faces, size, mass)
         _check_inertia(inertia)
-        values = {"name": name, "vertices": _as_tuple(vertices), "faces": faces,
-                  "size": float(size), "mass": float(mass), "com": tuple(float(c) for c in com),
-                  "inertia": _as_tuple(np.asarray(inertia, dtype=np.float64)),
-                  "reads_down": reads_down}
-        for key, value in values.items():
-            object.__setattr__(self, key, value)
+        values = (name, _as_tuple(vertices), faces, float(size), float(mass),
+                  tuple(float(c) for c in com), _as_tuple(np.asarray(inertia, dtype=np.float64)),
+                  reads_down)
+        for field, value in zip(fields(self), values, strict=True):
+            object.__setattr__(self, field.name, value)
 
     @cached_property
     def _face_distances(self) -> np.ndarray:
         """Distance (m) of each face plane from the geometric centre, (F,)."""
         return _face_distances(np.array(self.vertices), self.faces, self.face_normals)
 
-
-# --- shapes -------------------------------------------------------------------------------
 
 @cache
 def _unit_shape(name: str) -> _Shape:
@@ -476,10 +410,7 @@ def _nearest_labels(normals: np.ndarray, directions: np.ndarray) -> np.ndarray:
 
 
 def _labels_by_azimuth(normals: np.ndarray, upper: object) -> np.ndarray:
-    """Labels: ``upper`` for the faces with ``n_z > 0``, ``F + 1`` minus the opposite's below.
-
-    The upper faces in order of descending ``n_z``, then azimuth from +x.
-    """
+    """Labels: ``upper`` by descending ``n_z`` then azimuth, ``F + 1`` - opposite's below."""
     z = np.round(normals[:, 2], 9)
     azimuth = np.mod(np.round(np.arctan2(normals[:, 1], normals[:, 0]), 9), 2 * math.pi)
     top = np.flatnonzero(z > 0)
@@ -529,8 +460,6 @@ def _least_height(vertices: np.ndarray, faces: tuple[tuple[int, ...], ...]) -> f
     return float(np.ptp(spans, axis=1).min())
 
 
-# --- mass ---------------------------------------------------------------------------------
-
 def _check_mass(mass: float | None) -> None:
     if mass is not None:
         check_positive("mass", mass)
@@ -545,8 +474,7 @@ def _solid_inertia(name: str, vertices: np.ndarray, faces: tuple[tuple[int, ...]
                    size: float, mass: float) -> np.ndarray:
     """Inertia of the uniform solid about its centroid: the d6's closed form, else integrated.
 
-    Rounding noise is removed: entries below 1e-12 of the trace become 0, and a diagonal
-    tensor whose moments agree to 1e-12 becomes exactly isotropic.
+    Entries below 1e-12 of the trace become 0, moments equal to 1e-12 exactly isotropic.
     """
     if name == "d6":
         return solid_cube_inertia(mass, size)
@@ -565,22 +493,17 @@ def _check_inertia(inertia: object) -> None:
         raise ValueError("inertia must be symmetric")
     principal = np.linalg.eigvalsh(inertia)
     if principal[0] <= 0 or principal[2] > principal[0] + principal[1] * (1 + 1e-12):
-        raise ValueError(
-            "inertia must be positive definite with principal moments obeying the "
-            f"triangle inequality, got principal moments {principal}"
-        )
+        raise ValueError("inertia must be positive definite with principal moments obeying the "
+                         f"triangle inequality, got principal moments {principal}")
 
-
-# --- reading and tipping ------------------------------------------------------------------
 
 def _tie_arc(reading: np.ndarray, f: int, g: int
              ) -> tuple[float, float, np.ndarray, np.ndarray] | None:
     """The arc where faces ``f`` and ``g`` tie and no other face reads more, or None.
 
-    Up directions ``u = cos(phi) m + sin(phi) w`` with ``m`` the bisector of the two reading
-    directions and ``w`` their common normal; ``phi`` in ``[lo, hi]`` within ``[-pi/2, pi/2]``
-    (the other half circle reads both below zero, so below some other face). Each other face
-    ``k`` asks ``(a_f - a_k) . u >= 0``: a half circle in ``phi``.
+    Up directions ``u = cos(phi) m + sin(phi) w``, ``m`` the bisector of the two reading
+    directions, ``w`` their common normal, ``phi`` in ``[lo, hi]`` within ``[-pi/2, pi/2]``;
+    each other face ``k`` asks ``(a_f - a_k) . u >= 0``, a half circle in ``phi``.
     """
     a, b = reading[f], reading[g]
     bisector = a + b

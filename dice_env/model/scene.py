@@ -1,7 +1,6 @@
 """A scene: a die, a ground, gravity and the integrator settings, with the stable step.
 
-Units are SI in the default scene (m, kg, s). The paper's scenes use its own unit-free numbers
-(r = 1, m = 1, g = 9.8).
+Units are SI in the default scene; the paper's scenes use its unit-free numbers (r = m = 1).
 """
 
 from __future__ import annotations
@@ -23,6 +22,7 @@ from dice_env.model.checks import (
     check_nonnegative,
     check_positive,
     check_range,
+    check_type,
 )
 from dice_env.model.die import Die
 
@@ -30,12 +30,10 @@ MAX_STEPS = 10**9  # steps of one throw to t_max: more is refused (about a minut
 
 
 class ContactLaw(IntEnum):
-    """How a corner feels the ground.
+    """How a corner feels the ground (``docs/model.md``).
 
     ``GATED`` (default): only corners below the plane feel ``max(0, S*dg - D*un)``.
-    ``PAPER``: the listing's ``max(0, S*max(0, dg) - D*un)`` on every corner, so a corner above
-    the ground that moves down is pushed up by ``-D*un``: an air drag of about ``8*D*v`` on a
-    falling die. Kept to reproduce the paper.
+    ``PAPER``: the listing's ``max(0, S*max(0, dg) - D*un)`` on every corner (an air drag).
     """
 
     GATED = 0
@@ -43,13 +41,10 @@ class ContactLaw(IntEnum):
 
 
 class Scheme(IntEnum):
-    """How a step treats the contact forces (see :mod:`dice_env.physics.kernel`).
+    """How a step treats the contact forces (``docs/model.md``, "Midpoint step").
 
-    ``MIDPOINT`` (default): damping and friction from the corner velocity extrapolated to the
-    middle of the step's kick, and the damping of a corner that just touched weighted by its time
-    in contact; second order for smooth friction, and with the stick-slip friction the gentle
-    throws' faces converge in the step (``docs/error-vs-runtime.md``); no better than ``PAPER``
-    with the listing's sign-like friction. ``PAPER``: the listing's step, first order.
+    ``MIDPOINT`` (default): damping and friction from the corner velocity at the middle of the
+    step's kick. ``PAPER``: the listing's step, first order.
     """
 
     PAPER = 0
@@ -57,15 +52,11 @@ class Scheme(IntEnum):
 
 
 class FrictionLaw(IntEnum):
-    """How a corner in contact feels friction (see :mod:`dice_env.physics.kernel`).
+    """How a corner in contact feels friction (``docs/model.md``, "Stick-slip friction").
 
-    ``STICK_SLIP`` (default): Coulomb friction with sticking. A corner is tied by a tangential
-    spring and damper (``tangential`` times the ground's S and D) to where it touched, until
-    the spring force would exceed ``mu fn``; then it slips at ``mu fn`` (Cundall and Strack
-    1979). Converges in the step and holds a die on a slope. ``REGULARIZED``: the listing's
-    ``-mu fn Ut / (|Ut| + vmin)``, a sign function for the listing's tiny ``vmin`` (whose
-    dithering about zero slip speed keeps outcomes from converging in the step) and a viscous
-    creep for a large one. Kept to reproduce the paper.
+    ``STICK_SLIP`` (default): a corner is tied by a spring and damper (``tangential`` times the
+    plane's S and D) to where it touched, slipping at ``mu fn``. ``REGULARIZED``: the
+    listing's ``-mu fn Ut / (|Ut| + vmin)``.
     """
 
     REGULARIZED = 0
@@ -76,14 +67,11 @@ class FrictionLaw(IntEnum):
 class Plane:
     """A penalty half-space: the die stays on the side ``normal . x >= offset``.
 
-    ``normal`` (unit, normalised when given) points into the free side; ``offset`` (m) is the
-    plane's signed distance from the origin along it. ``stiffness`` S (N/m per vertex),
-    ``damping`` D (N s/m per vertex), sliding ``friction`` mu; ``tangential``: the stick-slip
-    friction's spring and damper per vertex as a fraction of S and D (2/7, the usual choice
-    for discrete elements since Silbert et al. 2001; the same fraction for both keeps the
-    damping proportional to the stiffness, so the stable step stays exact). The defaults
-    are the wooden table of :mod:`dice_env.model.table` for the default 4.5 g die (restitution
-    0.45); :func:`dice_env.simulation.calibration.table_scene` recomputes D for another die.
+    ``normal`` (normalised when given) points into the free side; ``offset`` (m) is the plane's
+    signed distance from the origin along it. ``stiffness`` S (N/m per vertex), ``damping`` D
+    (N s/m per vertex), sliding ``friction`` mu; ``tangential``: the stick-slip spring and
+    damper as a fraction of S and D, in (0, 1]. Defaults: the wooden table of
+    :mod:`dice_env.model.table` for the default die.
     """
 
     stiffness: float = table.STIFFNESS
@@ -108,10 +96,7 @@ class Plane:
         return np.asarray(points) @ np.asarray(self.normal) - self.offset
 
     def with_(self, **changes: object) -> Self:
-        """A copy with some fields changed (validated again), as :meth:`Scene.with_`.
-
-        An unchanged ``normal`` is kept to the bit (normalising it again can move it by an ulp).
-        """
+        """A copy with some fields changed (validated again); an unchanged ``normal`` to the bit."""
         plane = replace(self, **changes)
         if "normal" not in changes:
             object.__setattr__(plane, "normal", self.normal)
@@ -120,10 +105,7 @@ class Plane:
 
 @dataclass(frozen=True)
 class Ground(Plane):
-    """The floor: a :class:`Plane` whose ``normal`` points up (through the origin by default).
-
-    It also holds the contact law of every plane of the scene (see :class:`ContactLaw`).
-    """
+    """The floor: a :class:`Plane` whose ``normal`` points up; its ``contact_law`` is all's."""
 
     contact_law: ContactLaw = ContactLaw.GATED
 
@@ -145,10 +127,7 @@ class Ground(Plane):
 
 @dataclass(frozen=True)
 class Wall(Plane):
-    """A wall: a :class:`Plane` with its own material; ``normal`` points into the room.
-
-    ``Wall.through(point, normal)`` places it through a point.
-    """
+    """A wall: a :class:`Plane` with its own material; ``normal`` points into the room."""
 
     normal: tuple[float, float, float] = (1.0, 0.0, 0.0)
 
@@ -183,26 +162,18 @@ class Rest:
 
 @dataclass(frozen=True)
 class Scene:
-    """Everything that stays fixed during a throw.
+    """Everything that stays fixed during a throw: the die, the planes, gravity, the integrator.
 
-    The die, the floor (``ground``) and any ``walls``, gravity and the integrator settings.
+    ``dt=None`` picks ``safety * critical_dt`` (``safety`` in (0, 1], ``docs/model.md``); a
+    ``dt`` above :attr:`critical_dt` raises unless ``allow_unstable``. ``rotation=False`` is
+    the paper's ground_cube.m (translation only). ``friction_vmin``: the listing's ``umin`` of
+    the ``REGULARIZED`` :class:`FrictionLaw`. A throw is flagged unstable when its energy
+    (kinetic + potential + normal springs) exceeds its start by more than ``energy_tol`` times
+    ``KE0 + m*g*(h0 + size)``, and ``sunk`` when a vertex sinks more than ``sink_limit`` times
+    the die's size into a plane.
 
-    ``dt=None`` picks ``safety * critical_dt`` (0.15: landed faces of gentle throws agree with
-    a quarter step as well as at 0.1, and at 0.2 less well; docs/model.md). A ``dt``
-    above :attr:`critical_dt` raises unless
-    ``allow_unstable=True``. ``rotation=False`` is the paper's ground_cube.m: the die translates
-    only. ``friction_law``: see :class:`FrictionLaw`; ``friction_vmin`` is the listing's ``umin``
-    of the ``REGULARIZED`` law, added to the tangential speed before dividing: friction is
-    Coulomb well above it and viscous below it. ``scheme``: see
-    :class:`Scheme`. A throw is flagged unstable when its total energy (kinetic + potential +
-    normal ground springs) exceeds its start by more than ``energy_tol`` times
-    ``KE0 + m*g*(h0 + size)``, ``h0`` the start height of the centre above the table. A throw
-    whose deepest vertex sinks more than ``sink_limit`` times the die's size into a plane is
-    flagged ``sunk`` (the contact too soft for the load or the impact).
-
-    Checked when built: every field's type and range, and the run it implies: a step
-    that is finite, > 0 and at most ``t_max``, and at most :data:`MAX_STEPS` steps to
-    ``t_max`` (stiff, heavily damped or very light settings make the automatic step tiny).
+    Checked when built: every field's type and range, and a step that is finite, > 0, at most
+    ``t_max`` and at most :data:`MAX_STEPS` steps to ``t_max``.
     """
 
     die: Die = field(default_factory=Die)
@@ -223,9 +194,7 @@ class Scene:
 
     def __post_init__(self) -> None:
         for name, kind in (("die", Die), ("ground", Ground), ("rest", Rest)):
-            if not isinstance(getattr(self, name), kind):
-                raise TypeError(f"{name} must be a {kind.__name__}, "
-                                f"got {type(getattr(self, name)).__name__}")
+            check_type(name, getattr(self, name), kind)
         walls = (self.walls,) if isinstance(self.walls, Wall) else self.walls
         if not isinstance(walls, (tuple, list)) or not all(isinstance(w, Wall) for w in walls):
             raise TypeError(f"walls must be a tuple of Wall, got {self.walls!r}")
@@ -245,11 +214,10 @@ class Scene:
             check_positive("dt", self.dt)
         step = self.step_within(self.critical_dt, self.stiffest_plane())
         if not (math.isfinite(step) and 0.0 < step <= self.t_max):
-            raise ValueError(
-                f"the step must be in (0, t_max = {self.t_max:g}] s, got {step:.6g} s from "
-                f"dt={self.dt}, safety={self.safety:g} and the critical step of "
-                f"{self.stiffest_plane()} (die mass {self.die.mass:g})"
-            )
+            raise ValueError(f"the step must be in (0, t_max = {self.t_max:g}] s, got "
+                             f"{step:.6g} s from dt={self.dt}, safety={self.safety:g} and the "
+                             f"critical step of {self.stiffest_plane()} (die mass "
+                             f"{self.die.mass:g})")
         self.steps_for()
 
     @property
@@ -263,15 +231,10 @@ class Scene:
         return self.effective_mass_on(self.ground)
 
     def effective_mass_on(self, plane: Plane) -> float:
-        """Smallest effective mass per contact vertex on ``plane``, ``S / omega_max**2``.
+        """Smallest effective mass per contact vertex on ``plane``, ``S / omega_max**2`` (kg).
 
-        ``omega_max`` is the fastest contact mode with one whole face on the plane (the
-        stiffest contact a flat plane allows): the largest eigenvalue of ``M^-1 K`` with
-        ``K = S * sum_k a_k a_k^T``, ``a_k = (n, r_k x n)`` over the face's vertices, and
-        ``M = diag(m, m, m, I)``; sticking friction adds ``tangential * S`` springs along two
-        tangents ``t`` (``a_k = (t, r_k x t)``). For a fair solid die it is ``m/6`` without
-        them (rocking about an edge axis) and ``m/8`` with them (sliding coupled to rocking);
-        with ``rotation=False`` it is ``m/4`` (the four corners moving together).
+        ``omega_max``: the fastest contact mode with a whole face on the plane, sticking
+        springs included (``docs/model.md``, "Stable step"); ``m/4`` with ``rotation=False``.
         """
         if not self.rotation:
             return self.die.mass / 4
@@ -280,16 +243,9 @@ class Scene:
 
     @property
     def critical_dt(self) -> float:
-        """Largest stable step of the scheme for the stiffest contact mode of any plane.
+        """Largest stable step (s) of the scheme for the stiffest contact mode of any plane.
 
-        The modified (symplectic) Euler step of ``m_eff x'' = -S x - D x'`` is stable iff
-        ``(w dt)^2 + 2 (D/m_eff) dt < 4`` with ``w^2 = S/m_eff``, i.e.
-        ``dt < (sqrt(D^2 + 4 S m_eff) - D) / S``. With the midpoint damping
-        (``1.5 v_n - 0.5 v_n-1``) the eigenvalue -1 is reached at
-        ``(w dt)^2 + 4 (D/m_eff) dt = 4``, i.e. ``dt < 2 (sqrt(D^2 + S m_eff) - D) / S``.
-        The smallest over the planes; a die pressed into a floor and a wall at once is
-        stiffer still (up to twice the stiffness: ``1/sqrt(2)`` of the step), which the
-        default safety of 0.15 covers.
+        :func:`critical_step` on :meth:`effective_mass_on` (``docs/model.md``, "Stable step").
         """
         return min(self._critical_dt(plane) for plane in self.planes)
 
@@ -312,10 +268,9 @@ class Scene:
         return self.dt if self.dt is not None else self.safety * self.critical_dt
 
     def step_within(self, critical: float, of: str) -> float:
-        """The step of a run whose critical step is ``critical`` (s), set by ``of``.
+        """``safety * critical`` (s), or ``dt``: refused above ``critical`` (set by ``of``).
 
-        ``safety * critical``, or ``dt`` when given: refused above ``critical`` unless
-        ``allow_unstable``.
+        ``allow_unstable`` lets a larger ``dt`` through.
         """
         if self.dt is None:
             return self.safety * critical
@@ -330,10 +285,9 @@ class Scene:
         return self.steps_for()
 
     def steps_for(self, t_max: float | None = None, step: float | None = None) -> int:
-        """Steps of ``step`` (s) to reach ``t_max`` (s), refused above :data:`MAX_STEPS`.
+        """Steps of ``step`` (s, default :attr:`step`) to reach ``t_max`` (s, default the scene's).
 
-        ``t_max`` defaults to the scene's, ``step`` to :attr:`step` (a run of several dice
-        takes the step of :func:`dice_env.simulation.group.group_step`).
+        Refused above :data:`MAX_STEPS`.
         """
         t_max = self.t_max if t_max is None else t_max
         check_positive("t_max", t_max)
@@ -364,10 +318,7 @@ class Scene:
 
 def check_material(stiffness: float, damping: float, friction: float,
                    tangential: float) -> None:
-    """Check a contact's material (:class:`Plane`'s fields of the same names).
-
-    ``stiffness`` > 0, ``damping`` and ``friction`` >= 0, ``tangential`` in (0, 1].
-    """
+    """Check ``stiffness`` > 0, ``damping``, ``friction`` >= 0, ``tangential`` in (0, 1]."""
     check_positive("stiffness", stiffness)
     check_range("tangential", tangential, 0.0, 1.0, low_open=True)
     check_nonnegative("damping", damping)
@@ -377,8 +328,8 @@ def check_material(stiffness: float, damping: float, friction: float,
 def critical_step(stiffness: float, damping: float, mass: float, scheme: Scheme) -> float:
     """Largest stable step of ``scheme`` for ``mass x'' = -stiffness x - damping x'``.
 
-    See :attr:`Scene.critical_dt`; the roots rationalised, with no cancellation when
-    ``D^2 >> S m``.
+    The symplectic Euler bound ``(w dt)^2 + 2 (D/m) dt < 4``, the midpoint's
+    ``(w dt)^2 + 4 (D/m) dt < 4``; the roots rationalised (no cancellation when ``D^2 >> S m``).
     """
     s, d, m = stiffness, damping, mass
     if scheme == Scheme.MIDPOINT:
@@ -388,10 +339,7 @@ def critical_step(stiffness: float, damping: float, mass: float, scheme: Scheme)
 
 @functools.lru_cache(maxsize=256)
 def _effective_mass(die: Die, tangential: float) -> float:
-    """:meth:`Scene.effective_mass_on` for ``die``.
-
-    With sticking springs of ``tangential`` times S along the face (0: none).
-    """
+    """:meth:`Scene.effective_mass_on` for ``die``, sticking springs ``tangential`` times S."""
     inv_sqrt_m = np.zeros((6, 6))
     inv_sqrt_m[:3, :3] = np.eye(3) / math.sqrt(die.mass)
     inv_sqrt_m[3:, 3:] = _inv_sqrt_spd(die.inertia_body)
