@@ -1,11 +1,8 @@
 """Drilled pips on the d6: spherical-cap cavities, empty or filled flush with paint.
 
-A real die has its pips drilled into the faces: 1 to 6 cavities, 21 in all, so the face with
-six pips is lighter than the face with one and the centre of mass moves toward the one.
-:class:`Pips` describes the cavities; ``Die.standard("d6", pips=...)`` takes a :class:`Pips`
-or a preset name from :data:`DRILLINGS` and returns the die with the exact mass properties of
-the solid cube minus the cavities (plus the paint, for "casino" dice whose pips are filled
-flush). The geometry (vertices, faces) stays the cube's.
+``Die.standard("d6", pips=...)`` takes a :class:`Pips` or a preset of :data:`DRILLINGS` and
+gives the exact mass properties of the cube minus its 21 cavities (plus the paint of casino
+dice); the geometry stays the cube's.
 
 **Layout** (:func:`layout`): pip centres on each face at 0 or ``±offset`` times the face's
 half-width along the face's two axes: 1 in the centre; 2 and 3 on a diagonal; 4 at the
@@ -28,17 +25,14 @@ face  pip centres
 6     (x, ±f, -1) for x in -f, 0, f
 ====  ==========================================================================
 
-The pip pattern is centrally symmetric on every face, so the pips of a face shift the centre
-of mass only along that face's normal: by ``(6 - 1) : (5 - 2) : (4 - 3)`` = 5 : 3 : 1 along
-z, x, y, i.e. toward the 1-2-3 corner, whatever the sizes. The handedness and the rows of the
-6 change only the products and the split of the moments of inertia.
+Each face's pattern is centrally symmetric, so the centre of mass moves toward the 1-2-3
+corner, 5 : 3 : 1 along z, x, y; the handedness and the 6's rows change only the products
+and the split of the moments of inertia.
 
-**Mass** (:func:`drill`): ``mass`` is the die's actual mass as weighed, pips included. With
-``n = 21`` cavities of volume ``V_c``, outer volume ``V = s^3`` and paint density ``rho_p``
-(0 for empty pips), the body's density is ``rho = (mass - rho_p n V_c) / (V - n V_c)``; each
-cavity adds a signed mass ``(rho_p - rho) V_c`` at its centroid and its own inertia; the
-parallel-axis theorem moves everything to the centre of mass. A paint as dense as the body
-leaves the uniform die, exactly.
+**Mass** (:func:`drill`): ``mass`` is the weighed mass. With ``n = 21`` cavities of volume
+``V_c``, outer volume ``V = s^3`` and paint density ``rho_p`` (0: empty), the body's density
+is ``rho = (mass - rho_p n V_c) / (V - n V_c)``; each cavity adds a signed mass
+``(rho_p - rho) V_c`` at its centroid with its own inertia (parallel-axis theorem).
 """
 
 from __future__ import annotations
@@ -66,12 +60,10 @@ SAME_DENSITY = 1e-12
 class Pips:
     """The pips of a d6: identical spherical-cap cavities in the standard layout.
 
-    ``radius`` (m): the opening radius at the face; ``depth`` (m): the cap's depth, in
-    ``(0, radius]`` (at most a hemisphere, the cut of a ball-end drill); ``offset``: the
-    off-centre pips' distance from the face centre along each face axis, as a fraction of the
-    face's half-width, in (0, 1) (default 0.5, see :data:`DRILLINGS`); ``paint_density``
-    (kg/m^3): None for empty (drilled) pips, else the density of a paint filling them flush
-    ("casino" dice; 0 is the same as None); ``shape``: "spherical cap", the only one.
+    ``radius`` (m): the opening radius at the face; ``depth`` (m): in ``(0, radius]`` (at most
+    a hemisphere); ``offset``: the off-centre pips' distance from the face centre along each
+    face axis, a fraction in (0, 1) of the half-width; ``paint_density`` (kg/m^3): None (or 0)
+    for empty pips, else a paint filling them flush; ``shape``: "spherical cap", the only one.
     """
 
     radius: float
@@ -90,10 +82,9 @@ class Pips:
 
 
 class Preset(NamedTuple):
-    """A real die with pips: its :class:`Pips`, its size and density, and the sources.
+    """A real die with pips: its :class:`Pips`, ``size`` (m), ``density`` and the sources.
 
-    ``size`` (m) None means the default d6's; ``density`` (kg/m^3) is the die's mass over its
-    outer volume ``size^3`` (None: the default d6's, 4.5 g at 16 mm).
+    ``density`` (kg/m^3): mass over ``size^3``; None for either: the default d6's.
     """
 
     pips: Pips
@@ -152,8 +143,7 @@ def cap_properties(radius: float, depth: float) -> tuple[float, float, float, fl
 def layout(offset: float = 0.5) -> dict[int, np.ndarray]:
     """Pip centres of each face label 1-6, (k, 3), body frame, in units of the half-width.
 
-    The centres lie on the face planes (one coordinate is ±1, the face's outward normal);
-    see the module's table for the layout and its handedness.
+    On the face planes (one coordinate ±1); the module's table gives the layout.
     """
     f = offset
     corners = [(u, v) for u in (f, -f) for v in (f, -f)]
@@ -172,8 +162,8 @@ def with_defaults(name: str, pips: Pips | str, size: float | None, mass: float |
                   ) -> tuple[Pips, float | None, float | None]:
     """The :class:`Pips` of ``pips`` (a preset name or a :class:`Pips`), with size and mass.
 
-    A preset supplies the size when ``size`` is None and the mass (its density times
-    ``size^3``) when ``mass`` is None. Raises ValueError for a die other than the d6.
+    A preset supplies a ``size`` or ``mass`` left None. Raises ValueError unless ``name`` is
+    "d6".
     """
     if name != "d6":
         raise ValueError(f"pips are modelled on the d6 only, got name={name!r}")
@@ -193,17 +183,16 @@ def with_defaults(name: str, pips: Pips | str, size: float | None, mass: float |
 def drill(size: float, mass: float, pips: Pips) -> tuple[np.ndarray, np.ndarray] | None:
     """The centre of mass and the inertia about it of a d6 of ``size`` drilled with ``pips``.
 
-    ``mass`` is the die's mass as weighed; None when the paint is as dense as the body (the
-    uniform die's). Raises ValueError when the pips overlap each other (``2 radius > offset
-    size/2``, the spacing of the 6's rows) or come nearer the face's edge than their depth
-    (``offset size/2 + radius + depth > size/2``; this also keeps cavities on neighbouring
-    faces apart), or when the paint alone would outweigh ``mass``.
+    ``mass`` is the weighed mass; None when the paint is as dense as the body. Raises
+    ValueError when the pips overlap (``2 radius > offset size/2``), come nearer the face's
+    edge than their depth (``offset size/2 + radius + depth > size/2``), or the paint alone
+    outweighs ``mass``.
     """
     half = size / 2
     _check_fit(pips, half)
     volume, below, axial, transverse = cap_properties(pips.radius, pips.depth)
     centres = np.concatenate(list(layout(pips.offset).values()))
-    normals = np.where(np.abs(centres) == 1.0, centres, 0.0)  # offset < 1: one coordinate ±1
+    normals = np.where(np.abs(centres) == 1.0, centres, 0.0)
     centroids = centres * half - below * normals
     n = len(centroids)
     outer = size**3
@@ -233,8 +222,6 @@ def _check_fit(pips: Pips, half: float) -> None:
                          f"({1e3 * (spacing + pips.radius + pips.depth):g} mm) must be <= "
                          f"size/2 ({1e3 * half:g} mm)")
 
-
-# --- the page -----------------------------------------------------------------------------
 
 SOURCES = (
     "dice-play.com, \"Casino Dice\": http://dice-play.com/DiceCasino.htm (the 2 and 3 "

@@ -5,11 +5,8 @@
     result = simulate_group(scene, dice, state, until="decided")
     result.face      # (B, N): each die's face; 0 for a die not read (leaning on another)
 
-The scene gives the planes, gravity, the scheme and the rest test; its ``die`` is not used (the
-dice are given). Dice touch each other through :class:`DieContact` (penalty springs, damping
-and Coulomb friction, regularised or stick-slip, :mod:`dice_env.physics.group_kernel`). A die that
-ends touching another die with fewer than three corners on the planes leans on it (a
-"cocked" die) and is not read: its ``face`` is 0 and ``read`` False.
+The scene gives the planes, gravity, the scheme and the rest test, not the dice. Dice touch
+each other through :class:`DieContact` (``docs/model.md``, "Several dice in one throw").
 """
 
 from __future__ import annotations
@@ -21,7 +18,7 @@ from typing import ClassVar
 
 import numpy as np
 
-from dice_env.model.checks import as_enum
+from dice_env.model.checks import as_enum, check_type
 from dice_env.model.die import Die
 from dice_env.model.scene import FrictionLaw, Scene, check_material, critical_step
 from dice_env.model.table import DIE_MASS, STIFFNESS, damping_for_restitution
@@ -43,9 +40,8 @@ from dice_env.simulation.simulate import (
     run_kernel,
 )
 
-# Die against die: plastic on plastic. Estimates: no measurement of dice striking dice is
-# known to us. Restitution 0.5, about the die's on a hard table; friction 0.4, within the
-# 0.3-0.5 usual for a rigid polymer on itself.
+# Die against die, plastic on plastic: estimates (no measurement of dice striking dice is known
+# to us): restitution about the die's on a hard table, friction within the polymer's 0.3-0.5.
 DIE_RESTITUTION = 0.5
 DIE_FRICTION = 0.4
 MAX_DICE = 64  # dice in one throw: every pair is tested each step
@@ -57,15 +53,10 @@ TOUCH = 1e-3  # dice released closer than this fraction of the smaller's size to
 class DieContact:
     """The die–die material: stiffness, damping and friction of a contact.
 
-    ``stiffness`` S (N/m per contact), ``damping`` D (N s/m), ``friction`` mu and its
-    ``friction_law`` (:class:`dice_env.model.scene.FrictionLaw`): ``STICK_SLIP`` (default), the
-    table's law for a corner inside another die (tied to where it touched by a spring and
-    damper of ``tangential`` times S and D, slipping at ``mu fn``), so that a die leaning on
-    another stays put, edge-on-edge contacts keeping the regularised law; or ``REGULARIZED``,
-    Coulomb regularised at the scene's ``friction_vmin`` and capped so that a slip stops over
-    a few steps (a die held by another creeps slowly). D defaults to the restitution
-    :data:`DIE_RESTITUTION` of the default die's mass on the table's stiffness
-    (:func:`dice_env.model.table.damping_for_restitution`).
+    ``stiffness`` S (N/m per contact), ``damping`` D (N s/m; default: the restitution
+    :data:`DIE_RESTITUTION` for the default die), ``friction`` mu, its ``friction_law``
+    (:class:`dice_env.model.scene.FrictionLaw`, ``docs/model.md``) and ``tangential``, the
+    stick-slip spring and damper as a fraction of S and D.
     """
 
     stiffness: float = STIFFNESS
@@ -87,21 +78,13 @@ class DieContact:
 
 @dataclass
 class GroupState(DiceArrays):
-    """State of B throws of N dice: :class:`dice_env.State`'s arrays with a die axis.
-
-    ``position``, ``velocity``, ``angular_momentum``, ``angular_velocity`` (B, N, 3) and
-    ``orientation`` (B, N, 3, 3); checked when built
-    (:class:`dice_env.simulation.simulate.DiceArrays`).
-    """
+    """State of B throws of N dice: :class:`~dice_env.simulation.simulate.DiceArrays`, (B, N)."""
 
     LEAD: ClassVar[tuple[str, ...]] = ("B", "N")
 
     @classmethod
     def of(cls, states: Sequence[State]) -> GroupState:
-        """The group whose die ``i`` is ``states[i]``.
-
-        Each a batch of B, e.g. from :meth:`State.release` with that die's scene.
-        """
+        """The group whose die ``i`` is ``states[i]``, each a batch of B (:meth:`State.release`)."""
         if not isinstance(states, Sequence) or not states \
                 or not all(isinstance(s, State) for s in states):
             raise TypeError("states must be a non-empty sequence of State")
@@ -125,21 +108,18 @@ class GroupState(DiceArrays):
 class GroupResult(RunResult):
     """Outcome of B throws of N dice: the fields of :class:`dice_env.Result`, and more.
 
-    Per die (B, N): ``face`` (the label read, 0 where not read), ``read`` (False for a die
-    leaning on another at the end), ``impacts``, ``die_impacts`` (starts of a contact with
-    another die, their centres' relative speed above the rest speed), ``max_penetration``,
-    ``sunk`` (also where the dice overlap deeper than the sink limit); ``touched`` (B, N, P):
-    the die touched plane P (:attr:`Scene.planes`: the floor, then the walls). Per throw
-    (B,): ``settled`` (every die at rest), ``decided`` (no face can change any more),
-    ``rest_time``, ``unstable``, ``energy_rise``, ``overlap`` (deepest die–die overlap along
-    separating axes, m), ``steps``; ``final`` the state at the end.
+    Per die (B, N): ``face`` (0 where not read), ``read`` (False for a die leaning on another
+    at the end), ``impacts``, ``die_impacts`` (contacts with another die faster than the rest
+    speed), ``max_penetration``, ``sunk`` (also a die-die overlap beyond the sink limit);
+    ``touched`` (B, N, P): the die touched plane P (:attr:`Scene.planes`). Per throw (B,):
+    ``settled`` (every die at rest), ``decided``, ``rest_time``, ``unstable``,
+    ``energy_rise``, ``overlap`` (deepest die–die overlap, m), ``steps``; ``final``.
 
-    The first die–die contact: ``meet_dice`` (B, 2) the pair (-1 where no dice touched),
-    ``meet_steps`` (B, 2) the steps done when it starts and when it ends (-1: none, or the
-    pair still touching at the end), ``meet_velocity`` and ``meet_spin`` (B, 2, N, 3): every
-    die's velocity and angular velocity (world frame) then, before the contact's first force
-    and after its last. With recording: ``t`` (n,), ``x_cm`` (B, n, N, 3), ``orientations``
-    (B, n, N, 3, 3).
+    The first die–die contact: ``meet_dice`` (B, 2) the pair (-1: none), ``meet_steps`` (B, 2)
+    the steps done at its start and end (-1: none, or still touching), ``meet_velocity`` and
+    ``meet_spin`` (B, 2, N, 3): every die's velocity and angular velocity (world) before its
+    first force and after its last. Recorded: ``t`` (n,), ``x_cm`` (B, n, N, 3),
+    ``orientations`` (B, n, N, 3, 3).
     """
 
     final: GroupState
@@ -157,29 +137,23 @@ class GroupResult(RunResult):
 
 
 def pair_mass(scene: Scene, dice: Sequence[Die]) -> float:
-    """The smallest reduced effective mass of a pair of ``dice`` (kg; inf for one die).
-
-    Each die's effective mass is its smallest per contact vertex on the floor
-    (:meth:`Scene.effective_mass_on`).
-    """
+    """The smallest reduced :attr:`Scene.effective_mass` of a pair of ``dice`` (kg; inf for one)."""
     masses = [scene.with_(die=die).effective_mass for die in _dice(dice)]
     return min((m_i * m_j / (m_i + m_j) for i, m_i in enumerate(masses)
                 for m_j in masses[i + 1:]), default=math.inf)
 
 
 def group_step(scene: Scene, dice: Sequence[Die], contact: DieContact = DieContact()) -> float:
-    """The step of a throw of ``dice``.
+    """The step of a throw of ``dice``: :meth:`Scene.step_within` the least critical step.
 
-    ``scene.dt``, or ``scene.safety`` times the least critical step of every die on every
-    plane and of every pair of dice against each other. A pair's contact moves the reduced
-    mass of the two dice's effective masses (:meth:`Scene.effective_mass_on`, the floor's).
-    A contact whose step comes out as 0 (a damping so large that it underflows) is refused.
+    Of every die on every plane and every pair (on :func:`pair_mass`); a pair's step that
+    underflows to 0 is refused.
     """
     critical = min(scene.with_(die=die).critical_dt for die in _dice(dice))
     if len(dice) > 1:
         reduced = pair_mass(scene, dice)
         pair = critical_step(contact.stiffness, contact.damping, reduced, scene.scheme)
-        if not scene.safety * pair > 0:  # a damping so large that the step underflows
+        if not scene.safety * pair > 0:
             raise ValueError(f"the step of die against die comes out as {pair:g} s from the "
                              f"contact's stiffness {contact.stiffness:g} N/m and damping "
                              f"{contact.damping:g} N s/m (DieContact) on the dice's reduced "
@@ -188,38 +162,23 @@ def group_step(scene: Scene, dice: Sequence[Die], contact: DieContact = DieConta
     return scene.step_within(critical, "the dice on the planes and against each other")
 
 
-def simulate_group(
-    scene: Scene,
-    dice: Sequence[Die],
-    state: GroupState,
-    *,
-    contact: DieContact = DieContact(),
-    t_max: float | None = None,
-    until: str = "rest",
-    free_flight: bool = True,
-    record_every: int = 0,
-    orientations: bool = False,
-    num_threads: int | None = None,
-) -> GroupResult:
+def simulate_group(scene: Scene, dice: Sequence[Die], state: GroupState, *,
+                   contact: DieContact = DieContact(), t_max: float | None = None,
+                   until: str = "rest", free_flight: bool = True, record_every: int = 0,
+                   orientations: bool = False, num_threads: int | None = None) -> GroupResult:
     """Run B throws of the N ``dice`` together; ``state`` is not modified.
 
-    Keywords as :func:`dice_env.simulate`; ``free_flight`` takes the steps in which no die
-    touches a plane or another die (their bounding spheres apart) at once, in closed form.
-    ``until`` (:data:`GROUP_UNTIL`): ``"rest"`` ends a throw when every die is at rest,
-    ``"decided"`` also when no energy left in it can change any die's face (see
-    :mod:`dice_env.physics.group_kernel`), ``"t_max"`` at the time limit alone.
-    ``record_every`` > 0 records the centres (and with ``orientations`` the orientations).
-    Refused: dice that overlap at the start, more than :data:`MAX_DICE` dice, a step count
-    above :data:`dice_env.model.scene.MAX_STEPS`, records above
-    :data:`dice_env.simulation.simulate.MAX_RECORD_BYTES`, a die-die step that underflows
-    (:func:`group_step`), with ``until="decided"`` a gravity whose energies overflow.
+    Keywords as :func:`dice_env.simulate`; ``until`` in :data:`GROUP_UNTIL` (``"decided"``:
+    when no energy left can change any die's face); ``record_every`` > 0 records the centres
+    (and the ``orientations``). Refused besides: dice that overlap at the start, more than
+    :data:`MAX_DICE` dice, a die-die step that underflows (:func:`group_step`), with
+    ``until="decided"`` a gravity whose energies overflow.
     """
     dice = _dice(dice)
     threads = check_run(scene, state, GroupState, record_every, num_threads,
                         free_flight=free_flight, orientations=orientations)
     ends = ending(until, GROUP_UNTIL)
-    if not isinstance(contact, DieContact):
-        raise TypeError(f"contact must be a DieContact, got {type(contact).__name__}")
+    check_type("contact", contact, DieContact)
     if state.n_dice != len(dice):
         raise ValueError(f"state holds {state.n_dice} dice per throw, dice {len(dice)}")
     dt = group_step(scene, dice, contact)
@@ -283,10 +242,7 @@ def _pair(scene: Scene, dice: tuple[Die, ...], contact: DieContact,
 
 
 def _hold_steps(hold: float, n_steps: int) -> int:
-    """Quiet steps before rest, ``ceil(hold)``; a hold beyond the run (never rest) as ``n_steps``.
-
-    A hold of 1e20 s would not fit the kernel's integer.
-    """
+    """Quiet steps before rest, ``ceil(hold)``; beyond the run ``n_steps`` (fits an int64)."""
     return n_steps if hold >= n_steps else math.ceil(hold)
 
 
@@ -327,12 +283,9 @@ def _bodies(scenes: list[Scene], decide: bool) -> group_kernel.Bodies:
     return group_kernel.Bodies(
         vertices=vertices, n_vertices=np.array([len(d.vertices) for d in dice]),
         faces=faces, n_faces=np.array([d.n_faces for d in dice]),
-        mass=np.array([p.mass for p in packed]),
-        inv_inertia=np.stack([p.inv_inertia for p in packed]),
-        inv_iso=np.array([p.inv_iso for p in packed]),
-        inv_i_min=np.array([p.inv_i_min for p in packed]),
-        r_max=np.array([p.r_max for p in packed]),
-        reads_down=np.array([p.reads_down for p in packed]), lock=lock, floor=floor)
+        lock=lock, floor=floor, **{name: np.array([getattr(p, name) for p in packed]) for name in
+                                   ("mass", "inv_inertia", "inv_iso", "inv_i_min", "r_max",
+                                    "reads_down")})
 
 
 def _hulls(scenes: list[Scene], bodies: group_kernel.Bodies) -> group_kernel.Hulls:
@@ -374,11 +327,7 @@ def _distinct_axes(normals: np.ndarray, tol: float = 1e-9) -> np.ndarray:
 
 def _edge_classes(vertices: np.ndarray, edges: np.ndarray,
                   tol: float = 1e-9) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The edges grouped by direction.
-
-    Returns the order that puts parallel edges together, where each class starts in it (then
-    the end), and each class's unit direction.
-    """
+    """The edges by direction: their order, each class's start in it (then the end), its axis."""
     directions = vertices[edges[:, 1]] - vertices[edges[:, 0]]
     directions /= np.linalg.norm(directions, axis=1, keepdims=True)
     classes: list[list[int]] = []
@@ -395,10 +344,7 @@ def _edge_classes(vertices: np.ndarray, edges: np.ndarray,
 
 
 def _check_apart(dice: tuple[Die, ...], state: GroupState) -> None:
-    """Refuse dice that start inside each other.
-
-    Overlapping by more than :data:`TOUCH` of the smaller die's size; touching counts as apart.
-    """
+    """Refuse dice that overlap by more than :data:`TOUCH` of the smaller one's size."""
     depth = overlaps(dice, state)
     for i in range(len(dice)):
         for j in range(i + 1, len(dice)):
@@ -412,8 +358,7 @@ def _check_apart(dice: tuple[Die, ...], state: GroupState) -> None:
 def overlaps(dice: Sequence[Die], state: GroupState) -> np.ndarray:
     """How deep each pair of ``dice`` overlaps in ``state``: (B, N, N), m, <= 0 where apart.
 
-    Separating axes: two convex dice overlap by the least of their overlaps along the face
-    normals of both and the cross products of their edges (parallel edges give no axis).
+    The least overlap along the separating axes: both dice's face normals and edge crosses.
     """
     dice = _dice(dice)
     corners = [state.position[:, i, None, :] + np.einsum(

@@ -15,7 +15,15 @@ from typing import ClassVar, NamedTuple, Self
 import numba
 import numpy as np
 
-from dice_env.model.checks import as_batch, check_bool, check_choice, check_finite, check_range
+from dice_env.model.checks import (
+    as_batch,
+    check_bool,
+    check_choice,
+    check_finite,
+    check_int,
+    check_range,
+    check_type,
+)
 from dice_env.model.rotations import orthonormality_error
 from dice_env.model.scene import ContactLaw, FrictionLaw, Scene, Scheme
 from dice_env.physics import group_kernel, kernel, vector_kernel
@@ -28,9 +36,8 @@ class DiceArrays:
 
     ``position`` centre of mass; ``velocity`` its velocity; ``angular_momentum`` about it;
     ``orientation`` body-to-world rotations (lead, 3, 3); ``angular_velocity`` the ω used for
-    corner velocities. Checked when built: every array is converted to float64, has the
-    shape (lead, 3) (or (lead, 3, 3)) with one lead shape, at least one die, finite values,
-    and ``orientation`` holds rotations (to :data:`ROTATION_TOL`).
+    corner velocities. Checked when built: float64 arrays of shape (lead, 3) (or (lead, 3, 3))
+    sharing one lead shape, at least one die, finite, rotations to :data:`ROTATION_TOL`.
     """
 
     LEAD: ClassVar[tuple[str, ...]] = ("B",)
@@ -72,11 +79,7 @@ class DiceArrays:
         return self.position.shape[0]
 
     def copy(self) -> Self:
-        """An independent copy (checked again, so changes made to this one are caught).
-
-        Its arrays are C-contiguous whatever the layout of these, so that the kernels, which
-        take them as they are, compile for one layout.
-        """
+        """An independent, checked copy with C-contiguous arrays (the kernels' one layout)."""
         return type(self)(*(np.array(a, order="C") for a in self._arrays()))
 
     def _arrays(self) -> tuple[np.ndarray, ...]:
@@ -86,30 +89,20 @@ class DiceArrays:
 
 @dataclass
 class State(DiceArrays):
-    """State of a batch of B dice (world frame, SI units in the default scene).
+    """State of a batch of B dice (world frame): the :class:`DiceArrays` with lead axis B.
 
-    The arrays of :class:`DiceArrays` with one leading axis B: ``position`` (B, 3),
-    ``velocity`` (B, 3), ``angular_momentum`` (B, 3), ``orientation`` (B, 3, 3),
-    ``angular_velocity`` (B, 3) (``I_world^-1 L`` except where a paper script starts its
-    corners without spin).
+    ``angular_velocity`` is ``I_world^-1 L`` except where a paper script starts without spin.
     """
 
     @classmethod
-    def release(
-        cls,
-        scene: Scene,
-        position: np.ndarray,
-        velocity: np.ndarray,
-        angular_velocity: np.ndarray | None = None,
-        orientation: np.ndarray | None = None,
-    ) -> State:
+    def release(cls, scene: Scene, position: np.ndarray, velocity: np.ndarray,
+                angular_velocity: np.ndarray | None = None,
+                orientation: np.ndarray | None = None) -> State:
         """Dice released at ``position`` with ``velocity`` and ``angular_velocity`` (rad/s).
 
-        Each argument is (3,) or (B, 3) (orientation (3, 3) or (B, 3, 3)) and is broadcast to
-        the batch; ``angular_velocity`` defaults to zero, ``orientation`` to the identity.
-        A die must start above the table or touching it: no corner deeper than
-        :data:`RELEASE_SINK` of the die's size, or than its weight presses one corner in
-        (``m g / S``), whichever is more.
+        Each argument is (3,) or (B, 3) (orientation (3, 3) or (B, 3, 3)), broadcast to the
+        batch; default no spin, identity orientation. No corner may start deeper in the table
+        than :data:`RELEASE_SINK` of the die's size or ``m g / S``, whichever is more.
         """
         position = as_batch("position", position, (3,))
         velocity = as_batch("velocity", velocity, (3,))
@@ -160,22 +153,15 @@ class RunResult:
 class Result(RunResult):
     """Outcome of a batch of throws (arrays over the batch, B).
 
-    - ``face``: the label read at the end (the face up against gravity, whatever the floor's
-      tilt; the d4's face down);
-    - ``settled``: came to rest; ``rest_time``: when the rest began (s; the time simulated if
-      not settled);
-    - ``decided``: ended by ``until="decided"`` with too little energy left to change face;
-    - ``impacts``: airborne-to-contact transitions;
-    - ``unstable``: energy rose beyond the scene's tolerance, or the state stopped being finite;
-      ``energy_rise``: the largest rise above the start in units of that tolerance;
-    - ``max_penetration``: deepest corner below a plane (m); ``sunk``: deeper than the
-      scene's :attr:`~dice_env.model.scene.Scene.sink_limit` (a contact too soft for the load or the
-      impact: physics the model cannot represent; never count such a throw's face);
-    - ``steps``: steps taken; ``final``: the state at the end.
-
-    With recording: ``t`` (n,), ``x_cm`` (B, n, 3), ``energy`` (B, n) as the listing computes
-    it (kinetic + m g z, no ground springs), ``orientations`` (B, n, 3, 3), ``nodes``
-    (B, n, 8, 3).
+    ``face``: the label read at the end (against gravity; the d4's face down); ``settled``:
+    came to rest; ``rest_time``: when the rest began (s; the time simulated if not settled);
+    ``decided``: ended by ``until="decided"``; ``impacts``: airborne-to-contact transitions;
+    ``unstable``: energy rose beyond the scene's tolerance or the state stopped being finite;
+    ``energy_rise``: the largest rise in units of that tolerance; ``max_penetration``: deepest
+    corner below a plane (m); ``sunk``: deeper than the scene's
+    :attr:`~dice_env.model.scene.Scene.sink_limit` (never count such a face); ``steps``;
+    ``final``: the state at the end. Recorded: ``t`` (n,), ``x_cm`` (B, n, 3), ``energy``
+    (B, n; kinetic + m g z), ``orientations`` (B, n, 3, 3), ``nodes`` (B, n, 8, 3).
     """
 
     final: State
@@ -186,49 +172,29 @@ class Result(RunResult):
     nodes: np.ndarray | None = None
 
 
-def simulate(
-    scene: Scene,
-    state: State,
-    *,
-    t_max: float | None = None,
-    until: str = "rest",
-    record_every: int = 0,
-    record: tuple[str, ...] = ("energy",),
-    num_threads: int | None = None,
-    free_flight: bool = True,
-    device: str = "cpu",
-) -> Result:
+def simulate(scene: Scene, state: State, *, t_max: float | None = None, until: str = "rest",
+             record_every: int = 0, record: tuple[str, ...] = ("energy",),
+             num_threads: int | None = None, free_flight: bool = True,
+             device: str = "cpu") -> Result:
     """Run a batch of throws; ``state`` is not modified.
 
-    ``t_max`` overrides the scene's time limit. ``until`` says what ends a die's run before it
-    (:data:`ENDINGS`): ``"rest"`` when it has been quiet for the hold ``scene.rest.hold``;
-    ``"early_rest"`` as soon as its energy proves it stays at rest (fair die on a horizontal
-    table; else as ``"rest"``): the same outcome (face, rest time, impacts) without the cost
-    of the hold, but the final state is taken then, still vibrating within the rest
-    thresholds; ``"decided"`` as soon as its face up is decided (or at rest): its total energy
-    (kinetic, potential and ground springs), which the ground can only store or dissipate, is
-    below the least energy of any orientation in which its face up ties with another
-    (:func:`lock_energy`; horizontal table, fair or loaded die). Its face is the one it would
-    rest on, at a fraction of the cost; the final state, rest time and impacts are those of
-    that moment, and it is not ``settled``. ``"t_max"``: nothing, the time limit alone.
+    ``t_max`` overrides the scene's time limit. ``until`` (:data:`ENDINGS`) ends a die's run
+    before it: ``"rest"`` after the hold ``scene.rest.hold``; ``"early_rest"`` as soon as its
+    energy proves rest (fair die, horizontal table; same face, rest time and impacts, the
+    final state still vibrating); ``"decided"`` as soon as its energy is below
+    :func:`lock_energy` of its face (``docs/performance.md``; not ``settled``, the final state
+    that moment's); ``"t_max"``: the time limit alone.
 
     ``record_every`` > 0 stores the centre of mass every that many steps, plus what ``record``
-    names among "energy", "orientations", "nodes". ``num_threads`` caps numba's threads for
-    this call (1 to ``NUMBA_NUM_THREADS``; default: all of them); a single throw or one thread
-    runs on the calling thread, and so do a batch of at most :data:`SERIAL_FIRST` throws while
-    the parallel loop is not compiled and every run in a process forked after its parent ran
-    threads (GNU OpenMP cannot be used across a fork; :func:`_forked`). ``free_flight`` takes
-    the contact-free steps in analytic jumps (gated law, or no damping, where the paper law is
-    the same); False steps them one by one.
+    names among :data:`RECORDS`. ``num_threads``: 1 to ``NUMBA_NUM_THREADS`` (default all); see
+    :func:`run_kernel` for the runs kept on the calling thread. ``free_flight`` takes the
+    contact-free steps in analytic jumps. ``device``: ``"cpu"`` or ``"cuda"`` (one die per GPU
+    thread, :mod:`dice_env.physics.cuda_kernel`, the extra ``dice_env[cuda]``; no records).
 
-    ``device``: ``"cpu"`` (numba's threads) or ``"cuda"``: one die per thread of an NVIDIA GPU
-    (:mod:`dice_env.physics.cuda_kernel`; the extra ``dice_env[cuda]``), the same physics to
-    round-off, without records; ``num_threads`` does not apply there.
-
-    Refused before any work (``ValueError``/``TypeError`` naming the argument): a step count
-    above :data:`dice_env.model.scene.MAX_STEPS`, records above :data:`MAX_RECORD_BYTES`, a state
-    starting deeper in the table than the scene's sink limit. Ctrl-C ends a long run within
-    milliseconds and raises ``KeyboardInterrupt``.
+    Refused before any work (naming the argument): more than
+    :data:`dice_env.model.scene.MAX_STEPS` steps, records above :data:`MAX_RECORD_BYTES`, a
+    state deeper in a plane than the scene's sink limit. Ctrl-C raises ``KeyboardInterrupt``
+    within milliseconds.
     """
     threads = check_run(scene, state, State, record_every, num_threads,
                         free_flight=free_flight)
@@ -252,8 +218,7 @@ def simulate(
             inputs = (*inputs[:-1], vector_kernel.stop_tests(stops))
         run_kernel("paper" if paper else "die", inputs, outcome, batch=b, threads=threads,
                    work=b * n_steps)
-    fields = {"energy": records.energy, "orientations": records.orientation,
-              "nodes": records.nodes}
+    fields = {"energy": records.energy, "orientations": records.orientation, "nodes": records.nodes}
     return Result(face=scene.die.face_read(out.orientation, UP), final=out,
                   **outcome_fields(scene, outcome, scene.die.size),
                   **recorded(record_every, records, scene.step,
@@ -285,11 +250,7 @@ def ending(until: object, allowed: tuple[str, ...] = tuple(ENDINGS)) -> Ending:
 
 def pack_run(scene: Scene, *, n_steps: int, until: str = "rest",
              free_flight: bool = True) -> tuple[kernel.Options, kernel.Stops]:
-    """The kernel's integration options and stop rules for a run of ``n_steps`` in ``scene``.
-
-    The keywords are :func:`simulate`'s. With :func:`pack_scene`, the one place that turns a
-    scene into the kernel's groups.
-    """
+    """The kernel's options and stop rules for ``n_steps``; keywords as :func:`simulate`'s."""
     ends = ending(until)
     ground, dt = scene.ground, scene.step
     options = kernel.Options(
@@ -315,12 +276,11 @@ def pack_scene(scene: Scene) -> tuple[kernel.Body, kernel.Contact]:
     """The kernel's die and contact groups for ``scene`` (see :mod:`dice_env.physics.kernel`)."""
     die, ground = scene.die, scene.ground
     inertia = die.inertia_body
-    vertices = np.ascontiguousarray(die.vertices_body)
     body = kernel.Body(
-        vertices=vertices, mass=float(die.mass), inv_inertia=np.linalg.inv(inertia),
+        vertices=np.ascontiguousarray(die.vertices_body), mass=float(die.mass),
+        inv_inertia=np.linalg.inv(inertia),
         inv_iso=1.0 / float(inertia[0, 0]) if die.is_isotropic else 0.0,
-        inv_i_min=float(1.0 / np.linalg.eigvalsh(inertia)[0]),
-        r_max=die.reach,
+        inv_i_min=float(1.0 / np.linalg.eigvalsh(inertia)[0]), r_max=die.reach,
         faces=np.ascontiguousarray(die.face_normals), reads_down=bool(die.reads_down))
     contact = kernel.Contact(
         planes=np.array([[*plane.normal, plane.offset, plane.stiffness, plane.damping,
@@ -347,28 +307,22 @@ def _records(record: tuple[str, ...], record_every: int, b: int, n_steps: int,
 
 def check_run(scene: Scene, state: object, kind: type, record_every: object,
               num_threads: int | None, **flags: object) -> int:
-    """Check the keywords that :func:`simulate` and ``simulate_group`` share.
+    """Check the keywords :func:`simulate` and ``simulate_group`` share; the thread count.
 
-    ``state`` must be a ``kind``, ``record_every`` an int >= 0, each of ``flags`` a bool;
-    returns the run's thread count (:func:`thread_count`).
+    ``state`` must be a ``kind``, ``record_every`` an int >= 0, each of ``flags`` a bool.
     """
-    if not isinstance(scene, Scene):
-        raise TypeError(f"scene must be a Scene, got {type(scene).__name__}")
-    if not isinstance(state, kind):
-        raise TypeError(f"state must be a {kind.__name__}, got {type(state).__name__}")
-    if not isinstance(record_every, (int, np.integer)) or isinstance(record_every, bool) \
-            or record_every < 0:
-        raise ValueError(f"record_every must be an int >= 0, got {record_every!r}")
+    check_type("scene", scene, Scene)
+    check_type("state", state, kind)
+    check_int("record_every", record_every, 0)
     for name, flag in flags.items():
         check_bool(name, flag)
     return thread_count(num_threads)
 
 
 def record_plan(record_every: int, n_steps: int, floats: int, what: str) -> tuple[int, int]:
-    """The kernel's record stride and the number of states recorded in ``n_steps``.
+    """The kernel's record stride (beyond the run: none) and the states recorded in ``n_steps``.
 
-    Every ``record_every`` steps (0: none; a stride beyond the run records nothing), each
-    state ``floats`` numbers of ``what``; refused above :data:`MAX_RECORD_BYTES`.
+    Each state is ``floats`` numbers of ``what``; refused above :data:`MAX_RECORD_BYTES`.
     """
     n_rec = n_steps // record_every if record_every else 0
     size = 8 * n_rec * floats
@@ -382,10 +336,7 @@ def record_plan(record_every: int, n_steps: int, floats: int, what: str) -> tupl
 
 def recorded(record_every: int, records: kernel.Records | group_kernel.GroupRecords,
              dt: float, fields: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
-    """A result's records: ``t``, ``x_cm`` and ``fields``; none when ``record_every`` is 0.
-
-    ``t``: the times (s) of the states, every ``stride`` steps of ``dt`` from the first.
-    """
+    """A result's records: ``t`` (s), ``x_cm`` and ``fields``; none when ``record_every`` is 0."""
     if not record_every:
         return {}
     return {"t": np.arange(1, records.x.shape[1] + 1) * (records.stride * dt),
@@ -395,8 +346,8 @@ def recorded(record_every: int, records: kernel.Records | group_kernel.GroupReco
 def blank_outcome(scene: Scene, sink: np.ndarray, size: float) -> dict[str, np.ndarray]:
     """The outcome arrays every kernel starts from, for dice ``sink`` (m) deep at the start.
 
-    ``sink`` (B,) or (B, N): each die's deepest corner in a plane (:meth:`Scene.sink`);
-    refused deeper than the scene's sink limit of ``size``, the (smallest) die's size.
+    ``sink`` (B,) or (B, N) (:meth:`Scene.sink`) is refused beyond the scene's sink limit of
+    ``size``, the (smallest) die's size.
     """
     if sink.max() > scene.sink_limit * size:
         at = np.unravel_index(int(sink.argmax()), sink.shape)
@@ -413,10 +364,9 @@ def blank_outcome(scene: Scene, sink: np.ndarray, size: float) -> dict[str, np.n
 
 def outcome_fields(scene: Scene, outcome: kernel.Outcome | group_kernel.GroupOutcome,
                    size: float) -> dict[str, np.ndarray]:
-    """The :class:`RunResult` fields a kernel's ``outcome`` gives, but ``face`` and ``final``.
+    """The :class:`RunResult` fields of a kernel's ``outcome`` but ``face`` and ``final``.
 
-    The energy rise in units of the scene's tolerance (unstable above 1); sunk deeper than
-    its sink limit of ``size``, the (smallest) die's size.
+    ``size``: the (smallest) die's size, for ``sunk``.
     """
     energy_rise = outcome.energy_rise / scene.energy_tol
     return {"settled": outcome.status == kernel.SETTLED,
@@ -502,10 +452,7 @@ def thread_count(num_threads: int | None) -> int:
     most = numba.config.NUMBA_NUM_THREADS
     if num_threads is None:
         return most
-    if (not isinstance(num_threads, (int, np.integer)) or isinstance(num_threads, bool)
-            or not 1 <= num_threads <= most):
-        raise ValueError(f"num_threads must be an int in [1, {most}] (NUMBA_NUM_THREADS) or "
-                         f"None, got {num_threads!r}")
+    check_int("num_threads", num_threads, 1, most, also=" (NUMBA_NUM_THREADS) or None")
     return int(num_threads)
 
 
@@ -513,12 +460,9 @@ def run_kernel(kind: str, inputs: tuple, outcome: tuple, *, batch: int, threads:
                work: int) -> None:
     """Run the CPU kernel of ``kind`` (:data:`BACKENDS`) on ``inputs`` into ``outcome``.
 
-    On the calling thread for a batch of one, one thread, a batch of at most
-    :data:`SERIAL_FIRST` while ``parallel`` is neither compiled nor in numba's cache (the same
-    results, without waiting for that compile), or in a process forked after its parent ran
-    threads (:func:`_forked`); in parallel otherwise. A run of more than
-    ``_LONG_RUN`` die-steps of ``work`` can be interrupted (:func:`_run_interruptibly`). A
-    kernel about to compile is said on stderr first (:data:`COMPILES`).
+    Serially for a batch of one, one thread, a batch of at most :data:`SERIAL_FIRST` while
+    the parallel loop is not compiled, or after a fork (:func:`_forked`). A compile is
+    announced (:data:`COMPILES`); ``work`` (die-steps) decides if Ctrl-C is watched for.
     """
     parallel, serial = BACKENDS[kind]
     args = (*inputs, outcome)
@@ -533,10 +477,8 @@ def _run_interruptibly(run: Callable, args: tuple, abort: np.ndarray, threads: i
                        long: bool) -> None:
     """Call the kernel ``run(*args)`` on ``threads`` threads, ending early on Ctrl-C.
 
-    A long run goes on a worker thread (the kernel releases the GIL) while this one waits
-    where Python can take a signal; on ``KeyboardInterrupt`` the kernel's ``abort`` flag ends
-    every die within a few thousand steps and the interrupt is raised again. A short run
-    is called directly (a thread costs about 0.1 ms).
+    A ``long`` run goes on a worker thread (the kernel releases the GIL) so that this one can
+    take the signal and set the kernel's ``abort`` flag; a short one is called directly.
     """
     def call() -> None:
         previous = numba.get_num_threads()  # per thread in numba
@@ -584,12 +526,9 @@ _cached_pack = functools.lru_cache(maxsize=64)(pack_scene)
 def _rest_energy(scene: Scene, early_rest: bool) -> tuple[float, float]:
     """Lowest total energy of the die and the excess above it that proves rest (0: none).
 
-    For a fair, isotropic die on a horizontal table whose faces all have ``k`` vertices, the
-    lowest energy is flat on a face, each vertex carrying ``1/k`` of the weight:
-    ``m g h - (m g)^2 / (2 k S)``. With less than ``(m g)^2 / (2 k S)`` above it the die
-    cannot lift off, and with kinetic energy below ``v^2 / (2 (1/m + r_max^2 / I))`` no vertex
-    moves at ``v`` (Cauchy-Schwarz on ``|u| + |w| r_max``). Half the smaller of the two allows
-    for the scheme's energy wobble. Walls can only hold the die higher.
+    Fair, isotropic die on a horizontal table, ``k`` vertices a face: lowest flat on a face,
+    ``m g h - (m g)^2 / (2 k S)``; below ``(m g)^2 / (2 k S)`` above it no lift-off, below
+    ``v^2 / (2 (1/m + r_max^2 / I))`` no vertex at ``v``; half the smaller, for the wobble.
     """
     die, ground = scene.die, scene.ground
     corners = {len(face) for face in die.faces}
@@ -609,15 +548,10 @@ LOCK_MARGIN = 0.25  # the energy's rise after a decision: <= 0.04 of the barrier
 def lock_energy(scene: Scene, margin: float = LOCK_MARGIN) -> np.ndarray:
     """Total energy (J) below which each face read can no longer change, (F,) in label order.
 
-    A die stops showing ``F`` up only through an orientation in which ``F`` ties with an
-    adjacent face, with the centre of mass at least ``Die.tipping_heights[F]`` above the
-    lowest corner; that corner sinks ``d`` into the ground at a spring energy of ``S d^2 / 2``,
-    so such an orientation holds at least ``E_tie = m g h_tip - (m g)^2 / (2 S)`` (potential
-    energy above the plane, the minimum over ``d``). Every ground force stores energy in a
-    spring or dissipates it, so a die below ``E_tie`` keeps its face for good. The threshold is
-    lowered by ``margin`` of the barrier ``m g (h_tip - h_rest)`` against the scheme's energy
-    wobble. ``-inf`` (never) unless the table is horizontal (on a slope gravity does work as
-    the die slides), with gravity and rotation.
+    ``m g h_tip - (m g)^2 / (2 S)`` (:attr:`~dice_env.model.die.Die.tipping_heights`)
+    lowered by ``margin`` (in [0, 1]) of the barrier ``m g (h_tip - h_rest)``
+    (``docs/performance.md``); ``-inf`` unless the table is horizontal, with gravity and
+    rotation.
     """
     check_range("margin", margin, 0.0, 1.0)
     die, ground = scene.die, scene.ground
