@@ -1,9 +1,6 @@
-"""Convex polyhedra as vertex sets: hull faces, face normals, and the uniform solid's mass.
+"""Convex polyhedra as (N, 3) corner arrays: hull faces, face normals, the uniform solid's mass.
 
-Pure numpy. A polyhedron is an (N, 3) array of its corners; :func:`convex_faces` finds its
-faces (polygons, coplanar triangles merged) and refuses any set that is not the corner set of
-a convex solid. :func:`mass_properties` integrates the uniform solid exactly (tetrahedra from
-an interior point). The generators return the standard dice shapes at an arbitrary scale.
+Pure numpy; the generators return the standard dice shapes at an arbitrary scale.
 """
 
 from __future__ import annotations
@@ -23,11 +20,10 @@ GOLDEN = (1.0 + math.sqrt(5.0)) / 2.0
 def convex_faces(points: np.ndarray, name: str = "vertices") -> tuple[tuple[int, ...], ...]:
     """Faces of the convex hull of ``points`` (N, 3), as tuples of point indices.
 
-    Each face lists its corners counter-clockwise seen from outside; faces come in the
-    lexicographic order of their sorted index tuples. Coplanar points (within
-    :data:`TOLERANCE` of the extent) make one polygon face. Raises ``ValueError`` naming
-    ``name`` unless the points are 4 to :data:`MAX_VERTICES` finite, distinct points, not all in
-    one plane, each a corner of the hull (none inside it, on a face or on an edge).
+    Corners counter-clockwise seen from outside, faces in the order of their sorted index
+    tuples; points coplanar within :data:`TOLERANCE` make one face. Raises ``ValueError``
+    naming ``name`` unless the points are 4 to :data:`MAX_VERTICES` finite, distinct points,
+    not all in one plane, each a corner of the hull.
     """
     points = checked_points(points, name)
     diameter = _diameter(points)
@@ -91,15 +87,13 @@ def edges(faces: tuple[tuple[int, ...], ...]) -> np.ndarray:
     return np.array(sorted(pairs), dtype=np.int64)
 
 
-def mass_properties(
-    points: np.ndarray, faces: tuple[tuple[int, ...], ...]
-) -> tuple[float, np.ndarray, np.ndarray]:
+def mass_properties(points: np.ndarray, faces: tuple[tuple[int, ...], ...]
+                    ) -> tuple[float, np.ndarray, np.ndarray]:
     """Volume, centroid (3,) and inertia tensor per unit mass about the centroid (3, 3).
 
-    Of the uniform solid, exact up to rounding: the faces are fanned into triangles, each
-    making a tetrahedron with the mean of the points; a tetrahedron ``(0, a, b, c)`` has
-    volume ``det[a, b, c] / 6`` and second moment ``V/20 (a a^T + b b^T + c c^T + s s^T)``,
-    ``s = a + b + c``.
+    Of the uniform solid, exactly: tetrahedra ``(0, a, b, c)`` from the mean point to each
+    face's fan have volume ``det[a, b, c] / 6`` and second moment
+    ``V/20 (a a^T + b b^T + c c^T + s s^T)``, ``s = a + b + c``.
     """
     ref = points.mean(axis=0)
     tri = np.array([[face[0], face[k], face[k + 1]] for face in faces
@@ -122,8 +116,6 @@ def point_inertia(r: np.ndarray) -> np.ndarray:
     """Inertia of a unit point mass at ``r`` (3,) about the origin: ``|r|^2 I - r r^T``."""
     return r @ r * np.eye(3) - np.outer(r, r)
 
-
-# --- the standard shapes (arbitrary scale, centred) ---------------------------------------
 
 def tetrahedron() -> np.ndarray:
     """Regular tetrahedron, edge ``2 sqrt(2)``: alternate corners of the cube ``(+-1)^3``."""
@@ -151,10 +143,8 @@ def pentagonal_trapezohedron(apex: float = 1.0 + math.cos(math.pi / 5)) -> np.nd
     """Pentagonal trapezohedron (the d10): apexes ``(0, 0, +-apex)``, a zigzag ring of radius 1.
 
     The ring's upper corners sit at azimuths ``72 k - 36`` degrees, the lower ones at ``72 k``,
-    at heights ``+-z0`` with ``z0 = apex (1 - cos 36) / (1 + cos 36)`` (what makes each kite
-    planar). The default apex, ``1 + cos 36``, gives the dual of the uniform pentagonal
-    antiprism (``z0 = 1 - cos 36``); kites are then centred on azimuths ``72 k`` (from the
-    upper apex) and ``72 k + 36`` (from the lower one).
+    at heights ``+-z0``, ``z0 = apex (1 - cos 36) / (1 + cos 36)`` (planar kites). The default
+    apex gives the dual of the uniform pentagonal antiprism.
     """
     c = math.cos(math.pi / 5)
     z0 = apex * (1 - c) / (1 + c)
@@ -164,8 +154,6 @@ def pentagonal_trapezohedron(apex: float = 1.0 + math.cos(math.pi / 5)) -> np.nd
     lower = np.column_stack([np.cos(angles), np.sin(angles), np.full(5, -z0)])
     return np.vstack([[[0.0, 0.0, apex], [0.0, 0.0, -apex]], upper, lower])
 
-
-# --- helpers ------------------------------------------------------------------------------
 
 def _diameter(points: np.ndarray) -> float:
     return float(np.ptp(points, axis=0).max())
@@ -180,9 +168,8 @@ def _cyclic(rows: list[list[float]]) -> np.ndarray:
     return np.vstack([np.roll(base, k, axis=1) for k in range(3)])
 
 
-def _supporting_planes(
-    points: np.ndarray, tol: float, diameter: float
-) -> dict[frozenset[int], np.ndarray]:
+def _supporting_planes(points: np.ndarray, tol: float,
+                       diameter: float) -> dict[frozenset[int], np.ndarray]:
     """Every plane through three points with no point beyond it: the points on it, its normal."""
     n = len(points)
     planes: dict[frozenset[int], np.ndarray] = {}

@@ -1,29 +1,10 @@
 """A real die on a real table: measured material values, damping from restitution.
 
-The default scene is a common 16 mm acrylic die (4.5 g) thrown on a wooden table:
-
-=====================  ==========  ==========================================================
-quantity               value       source / reason
-=====================  ==========  ==========================================================
-edge                   16 mm       the common size of a game die
-mass                   4.5 g       16 mm cube of PMMA (1.18 g/cm³) is 4.8 g, less pips and
-                                   rounded corners
-restitution (normal)   0.45        die-on-table impacts, see ``docs/error-vs-runtime.md``
-friction (sliding)     0.4         dry wood against plastics, see the same page
-stiffness per corner   1e5 N/m     a corner sinks at most about 3 % of the edge in a throw
-=====================  ==========  ==========================================================
-
-The ground law is a linear spring-dashpot per corner, ``fn = max(0, S dg - D un)``. For a
-flat landing the four bottom corners carry a quarter of the mass each, so one corner is the
-oscillator ``(m/4) x'' + D x' + S x = 0`` with damping ratio ``zeta = D / (2 sqrt(S m/4))``.
-Without the clip at zero its restitution is the classical
-``e = exp(-pi zeta / sqrt(1 - zeta^2))``. With the clip, the corner leaves the table when the
-force reaches zero, before the spring is relaxed, so ``e`` is higher; :func:`restitution`
-gives that exact value (Schwager & Pöschel 2007) and :func:`damping_for_restitution` inverts
-it, so the default damping gives the target restitution;
-:func:`dice_env.simulation.calibration.measured_restitution` measures what the simulator actually
-produces. This module is the package's bottom layer: it imports nothing from the rest of it but
-:mod:`dice_env.model.checks`.
+The default scene is a 16 mm acrylic die (4.5 g) on a wooden table; the values and their
+sources are in ``docs/error-vs-runtime.md``. The ground law is a spring-dashpot per corner,
+``fn = max(0, S dg - D un)``: :func:`restitution` gives its restitution for a flat landing
+(one corner carrying ``m/4``; Schwager & Pöschel 2007) and :func:`damping_for_restitution`
+inverts it. The package's bottom layer: it imports only :mod:`dice_env.model.checks`.
 """
 
 from __future__ import annotations

@@ -1,8 +1,4 @@
-"""Calibration against the simulator: the table scene for any die, the restitution it produces.
-
-Above :func:`dice_env.simulation.simulate.simulate`; the measured values and the restitution
-formulas are in :mod:`dice_env.model.table`.
-"""
+"""Calibration against the simulator: the table scene for any die, the restitution it produces."""
 
 from __future__ import annotations
 
@@ -26,15 +22,9 @@ from dice_env.model.table import (
 from dice_env.simulation.simulate import State, simulate
 
 
-def table_scene(
-    *,
-    edge: float = DIE_EDGE,
-    mass: float = DIE_MASS,
-    restitution: float = RESTITUTION,
-    friction: float = FRICTION,
-    stiffness: float = STIFFNESS,
-    **scene_options: object,
-) -> Scene:
+def table_scene(*, edge: float = DIE_EDGE, mass: float = DIE_MASS,
+                restitution: float = RESTITUTION, friction: float = FRICTION,
+                stiffness: float = STIFFNESS, **scene_options: object) -> Scene:
     """A uniform d6 of ``edge`` and ``mass`` on a table of the given restitution and friction.
 
     The damping is recomputed for the die's mass; ``scene_options`` go to :class:`Scene`
@@ -48,14 +38,10 @@ def table_scene(
 def measured_restitution(scene: Scene, speed: float = 1.0) -> float:
     """Restitution the simulator produces for a flat, spin-free landing at ``speed`` (m/s).
 
-    The die lands on the face where its centre of mass rests lowest (the least of
-    :attr:`Die.resting_heights`; the uniform d6 on face 6, showing 1), turned so that it reads
-    that face (:func:`dice_env.model.rotations.up_rotation`): flat for every die whose faces come in
-    parallel pairs, and for the d4. It starts up to 1 mm above the plane (``normal`` along z),
-    falling so that it meets the plane at ``speed`` (starting on the plane would put the
-    contact onset exactly on a step and add a first-order error of its own); the result is
-    the upward speed when the face crosses the plane again (the gravity between leaving and
-    crossing is undone exactly) over ``speed``.
+    The die lands on the face where it rests lowest (:attr:`Die.resting_heights`), from up to
+    1 mm above a horizontal plane (a contact onset exactly on a step would add an error of its
+    own); the result is the upward speed when it crosses its resting height again (gravity
+    undone) over ``speed``.
     """
     check_positive("speed", speed)
     if scene.ground.normal != (0.0, 0.0, 1.0):

@@ -1,11 +1,8 @@
 """Scenes, dice and die contacts as JSON data, and back, exactly.
 
-:func:`to_data` turns a :class:`~dice_env.model.scene.Scene`, a :class:`~dice_env.model.die.Die`, a
-:class:`~dice_env.simulation.group.DieContact` (or any of their parts: planes, rest thresholds) into
-plain JSON data: ``{"type": name, field: value, ...}``, floats as Python writes them (which
-JSON reads back to the same double), enums by name. :func:`from_data` builds the object
-again through its own checks, so a file edited into nonsense is refused as the constructor
-would refuse it. Round trips are exact: ``from_data(to_data(x)) == x``.
+:func:`to_data` writes one of :data:`TYPES` as ``{"type": name, field: value, ...}`` (floats
+exact, enums by name); :func:`from_data` builds it again through its own checks, so
+``from_data(to_data(x)) == x`` and edited nonsense is refused as the constructor refuses it.
 """
 
 from __future__ import annotations
@@ -41,8 +38,7 @@ def to_data(value: Any) -> Any:
 def from_data(data: Any) -> Any:
     """The object that :func:`to_data` wrote as ``data``; lists come back as tuples.
 
-    Raises ``ValueError`` for a type it does not know or fields its type does not have,
-    and whatever the type's own checks raise for values out of range.
+    Raises ``ValueError`` for an unknown type or fields, and what the type's checks raise.
     """
     if isinstance(data, dict):
         fields = dict(data)

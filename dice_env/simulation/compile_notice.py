@@ -1,10 +1,7 @@
 """One line on stderr before a kernel compiles: what is compiling and about how long it takes.
 
-numba compiles each kernel at its first call and caches the machine code on disk
-(``NUMBA_CACHE_DIR``, else ``__pycache__`` beside the sources), so only a process that finds
-the cache empty or stale waits. :func:`announce` says so for a kernel loop neither compiled
-nor cached for the types of its arguments (a loop compiles once per signature: the
-vectorised loop has two), and is quiet when :data:`QUIET` is set in the environment.
+numba caches each kernel's machine code on disk (``NUMBA_CACHE_DIR``, else ``__pycache__``),
+so only a process that finds the cache empty or stale for a signature waits.
 """
 
 from __future__ import annotations
@@ -22,10 +19,9 @@ _types: dict[tuple[object, tuple[type, ...]], tuple] = {}
 def announce(dispatcher: object, args: tuple, what: str, seconds: float) -> None:
     """Say on stderr that the kernel ``what`` compiles, unless ``dispatcher`` runs ``args`` now.
 
-    ``dispatcher`` is the kernel's numba ``@njit(cache=True)`` loop and ``seconds`` its cold
-    compile time on two cores (``benchmarks/cold_start.py`` measures it). Nothing is said
-    when the loop is compiled in this process or found in numba's cache for the types of
-    ``args``, or when :data:`QUIET` is set to anything but ``""`` or ``"0"``.
+    ``dispatcher``: the kernel's ``@njit(cache=True)`` loop; ``seconds``: its cold compile time
+    on two cores (``benchmarks/cold_start.py``). Quiet when :func:`ready`, or when
+    :data:`QUIET` is set to anything but ``""`` or ``"0"``.
     """
     if os.environ.get(QUIET, "") not in ("", "0") or ready(dispatcher, args):
         return
@@ -44,10 +40,7 @@ def ready(dispatcher: object, args: tuple) -> bool:
 
 
 def _cached(dispatcher: object, types: tuple) -> bool:
-    """Whether numba's on-disk cache holds a current compilation of ``dispatcher`` for ``types``.
-
-    A cache index written for other sources or another numba reads as empty.
-    """
+    """Whether numba's on-disk cache holds a current compilation of ``dispatcher`` for ``types``."""
     cache = getattr(dispatcher, "_cache", None)
     index = getattr(cache, "_cache_file", None)
     if index is None:  # not cached on disk: every process compiles it

@@ -1,18 +1,8 @@
 """The paper's two scripts, step for step: ``real_throw_cube.m`` and ``ground_cube.m``.
 
-Both run the compiled kernel with the paper's die (side from its formula, solid-cube inertia),
-the paper contact law and its listing's defaults, for exactly ``clockmax`` steps (no stopping
-at rest). As in the listings, the corners start with the centre's velocity only (no spin
-term), gravity acts along -z whatever the ground normal, and the recorded energy is
-``0.5 m |u|^2 + 0.5 |L|^2 / I11 + m g z`` (no rotational term in ``ground_cube``).
-
-Agreement with the listings: ``tests/listing_transcription.py`` is an independent numpy
-transcription; the kernel matches it to 1e-9 over the whole ``ground_cube`` run and over the
-first 3 s of ``real_throw_cube``. The spinning die is chaotic, so round-off differences
-(the kernel rotates one orientation matrix instead of eight corner vectors, and sums gravity
-once instead of per node) grow past 1e-9 later in the 10 s throw.
-
-Where the listings are fragile the kernel is not: ``L0 = 0`` gives ``R = I`` instead of NaN.
+Both run the kernel with the paper's die, contact law and listing defaults for exactly
+``clockmax`` steps; the quirks kept and how far the runs match the listings are in
+``docs/model.md`` (paper mode). ``L0 = 0`` gives ``R = I`` where the listing gives NaN.
 """
 
 from __future__ import annotations
@@ -29,10 +19,9 @@ from dice_env.simulation.simulate import Result, State, simulate
 
 @dataclass
 class PaperRun:
-    """Per-step records of one paper script.
+    """Per-step records of one paper script: ``t``, ``x_cm``, ``energy``, ``nodes`` or None.
 
-    ``t`` (clockmax,), ``x_cm`` (clockmax, 3), ``energy`` (clockmax,), ``nodes``
-    (clockmax, 8, 3) or None; ``L0`` used; ``result`` the full :class:`Result`.
+    Over the clockmax steps; ``L0`` used; ``result`` the full :class:`Result`.
     """
 
     t: np.ndarray
@@ -68,27 +57,22 @@ def ground_cube(*, D: float = 0.2, mu: float = 0.075, clockmax: int = 10000,
     return _run(np.zeros(3), False, D=D, mu=mu, clockmax=clockmax, **listing)
 
 
-def paper_scene(
-    *, r: float = 1.0, total_mass: float = 1.0, normal: tuple[float, float, float] = (0, 0, 1),
-    S: float = 1e4, D: float = 0.1, mu: float = 0.1, dt: float | None = 1e-4, g: float = 9.8,
-    umin: float | None = None, rotation: bool = True,
-) -> Scene:
+def paper_scene(*, r: float = 1.0, total_mass: float = 1.0,
+                normal: tuple[float, float, float] = (0, 0, 1), S: float = 1e4, D: float = 0.1,
+                mu: float = 0.1, dt: float | None = 1e-4, g: float = 9.8,
+                umin: float | None = None, rotation: bool = True) -> Scene:
     """The paper's scene (real throw defaults: its listing's values, 10 s) as a :class:`Scene`.
 
-    Change the rest with :meth:`Scene.with_`: ``.with_(t_max=3.0)``; a step above the
-    critical one, ``.with_(dt=..., allow_unstable=True)`` (together: each scene is checked
-    when built); the gated contact law, ``.with_(ground=scene.ground.with_(contact_law=
-    ContactLaw.GATED))``.
+    Change the rest with :meth:`Scene.with_` (a step above the critical one together with
+    ``allow_unstable=True``).
     """
     check_positive("r", r)
-    return Scene(
-        die=Die.paper(r, total_mass),
-        ground=Ground(stiffness=S, damping=D, friction=mu, normal=normal,
-                      contact_law=ContactLaw.PAPER),
-        gravity=g, dt=dt, t_max=10.0, rotation=rotation,
-        friction_vmin=1e-6 * r if umin is None else umin,
-        scheme=Scheme.PAPER, friction_law=FrictionLaw.REGULARIZED,
-    )
+    return Scene(die=Die.paper(r, total_mass),
+                 ground=Ground(stiffness=S, damping=D, friction=mu, normal=normal,
+                               contact_law=ContactLaw.PAPER),
+                 gravity=g, dt=dt, t_max=10.0, rotation=rotation,
+                 friction_vmin=1e-6 * r if umin is None else umin,
+                 scheme=Scheme.PAPER, friction_law=FrictionLaw.REGULARIZED)
 
 
 def _run(L0: object, rotation: bool, *, clockmax: int, tmax: float = 10.0,
@@ -110,16 +94,12 @@ def _run(L0: object, rotation: bool, *, clockmax: int, tmax: float = 10.0,
     if sink > 0.0:
         raise ValueError(f"x0 must hold every corner above the ground, got {x0} with a corner "
                          f"{sink:.4g} below it")
-    state = State(
-        position=position, velocity=_vector("u0", u0), angular_momentum=L0.copy(),
-        orientation=np.eye(3)[None].copy(), angular_velocity=np.zeros((1, 3)),
-    )
+    state = State(position=position, velocity=_vector("u0", u0), angular_momentum=L0.copy(),
+                  orientation=np.eye(3)[None].copy(), angular_velocity=np.zeros((1, 3)))
     record = ("energy", "nodes") if record_nodes else ("energy",)
     result = simulate(scene, state, until="t_max", record_every=1, record=record)
-    return PaperRun(
-        t=result.t, x_cm=result.x_cm[0], energy=result.energy[0],
-        nodes=result.nodes[0] if record_nodes else None, L0=L0[0], result=result,
-    )
+    return PaperRun(t=result.t, x_cm=result.x_cm[0], energy=result.energy[0],
+                    nodes=result.nodes[0] if record_nodes else None, L0=L0[0], result=result)
 
 
 def _vector(name: str, value: object) -> np.ndarray:

@@ -2,10 +2,8 @@
 
     python -m dice_env.simulation.precompile          # every kernel; quiet when the cache is warm
 
-numba compiles a kernel at its first call, one at a time in a process. This runs a tiny
-throw through each kernel in its own process, as many at once as there are cores (at most
-:data:`KERNELS`), so that a cold cache fills in the time of the longest compile rather than
-the sum of them. ``.ci/setup`` runs it before the tests.
+A tiny throw through each kernel, each in its own process (up to one per core), so that a
+cold cache fills in the time of the longest compile rather than their sum (``.ci/setup``).
 """
 
 from __future__ import annotations
