@@ -62,12 +62,8 @@ def check_type(name: str, value: object, kind: type) -> None:
         raise TypeError(f"{name} must be a {kind.__name__}, got {type(value).__name__}")
 
 
-def check_choice(name: str, value: object, choices: Iterable[object], *,
-                 also: str = "") -> None:
-    """Raise ``ValueError`` unless ``value`` is one of ``choices`` (``also``: what else is).
-
-    A value that cannot be one of them (an array, a list) is refused too.
-    """
+def check_choice(name: str, value: object, choices: Iterable[object], *, also: str = "") -> None:
+    """Raise ``ValueError`` unless ``value`` is one of ``choices`` (``also``: what else is)."""
     choices = tuple(choices)
     if not isinstance(value, Hashable) or value not in choices:
         raise ValueError(f"{name} must be one of {', '.join(map(repr, choices))}{also}, got "
@@ -77,7 +73,7 @@ def check_choice(name: str, value: object, choices: Iterable[object], *,
 def as_enum(name: str, kind: type[IntEnum], value: object) -> IntEnum:
     """``value`` as a member of ``kind``: a member, its name (any case) or its int value.
 
-    A member of another enum is refused, whatever its value.
+    A member of another enum is refused, whatever its value (``ValueError``).
     """
     if isinstance(value, kind):
         return value

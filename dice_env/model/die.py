@@ -214,8 +214,6 @@ class Die:
         about_com = solid + weight - self.mass * polyhedra.point_inertia(com)
         return self._with_mass(self.mass, com, about_com)
 
-    # --- geometry -------------------------------------------------------------------------
-
     @property
     def vertices_body(self) -> np.ndarray:
         """Corner positions relative to the centre of mass, body frame, shape (N, 3)."""
@@ -305,8 +303,6 @@ class Die:
             low = float(_heights_above_lowest_corner(corners, up).min()) - self.reach * gap / 2
             out[f], out[g] = min(out[f], low), min(out[g], low)
         return _frozen(out)
-
-    # --- mass -----------------------------------------------------------------------------
 
     @property
     def inertia_body(self) -> np.ndarray:

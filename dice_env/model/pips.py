@@ -4,26 +4,12 @@
 gives the exact mass properties of the cube minus its 21 cavities (plus the paint of casino
 dice); the geometry stays the cube's.
 
-**Layout** (:func:`layout`): pip centres on each face at 0 or ``±offset`` times the face's
-half-width along the face's two axes: 1 in the centre; 2 and 3 on a diagonal; 4 at the
-corners; 5 at the corners and the centre; 6 in two rows of three. Handedness: the die is
-right-handed (faces 1, 2, 3 counter-clockwise about their corner, :mod:`dice_env.model.die`); with
-the 1 up, the 2 on the left and the 3 on the right, the 3's diagonal runs up from the left and
-the 2's diagonal down from the left, as described for casino dice by dice-play.com ("Casino
-Dice"): both diagonals end at the 2-3-6 corner, none touches the 1-2-3 corner. The rows of the
-6 run along x (from the 5's edge to the 2's edge); this one is our choice, no source found. In
-body coordinates (units of the half-width, ``f = offset``):
-
-====  ==========================================================================
-face  pip centres
-====  ==========================================================================
-1     (0, 0, 1)
-2     (1, -f, f), (1, f, -f)
-3     (f, 1, -f), (0, 1, 0), (-f, 1, f)
-4     (±f, -1, ±f)
-5     (-1, ±f, ±f), (-1, 0, 0)
-6     (x, ±f, -1) for x in -f, 0, f
-====  ==========================================================================
+**Layout** (:func:`layout`, which lists the centres): pips at 0 or ``±offset`` times the
+half-width along each face's two axes. Handedness: on the right-handed die
+(:mod:`dice_env.model.die`), with the 1 up, the 2 on the left and the 3 on the right, the 3's
+diagonal runs up from the left and the 2's down from the left, as dice-play.com ("Casino
+Dice") describes casino dice: both end at the 2-3-6 corner. The 6's rows run along x (our
+choice, no source found).
 
 Each face's pattern is centrally symmetric, so the centre of mass moves toward the 1-2-3
 corner, 5 : 3 : 1 along z, x, y; the handedness and the 6's rows change only the products
@@ -117,9 +103,8 @@ DRILLINGS = {
 def cap_properties(radius: float, depth: float) -> tuple[float, float, float, float]:
     """Volume and second moments of a spherical cap of opening ``radius`` a and ``depth`` h.
 
-    The cap is the part of a sphere of radius ``R = (a^2 + h^2) / (2h)`` cut off by the face.
-    With ``s`` the height above the cap's deepest point (0 … h), the disk at ``s`` has radius
-    squared ``r^2 = 2Rs - s^2``; integrating disks (per unit density):
+    Of a sphere of radius ``R = (a^2 + h^2) / (2h)``; integrating the disks at height ``s``
+    above the deepest point, ``r^2 = 2Rs - s^2`` (per unit density):
 
     - volume ``V = pi ∫ r^2 ds = pi h^2 (3R - h) / 3``;
     - centroid height ``s_c = pi ∫ s r^2 ds / V = h (8R - 3h) / (4 (3R - h))``;
@@ -141,10 +126,7 @@ def cap_properties(radius: float, depth: float) -> tuple[float, float, float, fl
 
 
 def layout(offset: float = 0.5) -> dict[int, np.ndarray]:
-    """Pip centres of each face label 1-6, (k, 3), body frame, in units of the half-width.
-
-    On the face planes (one coordinate ±1); the module's table gives the layout.
-    """
+    """Pip centres of each face label 1-6, (k, 3), body frame, in units of the half-width."""
     f = offset
     corners = [(u, v) for u in (f, -f) for v in (f, -f)]
     faces = {

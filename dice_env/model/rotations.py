@@ -6,15 +6,12 @@ import numpy as np
 
 
 def random_rotations(rng: np.random.Generator, size: int) -> np.ndarray:
-    """``size`` rotation matrices drawn uniformly (Haar) over SO(3), shape (size, 3, 3).
-
-    From uniform unit quaternions (Shoemake 1992).
-    """
+    """``size`` rotation matrices drawn uniformly (Haar) over SO(3), shape (size, 3, 3)."""
     return uniform_rotations(rng.random((3, size)))
 
 
 def uniform_rotations(uniforms: np.ndarray) -> np.ndarray:
-    """Rotation matrices (n, 3, 3) from uniforms (3, n) in [0, 1), as :func:`random_rotations`."""
+    """Rotation matrices (n, 3, 3) from uniforms (3, n) in [0, 1) (Shoemake 1992)."""
     u1, u2, u3 = uniforms
     a, b = np.sqrt(1 - u1), np.sqrt(u1)
     quat = np.stack([a * np.sin(2 * np.pi * u2), a * np.cos(2 * np.pi * u2),
@@ -35,8 +32,7 @@ def quaternion_to_matrix(quat: np.ndarray) -> np.ndarray:
 def matrix_to_quaternion(rot: np.ndarray) -> np.ndarray:
     """Unit quaternions (..., 4) (w, x, y, z), w >= 0, of rotation matrices (..., 3, 3).
 
-    The inverse of :func:`quaternion_to_matrix`; each from the largest of the four squared
-    components (Shepperd 1978), so no division comes near zero.
+    Each from its largest squared component (Shepperd 1978): no division near zero.
     """
     r = np.asarray(rot, dtype=np.float64)
     trace = r[..., 0, 0] + r[..., 1, 1] + r[..., 2, 2]
@@ -59,10 +55,7 @@ def matrix_to_quaternion(rot: np.ndarray) -> np.ndarray:
 
 
 def matrix_to_rotation_vector(rot: np.ndarray) -> np.ndarray:
-    """Rotation vectors (..., 3), axis times angle in [0, pi], of rotation matrices (..., 3, 3).
-
-    The logarithm of :func:`matrix_to_quaternion`'s quaternion; zero for the identity.
-    """
+    """Rotation vectors (..., 3), axis times angle in [0, pi], of rotation matrices (..., 3, 3)."""
     quat = matrix_to_quaternion(rot)  # w >= 0: half the angle in [0, pi/2]
     half = np.arccos(np.clip(quat[..., :1], -1.0, 1.0))
     sine = np.sin(half)
@@ -81,9 +74,7 @@ def axis_angle(axis: np.ndarray, angle: float) -> np.ndarray:
 def up_rotation(direction: np.ndarray) -> np.ndarray:
     """A rotation (body to world, 3x3) taking the unit body ``direction`` (3,) to world +z.
 
-    Rows: the body axes that map to world x, y, z; the x row is the direction's absolute value
-    rolled by one, made orthogonal to it (for an axis direction a permuted, flipped frame; for
-    +z the identity).
+    Its x row is ``|direction|`` rolled by one, made orthogonal to it (+z gives the identity).
     """
     z = np.asarray(direction, dtype=np.float64)
     x = np.roll(np.abs(z), 1)

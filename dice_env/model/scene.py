@@ -105,7 +105,7 @@ class Plane:
 
 @dataclass(frozen=True)
 class Ground(Plane):
-    """The floor: a :class:`Plane` whose ``normal`` points up; its ``contact_law`` is all's."""
+    """The floor: a :class:`Plane` pointing up, whose ``contact_law`` every plane follows."""
 
     contact_law: ContactLaw = ContactLaw.GATED
 

@@ -1,8 +1,7 @@
-"""Preset surroundings: the walls of a dice tray and of a craps table.
+"""Preset surroundings: the walls of a dice tray and of a craps table, around the origin.
 
-Every preset returns a tuple of :class:`~dice_env.model.scene.Wall` for ``Scene(walls=...)``,
-around the release point above the origin (the floor is the scene's ``ground``). Walls take
-the table's material unless given other ``stiffness``, ``damping``, ``friction``.
+Each returns a tuple of :class:`~dice_env.model.scene.Wall` for ``Scene(walls=...)``; the
+``material`` keywords (``stiffness``, ``damping``, ...) default to the table's.
 """
 
 from __future__ import annotations
@@ -10,11 +9,8 @@ from __future__ import annotations
 from dice_env.model.checks import check_choice, check_positive
 from dice_env.model.scene import Wall
 
-# A common felt-lined dice tray: 30 cm x 20 cm inside.
-TRAY = (0.30, 0.20)
-# A craps table's throwing area, scaled: the dice travel 1 m along +x to the back wall,
-# between side walls 0.6 m apart.
-CRAPS = (1.0, 0.6)
+TRAY = (0.30, 0.20)  # a common felt-lined dice tray, inside (m)
+CRAPS = (1.0, 0.6)  # a craps table's throw, scaled: 1 m to the back wall, sides 0.6 m apart
 
 
 def tray(length: float = TRAY[0], width: float = TRAY[1], **material: float) -> tuple[Wall, ...]:
@@ -30,10 +26,9 @@ def tray(length: float = TRAY[0], width: float = TRAY[1], **material: float) -> 
 
 def craps(distance: float = CRAPS[0], width: float = CRAPS[1],
           **material: float) -> tuple[Wall, ...]:
-    """A craps table: a back wall the dice must hit, side walls, open behind the thrower.
+    """A craps table: a back wall ``distance`` (m) ahead along +x, side walls ``width`` (m) apart.
 
-    The back wall stands ``distance`` (m) ahead along +x; the side walls are ``width`` (m)
-    apart.
+    Open behind the thrower.
     """
     check_positive("distance", distance)
     check_positive("width", width)

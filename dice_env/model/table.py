@@ -15,25 +15,19 @@ import numpy as np
 
 from dice_env.model.checks import check_positive, check_range
 
-# A common 16 mm game die (m, kg).
-DIE_EDGE = 0.016
-DIE_MASS = 0.0045
-# Normal restitution of the die on a wooden table (flat landing, about 1 m/s).
-RESTITUTION = 0.45
-# Sliding friction coefficient, plastic die on dry wood.
-FRICTION = 0.4
-# Ground stiffness per corner (N/m): corners sink at most about 3 % of the edge.
-STIFFNESS = 1e5
+DIE_EDGE = 0.016  # a common game die (m)
+DIE_MASS = 0.0045  # kg
+RESTITUTION = 0.45  # normal, flat landing on a wooden table at about 1 m/s
+FRICTION = 0.4  # sliding, plastic on dry wood
+STIFFNESS = 1e5  # ground, per corner (N/m): corners sink at most about 3 % of the edge
 
 
 def restitution(zeta: float, *, clipped: bool = True) -> float:
     """Normal restitution of a linear spring-dashpot with damping ratio ``zeta`` in [0, 1).
 
-    ``clipped=False``: the classical ``exp(-pi zeta / sqrt(1 - zeta^2))`` (contact for half a
-    damped period, the force turning attractive at the end). ``clipped=True``: the force is
-    ``max(0, ...)``, so the contact ends when ``S x + D x' = 0``, at
-    ``wd t* = pi - atan2(2 zeta sqrt(1 - zeta^2), 1 - 2 zeta^2)``, and
-    ``e = -x'(t*) / v0`` (Schwager & Pöschel 2007). Gravity is neglected.
+    ``clipped=False``: the classical ``exp(-pi zeta / sqrt(1 - zeta^2))``; ``clipped=True``:
+    the force ``max(0, ...)`` ends the contact at ``S x + D x' = 0`` (Schwager & Pöschel
+    2007). Gravity is neglected.
     """
     check_range("zeta", zeta, 0.0, 1.0, high_open=True)
     root = math.sqrt(1.0 - zeta * zeta)
@@ -70,9 +64,8 @@ def damping_ratio(target: float, *, clipped: bool = True) -> float:
     return 0.5 * (low + high)
 
 
-def damping_for_restitution(
-    target: float, stiffness: float, mass: float, *, clipped: bool = True
-) -> float:
+def damping_for_restitution(target: float, stiffness: float, mass: float, *,
+                            clipped: bool = True) -> float:
     """Per-corner damping D (N s/m) giving restitution ``target`` for a flat landing.
 
     ``D = 2 zeta sqrt(S m/4) = zeta sqrt(S m)``, ``zeta`` from :func:`damping_ratio`.
@@ -90,8 +83,8 @@ def rebound(z: np.ndarray, vz: np.ndarray, height: float, gravity: float,
             speed: float) -> float | None:
     """Restitution from a landing's record of centre height ``z`` and vertical velocity ``vz``.
 
-    The upward speed when the centre first rises through its resting ``height`` again (the
-    gravity since the die left undone) over the landing ``speed``; None if it never does.
+    The upward speed (gravity undone) when the centre first rises through its resting
+    ``height`` over the landing ``speed``; None if it never does.
     """
     left = np.flatnonzero((z > height) & (vz > 0))
     if left.size == 0:

@@ -280,12 +280,11 @@ def _bodies(scenes: list[Scene], decide: bool) -> group_kernel.Bodies:
                              f"until='decided' for die {i} ((m g)^2 / 2 S, mass "
                              f"{die.mass:g} kg): lower gravity, or pass an until other "
                              "than 'decided'") from error
+    per_die = {name: np.array([getattr(p, name) for p in packed])
+               for name in ("mass", "inv_inertia", "inv_iso", "inv_i_min", "r_max", "reads_down")}
     return group_kernel.Bodies(
-        vertices=vertices, n_vertices=np.array([len(d.vertices) for d in dice]),
-        faces=faces, n_faces=np.array([d.n_faces for d in dice]),
-        lock=lock, floor=floor, **{name: np.array([getattr(p, name) for p in packed]) for name in
-                                   ("mass", "inv_inertia", "inv_iso", "inv_i_min", "r_max",
-                                    "reads_down")})
+        vertices=vertices, n_vertices=np.array([len(d.vertices) for d in dice]), faces=faces,
+        n_faces=np.array([d.n_faces for d in dice]), lock=lock, floor=floor, **per_die)
 
 
 def _hulls(scenes: list[Scene], bodies: group_kernel.Bodies) -> group_kernel.Hulls:
