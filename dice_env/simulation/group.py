@@ -198,9 +198,10 @@ def simulate_group(scene: Scene, dice: Sequence[Die], state: GroupState, *,
         meet=np.zeros((b, 2, n, 6)))
     _, contact_planes = pack_scene(scenes[0])
     options, _ = pack_run(scenes[0], n_steps=n_steps, free_flight=free_flight)
+    hold = scene.rest.hold / dt  # beyond the run (never rest) as n_steps, to fit an int64
     stops = group_kernel.GroupStops(
         n_steps=n_steps, at_rest=ends.at_rest, v_rest=float(scene.rest.speed),
-        hold_steps=_hold_steps(scene.rest.hold / dt, n_steps), decide=ends.decided,
+        hold_steps=n_steps if hold >= n_steps else math.ceil(hold), decide=ends.decided,
         energy_scale=float(sum(d.mass * scene.gravity * d.size for d in dice)))
     bodies = _bodies(scenes, ends.decided)
     stride, n_rec = record_plan(record_every, n_steps, b * n * (12 if orientations else 3),
@@ -240,10 +241,6 @@ def _pair(scene: Scene, dice: tuple[Die, ...], contact: DieContact,
         float(contact.tangential * contact.stiffness),
         float(contact.tangential * contact.damping), float(dt / reduced))
 
-
-def _hold_steps(hold: float, n_steps: int) -> int:
-    """Quiet steps before rest, ``ceil(hold)``; beyond the run ``n_steps`` (fits an int64)."""
-    return n_steps if hold >= n_steps else math.ceil(hold)
 
 
 def _dice(dice: Sequence[Die]) -> tuple[Die, ...]:

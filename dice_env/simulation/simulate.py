@@ -112,11 +112,14 @@ class State(DiceArrays):
         if orthonormality_error(rot).max() > 1e-9:
             raise ValueError("orientation must be rotation matrices (R R^T = I, det R = +1, "
                              "to 1e-9)")
-        size = _batch_size(position, velocity, spin, rot)
+        sizes = {a.shape[0] for a in (position, velocity, spin, rot)} - {1}
+        if len(sizes) > 1:
+            raise ValueError(f"batch sizes of the release arguments disagree: {sorted(sizes)}")
+        size = sizes.pop() if sizes else 1
         if size == 0:
             raise ValueError("release arguments must hold at least one die, got a batch of 0")
-        position, velocity, spin = (np.broadcast_to(a, (size, 3)) for a in (position, velocity,
-                                                                               spin))
+        position, velocity, spin = (np.broadcast_to(a, (size, 3))
+                                    for a in (position, velocity, spin))
         rot = np.broadcast_to(rot, (size, 3, 3))
         sink = scene.sink(position, rot)
         pressed = max(RELEASE_SINK * scene.die.size,
@@ -561,9 +564,3 @@ def lock_energy(scene: Scene, margin: float = LOCK_MARGIN) -> np.ndarray:
     tip, rest = die.tipping_heights, die.resting_heights
     return weight * (tip - margin * (tip - rest)) - weight**2 / (2.0 * ground.stiffness)
 
-
-def _batch_size(*arrays: np.ndarray) -> int:
-    sizes = {a.shape[0] for a in arrays} - {1}
-    if len(sizes) > 1:
-        raise ValueError(f"batch sizes of the release arguments disagree: {sorted(sizes)}")
-    return sizes.pop() if sizes else 1
