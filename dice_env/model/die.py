@@ -92,7 +92,7 @@ class Die:
                  inertia: tuple[tuple[float, ...], ...] | None = None) -> None:
         check_positive("edge", edge)
         shape = _unit_shape("d6")
-        self._set("d6", shape.vertices * edge, shape.faces, edge, mass, com, inertia, False)
+        self._set("d6", shape.vertices * edge, shape.faces, edge, mass, False, com, inertia)
 
     @classmethod
     def standard(cls, name: str = "d6", size: float | None = None,
@@ -127,7 +127,7 @@ class Die:
         vertices = shape.vertices * size
         volume = size * size * size if name == "d6" else polyhedra.mass_properties(
             vertices, shape.faces)[0]
-        die = cls._make(name, vertices, shape.faces, size, _mass(mass, volume), shape.reads_down)
+        die = cls._new(name, vertices, shape.faces, size, _mass(mass, volume), shape.reads_down)
         mass_properties = None if pips is None else drill(size, die.mass, pips)
         return die if mass_properties is None else die._with_mass(die.mass, *mass_properties)
 
@@ -146,8 +146,8 @@ class Die:
         if x == y == z:
             return cls.standard("d6", size=x, mass=mass)
         shape = _unit_shape("d6")
-        return cls._make("cuboid", shape.vertices * sides, shape.faces, min(x, y, z),
-                         _mass(mass, x * y * z), False)
+        return cls._new("cuboid", shape.vertices * sides, shape.faces, min(x, y, z),
+                        _mass(mass, x * y * z), False)
 
     @classmethod
     def from_vertices(cls, vertices: np.ndarray, labels: np.ndarray | None = None,
@@ -168,8 +168,8 @@ class Die:
         volume, centroid, _ = polyhedra.mass_properties(points, faces)
         if np.abs(centroid).max() > 1e-12 * np.abs(points).max():
             points = points - centroid
-        return cls._make("polyhedron", points, faces, _least_height(points, faces),
-                         _mass(mass, volume), bool(reads_down))
+        return cls._new("polyhedron", points, faces, _least_height(points, faces),
+                        _mass(mass, volume), bool(reads_down))
 
     @classmethod
     def paper(cls, r: float = 1.0, mass: float = 1.0) -> Die:
@@ -328,8 +328,8 @@ class Die:
                     com: tuple, inertia: tuple, reads_down: bool) -> Die:
         """The die whose fields are these (as :func:`dataclasses.asdict` gives them), checked."""
         faces = tuple(tuple(int(k) for k in face) for face in faces)
-        return cls._new(str(name), np.asarray(vertices, dtype=np.float64), faces, size, mass, com,
-                        _as_tuple(np.asarray(inertia, dtype=np.float64)), bool(reads_down))
+        return cls._new(str(name), np.asarray(vertices, dtype=np.float64), faces, size, mass,
+                        bool(reads_down), com, _as_tuple(np.asarray(inertia, dtype=np.float64)))
 
     def __repr__(self) -> str:
         com = "" if not any(self.com) else f", com={tuple(round(c, 9) for c in self.com)}"
@@ -341,18 +341,14 @@ class Die:
         die._set(*values)
         return die
 
-    @classmethod
-    def _make(cls, name: str, vertices: np.ndarray, faces: tuple[tuple[int, ...], ...],
-              size: float, mass: float, reads_down: bool) -> Die:
-        return cls._new(name, vertices, faces, size, mass, (0.0, 0.0, 0.0), None, reads_down)
-
     def _with_mass(self, mass: float, com: np.ndarray, inertia: np.ndarray) -> Die:
-        return self._new(self.name, np.array(self.vertices), self.faces, self.size, mass, com,
-                         _as_tuple(inertia), self.reads_down)
+        return self._new(self.name, np.array(self.vertices), self.faces, self.size, mass,
+                         self.reads_down, com, _as_tuple(inertia))
 
     def _set(self, name: str, vertices: np.ndarray, faces: tuple[tuple[int, ...], ...],
-             size: float, mass: float, com: tuple[float, ...] | np.ndarray,
-             inertia: tuple[tuple[float, ...], ...] | None, reads_down: bool) -> None:
+             size: float, mass: float, reads_down: bool,
+             com: tuple[float, ...] | np.ndarray = (0.0, 0.0, 0.0),
+             inertia: tuple[tuple[float, ...], ...] | None = None) -> None:
         check_positive("mass", mass)
         com = as_shaped("com", com, (3,))
         normals = polyhedra.face_normals(vertices, faces)
