@@ -26,6 +26,11 @@ def save_figure(fig: plt.Figure, path: Path) -> None:
     plt.close(fig)
 
 
+def error_bars(p: np.ndarray, ci: np.ndarray) -> np.ndarray:
+    """Matplotlib's (2, n) error bars of shares ``p`` from intervals ``ci`` (n, 2), clipped at 0."""
+    return np.clip(np.stack([p - ci[:, 0], ci[:, 1] - p]), 0.0, None)
+
+
 def progress(total: int, desc: str, unit: str = "run") -> tqdm:
     """The studies' progress bar, counting ``unit``."""
     return tqdm(total=total, desc=desc, unit=unit, dynamic_ncols=True)

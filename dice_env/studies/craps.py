@@ -1,20 +1,12 @@
 """Setting the dice for a craps throw: how much control over the seven survives the back wall.
 
-``run(out, quick, throws)`` writes ``out/craps.md`` and ``out/figures/craps.png``. Two default
-d6 leave one hand (:class:`dice_env.envs.task.ThrowTask`, the env's hand with
-``num_dice=2``) on the craps layout (:func:`dice_env.model.materials.scene` ``"craps"``) toward the
-back wall 1 m ahead (:func:`dice_env.model.surroundings.craps`), with backspin, each throw until
-both faces are decided. The dice are either **set** in the hand (:func:`sevens_set`: every
-common turn about the roll axis shows a seven) or held in uniform random orientations, under
-hand noise of several sizes and at two throw speeds. A throw in which a die does not touch the
-back wall is voided (:attr:`dice_env.simulation.group.GroupResult.touched`), as are the throws the
-pairs study voids. Reported per cell: the chance of a seven with its 95% interval, an exact binomial
-test against 1/6, and Fisher's exact test of set against random.
+``run(out, quick, throws)`` writes ``out/craps.md`` and ``out/figures/craps.png``: two d6 set
+(:func:`sevens_set`) or held at random, thrown by the env's hand (:class:`ThrowTask`) against
+the craps table's back wall under several hand noises and speeds.
 """
 
 from __future__ import annotations
 
-import itertools
 import time
 from pathlib import Path
 
@@ -30,7 +22,7 @@ from dice_env.model.rotations import axis_angle
 from dice_env.model.scene import Scene
 from dice_env.model.surroundings import CRAPS, craps
 from dice_env.simulation.group import GroupResult
-from dice_env.studies.common import DOCS, SEED, checked_throws, progress, save_figure
+from dice_env.studies.common import DOCS, SEED, checked_throws, error_bars, progress, save_figure
 from dice_env.studies.fairness import random_orientations
 from dice_env.studies.markdown import estimate, markdown_table
 from dice_env.studies.numbers import study_page
@@ -45,17 +37,14 @@ from dice_env.studies.pairs import (
 
 # Throws per cell in the full and the quick run; the fewest a run takes per cell.
 FULL, QUICK, MIN_THROWS = 300, 8, 10
-# Hand noise: the standard deviation of each release component as a fraction of its maximum
-# (MAX_SPEED, MAX_SPIN) and of each die's orientation error (rad per axis).
+# Hand noise: each release component's standard deviation as a fraction of its maximum, and
+# each die's orientation error (rad per axis).
 NOISES, QUICK_NOISES = (1e-5, 1e-4, 1e-3, 1e-2), (1e-5, 1e-2)
-# Forward release speeds (m/s).
-SPEEDS, QUICK_SPEEDS = (2.0, 2.8), (2.0,)
-# The rest of the release: upward speed (m/s), backspin about -y (rad/s), height (m).
+SPEEDS, QUICK_SPEEDS = (2.0, 2.8), (2.0,)  # forward release speeds (m/s)
+# Upward speed (m/s), backspin about -y (rad/s), release height (m).
 LIFT, BACKSPIN, RELEASE_HEIGHT = 1.5, 20.0, 0.12
-# The hand's scales: an action component of 1 is this speed (m/s) or spin (rad/s).
-MAX_SPEED, MAX_SPIN = 4.0, 40.0
-# Index of the back wall in Scene.planes: the floor, then craps()'s walls, the back wall first.
-BACK_WALL = 1
+MAX_SPEED, MAX_SPIN = 4.0, 40.0  # an action component of 1 is this speed (m/s) or spin (rad/s)
+BACK_WALL = 1  # index in Scene.planes: the floor, then craps()'s walls, the back wall first
 SIGNIFICANT = 0.01
 HANDS = ("set", "random")
 _HEADER = ("noise | speed (m/s) | dice | counted / thrown | sevens | P(seven) [95%] | "
@@ -70,8 +59,8 @@ def craps_scene() -> Scene:
 def sevens_set() -> np.ndarray:
     """The two dice's orientations in the hand (2, 3, 3): the "all-sevens" set.
 
-    Die 1 as it is made, die 2 turned half a turn about y, the roll axis of a throw along x:
-    die 2's top is die 1's bottom, so while both turn alike about y the faces up add to 7.
+    Die 2 is die 1 turned half a turn about y (the roll axis): while both turn alike about y,
+    the faces up add to 7.
     """
     return np.stack([np.eye(3), axis_angle([0.0, 1.0, 0.0], np.pi)])
 
@@ -79,9 +68,8 @@ def sevens_set() -> np.ndarray:
 def crossed_set() -> np.ndarray:
     """The two dice's orientations in the hand (2, 3, 3): a set against the seven.
 
-    Die 2 is die 1 turned a quarter turn about x, the throw's direction: the four faces each
-    die rolls through about y share one opposite pair, so that 2 of their 16 pairings add to
-    seven (4 for dice set alike or in :func:`sevens_set`).
+    Die 2 is die 1 turned a quarter turn about x: 2 of the 16 pairings of the faces rolled
+    through about y add to seven (4 for dice set alike or in :func:`sevens_set`).
     """
     return np.stack([np.eye(3), axis_angle([1.0, 0.0, 0.0], np.pi / 2)])
 
@@ -148,8 +136,7 @@ def run(out: Path = DOCS, quick: bool = False, throws: int | None = None,
     numbers = {"throws_per_cell": float(n), "seconds": seconds}
     for (noise, speed, way), c in cells.items():
         numbers[f"p7_{way}_{noise:g}_{speed:g}"] = c["p7"]
-    numbers["voided"] = sum(c["thrown"] - c["n"] for c in cells.values()) / (
-        n * len(cells))
+    numbers["voided"] = sum(c["thrown"] - c["n"] for c in cells.values()) / (n * len(cells))
     return numbers
 
 
@@ -174,9 +161,8 @@ def _plot(cells: dict, noises: tuple, speeds: tuple, path: Path) -> None:
         for way, style in (("set", "-o"), ("random", "--s")):
             p = np.array([cells[(noise, speed, way)]["p7"] for noise in noises])
             ci = np.array([cells[(noise, speed, way)]["ci"] for noise in noises])
-            ax.errorbar(np.array(noises) * (1 + 0.06 * i), p, yerr=np.clip(
-                [p - ci[:, 0], ci[:, 1] - p], 0, None), fmt=style, color=f"C{i}", capsize=3,
-                label=f"{way}, {speed:g} m/s")
+            ax.errorbar(np.array(noises) * (1 + 0.06 * i), p, yerr=error_bars(p, ci), fmt=style,
+                        color=f"C{i}", capsize=3, label=f"{way}, {speed:g} m/s")
     ax.axhline(1 / 6, color="k", lw=1, ls=":", label="1/6")
     ax.set_xscale("log")
     ax.set_xlabel("hand noise (fraction of the release's scale; rad of orientation)")
@@ -201,16 +187,12 @@ def _plot(cells: dict, noises: tuple, speeds: tuple, path: Path) -> None:
 
 def _markdown(cells: dict, noises: tuple, speeds: tuple, n: int, seconds: float, cpu: float,
               seed: int) -> str:
-    rows = []
-    for noise, speed, way in itertools.product(noises, speeds, HANDS):
-        c = cells[(noise, speed, way)]
-        rows.append((f"{noise:g}", f"{speed:g}", way, f"{c['n']} / {c['thrown']}", c["sevens"],
-                     estimate(c["p7"], c["ci"]), f"{c['binom_p']:.3g}",
-                     f"{c['fisher_p']:.3g}" if way == "set" else "", f"{c['met']:.2f}"))
-    voided = {}
-    for c in cells.values():
-        for k, v in c["voided"].items():
-            voided[k] = voided.get(k, 0) + v
+    rows = [(f"{noise:g}", f"{speed:g}", way, f"{c['n']} / {c['thrown']}", c["sevens"],
+             estimate(c["p7"], c["ci"]), f"{c['binom_p']:.3g}",
+             f"{c['fisher_p']:.3g}" if way == "set" else "", f"{c['met']:.2f}")
+            for (noise, speed, way), c in cells.items()]  # noise, then speed, then hand
+    by_cell = [c["voided"] for c in cells.values()]
+    voided = {k: sum(v[k] for v in by_cell) for k in by_cell[0]}
     thrown = sum(c["thrown"] for c in cells.values())
     voided_rows = markdown_table("reason | throws | share",
                         ((k, v, f"{v / thrown:.2%}") for k, v in voided.items()))

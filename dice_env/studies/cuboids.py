@@ -1,14 +1,8 @@
 """Square-cuboid dice, a prediction: the chance of landing on a square face against x/y.
 
 ``run(out, quick, throws)`` writes ``out/cuboids.md`` and ``out/figures/cuboids.png``;
-:func:`read_page` reads the page's numbers back (the validation page quotes them).
-
-A square cuboid has two square faces of side ``y`` and height ``x`` along their normal:
-``Die.cuboid((y, y, x))``, whose square faces are 1 (+z) and 6 (-z). Every cuboid keeps the
-volume (and mass, 4.5 g) of the default 16 mm die, so that the table's damping, set for that
-mass, gives every shape the same restitution. Each shape is thrown ``throws`` times in each
-:data:`CONDITIONS` (throw energy × table), each throw until its face is decided. Nothing is
-fitted: this is the model's prediction, to be compared with experiments.
+:func:`read_page` reads the page's numbers back (the validation page quotes them). The square
+faces of ``Die.cuboid((y, y, x))`` are 1 and 6; every cuboid keeps the default die's volume.
 """
 
 from __future__ import annotations
@@ -34,10 +28,8 @@ from dice_env.studies.shapes import Faces, hand_throws, throw_faces
 # x/y of the shapes thrown (1 is the cube).
 RATIOS = (0.45, 0.55, 0.65, 0.8, 0.9, 1.0, 1.1, 1.25, 1.5, 1.8, 2.2, 2.7)
 QUICK_RATIOS = (0.45, 1.0, 2.7)
-# Throws per shape and condition: the full run's default and the quick run's.
-FULL, QUICK = 4000, 100
-# Gentle hand throws (units of the 16 mm edge, as VIGOROUS): 1.6–6.4 cm up, 0.08–0.4 m/s,
-# 2–20 rad/s.
+FULL, QUICK = 4000, 100  # throws per shape and condition
+# Gentle hand throws (in edges, as VIGOROUS): 1.6–6.4 cm up, 0.08–0.4 m/s, 2–20 rad/s.
 GENTLE = Vigour(clearance=(1.0, 4.0), speed=(5.0, 25.0), spin=(2.0, 20.0))
 # A soft, slippery cloth: a tenth of the wooden table's stiffness, half its friction, the
 # damping recomputed for the same restitution.
@@ -63,9 +55,7 @@ def square_cuboid(ratio: float, volume: float = DIE_EDGE**3) -> Die:
 def solid_angle_share(ratio: float) -> float:
     """Share of the full solid angle that the two square faces subtend from the centre.
 
-    A naive reference (each face as likely as the directions it covers), not a fit: a
-    rectangle of half-sides ``a``, ``b`` at distance ``d`` subtends
-    ``4 atan(a b / (d sqrt(a^2 + b^2 + d^2)))``; here ``a = b = 1/2``, ``d = ratio / 2``.
+    A naive reference: each face as likely as the directions it covers.
     """
     a, d = 0.5, 0.5 * ratio
     omega = 4.0 * math.atan(a * a / (d * math.sqrt(2 * a * a + d * d)))
@@ -109,8 +99,7 @@ def run(out: Path = DOCS, quick: bool = False, seed: int = SEED,
 class Page(NamedTuple):
     """The numbers of a ``cuboids.md``: its command, seed, throws per point and its table.
 
-    ``table[label][ratio]`` is ``(p, lo, hi)``: P(square face) and its 95% interval, for each
-    condition label (:data:`CONDITIONS`) and x/y.
+    ``table[label][ratio]`` is ``(p, lo, hi)``: P(square face) and its 95% interval.
     """
 
     command: str
@@ -183,8 +172,6 @@ def _markdown(table: dict, ratios: tuple[float, ...], n: int, seed: int, quick: 
         f"{'inside' if ci[0] <= 1 / 3 <= ci[1] else 'OUTSIDE'} the interval."
         for label, (_, p, ci) in cube.items())
     shares = markdown_table("x/y | y × x (mm) | solid angle | " + " | ".join(labels), rows)
-    g = Ground()
-    v, s = VIGOROUS, GENTLE
     return study_page("cuboids", RESTITUTION=RESTITUTION, SOFT=SOFT, command=command,
-                      cube_lines=cube_lines, g=g, n=n, s=s, seed=seed, shares=shares,
-                      undecided=undecided, v=v)
+                      cube_lines=cube_lines, g=Ground(), n=n, s=GENTLE, seed=seed, shares=shares,
+                      undecided=undecided, v=VIGOROUS)

@@ -1,10 +1,7 @@
 """Fairness of the die: face frequencies, a loaded die, memory of the release orientation.
 
-``run(out, quick)`` writes ``out/fairness.md`` and ``out/figures/fairness_*.png``. All throws use
-the default scene (``Scene()``: its die, table and automatic step) through the batched kernel.
-
-Energies are in units of ``m g a`` (mass, gravity, edge): the energy of a throw is its kinetic
-energy plus ``m g`` times the centre's height above its resting height ``a/2``.
+``run(out, quick)`` writes ``out/fairness.md`` and ``out/figures/fairness_*.png``. Energies are
+in units of ``m g a`` (mass, gravity, edge) above rest on a face.
 """
 
 from __future__ import annotations
@@ -21,26 +18,23 @@ from dice_env.intervals import wilson
 from dice_env.model.die import Die
 from dice_env.model.scene import Scene
 from dice_env.simulation.simulate import Result, RunResult, State, simulate
-from dice_env.studies.common import DOCS, SEED, batches, progress, save_figure
+from dice_env.studies.common import DOCS, SEED, batches, error_bars, progress, save_figure
 from dice_env.studies.markdown import bracket, estimate, markdown_table
 from dice_env.studies.numbers import study_page
 
-# Batch size of one kernel call (the kernel runs the batch in parallel over dice).
-BATCH = 2048
-# Sizes of the full and quick runs: fair throws, loaded throws, energy-study throws.
+BATCH = 2048  # dice per kernel call
+# Throws of the full and quick runs: fair, loaded, and the memory-against-energy throws.
 FULL = {"fair": 100_000, "loaded": 20_000, "memory": 40_000}
 QUICK = {"fair": 1_200, "loaded": 600, "memory": 1_200}
-# Simulated time limit per throw (s); throws still moving then count as not settled.
-T_MAX = 20.0
+T_MAX = 20.0  # simulated time limit per throw (s); throws still moving count as not settled
 
 
 @dataclass(frozen=True)
 class Vigour:
-    """Ranges of a random throw, each drawn uniformly.
+    """Ranges of a random throw, each drawn uniformly; orientation uniform over rotations.
 
-    ``clearance``: centre height above the height where the lowest corner touches (edges);
-    ``speed`` (edges/s) in a uniform direction toward the table; ``spin`` (rad/s) about a
-    uniform axis. Orientation uniform over rotations.
+    ``clearance``: centre height above touching (edges); ``speed`` (edges/s) in a uniform
+    direction toward the table; ``spin`` (rad/s) about a uniform axis.
     """
 
     clearance: tuple[float, float] = (5.0, 20.0)
@@ -85,10 +79,7 @@ def release_state(scene: Scene, orientation: np.ndarray, clearance: np.ndarray,
 
 def vigorous_throws(scene: Scene, n: int, rng: np.random.Generator,
                     vigour: Vigour = VIGOROUS, unit: float | None = None) -> State:
-    """``n`` random throws drawn from ``vigour`` (see :class:`Vigour`).
-
-    Lengths and speeds in units of ``unit`` (m; default the die's size).
-    """
+    """``n`` random throws from ``vigour``, lengths in ``unit`` (m; default the die's size)."""
     a = scene.die.size if unit is None else unit
     orientation = random_orientations(rng, n)
     clearance = rng.uniform(*vigour.clearance, n) * a
@@ -128,12 +119,6 @@ def throw_energy(scene: Scene, state: State) -> np.ndarray:
     return (kinetic + die.mass * scene.gravity * height) / (die.mass * scene.gravity * die.size)
 
 
-def _spin(scene: Scene, state: State) -> np.ndarray:
-    inv = np.linalg.inv(scene.die.inertia_body)
-    world_inv = state.orientation @ inv @ state.orientation.transpose(0, 2, 1)
-    return np.einsum("bij,bj->bi", world_inv, state.angular_momentum)
-
-
 def face_down(die: Die, orientation: np.ndarray, normal: np.ndarray) -> np.ndarray:
     """Label of the face of ``die`` whose outward normal points most against ``normal``."""
     world = np.einsum("...ij,fj->...fi", orientation, die.face_normals)
@@ -142,13 +127,10 @@ def face_down(die: Die, orientation: np.ndarray, normal: np.ndarray) -> np.ndarr
 
 def throw_batches(scene: Scene, state: State, bar, batch: int = BATCH) -> Result:
     """Simulate ``state`` in batches of ``batch`` dice; concatenated face/settled/energy."""
-    parts = []
-    for chunk in batches(state, batch, bar):
-        parts.append(simulate(scene, chunk, t_max=T_MAX))
+    parts = [simulate(scene, chunk, t_max=T_MAX) for chunk in batches(state, batch, bar)]
     names = [f.name for f in fields(RunResult) if f.name != "final"]
     joined = {f: np.concatenate([getattr(p, f) for p in parts]) for f in names}
-    final = State(*(np.concatenate([getattr(p.final, f.name) for p in parts])
-                    for f in fields(State)))
+    final = State(*map(np.concatenate, zip(*(p.final._arrays() for p in parts), strict=True)))
     return Result(final=final, **joined)
 
 
@@ -235,21 +217,16 @@ def _memory_table(scene: Scene, state: State, result: Result, bins: int) -> dict
     ok = result.settled
     edges = np.quantile(energy[ok], np.linspace(0, 1, bins + 1))
     which = np.clip(np.searchsorted(edges, energy, side="right") - 1, 0, bins - 1)
-    rows = {k: [] for k in ("e_lo", "e_hi", "e_mid", "n", "p_down", "ci_down", "p_up", "ci_up")}
+    rows = []
     for b in range(bins):
         sel = ok & (which == b)
         n = int(sel.sum())
-        hits_down = int(np.sum(final_down[sel] == down0[sel]))
-        hits_up = int(np.sum(final_down[sel] == 7 - down0[sel]))
-        rows["e_lo"].append(edges[b])
-        rows["e_hi"].append(edges[b + 1])
-        rows["e_mid"].append(float(np.median(energy[sel])))
-        rows["n"].append(n)
-        rows["p_down"].append(hits_down / n)
-        rows["ci_down"].append(wilson(hits_down, n))
-        rows["p_up"].append(hits_up / n)
-        rows["ci_up"].append(wilson(hits_up, n))
-    table = {k: np.array(v) for k, v in rows.items()}
+        down = int(np.sum(final_down[sel] == down0[sel]))
+        up = int(np.sum(final_down[sel] == 7 - down0[sel]))
+        rows.append((edges[b], edges[b + 1], float(np.median(energy[sel])), n, down / n,
+                     wilson(down, n), up / n, wilson(up, n)))
+    keys = ("e_lo", "e_hi", "e_mid", "n", "p_down", "ci_down", "p_up", "ci_up")
+    table = {k: np.array(v) for k, v in zip(keys, zip(*rows, strict=True), strict=True)}
     top = ok & (which == bins - 1)
     spin_share = _spin_energy(scene, state) / (energy * scene.die.mass * scene.gravity
                                                * scene.die.size)
@@ -263,7 +240,10 @@ def _memory_table(scene: Scene, state: State, result: Result, bins: int) -> dict
 
 def _spin_energy(scene: Scene, state: State) -> np.ndarray:
     """Rotational kinetic energy of each throw (J)."""
-    return 0.5 * np.einsum("bi,bi->b", state.angular_momentum, _spin(scene, state))
+    inv = np.linalg.inv(scene.die.inertia_body)
+    world_inv = state.orientation @ inv @ state.orientation.transpose(0, 2, 1)
+    spin = np.einsum("bij,bj->bi", world_inv, state.angular_momentum)
+    return 0.5 * np.einsum("bi,bi->b", state.angular_momentum, spin)
 
 
 def _trend(p: np.ndarray) -> str:
@@ -298,11 +278,6 @@ def _spin_reading(m: dict) -> str:
             "their orientation in flight; we have not traced its cause.")
 
 
-def _error_bars(p: np.ndarray, ci: np.ndarray) -> np.ndarray:
-    """Matplotlib's (2, n) error bars from intervals, clipped at 0 against round-off."""
-    return np.clip(np.stack([p - ci[:, 0], ci[:, 1] - p]), 0.0, None)
-
-
 def _plot_faces(fair: FaceCounts, loaded: FaceCounts, path: Path) -> None:
     fig, axes = plt.subplots(1, 2, figsize=(11, 4), layout="constrained")
     faces = np.arange(1, 7)
@@ -311,7 +286,7 @@ def _plot_faces(fair: FaceCounts, loaded: FaceCounts, path: Path) -> None:
         p = counts.counts / counts.total
         ci = counts.intervals
         ax.bar(faces, p, color="C0" if counts is fair else "C1")
-        ax.errorbar(faces, p, yerr=_error_bars(p, ci), fmt="none", color="k", capsize=4)
+        ax.errorbar(faces, p, yerr=error_bars(p, ci), fmt="none", color="k", capsize=4)
         ax.axhline(1 / 6, color="k", ls=":", lw=1)
         ax.set_xticks(faces)
         ax.set_xlabel("face up")
@@ -328,7 +303,7 @@ def _plot_memory(m: dict, path: Path) -> None:
     for key, label, color in (("down", "rests on the face down at release", "C3"),
                               ("up", "rests on the face up at release", "C0")):
         p, ci = m[f"p_{key}"], m[f"ci_{key}"]
-        ax.errorbar(m["e_mid"], p, yerr=_error_bars(p, ci), fmt="o-", color=color, capsize=3,
+        ax.errorbar(m["e_mid"], p, yerr=error_bars(p, ci), fmt="o-", color=color, capsize=3,
                     label=label)
     ax.axhline(1 / 6, color="k", ls=":", lw=1, label="1/6")
     ax.set_xscale("log")
@@ -341,8 +316,6 @@ def _plot_memory(m: dict, path: Path) -> None:
 
 def _markdown(scene: Scene, loaded_die: Die, fair: FaceCounts, loaded: FaceCounts, m: dict,
               n: dict, fair_energy: np.ndarray, sizes: dict, seed: int) -> str:
-    g = scene.ground
-
     def cells(c: FaceCounts, f: int) -> tuple:
         return c.counts[f - 1], f"{c.counts[f - 1] / c.total:.4f}", bracket(c.intervals[f - 1], 4)
 
@@ -355,8 +328,8 @@ def _markdown(scene: Scene, loaded_die: Die, fair: FaceCounts, loaded: FaceCount
         ((f"{m['e_lo'][b]:.3g}–{m['e_hi'][b]:.3g}", f"{m['e_mid'][b]:.3g}", m["n"][b],
           estimate(m["p_down"][b], m["ci_down"][b]), estimate(m["p_up"][b], m["ci_up"][b]))
          for b in range(len(m["n"]))))
-    v = VIGOROUS
     return study_page("fairness", BATCH=BATCH, T_MAX=T_MAX, _beats_sides=_beats_sides,
                       _trend=_trend, _vigorous_sentence=_vigorous_sentence, bracket=bracket,
-                      faces=faces, fair=fair, g=g, loaded=loaded, loaded_die=loaded_die, m=m,
-                      memory=memory, n=n, np=np, scene=scene, seed=seed, sizes=sizes, v=v)
+                      faces=faces, fair=fair, g=scene.ground, loaded=loaded,
+                      loaded_die=loaded_die, m=m, memory=memory, n=n, np=np, scene=scene,
+                      seed=seed, sizes=sizes, v=VIGOROUS)

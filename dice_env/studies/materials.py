@@ -1,13 +1,7 @@
 """Table materials: how felt, wood, glass and a craps table change the throw's outcome.
 
-``run(out, quick, throws)`` writes ``out/materials.md`` and ``out/figures/materials.png``.
-The default die is thrown on each preset of :mod:`dice_env.model.materials` with the fairness
-study's vigorous hand throws and the cuboid study's gentle ones, the same releases on every
-material (so the materials' differences are not sampling noise of the releases), each throw
-until its face is decided. Reported per material: the restitution the simulator produces,
-the faces with a chi-square test of uniformity, the impacts and time to the decision, the
-deepest corner sink, and the memory of the release orientation: how often the die ends on
-the face that was down (or up) at release.
+``run(out, quick, throws)`` writes ``out/materials.md`` and ``out/figures/materials.png``: the
+default die on each preset of :mod:`dice_env.model.materials`, the same releases on every one.
 """
 
 from __future__ import annotations
@@ -32,12 +26,9 @@ from dice_env.studies.markdown import estimate, markdown_table
 from dice_env.studies.numbers import study_page
 from dice_env.studies.shapes import BATCH, Faces, counted
 
-# Throws per material: (vigorous, gentle) in the full and the quick run.
-FULL, QUICK = (10_000, 5_000), (60, 40)
-# (label, hand) of the two kinds of throw.
-KINDS = (("vigorous", VIGOROUS), ("gentle", GENTLE))
-# p-value below which the materials' memories count as different.
-SIGNIFICANT = 0.01
+FULL, QUICK = (10_000, 5_000), (60, 40)  # throws per material: (vigorous, gentle)
+KINDS = (("vigorous", VIGOROUS), ("gentle", GENTLE))  # (label, hand) of the two kinds of throw
+SIGNIFICANT = 0.01  # p-value below which the materials' memories count as different
 HEADER = ("throws | preset | counted | not decided | faces 1–6 | chi2 | p | mean impacts | "
           "time to decision, mean / median (s) | sink (mm)")
 
@@ -46,9 +37,8 @@ HEADER = ("throws | preset | counted | not decided | faces 1–6 | chi2 | p | me
 class MaterialThrows:
     """One material's throws of one kind.
 
-    ``faces``: the faces read; ``impacts`` and ``time`` (s, to the decision) per counted
-    throw; ``down``/``up``: counted throws resting on the face that was down/up at release;
-    ``sink``: deepest corner sink of each throw (m).
+    ``impacts`` and ``time`` (s, to the decision) per counted throw; ``down``/``up``: counted
+    throws resting on the face that was down/up at release; ``sink``: deepest sink per throw (m).
     """
 
     faces: Faces
@@ -75,11 +65,8 @@ def throw(scene: object, state: State, bar: object = None) -> MaterialThrows:
         down = rests_on == die.face_read(chunk.orientation, -UP)
         up = rests_on == die.face_read(chunk.orientation, UP)
         parts.append((ok, res.face, res.impacts, res.rest_time, down, up, res.max_penetration))
-    ok, face, impacts, when, down, up, sink = (np.concatenate(p) for p in zip(*parts,
-                                                                               strict=True))
-    counts = np.bincount(face[ok], minlength=die.n_faces + 1)[1:]
-    chi2, p = stats.chisquare(counts)
-    faces = Faces(counts, int(ok.sum()), int((~ok).sum()), float(chi2), float(p))
+    ok, face, impacts, when, down, up, sink = map(np.concatenate, zip(*parts, strict=True))
+    faces = Faces.of(np.bincount(face[ok], minlength=die.n_faces + 1)[1:], len(ok))
     return MaterialThrows(faces, impacts[ok], when[ok], int(down[ok].sum()), int(up[ok].sum()),
                           sink)
 
@@ -121,10 +108,7 @@ def run(out: Path = DOCS, quick: bool = False, throws: int | None = None,
 
 
 def memory_differs(results: dict, label: str, which: str = "down") -> float:
-    """p-value of the test that P(release-``which`` face) is one on every material.
-
-    Chi-square on the ``label`` throws; conservative, as the materials share their releases.
-    """
+    """Chi-square p-value that P(release-``which`` face) is one on all materials (conservative)."""
     hits = np.array([getattr(kinds[label], which) for kinds in results.values()])
     ended = np.array([kinds[label].faces.ended for kinds in results.values()])
     return float(stats.chi2_contingency(np.stack([hits, ended - hits]))[1])

@@ -1,13 +1,6 @@
 """Two fair dice thrown together into a tray: the total against 2d6's triangle, and independence.
 
-``run(out, quick, throws)`` writes ``out/pairs.md`` and ``out/figures/pairs.png``. Two default
-d6 leave one hand together (:func:`hand_throws`) into the 30 x 20 cm tray
-(:func:`dice_env.model.surroundings.tray`), colliding with each other and the walls
-(:func:`dice_env.simulation.group.simulate_group`), each throw until both faces are decided.
-Reported: the totals 2–12 against the triangle ``(6 - |k - 7|) / 36`` of two independent fair dice
-(chi-square, 10 degrees of freedom), the 6 x 6 table of (die 1, die 2) faces with a
-chi-square test of independence and each die's test of uniformity, how often the dice met,
-and the throws voided (not counted).
+``run(out, quick, throws)`` writes ``out/pairs.md`` and ``out/figures/pairs.png`` (see that page).
 """
 
 from __future__ import annotations
@@ -40,28 +33,22 @@ from dice_env.studies.fairness import random_directions, random_orientations, to
 from dice_env.studies.markdown import bracket, markdown_table
 from dice_env.studies.numbers import study_page
 
-# Throws of the pair in the full and the quick run; throws per kernel call; throws per seeded
-# chunk (see chunked_pairs).
+# Throws of the pair in the full and the quick run, per kernel call, per seeded chunk.
 FULL, QUICK, BATCH, CHUNK = 100_000, 60, 500, 2_000
-# Fewest throws a run takes (the 6 x 6 table needs some in every row and column).
-MIN_THROWS = 20
-# Simulated time limit per throw (s): a throw not decided by then is voided.
-T_MAX = 10.0
-# p-value below which a test counts as a detected departure.
-SIGNIFICANT = 0.01
+MIN_THROWS = 20  # the 6 x 6 table needs some in every row and column
+T_MAX = 10.0  # simulated time limit per throw (s): a throw not decided by then is voided
+SIGNIFICANT = 0.01  # p-value below which a test counts as a detected departure
 TOTALS = np.arange(2, 13)
 
 
 @dataclass(frozen=True)
 class Hand:
-    """A hand that throws several dice at once; lengths in metres, speeds in m/s.
+    """A hand that throws several dice at once; lengths in metres, speeds in m/s, spin in rad/s.
 
-    The dice sit in rows of at most ``per_row`` along y, ``spacing`` apart centre to centre
-    (rows along x), the group centred above the origin at a common height ``clearance`` above
-    the height where a die's lowest corner could touch (half its diagonal). The hand moves at
-    one velocity, ``speed`` in a uniform direction toward the table, and each die adds its own
-    normal noise (``noise`` per component); each die spins at ``spin`` (rad/s) about its own
-    uniform axis and has its own uniform orientation. Ranges are drawn uniformly per throw.
+    Dice in rows of at most ``per_row`` along y, ``spacing`` apart, centred above the origin at
+    ``clearance`` above touching; one hand velocity ``speed`` toward the table plus each die's
+    normal ``noise`` per component; each die its own uniform axis of ``spin`` and orientation.
+    Ranges are drawn uniformly per throw.
     """
 
     spacing: float = 0.03
@@ -72,9 +59,7 @@ class Hand:
     spin: tuple[float, float] = (10.0, 100.0)
 
 
-# The two-dice hand of the study: the fairness study's vigorous throw (8–32 cm up, 0.48–2.4 m/s,
-# 10–100 rad/s for the 16 mm die), given to both dice at once.
-HAND = Hand()
+HAND = Hand()  # the fairness study's vigorous throw, given to both dice at once
 
 
 def tray_scene() -> Scene:
@@ -118,9 +103,9 @@ def triangle() -> np.ndarray:
 
 
 def independence(table: np.ndarray) -> tuple[float, float, int]:
-    """Chi-square test that rows and columns of the count ``table`` are independent.
+    """Chi-square test of independence of the count ``table``'s non-empty rows and columns.
 
-    Returns (chi2, p, degrees of freedom); rows and columns without counts are left out.
+    Returns (chi2, p, degrees of freedom).
     """
     table = np.asarray(table)
     table = table[table.sum(axis=1) > 0][:, table.sum(axis=0) > 0]
@@ -190,19 +175,13 @@ class Pairs:
 
 def simulate_in_batches(scene: Scene, dice: tuple[Die, ...], state: GroupState,
                         bar: object = None, batch: int = BATCH, **keywords: object) -> GroupResult:
-    """:func:`simulate_group` of ``state`` in batches of ``batch`` throws, joined.
-
-    ``bar`` (a progress bar) advances by each batch's throws; ``keywords`` go to
-    :func:`simulate_group` (no recording).
-    """
-    parts = []
-    for chunk in batches(state, batch, bar):
-        parts.append(simulate_group(scene, dice, chunk, **keywords))
+    """:func:`simulate_group` (no recording; ``keywords`` go to it) in batches, joined."""
+    parts = [simulate_group(scene, dice, chunk, **keywords)
+             for chunk in batches(state, batch, bar)]
+    skip = ("final", "t", "x_cm", "orientations")
     joined = {f.name: np.concatenate([getattr(p, f.name) for p in parts])
-              for f in fields(GroupResult) if f.name not in ("final", "t", "x_cm",
-                                                             "orientations")}
-    final = GroupState(*(np.concatenate(arrays) for arrays in zip(
-        *(p.final._arrays() for p in parts), strict=True)))
+              for f in fields(GroupResult) if f.name not in skip}
+    final = GroupState(*map(np.concatenate, zip(*(p.final._arrays() for p in parts), strict=True)))
     return GroupResult(**joined, final=final)
 
 
@@ -225,10 +204,8 @@ def chunked_pairs(scene: Scene, dice: tuple[Die, ...], throws: int, seed: int,
     """``throws`` hand throws in chunks of ``chunk`` seeded ``(seed, i)``, joined.
 
     Returns the pairs and the wall-clock and CPU seconds their throwing took. With ``keep``,
-    each chunk is kept there (``pairs-<seed>-<i>-<size>.npz`` beside ``spec.json``, which
-    names the dice, the scene, the hand, the chunk size and the die–die contact) and read
-    back instead of thrown when present (:mod:`dice_env.studies.chunks`): a run stopped
-    part-way continues. The result does not depend on ``keep``.
+    each chunk is kept in that folder and read back when present (:mod:`dice_env.studies.chunks`),
+    so a stopped run continues; the result does not depend on ``keep``.
     """
     if keep is not None:
         prepare(keep, {"dice": [d.name for d in dice], "hand": asdict(HAND), "chunk": chunk,
@@ -247,17 +224,12 @@ def chunked_pairs(scene: Scene, dice: tuple[Die, ...], throws: int, seed: int,
             float(sum(p["cpu"] for p in parts)))
 
 
-# Why a throw is not counted (see void_reasons).
 VOID_REASONS = ("not decided within the time limit", "unstable (energy rose)", "a die sunk",
                 "a die leaning on the other (not read)")
 
 
 def void_reasons(result: GroupResult) -> dict[str, np.ndarray]:
-    """The throws (B,) of ``result`` that cannot be counted, by reason (a throw may have several).
-
-    Not decided (nor at rest) within the time limit, unstable, a die sunk, a die leaning on
-    another (not read): :data:`VOID_REASONS`, in that order.
-    """
+    """The throws (B,) of ``result`` that cannot be counted, by :data:`VOID_REASONS`."""
     return dict(zip(VOID_REASONS, (~(result.decided | result.settled), result.unstable,
                                    result.sunk.any(axis=1), ~result.read.all(axis=1)),
                     strict=True))
@@ -279,7 +251,7 @@ def run(out: Path = DOCS, quick: bool = False, throws: int | None = None,
     """Regenerate ``pairs.md`` and its figure under ``out``; return the headline numbers.
 
     ``throws``: throws of the pair (default :data:`FULL`, :data:`QUICK` with ``quick``);
-    ``keep``: a folder for the chunks (:func:`chunked_pairs`), to continue a run.
+    ``keep``: a folder for the chunks (:func:`chunked_pairs`).
     """
     throws = checked_throws(throws, MIN_THROWS)
     n = throws if throws is not None else QUICK if quick else FULL

@@ -2,12 +2,6 @@
 
 ``run(out, quick)`` writes ``out/paper.md`` and ``out/figures/paper_*.png``. Every claim is
 also a function returning the number it rests on, so the tests assert the same numbers.
-
-Figure 13 search: for each stiffness, ``ground_cube`` runs over a fine grid of ``clockmax``
-(tmax = 10); a run passes a criterion when its total energy (kinetic + potential + ground
-springs) never rises above its start by more than a limit (10% or 100% of
-``KE0 + m g (h0 + edge)``, h0 the start height above the plane), stays finite and ends above
-the plane. The steps needed are the smallest grid ``clockmax`` above which every run passes.
 """
 
 from __future__ import annotations
@@ -24,8 +18,7 @@ from dice_env.studies.common import DOCS, progress, save_figure
 from dice_env.studies.markdown import markdown_table
 from dice_env.studies.numbers import study_page
 
-# Seed of the real throw's random initial angular momentum (the listing's rand(3,1)*0.75+1e-6).
-THROW_SEED = 0
+THROW_SEED = 0  # seed of the real throw's initial angular momentum (the listing's rand(3,1))
 # Ground-cube variants of Figures 6–12: (figure label, keyword overrides of ground_cube).
 VARIANTS = {
     "fig6_mu0": ("Figure 6: mu = 0", {"mu": 0.0}),
@@ -37,8 +30,6 @@ VARIANTS = {
                          {"S": 1e6, "clockmax": 20000}),
 }
 
-
-# ---- the claims, each as the number it rests on -------------------------------------------
 
 def sliding_speed_at_end(run: PaperRun) -> float:
     """Mean x velocity over the last second (Figure 6: mu = 0 keeps sliding)."""
@@ -80,11 +71,7 @@ def rebound_peaks(run: PaperRun) -> np.ndarray:
     return z[1:-1][top][1:]
 
 
-# ---- Figure 13: steps needed against stiffness --------------------------------------------
-
-# Stability criteria of the search: the largest energy rise allowed, as a fraction of
-# KE0 + m g (h0 + edge). 0.1 is ``Scene.energy_tol`` (``Result.unstable``); 1.0 is "energy not
-# doubled".
+# Figure 13's criteria: the largest energy rise allowed, as a fraction of KE0 + m g (h0 + edge).
 CRITERIA = {"rise <= 10%": 0.1, "rise <= 100%": 1.0}
 
 
@@ -92,18 +79,16 @@ def energy_rises(stiffness: float, clockmaxes: np.ndarray,
                  contact_law: ContactLaw = ContactLaw.PAPER) -> np.ndarray:
     """Largest rise of total energy of ``ground_cube`` runs, one per ``clockmax`` (tmax = 10).
 
-    Total energy is kinetic + potential + ground springs; the rise is in units of
-    ``KE0 + m g (h0 + edge)``; ``inf`` when the state stopped being finite or the cube ended
-    below the plane (a few huge steps can carry it through the ground between energy checks).
+    In units of ``KE0 + m g (h0 + edge)``; ``inf`` when the state stopped being finite or the
+    cube ended below the plane (huge steps can carry it through between energy checks).
     """
     tol = paper_scene(S=stiffness, rotation=False, dt=None).energy_tol
     out = np.empty(len(clockmaxes))
     for j, clockmax in enumerate(clockmaxes):
         run_ = ground_cube(S=stiffness, clockmax=int(clockmax), contact_law=contact_law,
                            allow_unstable=True)
-        res = run_.result
         lost = not np.isfinite(run_.x_cm).all() or run_.x_cm[-1, 2] <= 0
-        out[j] = np.inf if lost else res.energy_rise[0] * tol
+        out[j] = np.inf if lost else run_.result.energy_rise[0] * tol
     return out
 
 
@@ -144,18 +129,15 @@ def fit_exponent(stiffness: np.ndarray, steps: np.ndarray) -> float:
     return float(np.polyfit(np.log(stiffness), np.log(steps), 1)[0])
 
 
-# ---- the report ---------------------------------------------------------------------------
-
 def run(out: Path = DOCS, quick: bool = False) -> dict[str, float]:
     """Regenerate ``paper.md`` and its figures under ``out``; return the headline numbers."""
     stiffnesses = np.logspace(3, 6, 4) if quick else np.logspace(1, 8, 15)
     points = 60 if quick else 200
     bar = progress(2 + len(VARIANTS) + len(stiffnesses), "paper figures")
-    throws = {}
+    throws, runs = {}, {}
     for law in (ContactLaw.PAPER, ContactLaw.GATED):
         throws[law] = real_throw_cube(seed=THROW_SEED, contact_law=law, record_nodes=True)
         bar.update()
-    runs = {}
     for key, (_, kw) in VARIANTS.items():
         runs[key] = ground_cube(**kw)
         bar.update()

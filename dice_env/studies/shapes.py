@@ -1,17 +1,6 @@
-"""Every standard die: fairness, loaded variants, and free flight.
+"""Every standard die: fairness, loaded variants (:func:`favoured_face`), and free flight.
 
 ``run(out, quick, throws)`` writes ``out/shapes.md`` and ``out/figures/shapes_faces.png``.
-
-- Fairness: each standard die (:meth:`Die.standard`) thrown ``throws`` times (default
-  100,000) on the default table with the vigorous hand throws of ``fairness.md``, in the
-  same physical units for every die; each throw ends when its face is decided
-  (``until="decided"``); chi-square test of uniformity over the faces.
-- Loaded dice: each die with a tenth of its mass moved toward face 1 (:meth:`Die.load`); the
-  predicted face (:func:`favoured_face`: the face read when the weight is down, the opposite
-  face on a die read up, the loaded face itself on the d4) must show more than ``1/n``.
-- Free flight: with no contact, the velocity changes by gravity alone, the angular momentum
-  not at all and the energy (kinetic plus potential) stays constant, for every shape,
-  loaded ones and a cuboid (non-isotropic inertia) included (:func:`free_flight`).
 """
 
 from __future__ import annotations
@@ -41,15 +30,12 @@ from dice_env.studies.markdown import estimate, markdown_table
 from dice_env.studies.numbers import study_page
 
 DICE = tuple(STANDARD_SIZES)
-# Throws per die: fair (the full run's default) and loaded; the quick run's sizes.
+# Throws per die, fair and loaded, in the full and the quick run.
 FULL = {"fair": 100_000, "loaded": 20_000}
 QUICK = {"fair": 600, "loaded": 600}
-# Dice per kernel call.
-BATCH = 2048
-# The loaded dice: this fraction of the mass at this depth toward face 1 (Die.load).
-LOAD = {"face": 1, "fraction": 0.1, "depth": 0.8}
-# Free flight: released 1 m up, 0.3 s without contact (the die falls about 0.45 m).
-FLIGHT_HEIGHT, FLIGHT_TIME = 1.0, 0.3
+BATCH = 2048  # dice per kernel call
+LOAD = {"face": 1, "fraction": 0.1, "depth": 0.8}  # the loaded dice (Die.load's arguments)
+FLIGHT_HEIGHT, FLIGHT_TIME = 1.0, 0.3  # free flight: released 1 m up, 0.3 s without contact
 FLIGHT_COLUMNS = ("velocity", "momentum", "energy", "rotation", "height")
 
 
@@ -57,19 +43,17 @@ def hand_throws(scene: Scene, n: int, rng: np.random.Generator,
                 vigour: Vigour = VIGOROUS, unit: float = DIE_EDGE) -> State:
     """``n`` random throws of ``scene``'s die drawn from ``vigour`` in units of ``unit`` (m).
 
-    The default unit is the default d6's edge, so every die gets the same hand: released
-    8–32 cm above touching, 0.48–2.4 m/s toward the table, 10–100 rad/s about a uniform
-    axis, orientation uniform.
+    The default unit, the default d6's edge, gives every die the same hand.
     """
     return vigorous_throws(scene, n, rng, vigour, unit)
 
 
 @dataclass
 class Faces:
-    """Faces of a set of throws that each ended decided or at rest.
+    """Faces of a set of throws: ``counts`` (F,) per label over the ``ended`` throws.
 
-    ``counts`` (F,) per label; ``ended``: throws with a face; ``undecided``: the rest (still
-    moving at the time limit, unstable or sunk: not counted); chi-square of uniformity.
+    ``undecided``: the throws not counted (moving at the time limit, unstable or sunk);
+    ``chi2``, ``p_value``: the chi-square test of uniformity.
     """
 
     counts: np.ndarray
@@ -157,16 +141,14 @@ class Loaded:
 
 def free_flight(die: Die, n: int = 8, seed: int = 0, step_by_step: bool = False,
                 t: float = FLIGHT_TIME, safety: float = 0.15) -> dict[str, float]:
-    """Largest errors of ``n`` random throws of ``die`` flying ``t`` seconds with no contact.
+    """Largest relative errors of ``n`` random throws of ``die`` flying ``t`` s with no contact.
 
-    Released :data:`FLIGHT_HEIGHT` up with up to 1 m/s and 100 rad/s. Relative to the scale of
-    each quantity: ``velocity`` ``|u - u0 - g t| / (|u0| + g t)``; ``momentum`` (angular)
-    ``|L - L0| / |L0|``; ``energy`` (kinetic plus ``m g z``, every recorded step, computed
-    here from the state, plus the symplectic Euler step's exact defect in uniform gravity
-    ``m g^2 dt t / 2``) ``|E - E0| / KE0``, and ``rotation`` its rotational part alone
-    ``|R - R0| / KE0``; ``height`` the centre's height against the
-    exact parabola over the drop ``g t^2 / 2``. ``step_by_step`` turns the analytic
-    contact-free jumps off; ``safety`` is the scene's (the step's fraction of the critical one).
+    Released :data:`FLIGHT_HEIGHT` up with up to 1 m/s and 100 rad/s. ``velocity``:
+    ``|u - u0 - g t| / (|u0| + g t)``; ``momentum``: ``|L - L0| / |L0|``; ``energy``
+    (kinetic plus ``m g z`` plus the step's exact defect ``m g^2 dt t / 2``, every recorded
+    step): ``|E - E0| / KE0``, ``rotation`` its rotational part; ``height``: against the
+    parabola, over the drop ``g t^2 / 2``. ``step_by_step`` turns the analytic contact-free
+    jumps off; ``safety`` is the scene's.
     """
     scene = Scene(die=die, safety=safety)
     rng = np.random.default_rng(seed)
@@ -188,7 +170,6 @@ def free_flight(die: Die, n: int = 8, seed: int = 0, step_by_step: bool = False,
     rotation0 = _rotational(die, start.angular_momentum, start.orientation)
     kinetic0 = 0.5 * die.mass * np.sum(start.velocity**2, axis=1) + rotation0
     energy0 = kinetic0 + die.mass * g * start.position[:, 2]
-    # records: centre and orientation; the velocity there follows from the exact gravity kick
     times = res.t
     velocities = start.velocity[:, None, :] + np.multiply.outer(times, [0.0, 0.0, -g])
     rotations = _rotational(die, start.angular_momentum[:, None, :], res.orientations)
@@ -227,11 +208,10 @@ def run(out: Path = DOCS, quick: bool = False, seed: int = SEED,
     """Regenerate ``shapes.md`` and its figure under ``out``; return the headline numbers.
 
     ``throws``: fair throws per die (default :data:`FULL`'s, or :data:`QUICK`'s with
-    ``quick``); the loaded dice then get half as many (at least the quick size).
-    ``faces_of(scene, n, seed)``: the faces of ``n`` hand throws of ``scene`` from ``seed``
-    (each die, fair and loaded, gets its own seed from ``SeedSequence(seed)``), e.g.
-    :func:`dice_env.studies.distributed.hand_faces` in seeded chunks on Ray; default: thrown here,
-    every die's throws drawn in turn from one generator.
+    ``quick``); the loaded dice get half as many (at least the quick size).
+    ``faces_of(scene, n, seed)``: the faces of ``n`` hand throws of ``scene`` (each die its own
+    seed from ``SeedSequence(seed)``), e.g. :func:`dice_env.studies.distributed.hand_faces`;
+    default: thrown here, every die's throws drawn in turn from one generator.
     """
     sizes = dict(QUICK if quick else FULL)
     if checked_throws(throws, 60) is not None:
@@ -263,9 +243,8 @@ def run(out: Path = DOCS, quick: bool = False, seed: int = SEED,
         numbers[f"{name}_p"] = fair[name].p_value
         numbers[f"{name}_undecided"] = fair[name].undecided / sizes["fair"]
         numbers[f"{name}_loaded_excess"] = loaded[name].share - 1 / fair[name].counts.size
-    numbers["flight_velocity"] = max(f[k]["velocity"] for f in flight.values() for k in (0, 1))
-    numbers["flight_momentum"] = max(f[k]["momentum"] for f in flight.values() for k in (0, 1))
-    numbers["flight_energy"] = max(f[k]["energy"] for f in flight.values() for k in (0, 1))
+    for q in ("velocity", "momentum", "energy"):
+        numbers[f"flight_{q}"] = max(f[k][q] for f in flight.values() for k in (0, 1))
     (out / "shapes.md").write_text(_markdown(fair, loaded, flight, sizes, seed, quick, throws,
                                              faces_of is not None))
     return numbers

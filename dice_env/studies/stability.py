@@ -1,16 +1,9 @@
 """Stiff and extreme cases: a stability map over stiffness and step, and a table of extremes.
 
-``run(out, quick)`` writes ``out/stability.md`` and ``out/figures/stability_*.png``.
-
-Map: the paper's real throw (``paper_scene``, rotation on) for stiffness 1e1–1e8 and steps from
-1/20 to 5 times ``Scene.critical_dt``, under both contact laws, a few spins per cell. A cell is
-*stable* when no throw's total energy (kinetic + potential + ground springs) rises above its
-start by more than 10% of ``KE0 + m g (h0 + edge)`` (``Result.unstable`` is False), *drifting* when
-the worst rise is above 10% but below 10 times that scale with a finite state, and *blowing
-up* beyond that or on a non-finite state.
-
-Extremes: the default scene (``Scene()``) with one parameter pushed at a time, each a batch of
-random throws at the automatic step.
+``run(out, quick)`` writes ``out/stability.md`` and ``out/figures/stability_*.png``. A map cell
+is *stable* when no throw is flagged (``Result.unstable``), *drifting* when the worst energy
+rise stays below :data:`DRIFT_LIMIT` times the tolerance's scale with a finite state, and
+*blowing up* otherwise.
 """
 
 from __future__ import annotations
@@ -35,10 +28,8 @@ from dice_env.studies.numbers import study_page
 
 STABLE, DRIFTING, BLOWUP = 0, 1, 2
 CLASS_NAMES = ("stable", "drifting", "blowing up")
-# Worst energy rise (fraction of KE0 + m g (h0 + edge)) that still counts as drifting.
-DRIFT_LIMIT = 10.0
-# Simulated time of each map cell (s): the paper throw lands at about 1.5 s.
-MAP_T_MAX = 5.0
+DRIFT_LIMIT = 10.0  # worst energy rise (fraction of KE0 + m g (h0 + edge)) still drifting
+MAP_T_MAX = 5.0  # simulated time of each map cell (s): the paper throw lands at about 1.5 s
 
 
 def classify(result: Result, energy_tol: float) -> int:
@@ -234,18 +225,7 @@ def _node_mass_bound(stiffness: float) -> float:
 def _markdown(stiffnesses: np.ndarray, ratios: np.ndarray, maps: dict, rows: list,
               throws: int, n: dict[str, float], sweep_cases: list[Case],
               sweep: np.ndarray) -> str:
-    """The page ``stability.md``: the map, the extreme cases and the notes on them."""
     base = Scene()
-    return study_page("stability-markdown", _extremes_table=_extremes_table,
-                      _flag_notes=_flag_notes, _map_section=_map_section,
-                      _parameter_notes=_parameter_notes, base=base, maps=maps, n=n, ratios=ratios,
-                      rows=rows, stiffnesses=stiffnesses, sweep=sweep, sweep_cases=sweep_cases,
-                      throws=throws)
-
-
-def _map_section(stiffnesses: np.ndarray, ratios: np.ndarray, maps: dict,
-                 n: dict[str, float]) -> str:
-    """The stability map: its figure, the share of each class per law and its reading."""
     law_lines = markdown_table(
         "law | below: stable | drift | blow-up | above: stable | drift | blow-up | 1st drift | "
         "1st blowup",
@@ -253,14 +233,6 @@ def _map_section(stiffnesses: np.ndarray, ratios: np.ndarray, maps: dict,
                   for c in ("stable", "drifting", "blowing_up")),
           f"{n[f'{name}_first_not_stable']:.3g}", f"{n[f'{name}_first_blowup']:.3g}")
          for name in (law.name.lower() for law in maps)))
-    return study_page("stability-map-section", DRIFT_LIMIT=DRIFT_LIMIT, MAP_T_MAX=MAP_T_MAX,
-                      _above_stable_phrase=_above_stable_phrase, law_lines=law_lines, n=n,
-                      ratios=ratios, stiffnesses=stiffnesses)
-
-
-def _extremes_table(base: Scene, rows: list, throws: int) -> str:
-    """The extreme cases: the default scene, the columns' meaning and one row per case."""
-    g = base.ground
     table = markdown_table(
         "group | case | settled | max pen. | drift | unstable | sunk | rest (s) | NaN | dt (s) | "
         "wall (s) | warn",
@@ -268,11 +240,6 @@ def _extremes_table(base: Scene, rows: list, throws: int) -> str:
           f"{100 * r['energy_drift']:+.2f}%", f"{100 * r['unstable']:.0f}%",
           f"{100 * r['sunk']:.0f}%", f"{r['rest_time']:.2f}", "NaN!" if r["nan"] else "none",
           f"{r['dt']:.2g}", f"{r['wall']:.2f}", r["warnings"] or "-") for c, r in rows))
-    return study_page("stability-extremes-table", base=base, g=g, table=table, throws=throws)
-
-
-def _flag_notes(base: Scene, rows: list, sweep_cases: list[Case], sweep: np.ndarray) -> str:
-    """Notes on the cases with NaNs, flagged unstable or sunk, and the safety sweep's table."""
     sweep_rows = markdown_table(
         "case | " + " | ".join(f"safety {s:g}" for s in SAFETIES),
         ((f"{c.group}: {c.label}", *(f"{100 * sweep[i, j, 0]:+.1f}% / {100 * sweep[i, j, 1]:.0f}%"
@@ -282,24 +249,21 @@ def _flag_notes(base: Scene, rows: list, sweep_cases: list[Case], sweep: np.ndar
                if r["unstable"] > 0]
     sunk = [f"{c.group} {c.label} ({100 * r['sunk']:.0f}%)" for c, r in rows if r["sunk"] > 0]
     nan_cases = [f"{c.group} {c.label}" for c, r in rows if r["nan"]]
-    return study_page("stability-flag-notes", _indent=_indent, _sweep_sentence=_sweep_sentence,
-                      base=base, flagged=flagged, nan_cases=nan_cases, sunk=sunk, sweep=sweep,
-                      sweep_cases=sweep_cases, sweep_rows=sweep_rows)
-
-
-def _parameter_notes(base: Scene, rows: list, throws: int) -> str:
-    """Notes on the stiffness, tilt, damping and mass groups of the extreme cases."""
-    stiff = [(c, r) for c, r in rows if c.group == "stiffness"]
-    slip = float(np.degrees(np.arctan(base.ground.friction)))
-    by_label = {c.label: r for c, r in rows}
-    d_rows = [(c.label, r) for c, r in rows if c.group == "damping"]
     tilt_rows = ", ".join(f"{c.label} {100 * r['settled']:.0f}%" for c, r in rows
                           if c.group == "tilt")
     sink = [f"{c.label}: {100 * _static_sink(c.scene):.2g}% static, "
             f"{100 * r['max_penetration']:.3g}% in the throws" for c, r in rows
             if c.group == "mass"]
-    return study_page("stability-parameter-notes", base=base, by_label=by_label, d_rows=d_rows,
-                      sink=sink, slip=slip, stiff=stiff, throws=throws, tilt_rows=tilt_rows)
+    return study_page(
+        "stability-markdown", DRIFT_LIMIT=DRIFT_LIMIT, MAP_T_MAX=MAP_T_MAX,
+        _above_stable_phrase=_above_stable_phrase, _indent=_indent,
+        _sweep_sentence=_sweep_sentence, base=base, by_label={c.label: r for c, r in rows},
+        d_rows=[(c.label, r) for c, r in rows if c.group == "damping"], flagged=flagged,
+        g=base.ground, law_lines=law_lines, n=n, nan_cases=nan_cases, ratios=ratios, sink=sink,
+        slip=float(np.degrees(np.arctan(base.ground.friction))),
+        stiff=[(c, r) for c, r in rows if c.group == "stiffness"], stiffnesses=stiffnesses,
+        sunk=sunk, sweep=sweep, sweep_cases=sweep_cases, sweep_rows=sweep_rows, table=table,
+        throws=throws, tilt_rows=tilt_rows)
 
 
 def _above_stable_phrase(n: dict[str, float]) -> str:
