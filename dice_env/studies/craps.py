@@ -164,9 +164,8 @@ def _plot(cells: dict, noises: tuple, speeds: tuple, path: Path) -> None:
             ax.errorbar(np.array(noises) * (1 + 0.06 * i), p, yerr=error_bars(p, ci), fmt=style,
                         color=f"C{i}", capsize=3, label=f"{way}, {speed:g} m/s")
     ax.axhline(1 / 6, color="k", lw=1, ls=":", label="1/6")
-    ax.set_xscale("log")
-    ax.set_xlabel("hand noise (fraction of the release's scale; rad of orientation)")
-    ax.set_ylabel("P(seven) (95% interval)")
+    ax.set(xscale="log", ylabel="P(seven) (95% interval)",
+           xlabel="hand noise (fraction of the release's scale; rad of orientation)")
     ax.set_title("the all-sevens set against random orientations", fontsize=10)
     ax.legend(fontsize=8)
     ax = axes[1]
@@ -177,9 +176,7 @@ def _plot(cells: dict, noises: tuple, speeds: tuple, path: Path) -> None:
             ax.bar(TOTALS + (2 * j + i - len(speeds) + 0.5) * width, c["totals"] / c["n"],
                    width=width, label=f"set, noise {noise:g} ({label}), {speed:g} m/s")
     ax.plot(TOTALS, triangle(), "o--", color="k", label="2d6")
-    ax.set_xticks(TOTALS)
-    ax.set_xlabel("total of the two dice")
-    ax.set_ylabel("share of counted throws")
+    ax.set(xticks=TOTALS, xlabel="total of the two dice", ylabel="share of counted throws")
     ax.set_title("totals of the set dice", fontsize=10)
     ax.legend(fontsize=7)
     save_figure(fig, path)

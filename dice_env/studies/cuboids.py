@@ -147,10 +147,9 @@ def _plot(table: dict, ratios: tuple[float, ...], n: int, path: Path) -> None:
     ax.set_xticks(ratios)
     ax.set_xticklabels([f"{r:g}" for r in ratios])
     ax.minorticks_off()
-    ax.set_xlabel("x / y (height along the square faces' normal / side of the square)")
-    ax.set_ylabel("P(lands on a square face), 95% band")
-    ax.set_ylim(0, 1)
-    ax.set_title(f"Square-cuboid dice, {n} throws per point (prediction, nothing fitted)")
+    ax.set(xlabel="x / y (height along the square faces' normal / side of the square)",
+           ylabel="P(lands on a square face), 95% band", ylim=(0, 1),
+           title=f"Square-cuboid dice, {n} throws per point (prediction, nothing fitted)")
     ax.legend(fontsize=8)
     save_figure(fig, path)
 
@@ -166,11 +165,10 @@ def _markdown(table: dict, ratios: tuple[float, ...], n: int, seed: int, quick: 
         rows.append((f"{r:g}", f"{y:.2f} × {x:.2f}", f"{solid_angle_share(r):.3f}",
                      *(estimate(*table[label, r][1:3]) for label in labels)))
     undecided = {label: sum(table[label, r][0].undecided for r in ratios) for label in labels}
-    cube = {label: table[label, 1.0] for label in labels}
     cube_lines = "\n".join(
         f"- {label}: {estimate(p, ci)}: 1/3 is "
         f"{'inside' if ci[0] <= 1 / 3 <= ci[1] else 'OUTSIDE'} the interval."
-        for label, (_, p, ci) in cube.items())
+        for label in labels for _, p, ci in [table[label, 1.0]])
     shares = markdown_table("x/y | y × x (mm) | solid angle | " + " | ".join(labels), rows)
     return study_page("cuboids", RESTITUTION=RESTITUTION, SOFT=SOFT, command=command,
                       cube_lines=cube_lines, g=Ground(), n=n, s=GENTLE, seed=seed, shares=shares,

@@ -266,16 +266,10 @@ def _vigorous_sentence(m: dict) -> str:
             f"{estimate(m['p_up'][-1], up)}. Splitting this bin at the median share of spin in "
             f"the energy ({m['low_spin'][2]:.2f}): release-down {estimate(*m['low_spin'][:2])} "
             f"with less spin, {estimate(*m['high_spin'][:2])} with more. "
-            + _spin_reading(m))
-
-
-def _spin_reading(m: dict) -> str:
-    low, high = m["low_spin"][1], m["high_spin"][1]
-    if low[0] > high[1]:
-        return ("The memory sits in the throws with little spin, which keep their orientation "
-                "in flight.")
-    return ("The memory is no weaker with more spin, so it is not simply throws that keep "
-            "their orientation in flight; we have not traced its cause.")
+            + ("The memory sits in the throws with little spin, which keep their orientation "
+               "in flight." if m["low_spin"][1][0] > m["high_spin"][1][1] else
+               "The memory is no weaker with more spin, so it is not simply throws that keep "
+               "their orientation in flight; we have not traced its cause."))
 
 
 def _plot_faces(fair: FaceCounts, loaded: FaceCounts, path: Path) -> None:
@@ -288,9 +282,7 @@ def _plot_faces(fair: FaceCounts, loaded: FaceCounts, path: Path) -> None:
         ax.bar(faces, p, color="C0" if counts is fair else "C1")
         ax.errorbar(faces, p, yerr=error_bars(p, ci), fmt="none", color="k", capsize=4)
         ax.axhline(1 / 6, color="k", ls=":", lw=1)
-        ax.set_xticks(faces)
-        ax.set_xlabel("face up")
-        ax.set_ylabel("probability (95% interval)")
+        ax.set(xticks=faces, xlabel="face up", ylabel="probability (95% interval)")
         ax.set_title(f"{title}: {counts.total} settled throws, chi-square p = "
                      f"{counts.p_value:.3g}", fontsize=10)
         if counts is fair:
@@ -306,10 +298,8 @@ def _plot_memory(m: dict, path: Path) -> None:
         ax.errorbar(m["e_mid"], p, yerr=error_bars(p, ci), fmt="o-", color=color, capsize=3,
                     label=label)
     ax.axhline(1 / 6, color="k", ls=":", lw=1, label="1/6")
-    ax.set_xscale("log")
-    ax.set_xlabel("throw energy above rest (m g a), median of each bin")
-    ax.set_ylabel("probability (95% interval)")
-    ax.set_title("Memory of the release orientation")
+    ax.set(xscale="log", xlabel="throw energy above rest (m g a), median of each bin",
+           ylabel="probability (95% interval)", title="Memory of the release orientation")
     ax.legend()
     save_figure(fig, path)
 

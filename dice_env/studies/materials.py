@@ -141,8 +141,7 @@ def _plot(results: dict, path: Path) -> None:
         ax.set_xticks(x, names)
         ax.legend(fontsize=8)
     axes[2].axhline(1 / 6, color="k", ls=":", lw=1)
-    axes[2].set_xlabel("face up (vigorous throws)")
-    axes[2].set_ylabel("share (95% interval)")
+    axes[2].set(xlabel="face up (vigorous throws)", ylabel="share (95% interval)")
     axes[2].legend(fontsize=8)
     save_figure(fig, path)
 

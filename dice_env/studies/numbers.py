@@ -8,20 +8,13 @@ A hand-written page (the README, ``docs/*.md``) quotes a measured figure only in
     the vector env runs 1,399 throws/s
     <!-- /numbers -->
 
-The comment holds the template, hidden where the page is shown; each
-``{{ expression | format }}`` is a Python expression over the named JSONs (keys by ``.name`` or
-``["key"]``; ``min``, ``max``, ``len``, ``sum``, ``abs``, ``round``, ``sorted``, ``all``,
-``any``, ``enumerate``, ``zip`` and ``range`` available; comprehensions and ``str`` methods
-such as ``"\n".join`` work), written with the format spec.
-A source may name a part of its JSON, keys joined by ``/``:
-``rest=benchmarks/results/physics.json#throws_to_rest/Scene()`` binds ``rest`` to that object.
+Each ``{{ expression | format }}`` of the hidden template is a Python expression over the named
+JSONs (keys by ``.name`` or ``["key"]``, the builtins of :data:`HELPERS`), written with the
+format spec. A source may name a part of its JSON, keys joined by ``/``:
+``rest=benchmarks/results/physics.json#throws_to_rest/Scene()``.
 ``python -m dice_env.studies.numbers`` rewrites every block from its JSONs; ``--check`` lists
-the blocks whose text differs instead (``tests/test_docs.py`` runs it), so a number changed by
-hand, or a JSON regenerated without the pages, fails the tests.
-
-A study's page is written the same way: its text is ``docs/templates/NAME.md``, whose fields
-:func:`study_page` fills from the study's results (Python objects rather than JSONs), so the
-prose lives with the docs and the study's code only computes what the page quotes.
+the stale blocks instead (``tests/test_docs.py`` runs it). :func:`study_page` fills a study's
+page, ``docs/templates/NAME.md``, the same way from the study's Python objects.
 """
 
 from __future__ import annotations

@@ -295,9 +295,7 @@ def _plot(pairs: Pairs, path: Path) -> None:
     ax.errorbar(TOTALS, share, yerr=np.clip([share - ci[:, 0], ci[:, 1] - share], 0, None),
                 fmt="none", color="k", capsize=3)
     ax.plot(TOTALS, triangle(), "o--", color="C3", label="2d6: (6 - |k - 7|) / 36")
-    ax.set_xticks(TOTALS)
-    ax.set_xlabel("total of the two dice")
-    ax.set_ylabel("share of counted throws")
+    ax.set(xticks=TOTALS, xlabel="total of the two dice", ylabel="share of counted throws")
     ax.set_title(f"{pairs.n} counted throws, chi-square p = {pairs.total_test()[1]:.3g}",
                  fontsize=10)
     ax.legend(fontsize=8)
@@ -308,8 +306,7 @@ def _plot(pairs: Pairs, path: Path) -> None:
                       extent=(0.5, 6.5, 0.5, 6.5))
     for (i, j), count in np.ndenumerate(pairs.table):
         ax.text(j + 1, i + 1, str(count), ha="center", va="center", fontsize=8)
-    ax.set_xlabel("die 2 face")
-    ax.set_ylabel("die 1 face")
+    ax.set(xlabel="die 2 face", ylabel="die 1 face")
     ax.set_title(f"(die 1, die 2) counts; colour: (observed - expected) / sqrt(expected), "
                  f"independence p = {independence(pairs.table)[1]:.3g}", fontsize=9)
     fig.colorbar(image, ax=ax, shrink=0.8)
@@ -323,26 +320,6 @@ def _detected(p: float) -> str:
 def _half_width(n: int) -> float:
     """Half-width of the 95% interval of P(7) = 1/6 after ``n`` counted throws."""
     return 1.959964 * float(np.sqrt(triangle()[5] * (1 - triangle()[5]) / n))
-
-
-def _conclusion(pairs: Pairs, n: dict) -> str:
-    shares = pairs.totals / pairs.n
-    worst = int(np.argmax(np.abs(shares - triangle())))
-    dependence = ("shows a dependence" if n["independence_p"] < SIGNIFICANT
-                  else "shows no detectable dependence")
-    met_dependence = ("does" if n["met_independence_p"] < SIGNIFICANT else "does not")
-    uniform = [f"die {d + 1}: p = {n[f'die{d + 1}_p']:.3g}" for d in range(2)]
-    faces = ("both dice's faces are consistent with uniform"
-             if min(n["die1_p"], n["die2_p"]) >= SIGNIFICANT
-             else "a die's faces depart from uniform")
-    ci = wilson(pairs.totals, pairs.n)
-    missed = int(np.sum((triangle() < ci[:, 0]) | (triangle() > ci[:, 1])))
-    more = (f"; {FULL:,} throws would narrow it to ±{_half_width(FULL):.4f}."
-            if len(pairs.counted) < FULL else ".")
-    return study_page("pairs-conclusion", SIGNIFICANT=SIGNIFICANT, TOTALS=TOTALS,
-                      _detected=_detected, _half_width=_half_width, dependence=dependence,
-                      faces=faces, met_dependence=met_dependence, missed=missed, n=n, pairs=pairs,
-                      shares=shares, triangle=triangle, uniform=uniform, worst=worst) + more
 
 
 def _markdown(pairs: Pairs, n: dict, scene: Scene, seed: int) -> str:
@@ -359,11 +336,25 @@ def _markdown(pairs: Pairs, n: dict, scene: Scene, seed: int) -> str:
                                               for reason, count in pairs.voided.items()))
     chi2, _ = pairs.total_test()
     ind_chi2, _, dof = independence(pairs.table)
-    h = HAND
     full = "" if thrown >= FULL else (
         f"; at that rate the study's default of {FULL:,} throws (`python -m dice_env.studies "
         f"pairs`) would take about {FULL / n['rate'] / 3600:.1f} h")
-    return study_page("pairs-markdown", CHUNK=CHUNK, DieContact=DieContact, TRAY=TRAY, T_MAX=T_MAX,
-                      _conclusion=_conclusion, chi2=chi2, dof=dof, faces=faces, full=full, h=h,
-                      ind_chi2=ind_chi2, n=n, numba=numba, pairs=pairs, scene=scene, seed=seed,
-                      thrown=thrown, totals=totals, voided=voided)
+    shares = pairs.totals / pairs.n
+    dependence = ("shows a dependence" if n["independence_p"] < SIGNIFICANT
+                  else "shows no detectable dependence")
+    uniformity = ("both dice's faces are consistent with uniform"
+                  if min(n["die1_p"], n["die2_p"]) >= SIGNIFICANT
+                  else "a die's faces depart from uniform")
+    met_dependence = "does" if n["met_independence_p"] < SIGNIFICANT else "does not"
+    missed = int(np.sum((triangle() < ci[:, 0]) | (triangle() > ci[:, 1])))
+    more = (f"; {FULL:,} throws would narrow it to ±{_half_width(FULL):.4f}."
+            if thrown < FULL else ".")
+    return study_page(
+        "pairs-markdown", CHUNK=CHUNK, DieContact=DieContact, SIGNIFICANT=SIGNIFICANT,
+        TOTALS=TOTALS, TRAY=TRAY, T_MAX=T_MAX, _detected=_detected, _half_width=_half_width,
+        chi2=chi2, dependence=dependence, dof=dof, faces=faces, full=full, h=HAND,
+        ind_chi2=ind_chi2, met_dependence=met_dependence, missed=missed, more=more, n=n,
+        numba=numba, pairs=pairs, scene=scene, seed=seed, shares=shares, thrown=thrown,
+        totals=totals, triangle=triangle,
+        uniform=[f"die {d + 1}: p = {n[f'die{d + 1}_p']:.3g}" for d in range(2)],
+        uniformity=uniformity, voided=voided, worst=int(np.argmax(np.abs(shares - triangle()))))

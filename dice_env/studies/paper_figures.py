@@ -192,8 +192,7 @@ def _numbers(throws: dict, runs: dict, stiffnesses: np.ndarray,
 def _plot_throw(throws: dict, path: Path) -> None:
     fig, axes = plt.subplots(2, 2, figsize=(11, 7), sharex=True, layout="constrained")
     for col, (law, run_) in enumerate(throws.items()):
-        for j, name in enumerate("xyz"):
-            axes[0, col].plot(run_.t, run_.x_cm[:, j], label=name)
+        axes[0, col].plot(run_.t, run_.x_cm, label=list("xyz"))
         axes[0, col].set_title(f"Figure 4: centre of mass, {law.name.lower()} law")
         axes[0, col].legend()
         axes[1, col].plot(run_.t, run_.energy)
@@ -207,8 +206,7 @@ def _plot_throw(throws: dict, path: Path) -> None:
 def _plot_variants(runs: dict, path: Path) -> None:
     fig, axes = plt.subplots(2, 4, figsize=(17, 7), layout="constrained")
     for ax, (key, run_) in zip(axes.flat[:5], runs.items(), strict=True):
-        for j, name in enumerate("xyz"):
-            ax.plot(run_.t, run_.x_cm[:, j], label=name)
+        ax.plot(run_.t, run_.x_cm, label=list("xyz"))
         ax.set_title(VARIANTS[key][0], fontsize=9)
         ax.axhline(0, color="k", lw=0.5)
         ax.set_xlabel("t")
@@ -232,9 +230,8 @@ def _plot_search(stiffnesses: np.ndarray, search: dict[str, np.ndarray], path: P
     ax.loglog(fine, theory_steps(fine, node_mass=True), "k--", label="theory, node mass m/8")
     for (name, steps), marker in zip(search.items(), "ox", strict=True):
         ax.loglog(stiffnesses, steps, marker, label=f"search, energy {name}")
-    ax.set_xlabel("stiffness S")
-    ax.set_ylabel("steps needed (tmax = 10)")
-    ax.set_title("Figure 13: steps needed against stiffness (paper law)")
+    ax.set(xlabel="stiffness S", ylabel="steps needed (tmax = 10)",
+           title="Figure 13: steps needed against stiffness (paper law)")
     ax.legend()
     save_figure(fig, path)
 

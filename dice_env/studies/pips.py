@@ -22,15 +22,7 @@ def run(out: Path = DOCS, quick: bool = False) -> dict[str, float]:
 
     ``quick`` changes nothing (the page is closed-form, instant).
     """
-    rows = _rows()
-    out.mkdir(parents=True, exist_ok=True)
-    (out / "pips.md").write_text(_page(rows))
-    drilled = rows[0][1]
-    return {"drilled16_com_over_edge": float(np.linalg.norm(drilled.com) / drilled.size)}
-
-
-def _rows() -> list[tuple[str, Die, Pips]]:
-    """The presets, then the casino die with its spots left empty and with paint 10 % light."""
+    # the presets, then the casino die with its spots left empty and with paint 10 % light
     rows = [(f"`{name}`", Die.standard("d6", pips=name), preset.pips)
             for name, preset in DRILLINGS.items()]
     casino = DRILLINGS["casino19"]
@@ -38,23 +30,6 @@ def _rows() -> list[tuple[str, Die, Pips]]:
         pips = Pips(casino.pips.radius, casino.pips.depth, casino.pips.offset, paint)
         die = Die.standard("d6", casino.size, casino.density * casino.size**3, pips=pips)
         rows.append((f"`casino19`, {label}", die, pips))
-    return rows
-
-
-def _mass_row(label: str, die: Die, pips: Pips) -> tuple:
-    """The mass-properties table's row of one die."""
-    volume = cap_properties(pips.radius, pips.depth)[0]
-    com = np.asarray(die.com)
-    inertia = die.inertia_body / (die.mass * die.size**2 / 6)
-    moments = np.linalg.eigvalsh(inertia) - 1
-    products = inertia[[1, 0, 0], [2, 2, 1]]
-    return (label, f"{100 * 21 * volume / die.size**3:.2f}",
-            ", ".join(f"{1e6 * c:.2f}" for c in com), f"{1e6 * np.linalg.norm(com):.2f}",
-            f"{np.linalg.norm(com) / die.size:.2e}", ", ".join(f"{1e3 * m:+.3f}" for m in moments),
-            ", ".join(f"{1e3 * m:+.3f}" for m in products))
-
-
-def _page(rows: list[tuple[str, Die, Pips]]) -> str:
     presets = markdown_table(
         "preset | edge (mm) | mass (g) | pip opening (mm) | depth (mm) | offset | paint "
         "(g/cm³) | source",
@@ -68,6 +43,22 @@ def _page(rows: list[tuple[str, Die, Pips]]) -> str:
         "\\|com\\| / edge | principal moments / (m s²/6) − 1 (10⁻³) | "
         "products yz, xz, xy / (m s²/6) (10⁻³)",
         (_mass_row(label, die, pips) for label, die, pips in rows))
-    return study_page("pips", presets=presets, masses=masses, sources=SOURCES,
-                      z_share=5 / math.sqrt(35),
-                      z_angle=math.degrees(math.atan(math.sqrt(10) / 5)))
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "pips.md").write_text(study_page(
+        "pips", presets=presets, masses=masses, sources=SOURCES, z_share=5 / math.sqrt(35),
+        z_angle=math.degrees(math.atan(math.sqrt(10) / 5))))
+    drilled = rows[0][1]
+    return {"drilled16_com_over_edge": float(np.linalg.norm(drilled.com) / drilled.size)}
+
+
+def _mass_row(label: str, die: Die, pips: Pips) -> tuple:
+    """The mass-properties table's row of one die."""
+    volume = cap_properties(pips.radius, pips.depth)[0]
+    com = np.asarray(die.com)
+    inertia = die.inertia_body / (die.mass * die.size**2 / 6)
+    moments = np.linalg.eigvalsh(inertia) - 1
+    products = inertia[[1, 0, 0], [2, 2, 1]]
+    return (label, f"{100 * 21 * volume / die.size**3:.2f}",
+            ", ".join(f"{1e6 * c:.2f}" for c in com), f"{1e6 * np.linalg.norm(com):.2f}",
+            f"{np.linalg.norm(com) / die.size:.2e}", ", ".join(f"{1e3 * m:+.3f}" for m in moments),
+            ", ".join(f"{1e3 * m:+.3f}" for m in products))

@@ -162,8 +162,7 @@ def free_flight(die: Die, n: int = 8, seed: int = 0, step_by_step: bool = False,
     if res.max_penetration.max() > 0 or res.impacts.any():
         raise RuntimeError("the free-flight throws touched a plane")
     g = scene.gravity
-    steps = scene.steps_for(t)
-    elapsed = steps * scene.step
+    elapsed = scene.steps_for(t) * scene.step
     fall = np.array([0.0, 0.0, -g * elapsed])
     dv = np.linalg.norm(res.final.velocity - start.velocity - fall, axis=1)
     momentum = np.linalg.norm(res.final.angular_momentum - start.angular_momentum, axis=1)
@@ -265,10 +264,8 @@ def _plot(fair: dict[str, Faces], loaded: dict[str, Loaded], path: Path) -> None
                 capsize=2, label=label)
         ax.axhline(1.0, color="k", ls=":", lw=1)
         ax.axvline(heavy.favoured, color="C1", lw=6, alpha=0.15)
-        ax.set_xticks(labels)
+        ax.set(xticks=labels, xlabel="face read", ylabel="share × n (95% interval)")
         ax.set_title(f"{name}: fair p = {f.p_value:.2g} ({f.ended} throws)", fontsize=10)
-        ax.set_xlabel("face read")
-        ax.set_ylabel("share × n (95% interval)")
     axes[0, 0].legend(fontsize=8)
     save_figure(fig, path)
 

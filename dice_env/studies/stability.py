@@ -200,8 +200,11 @@ def _first_ratio(mask: np.ndarray, ratios: np.ndarray) -> float:
 def _plot_maps(stiffnesses: np.ndarray, ratios: np.ndarray, maps: dict, path: Path) -> None:
     fig, axes = plt.subplots(1, 2, figsize=(13, 5), sharey=True, layout="constrained")
     cmap = ListedColormap(["#4caf50", "#ffc107", "#e53935"])
-    bounds = np.array([paper_scene(S=s, dt=None).critical_dt for s in stiffnesses])
-    node = np.array([_node_mass_bound(s) for s in stiffnesses])
+    scenes = [paper_scene(S=s, dt=None) for s in stiffnesses]
+    bounds = np.array([scene.critical_dt for scene in scenes])
+    d = np.array([scene.ground.damping for scene in scenes])
+    m = np.array([scene.die.mass / 8 for scene in scenes])  # one node's mass
+    node = (np.sqrt(d * d + 4 * stiffnesses * m) - d) / stiffnesses
     for ax, (law, classes) in zip(axes, maps.items(), strict=True):
         dts = ratios[:, None] * bounds[None, :]
         ax.scatter(np.broadcast_to(stiffnesses, dts.shape), dts, c=classes, cmap=cmap, vmin=0,
@@ -214,12 +217,6 @@ def _plot_maps(stiffnesses: np.ndarray, ratios: np.ndarray, maps: dict, path: Pa
         ax.legend(loc="lower left", fontsize=8)
     axes[0].set_ylabel("step dt")
     save_figure(fig, path)
-
-
-def _node_mass_bound(stiffness: float) -> float:
-    scene = paper_scene(S=stiffness, dt=None)
-    d, m = scene.ground.damping, scene.die.mass / 8
-    return (np.sqrt(d * d + 4 * stiffness * m) - d) / stiffness
 
 
 def _markdown(stiffnesses: np.ndarray, ratios: np.ndarray, maps: dict, rows: list,
