@@ -58,10 +58,7 @@ def checked_throws(throws: object, least: int) -> int | None:
 
 
 def code_version(tree: Path = DOCS.parent) -> str:
-    """The commit of the checkout at ``tree`` (this one by default), or ``"unknown"``.
-
-    ``git describe --always --dirty``: a tree with uncommitted changes ends in ``-dirty``.
-    """
+    """``git describe --always --dirty`` of the checkout at ``tree``, or ``"unknown"``."""
     try:
         done = subprocess.run(["git", "describe", "--always", "--dirty"], cwd=tree,
                               capture_output=True, text=True, timeout=10)

@@ -210,8 +210,7 @@ def run(out: Path = DOCS, quick: bool = False, seed: int = SEED) -> dict[str, fl
 
 def _memory_table(scene: Scene, state: State, result: Result, bins: int) -> dict:
     """P(resting on the face that was down / up at release) in energy bins (settled only)."""
-    normal = np.asarray(scene.ground.normal)
-    down0 = face_down(scene.die, state.orientation, normal)
+    down0 = face_down(scene.die, state.orientation, scene.ground.normal)
     final_down = 7 - result.face
     energy = throw_energy(scene, state)
     ok = result.settled

@@ -287,7 +287,6 @@ def _markdown(fair: dict[str, Faces], loaded: dict[str, Loaded], flight: dict,
     command = "python -m dice_env.studies shapes" + (" --quick" if quick else "") + (
         f" --throws {throws}" if throws is not None else "") + (
         " --chunks DIR" if chunked else "")
-    v, g = VIGOROUS, Scene().ground
     fairness = markdown_table(
         "die | faces | vertices | size (mm) | mass (g) | counted | undecided | chi2 | p | "
         "largest deviation of share × n from 1",
@@ -318,5 +317,5 @@ def _markdown(fair: dict[str, Faces], loaded: dict[str, Loaded], flight: dict,
         if chunked else "")
     return study_page("shapes", DIE_EDGE=DIE_EDGE, FLIGHT_HEIGHT=FLIGHT_HEIGHT,
                       FLIGHT_TIME=FLIGHT_TIME, Scene=Scene, _load_verdict=_load_verdict,
-                      command=command, fairness=fairness, flights=flights, g=g, loaded=loaded,
-                      loads=loads, note=note, seed=seed, sizes=sizes, v=v)
+                      command=command, fairness=fairness, flights=flights, g=Scene().ground,
+                      loaded=loaded, loads=loads, note=note, seed=seed, sizes=sizes, v=VIGOROUS)
