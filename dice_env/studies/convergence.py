@@ -1,14 +1,8 @@
 """Error against run time: ``python -m dice_env.studies error`` writes docs/error-vs-runtime.md.
 
-A thrown die is chaotic, so convergence is measured three ways (issue 4):
-
-- trajectory error at a horizon holding the first two or three impacts, against a reference
-  run at a 64 times finer step, with the observed order and the CPU time per throw;
-- outcome statistics of fixed releases under hand noise, step ``dt`` against ``dt/4``, on
-  independent draws, with a chi-square test of homogeneity of the face counts and a
-  two-proportion z-test of the success probability;
-- per-throw face agreement of ``dt`` with ``dt/4`` beside the chaos floor (the agreement of
-  a run with itself after a negligible change of the release), binned by throw energy.
+Trajectory error against step and CPU time (:func:`trajectory_errors`), outcome statistics at
+``dt`` and ``dt/4`` (:func:`outcome_test`) and per-throw face agreement beside the chaos floor
+(:func:`face_agreement`); the page explains each.
 """
 
 from __future__ import annotations
@@ -29,8 +23,7 @@ from dice_env.simulation.simulate import Result, State, simulate
 from dice_env.studies.markdown import markdown_table
 from dice_env.studies.numbers import study_page
 
-# Throws whose faces are compared are simulated for at most this long (s); all settle sooner.
-T_THROW = 4.0
+T_THROW = 4.0  # s: the most a throw whose face is compared runs (all settle sooner)
 # Equivalent drop heights E / (m g) (m) that bound the energy bins of the agreement study.
 ENERGY_BINS = (0.0, 0.06, 0.12, 0.2, 0.3, np.inf)
 
@@ -39,10 +32,9 @@ ENERGY_BINS = (0.0, 0.06, 0.12, 0.2, 0.3, np.inf)
 class Release:
     """A nominal release and the thrower's hand noise (SI units, angles in rad).
 
-    ``height`` of the centre above the table, ``velocity``, ``spin`` (angular velocity) and
-    ``tilt`` (rotation vector of the orientation) are the nominal values; each throw adds
-    independent normal noise of the given standard deviations (per component; the orientation
-    noise is a rotation vector). ``target`` is the face that counts as success.
+    ``height`` of the centre, ``velocity``, ``spin`` (angular velocity) and ``tilt`` (rotation
+    vector); each throw adds normal noise of the ``sigma_*`` standard deviations per component.
+    ``target`` is the face that counts as success.
     """
 
     name: str
@@ -58,8 +50,7 @@ class Release:
 
     def sample(self, scene: Scene, n: int, rng: np.random.Generator) -> State:
         """``n`` noisy releases of this throw."""
-        position = np.array([0.0, 0.0, self.height]) + self.sigma_position * rng.normal(
-            size=(n, 3))
+        position = np.array([0.0, 0.0, self.height]) + self.sigma_position * rng.normal(size=(n, 3))
         velocity = np.array(self.velocity) + self.sigma_velocity * rng.normal(size=(n, 3))
         spin = np.array(self.spin) + self.sigma_spin * rng.normal(size=(n, 3))
         noise = self.sigma_angle * rng.normal(size=(n, 3))
@@ -94,11 +85,7 @@ def spread_throws(scene: Scene, n: int, rng: np.random.Generator) -> State:
 
 
 def drop_height(scene: Scene, state: State) -> np.ndarray:
-    """Throw energy as an equivalent drop height ``E / (m g)`` (m), E relative to resting flat.
-
-    E is kinetic (translation and rotation) plus potential energy of the centre above its
-    height when resting on a face.
-    """
+    """Throw energy as an equivalent drop height ``E / (m g)`` (m), E relative to resting flat."""
     die = scene.die
     inv = np.linalg.inv(state.orientation @ die.inertia_body @ state.orientation.transpose(0, 2, 1))
     spin = np.einsum("bij,bj->bi", inv, state.angular_momentum)
@@ -120,20 +107,12 @@ def rotation_angle(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return np.arccos(np.clip((trace - 1.0) / 2.0, -1.0, 1.0))
 
 
-def trajectory_errors(
-    scene: Scene,
-    start: State,
-    horizon: float,
-    safeties: tuple[float, ...],
-    reference: Result,
-    *,
-    free_flight: bool = True,
-) -> dict[str, np.ndarray]:
+def trajectory_errors(scene: Scene, start: State, horizon: float, safeties: tuple[float, ...],
+                      reference: Result, *, free_flight: bool = True) -> dict[str, np.ndarray]:
     """Median centre and orientation error at ``horizon`` for steps ``safety * critical_dt``.
 
-    Each step is rounded so that it divides ``horizon``; ``reference`` is a run of the same
-    model to ``horizon`` at a much finer step. Returns ``dt``, ``position`` (m), ``angle``
-    (rad) and ``cpu`` (s per throw).
+    Each step is rounded to divide ``horizon``; ``reference``: the same model at a much finer
+    step. Returns ``dt``, ``position`` (m), ``angle`` (rad) and ``cpu`` (s per throw).
     """
     out: dict[str, list[float]] = {"dt": [], "position": [], "angle": [], "cpu": []}
     for safety in safeties:
@@ -161,9 +140,8 @@ def observed_order(dt: np.ndarray, error: np.ndarray) -> float:
     return float(np.polyfit(np.log(dt), np.log(error), 1)[0])
 
 
-def outcome_test(
-    scene: Scene, release: Release, n: int, rng: np.random.Generator, factor: int = 4
-) -> dict[str, object]:
+def outcome_test(scene: Scene, release: Release, n: int, rng: np.random.Generator,
+                 factor: int = 4) -> dict[str, object]:
     """Face counts at ``dt`` and ``dt/factor`` on independent draws of ``n`` throws each.
 
     Two-sample tests: chi-square homogeneity of the 2 x 6 count table (``p_faces``) and the
@@ -186,9 +164,8 @@ def outcome_test(
             "settled": float(min(coarse.settled.mean(), finer.settled.mean()))}
 
 
-def face_agreement(
-    scene: Scene, start: State, factor: int = 4, perturbation: float = 1e-9
-) -> dict[str, np.ndarray]:
+def face_agreement(scene: Scene, start: State, factor: int = 4,
+                   perturbation: float = 1e-9) -> dict[str, np.ndarray]:
     """Per throw: same face at ``dt`` and at ``dt/factor`` (``step``); and at ``dt`` again.
 
     ``floor``: the same face after adding ``perturbation`` rad/s to every spin component.
@@ -206,14 +183,11 @@ def face_agreement(
 def binned(height: np.ndarray, agree: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Agreement fraction, its standard error and the count per :data:`ENERGY_BINS` bin."""
     which = np.digitize(height, ENERGY_BINS) - 1
-    fraction, error, count = [], [], []
-    for b in range(len(ENERGY_BINS) - 1):
-        sel = agree[which == b]
-        p = sel.mean() if sel.size else np.nan
-        fraction.append(p)
-        error.append(math.sqrt(p * (1 - p) / sel.size) if sel.size else np.nan)
-        count.append(sel.size)
-    return np.array(fraction), np.array(error), np.array(count)
+    count = np.array([np.sum(which == b) for b in range(len(ENERGY_BINS) - 1)])
+    hits = np.array([np.sum(agree[which == b]) for b in range(len(ENERGY_BINS) - 1)])
+    with np.errstate(invalid="ignore"):  # an empty bin: nan
+        fraction = hits / count
+        return fraction, np.sqrt(fraction * (1 - fraction) / count), count
 
 
 @dataclass(frozen=True)
@@ -228,12 +202,11 @@ class Sizes:
 
 FULL = Sizes(trajectory=200, outcomes=10_000, agreement=3000, gentle=2000)
 QUICK = Sizes(trajectory=12, outcomes=300, agreement=120, gentle=100)
-# Steps of the work-precision curves, as fractions of the critical step.
-SAFETIES = (0.6, 0.3, 0.15, 0.075, 0.0375, 0.01875, 0.009375)
+SAFETIES = (0.6, 0.3, 0.15, 0.075, 0.0375, 0.01875, 0.009375)  # fractions of the critical step
 # Horizon (s) of the trajectory error: releases 6–10 cm up land at about 0.1 s and hit the
 # table two or three times by then.
 HORIZON = 0.25
-# The listing's friction with the default's integration, compared with the default throughout.
+# The listing's friction with the default's integration is compared with the default throughout.
 LISTING_FRICTION = "paper scheme, listing friction, analytic flight"
 DEFAULT = "default (midpoint, stick-slip, analytic flight)"
 LISTING = "listing (paper scheme, listing friction, every step)"
@@ -267,15 +240,13 @@ def run(out: Path, quick: bool = False) -> dict[str, float]:
     rng = np.random.default_rng(SEED)
     scene = Scene()
     compared = {"default": scene, LISTING_FRICTION: variants()[LISTING_FRICTION][0]}
-    tasks = [*variants(), *(f"{r.name}, {label}" for label in compared for r in RELEASES),
-             *(f"agreement, {label}" for label in compared), "gentle", "gentle steps",
-             "restitution"]
-    bar = tqdm(total=len(tasks), desc="error study", unit="part")
+    parts = len(variants()) + len(compared) * (len(RELEASES) + 1) + 3  # gentle, steps, restitution
+    bar = tqdm(total=parts, desc="error study", unit="part")
     numbers: dict[str, object] = {"scene": scene, "sizes": sizes}
 
     # 1. trajectory error against step and CPU time
     start = trajectory_start(scene, sizes.trajectory, rng)
-    curves = {}
+    curves = numbers["curves"] = {}
     references: dict[tuple[FrictionLaw, float], Result] = {}
     for name, (variant, flight) in variants().items():
         bar.set_postfix_str(name)
@@ -286,16 +257,14 @@ def run(out: Path, quick: bool = False) -> dict[str, float]:
         curves[name] = trajectory_errors(variant, start, HORIZON, SAFETIES, references[model],
                                          free_flight=flight)
         bar.update()
-    numbers["curves"] = curves
 
     # 2. outcome statistics of fixed releases
-    outcomes: dict[str, dict[str, dict[str, object]]] = {label: {} for label in compared}
+    outcomes = numbers["outcomes"] = {label: {} for label in compared}
     for label, variant in compared.items():
         for release in RELEASES:
             bar.set_postfix_str(f"{release.name}, {label}")
             outcomes[label][release.name] = outcome_test(variant, release, sizes.outcomes, rng)
             bar.update()
-    numbers["outcomes"] = outcomes
 
     # 3. per-throw agreement, binned by energy, and the gentle release
     spread = spread_throws(scene, sizes.agreement, rng)
@@ -318,8 +287,7 @@ def run(out: Path, quick: bool = False) -> dict[str, float]:
     bar.set_postfix_str("restitution")
     numbers["restitution"] = {
         (speed, factor): measured_restitution(scene.with_(dt=scene.step / factor), speed)
-        for speed in (0.3, 1.0, 3.0) for factor in (1, 4)
-    }
+        for speed in (0.3, 1.0, 3.0) for factor in (1, 4)}
     bar.update()
     bar.close()
     return write_report(out, numbers, quick)
@@ -330,6 +298,7 @@ def trajectory_start(scene: Scene, n: int, rng: np.random.Generator) -> State:
     position = np.column_stack([np.zeros((n, 2)), rng.uniform(0.06, 0.10, n)])
     return State.release(scene, position, rng.normal(0.0, 0.3, (n, 3)),
                          rng.normal(0.0, 10.0, (n, 3)), random_rotations(rng, n))
+
 
 def _plot_work_precision(curves: dict[str, dict[str, np.ndarray]], path: Path) -> None:
     import matplotlib.pyplot as plt
@@ -358,8 +327,7 @@ def _plot_agreement(height: np.ndarray, agreement: dict[str, dict[str, np.ndarra
     import matplotlib.pyplot as plt
 
     fig, ax = plt.subplots(figsize=(7.5, 4.2))
-    labels = [f"{100 * a:.0f}–{100 * b:.0f}" if np.isfinite(b) else f">{100 * a:.0f}"
-              for a, b in itertools.pairwise(ENERGY_BINS)]
+    labels = _bin_labels(">")
     x = np.arange(len(labels))
     shift = -0.15
     for scene_label, result in agreement.items():
@@ -413,15 +381,9 @@ def write_report(out: Path, numbers: dict[str, object], quick: bool) -> dict[str
     """Write the markdown and PNGs under ``out``; return the headline numbers."""
     figures = out / "figures"
     figures.mkdir(parents=True, exist_ok=True)
-    scene: Scene = numbers["scene"]
-    sizes: Sizes = numbers["sizes"]
-    curves = numbers["curves"]
-    outcomes = numbers["outcomes"]
-    agreement = numbers["agreement"]
-    gentle = numbers["gentle"]
-    gentle_steps = numbers["gentle_steps"]
+    scene, curves, outcomes, agreement, gentle, gentle_steps, height = (numbers[k] for k in (
+        "scene", "curves", "outcomes", "agreement", "gentle", "gentle_steps", "height"))
     _plot_work_precision(curves, figures / "error-vs-runtime.png")
-    height = numbers["height"]
     _plot_agreement(height, agreement, figures / "face-agreement.png")
     _plot_outcomes(outcomes["default"], figures / "outcome-statistics.png")
 
@@ -439,7 +401,7 @@ def write_report(out: Path, numbers: dict[str, object], quick: bool) -> dict[str
 
     paper = scene.with_(scheme=Scheme.PAPER)
     text = study_page(
-        "error-vs-runtime", quick=quick, sizes=sizes, scene=scene, pen=pen, ratio=ratio,
+        "error-vs-runtime", quick=quick, sizes=numbers["sizes"], scene=scene, pen=pen, ratio=ratio,
         orders=orders, verdicts=verdicts, gentle_steps=gentle_steps, paper=paper,
         paper_gentle=float(gentle["paper scheme, stick-slip, analytic flight"]["step"].mean()),
         m_ratio=scene.die.mass / scene.effective_mass, restitution=_restitution_table(
@@ -502,13 +464,15 @@ def _agreement_table(height: np.ndarray, agreement: dict[str, dict[str, np.ndarr
         f"{label}: dt vs dt/4 (%) | {label}: chaos floor (%)" for label in agreement)
     columns = [binned(height, result[key]) for result in agreement.values()
                for key in ("step", "floor")]
-    rows = []
-    for b in range(len(ENERGY_BINS) - 1):
-        lo, hi = 100 * ENERGY_BINS[b], 100 * ENERGY_BINS[b + 1]
-        rows.append((f"{lo:.0f}–{hi:.0f}" if np.isfinite(hi) else f"> {lo:.0f}",
-                     columns[0][2][b], *(f"{100 * frac[b]:.1f} ± {100 * err[b]:.1f}"
-                                         for frac, err, _ in columns)))
-    return markdown_table(header, rows)
+    return markdown_table(header, ((label, columns[0][2][b], *(
+        f"{100 * frac[b]:.1f} ± {100 * err[b]:.1f}" for frac, err, _ in columns))
+        for b, label in enumerate(_bin_labels("> "))))
+
+
+def _bin_labels(above: str) -> list[str]:
+    """The :data:`ENERGY_BINS` in cm: ``low–high``, the last ``{above}low``."""
+    return [f"{100 * a:.0f}–{100 * b:.0f}" if np.isfinite(b) else f"{above}{100 * a:.0f}"
+            for a, b in itertools.pairwise(ENERGY_BINS)]
 
 
 def _gentle_table(gentle: dict[str, dict[str, np.ndarray]]) -> str:

@@ -1,24 +1,10 @@
 """Weldon's dice (1894): twelve pip-drilled dice, the chance of a 5 or a 6.
 
 ``run(out, quick, throws)`` writes ``out/weldon.md``, its numbers ``out/weldon.json`` (read by
-the validation page) and ``out/figures/weldon.png``.
-
-Weldon threw 12 dice 26,306 times and counted the dice showing a 5 or a 6: 106,602 of
-315,672, p = 0.3377 against 1/3 (Pearson 1900; Kemp & Kemp 1991). The simulator repeats it
-with pip-drilled dice (``Die.standard("d6", pips=...)``) tipped from a cup onto the default
-wooden table, in two ways:
-
-- **together** (:func:`throw_together`, :func:`dice_env.simulation.group.simulate_group`): the
-twelve dice of one cup fall and collide; the distribution of successes per throw and any
-  dependence between the dice of one throw, at the few hundred throws affordable here;
-- **alone** (:func:`throw_alone`, :func:`dice_env.simulate`): every die of the same cup
-  releases thrown by itself, for the per-die probability only (independent by construction),
-  tens of times cheaper; also for the sensitivity to the pips (:data:`VARIANTS`).
-
-Nothing is fitted to Weldon's numbers. The comparison maths (:class:`Estimate`,
-:func:`compare`, :func:`chi2_fit`, :func:`chi2_homogeneity`, :func:`power`) is plain
-frequentist statistics: 95% intervals, chi-square tests with tails pooled until every
-expected count is at least :data:`MIN_EXPECTED`.
+the validation page) and ``out/figures/weldon.png``. The cups' dice are thrown together
+(:func:`throw_together`) and each alone (:func:`throw_alone`), the pip variants
+(:data:`VARIANTS`) alone; the page explains the statistics (95% intervals, chi-square tests
+with tails pooled to :data:`MIN_EXPECTED`). Nothing is fitted to Weldon's numbers.
 """
 
 from __future__ import annotations
@@ -48,8 +34,7 @@ from dice_env.studies.markdown import estimate, markdown_table
 from dice_env.studies.numbers import study_page
 from dice_env.studies.shapes import Faces, throw_faces
 
-# Weldon's data (Pearson 1900, Kemp & Kemp 1991): throws of twelve dice with 0..12 dice
-# showing a 5 or a 6.
+# Weldon's throws of twelve dice with 0..12 showing a 5 or a 6 (Pearson 1900, Kemp & Kemp 1991)
 WELDON_COUNTS = (185, 1149, 3265, 5475, 6114, 5194, 3067, 1331, 403, 105, 14, 4, 0)
 DICE = 12
 SUCCESS = (5, 6)
@@ -57,12 +42,10 @@ FAIR = 1 / 3
 MIN_EXPECTED = 5.0  # chi-square cells are pooled until each expects at least this many
 SIGNIFICANCE = 0.05
 RESOLVING_POWER = 0.8  # a test "resolves" a difference it detects with this probability
-# Twelve-dice throws of the full and quick runs: thrown together, and (in cups of 12) alone
-# for the reference die and for each other variant.
+# Twelve-dice throws of the full and quick runs: together, alone (reference die), each variant
 FULL = {"together": 240, "alone": 4500, "variant": 1200}
 QUICK = {"together": 3, "alone": 12, "variant": 6}
-BATCH_TOGETHER = 125  # twelve-dice throws per kernel call (run in parallel: the threads share long
-# and short throws evenly)
+BATCH_TOGETHER = 125  # twelve-dice throws per kernel call
 CHUNK_TOGETHER = 250  # twelve-dice throws per seeded chunk (see chunked_together)
 T_MAX_TOGETHER = 2.0  # s of simulated time; a throw not decided by then is not counted
 
@@ -88,11 +71,9 @@ class Estimate:
 
     @classmethod
     def per_throw(cls, successes: np.ndarray, dice: int = DICE) -> Estimate:
-        """The share of successes among ``dice`` dice per throw, the throw as the unit.
+        """The share of successes among ``dice`` dice per throw (T,), the throw as the unit.
 
-        ``successes`` (T,) per throw; the error is the spread between throws,
-        ``sd / (dice sqrt(T))``, which holds whether or not the dice of a throw depend on
-        each other.
+        The error is the spread between throws, valid if the dice of a throw depend on each other.
         """
         successes = np.asarray(successes, dtype=np.float64)
         if successes.ndim != 1 or successes.size < 2:
@@ -124,9 +105,8 @@ class Comparison:
 def compare(a: Estimate, b: Estimate, effect: float = EFFECT) -> Comparison:
     """Compare two independent estimates against the size of the ``effect`` looked for.
 
-    Verdict: "differs" when ``|a - b|`` exceeds the combined 95% half-width
-    ``1.96 sqrt(se_a^2 + se_b^2)``; else "not resolvable at this sample" when that half-width
-    exceeds ``|effect|`` (the sample could not tell ``b`` from ``b - effect``); else "agrees".
+    "differs" when ``|a - b|`` exceeds the combined 95% half-width; else "not resolvable at this
+    sample" when that half-width exceeds ``|effect|``; else "agrees".
     """
     half = Z95 * math.hypot(a.se, b.se)
     difference = a.p - b.p
@@ -140,9 +120,8 @@ def compare(a: Estimate, b: Estimate, effect: float = EFFECT) -> Comparison:
 
 
 def trials_to_resolve(p: float, reference: Estimate, effect: float = EFFECT) -> int | None:
-    """Trials needed at probability ``p`` to resolve ``effect`` against ``reference``.
+    """The fewest trials at ``p`` whose 95% half-width, with ``reference``'s, is below ``effect``.
 
-    The fewest whose 95% half-width, combined with ``reference``'s, is below ``|effect|``;
     None when the reference's own error is too wide for any.
     """
     room = (abs(effect) / Z95) ** 2 - reference.se**2
@@ -155,11 +134,7 @@ def binomial_probabilities(p: float, dice: int = DICE) -> np.ndarray:
 
 
 def pooled_cells(expected: np.ndarray, minimum: float = MIN_EXPECTED) -> list[range]:
-    """Groups of neighbouring cells with at least ``minimum`` expected each.
-
-    The end group with the smaller expectation is merged into its neighbour until every group
-    reaches ``minimum`` or one group is left (the tails of a binomial pool first).
-    """
+    """Groups of neighbouring cells with at least ``minimum`` expected each (tails pool first)."""
     expected = np.asarray(expected, dtype=np.float64)
     groups = [range(k, k + 1) for k in range(expected.size)]
     while len(groups) > 1:
@@ -192,52 +167,40 @@ def _pool(counts: np.ndarray, groups: list[range]) -> np.ndarray:
     return np.array([counts[..., g.start:g.stop].sum(axis=-1) for g in groups]).T
 
 
-def _chi2(observed: np.ndarray, expected: np.ndarray, groups: list[range], dof: int) -> Chi2:
+def _chi2(observed: np.ndarray, expected: np.ndarray, groups: list[range]) -> Chi2:
+    dof = len(groups) - 1
     statistic = float(((observed - expected) ** 2 / expected).sum()) if dof >= 1 else 0.0
     p_value = float(stats.chi2.sf(statistic, dof)) if dof >= 1 else 1.0
     return Chi2(statistic, dof, p_value, tuple((g.start, g.stop - 1) for g in groups))
 
 
-def chi2_fit(counts: np.ndarray, probabilities: np.ndarray,
-             minimum: float = MIN_EXPECTED) -> Chi2:
-    """Goodness of fit of ``counts`` (per number of successes) to ``probabilities``.
-
-    Nothing is estimated from the counts: ``cells - 1`` degrees of freedom.
-    """
+def chi2_fit(counts: np.ndarray, probabilities: np.ndarray, minimum: float = MIN_EXPECTED) -> Chi2:
+    """Goodness of fit of ``counts`` (per number of successes) to ``probabilities``."""
     counts = np.asarray(counts, dtype=np.float64)
     expected = counts.sum() * np.asarray(probabilities, dtype=np.float64)
     groups = pooled_cells(expected, minimum)
-    return _chi2(_pool(counts, groups), _pool(expected, groups), groups, len(groups) - 1)
+    return _chi2(_pool(counts, groups), _pool(expected, groups), groups)
 
 
 def chi2_homogeneity(a: np.ndarray, b: np.ndarray, minimum: float = MIN_EXPECTED) -> Chi2:
-    """Test that two samples of counts (per number of successes) share one distribution.
-
-    The 2 × cells contingency table, pooled until both samples expect ``minimum`` per cell;
-    ``cells - 1`` degrees of freedom.
-    """
+    """Test that two samples of counts (per number of successes) share one distribution."""
     table = np.array([a, b], dtype=np.float64)
     share = table.sum(axis=0) / table.sum()
     groups = pooled_cells(table.sum(axis=1).min() * share, minimum)
     pooled = _pool(table, groups).T
     expected = np.outer(pooled.sum(axis=1), pooled.sum(axis=0)) / pooled.sum()
-    return _chi2(pooled, expected, groups, len(groups) - 1)
+    return _chi2(pooled, expected, groups)
 
 
 def _effect_size(truth: np.ndarray, null: np.ndarray, test: Chi2) -> float:
     """Noncentrality per throw on ``test``'s cells: ``sum((truth - null)^2 / null)``."""
-    truth_c = np.array([np.sum(truth[a:b + 1]) for a, b in test.cells])
-    null_c = np.array([np.sum(null[a:b + 1]) for a, b in test.cells])
+    truth_c, null_c = (np.array([np.sum(x[a:b + 1]) for a, b in test.cells]) for x in (truth, null))
     return float(np.sum((truth_c - null_c) ** 2 / null_c))
 
 
 def power(throws: int, truth: np.ndarray, null: np.ndarray, test: Chi2,
           alpha: float = SIGNIFICANCE) -> float:
-    """Power of ``test``'s chi-square, on ``throws`` throws, against ``truth`` when ``null``.
-
-    Non-central chi-square on ``test``'s cells, noncentrality ``throws`` times
-    :func:`_effect_size`; 0 for a test with no degree of freedom.
-    """
+    """Power of ``test``'s chi-square, on ``throws`` throws, against ``truth`` when ``null``."""
     if not test.testable:
         return 0.0
     critical = stats.chi2.isf(alpha, test.dof)
@@ -245,12 +208,10 @@ def power(throws: int, truth: np.ndarray, null: np.ndarray, test: Chi2,
 
 
 def throws_to_resolve(truth: np.ndarray, null: np.ndarray, test: Chi2,
-                      target: float = RESOLVING_POWER, alpha: float = SIGNIFICANCE
-                      ) -> int | None:
-    """Throws needed for ``test``'s cells to tell ``truth`` from ``null``.
+                      target: float = RESOLVING_POWER, alpha: float = SIGNIFICANCE) -> int | None:
+    """The fewest throws on which ``test``'s cells tell ``truth`` from ``null`` with ``target``.
 
-    The fewest at which they detect it with probability ``target``; None when they cannot
-    (no degree of freedom, or no difference on those cells).
+    None when they cannot (no degree of freedom, or no difference on those cells).
     """
     size = _effect_size(truth, null, test) if test.testable else 0.0
     if size <= 0:
@@ -259,8 +220,7 @@ def throws_to_resolve(truth: np.ndarray, null: np.ndarray, test: Chi2,
     high = 1.0
     while stats.ncx2.sf(critical, test.dof, high) < target:
         high *= 2
-    needed = optimize.brentq(lambda lam: stats.ncx2.sf(critical, test.dof, lam) - target,
-                             0.0, high)
+    needed = optimize.brentq(lambda lam: stats.ncx2.sf(critical, test.dof, lam) - target, 0, high)
     return math.ceil(needed / size)
 
 
@@ -268,8 +228,7 @@ def distribution_verdict(test: Chi2, power_against_fair: float) -> str:
     """The verdict of a test of a simulated distribution against Weldon's.
 
     "differs" when the test rejects at :data:`SIGNIFICANCE`; else "not resolvable at this
-    sample" when the sample would detect Weldon's distribution against a fair die's with
-    probability below :data:`RESOLVING_POWER` (or cannot be tested); else "agrees".
+    sample" when ``power_against_fair`` is below :data:`RESOLVING_POWER`; else "agrees".
     """
     if test.testable and test.p_value < SIGNIFICANCE:
         return "differs"
@@ -282,15 +241,10 @@ def distribution_verdict(test: Chi2, power_against_fair: float) -> str:
 
 @dataclass(frozen=True)
 class Cup:
-    """A cup of twelve dice tipped onto the table; lengths in units of the die's edge.
+    """A cup of twelve dice tipped onto the table (described on the page).
 
-    The dice sit side by side in a 4 × 3 block (:data:`BLOCK`), centres ``spacing`` apart
-    (more than the cube's diagonal, sqrt 3, so apart in any orientation) with a uniform
-    ``jitter``, ``height`` above the height at which a die in any orientation clears the
-    table (a single layer: dice dropped in layers pile onto each other and many end leaning).
-    The cup moves along a uniform horizontal direction at ``speed`` (edges/s); each die adds
-    its own velocity (normal, ``scatter`` edges/s per component), spins at ``spin`` (rad/s)
-    about a uniform axis and has a uniform orientation. Ranges are drawn uniformly.
+    Lengths in die edges, speeds in edges/s, spins in rad/s; ranges drawn uniformly. ``spacing``
+    exceeds the cube's diagonal (sqrt 3), so the dice start apart in any orientation.
     """
 
     height: tuple[float, float] = (3.0, 6.0)
@@ -330,8 +284,8 @@ def cup_throws(scene: Scene, n: int, rng: np.random.Generator, cup: Cup = CUP) -
 class Together:
     """Twelve-dice throws thrown together: successes per counted throw and what was left out.
 
-    A throw is counted when it ended decided, every die read (none leaning on another), none
-    unstable or sunk. ``faces`` (F, 6): face counts over the counted throws' dice.
+    Counted: decided, every die read (none leaning), none unstable or sunk. ``faces`` (6,):
+    face counts over the counted throws' dice.
     """
 
     successes: np.ndarray
@@ -380,11 +334,8 @@ def chunked_together(scene: Scene, throws: int, seed: int, keep: Path | None = N
                      bar: object = None, chunk: int = CHUNK_TOGETHER) -> Together:
     """``throws`` cups thrown together, in chunks of ``chunk`` cups seeded ``(seed, i)``.
 
-    With ``keep``, each chunk's outcome is kept there (``together-<seed>-<i>-<size>.npz``,
-    beside ``spec.json``, which names the die, the table, the cup, the chunk size and the
-    die–die contact), and a chunk found there is read instead of thrown: a run stopped
-    part-way continues (:mod:`dice_env.studies.chunks`). The result does not depend on
-    ``keep``.
+    With ``keep``, each chunk is kept there and read back instead of thrown
+    (:mod:`dice_env.studies.chunks`); the result does not depend on ``keep``.
     """
     if keep is not None:
         prepare(keep, {"die": scene.die.name, "cup": asdict(CUP), "chunk": chunk,
@@ -412,13 +363,9 @@ def throw_alone(scene: Scene, cups: list[State], bar: object = None) -> Faces:
 
 def excess_per_offset(offsets: np.ndarray, excess: np.ndarray, se: np.ndarray
                       ) -> tuple[float, float]:
-    """Slope of p(5 or 6) - 1/3 against the centre of mass's offset, through the origin.
+    """Slope (per µm) of p(5 or 6) - 1/3 against the centre's offset (µm), and its error.
 
-    Weighted least squares (weights ``1 / se^2``) of ``excess`` on ``offsets`` (µm) over
-    dice whose centre of mass moves along one direction (the pips' 3 : 1 : 5), so that a
-    single number measures the offset; returns the slope (per µm) and its standard error.
-    A die with its centre at the middle (offset 0) has no excess by symmetry and adds
-    nothing.
+    Weighted least squares (weights ``1 / se^2``) of a line through the origin.
     """
     x, y, s = (np.asarray(v, dtype=np.float64) for v in (offsets, excess, se))
     weights = 1.0 / s**2
@@ -429,15 +376,12 @@ def excess_per_offset(offsets: np.ndarray, excess: np.ndarray, se: np.ndarray
 
 
 def offset_for_weldon(slope: float, se: float) -> tuple[float, float, float]:
-    """The offset (µm) whose excess the slope puts at Weldon's, with a 95% range.
+    """The offset (µm) whose excess the slope puts at Weldon's, and its 95% low and high.
 
-    The range is Weldon's excess over the slope's 95% interval; its upper end is inf when
-    that interval reaches zero (no excess cannot be ruled out).
+    An end is inf where the slope's 95% interval reaches zero.
     """
-    low_slope, high_slope = slope - Z95 * se, slope + Z95 * se
-    centre = EFFECT / slope if slope > 0 else math.inf
-    return (centre, EFFECT / high_slope if high_slope > 0 else math.inf,
-            EFFECT / low_slope if low_slope > 0 else math.inf)
+    return tuple(EFFECT / s if s > 0 else math.inf
+                 for s in (slope, slope + Z95 * se, slope - Z95 * se))
 
 
 def success_estimate(faces: Faces) -> Estimate:
@@ -467,9 +411,8 @@ def run(out: Path = DOCS, quick: bool = False, seed: int = SEED,
         throws: int | None = None, keep: Path | None = None) -> dict[str, float]:
     """Regenerate ``weldon.md``, ``weldon.json`` and ``figures/weldon.png`` under ``out``.
 
-    ``throws``: the twelve-dice throws thrown together (default :data:`FULL`'s, or
-    :data:`QUICK`'s with ``quick``); the single-die samples keep their sizes. ``keep``: a
-    folder for the together throws' chunks (:func:`chunked_together`), to continue a run.
+    ``throws``: the twelve-dice throws thrown together (the single-die samples keep their
+    sizes); ``keep``: a folder for their chunks (:func:`chunked_together`), to continue a run.
     """
     sizes = dict(QUICK if quick else FULL)
     if checked_throws(throws, 2) is not None:
@@ -571,10 +514,7 @@ def _test(test: dict) -> str:
 
 def markdown(n: dict) -> str:
     """The page ``weldon.md`` from :func:`summarise`'s numbers (with their ``meta``)."""
-    w, t, meta = n["weldon"], n["together"], n["meta"]
-    sizes = meta["sizes"]
-    ref = n["alone"][VARIANTS[0][0]]
-    cup = CUP
+    w, t = n["weldon"], n["together"]
     successes = markdown_table(
         "successes | Weldon | share | binomial at 1/3 | (a) together",
         ((k, w["counts"][k], f"{w['counts'][k] / sum(w['counts']):.4f}",
@@ -594,9 +534,9 @@ def markdown(n: dict) -> str:
                       DieContact=DieContact, EFFECT=EFFECT, T_MAX_TOGETHER=T_MAX_TOGETHER,
                       _distribution_text=_distribution_text, _p_rows=_p_rows,
                       _sensitivity_text=_sensitivity_text, _test=_test,
-                      _together_reach=_together_reach, cup=cup, faces=faces, meta=meta, n=n,
-                      p_text=p_text, ref=ref, sizes=sizes, successes=successes, t=t,
-                      variants=variants, w=w)
+                      _together_reach=_together_reach, cup=CUP, faces=faces, meta=n["meta"],
+                      n=n, p_text=p_text, ref=n["alone"][VARIANTS[0][0]],
+                      sizes=n["meta"]["sizes"], successes=successes, t=t, variants=variants, w=w)
 
 
 def _together_reach(t: dict) -> str:
@@ -628,10 +568,9 @@ def _p_rows(n: dict) -> str:
 
 
 def sensitivity(n: dict) -> dict[str, float]:
-    """The slope of :func:`excess_per_offset` over the pip-drilled dice, and Weldon's offset.
+    """:func:`excess_per_offset` over the drilled dice of :func:`summarise`'s numbers.
 
-    From the numbers of :func:`summarise` (every variant but the casino die, whose centre is
-    at the middle): ``slope`` (per µm), ``se``, ``offset`` (µm) and its 95% ``low``, ``high``.
+    ``slope`` (per µm), ``se``, and Weldon's ``offset`` (µm) with its 95% ``low``, ``high``.
     """
     drilled = [v for key, v in n["alone"].items() if key != "casino19"]
     slope, se = excess_per_offset(np.array([math.hypot(*v["com_um"]) for v in drilled]),
