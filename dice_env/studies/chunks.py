@@ -1,10 +1,8 @@
 """Long runs in chunks kept on disk, so that a run stopped part-way continues where it stopped.
 
-A run folder holds ``spec.json`` (what the run throws, as JSON data) and one ``.npz`` of arrays
-per finished chunk, each written atomically (never half a file). A folder holding another
-spec, or chunks without a spec, is refused rather than mixed in; a corrupt file is refused
-by name (:class:`FolderError`). The caller seeds each chunk from its index alone, so a run's
-result does not depend on which chunks were read back and which were thrown.
+A run folder holds ``spec.json`` (what the run throws) and one ``.npz`` per finished chunk,
+each written atomically. Another spec's folder, chunks without a spec or a corrupt file are
+refused by name (:class:`FolderError`).
 """
 
 from __future__ import annotations
@@ -35,8 +33,7 @@ def identity(record: dict) -> str:
 def prepare(folder: Path, record: dict, name: str = "keep") -> Path:
     """``folder`` made ready for a run of ``record``: created with its spec, or checked against it.
 
-    ``name``: the parameter that passed ``folder``, for the error. Raises :class:`FolderError`
-    for a folder of another spec, a corrupt ``spec.json``, or chunks (``.npz``) without one.
+    ``name``: the parameter that passed ``folder``, for the :class:`FolderError`.
     """
     record = json.loads(json.dumps(record))
     path = folder / SPEC_FILE
@@ -96,21 +93,19 @@ def kept_chunks(throw: Callable[[int, int], Arrays], throws: int, chunk: int,
                 unit: int = 1) -> list[Arrays]:
     """``throws`` split into chunks of ``chunk`` (the last takes the rest), each ``throw(i, size)``.
 
-    With ``folder`` (made ready by :func:`prepare`), chunk ``i`` of ``size`` throws is kept as
-    ``<prefix>-<i>-<size>.npz`` there and read back instead of thrown when present. ``bar``
-    (a progress bar) advances by ``size * unit`` per chunk.
+    With ``folder`` (see :func:`prepare`), chunk ``i`` is kept as ``<prefix>-<i>-<size>.npz``
+    there and read back when present; ``bar`` advances by ``size * unit`` per chunk.
     """
     parts = []
     for i, start in enumerate(range(0, throws, chunk)):
         size = min(chunk, throws - start)
         path = None if folder is None else folder / f"{prefix}-{i:05d}-{size}.npz"
         if path is not None and path.exists():
-            part = load(path)
+            parts.append(load(path))
         else:
-            part = throw(i, size)
+            parts.append(throw(i, size))
             if path is not None:
-                write_atomically(path, lambda f, arrays=part: np.savez(f, **arrays))
-        parts.append(part)
+                write_atomically(path, lambda f, arrays=parts[-1]: np.savez(f, **arrays))
         if bar is not None:
             bar.update(size * unit)
     return parts

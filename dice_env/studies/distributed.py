@@ -1,22 +1,13 @@
 """Many throws in seeded chunks, in this process or on a Ray cluster, merged into one tally.
 
-:func:`run_throws` splits ``throws`` throws (by default the vigorous hand throws of
-:func:`~dice_env.studies.shapes.hand_throws`) into chunks of ``chunk``. Chunk ``i`` draws its
-throws from ``SeedSequence(seed, spawn_key=(i,))``, the ``i``-th child of
-``SeedSequence(seed).spawn``: a chunk's throws depend on its index alone, never on the worker
-that runs it. Each chunk runs to a decided face (``simulate(..., until="decided")``) and
-is reduced to a :class:`Tally`; the tallies merge exactly (counts add, sums are ``math.fsum``
-of the chunks' ``math.fsum``), so the result is the same bit for bit in this process, on one
-Ray worker or on many.
-
-With ``ray`` an address (``"auto"``, ``"ray://host:10001"``, or ``"local"`` for a fresh local
-instance) each chunk is a Ray task on one CPU; a worker that dies loses its chunk only, and Ray
-runs it again (``max_retries``). With ``out`` a folder, ``spec.json`` records what is thrown
-and each finished chunk's per-throw outcomes go to ``chunk_NNNNNN.npz``, with what the chunk is
-(its spec's identity, seed, index and throws): a run interrupted and started again on the same
-folder computes only the missing chunks. A chunk that is not this run's, a corrupt file, or
-chunks without ``spec.json`` are refused by name (:class:`~dice_env.studies.chunks.FolderError`,
-a ValueError), never merged.
+:func:`run_throws` splits the throws into chunks; chunk ``i`` draws its throws from
+``SeedSequence(seed, spawn_key=(i,))`` alone, runs them to a decided face and is reduced to a
+:class:`Tally`. The tallies merge exactly, so the result is the same bit for bit in this process
+or on any number of Ray workers (each chunk a Ray task on one CPU, run again if its worker
+dies). A run folder (``out``) keeps ``spec.json`` and each finished chunk's outcomes
+(``chunk_NNNNNN.npz``), so a run started again computes only the missing chunks; a chunk not
+this run's or a corrupt file is refused by name
+(:class:`~dice_env.studies.chunks.FolderError`), never merged.
 
 Command line (prints the chi-square summary)::
 
@@ -51,7 +42,7 @@ from dice_env.studies.chunks import FolderError, identity, load, prepare, write_
 from dice_env.studies.common import checked_int
 from dice_env.studies.shapes import Faces, counted, hand_throws
 
-# Per-throw outcomes a chunk keeps (``chunk_NNNNNN.npz`` holds these arrays).
+# Per-throw outcomes a chunk keeps (the arrays of ``chunk_NNNNNN.npz``).
 OUTCOMES = ("face", "counted", "decided", "settled", "unstable", "sunk", "steps", "time",
             "impacts")
 # Outcomes summarised by their sum and sum of squares (mean and standard deviation).
@@ -69,12 +60,9 @@ Draw = Callable[[Scene, int, np.random.Generator], State]
 class Spec:
     """What a run throws; a run folder holds one spec.
 
-    ``scene``; ``throws`` in all; ``chunk`` throws per chunk (the last one takes the rest);
-    ``seed`` of the chunks' seed sequences; ``draw(scene, n, rng)`` the throws of a chunk (a
-    module-level function or a picklable callable: Ray ships it to the workers). A run folder
-    records ``draw`` by its name (a ``functools.partial`` by its function's name and its
-    arguments, another callable by its repr): a lambda or local function has none and is
-    refused there.
+    ``chunk``: throws per chunk (the last takes the rest); ``draw(scene, n, rng)``: a chunk's
+    throws, picklable for Ray, and recorded in a run folder by its importable name (a lambda or
+    local function is refused there).
     """
 
     scene: Scene
@@ -106,11 +94,7 @@ class Spec:
         return np.random.default_rng(np.random.SeedSequence(self.seed, spawn_key=(index,)))
 
     def record(self) -> dict:
-        """The spec as JSON data (the scene field by field, ``draw`` by its name).
-
-        Raises ValueError for a ``draw`` that no name identifies (a lambda, a local function,
-        an object whose repr shows its address).
-        """
+        """The spec as JSON data; ValueError for a ``draw`` that no name identifies."""
         try:
             draw = _named(self.draw)
         except ValueError as error:
@@ -158,13 +142,10 @@ def _named(value: object) -> str:
 class Tally:
     """Counts and sums over a set of throws; :meth:`merge` adds tallies exactly.
 
-    ``throws``; ``counts`` (F,) the faces, per label, of the throws that count
-    (:func:`~dice_env.studies.shapes.counted`: ended decided or at rest, neither unstable nor
-    sunk); ``unfinished``: no face by the time limit; ``unstable``, ``sunk``: throws flagged
-    so; ``sums`` (3, 2): for each of :data:`MOMENTS` (steps, time to the end in s, impacts) the
-    sum and the sum of squares over all throws; ``time_hist`` (:data:`TIME_BINS`,) throws per
-    bin of the time to the end over [0, ``scene.t_max``]; ``impacts_hist``
-    (:data:`IMPACT_BINS`,) throws with 0, 1, ... impacts, the last bin that many or more.
+    ``counts`` (F,): the faces of the throws that count (:func:`~dice_env.studies.shapes.counted`);
+    ``unfinished``: no face by the time limit; ``sums`` (3, 2): the sum and the sum of squares
+    of each of :data:`MOMENTS` over all throws; ``time_hist``, ``impacts_hist``: the histograms
+    of :data:`TIME_BINS` and :data:`IMPACT_BINS`.
     """
 
     throws: int
@@ -180,18 +161,16 @@ class Tally:
     def of(cls, scene: Scene, outcomes: dict[str, np.ndarray]) -> Tally:
         """The tally of one chunk's per-throw ``outcomes`` (arrays named :data:`OUTCOMES`)."""
         o = outcomes
-        ok = o["counted"]
         sums = np.array([[math.fsum(o[q].astype(float)), math.fsum(o[q].astype(float) ** 2)]
                          for q in MOMENTS])
-        time_hist = np.histogram(np.clip(o["time"], 0.0, scene.t_max), TIME_BINS,
-                                 (0.0, scene.t_max))[0]
-        impacts_hist = np.bincount(np.minimum(o["impacts"], IMPACT_BINS - 1),
-                                   minlength=IMPACT_BINS)
-        return cls(throws=len(ok),
-                   counts=np.bincount(o["face"][ok], minlength=scene.die.n_faces + 1)[1:],
+        return cls(throws=len(o["counted"]),
+                   counts=np.bincount(o["face"][o["counted"]], minlength=scene.die.n_faces + 1)[1:],
                    unfinished=int(np.sum(~(o["decided"] | o["settled"]))),
                    unstable=int(o["unstable"].sum()), sunk=int(o["sunk"].sum()), sums=sums,
-                   time_hist=time_hist, impacts_hist=impacts_hist)
+                   time_hist=np.histogram(np.clip(o["time"], 0.0, scene.t_max), TIME_BINS,
+                                          (0.0, scene.t_max))[0],
+                   impacts_hist=np.bincount(np.minimum(o["impacts"], IMPACT_BINS - 1),
+                                            minlength=IMPACT_BINS))
 
     @classmethod
     def merge(cls, tallies: Iterable[Tally]) -> Tally:
@@ -221,8 +200,7 @@ class Tally:
         """Sample standard deviation of ``name`` (one of :data:`MOMENTS`); 0 for one throw."""
         total, squares = self.sums[_moment(name)]
         n = self.throws
-        return float(math.sqrt(max(squares - total * total / n, 0.0) / (n - 1))) if n > 1 \
-            else 0.0
+        return math.sqrt(max(squares - total * total / n, 0.0) / (n - 1)) if n > 1 else 0.0
 
     def same_as(self, other: Tally) -> bool:
         """Equal in every field, bit for bit."""
@@ -252,16 +230,12 @@ def run_throws(scene: Scene | str, throws: int, *, chunk: int = CHUNK, seed: int
     """Throw ``throws`` throws of ``scene`` in seeded chunks of ``chunk``; merge their tallies.
 
     ``scene``: a :class:`Scene`, or a standard die's name (``"d20"``) on the default table.
-    ``ray``: None runs the chunks one after the other in this process (all numba threads);
-    an address runs each chunk as a Ray task on one thread: ``"auto"`` (the cluster this
-    node belongs to), ``"ray://host:10001"`` (Ray Client), ``"local"`` (a fresh local
-    instance, stopped at the end). A process already connected to Ray uses that connection.
-    ``workers``: at most this many chunks at once on Ray (default: the cluster's CPUs).
-    ``max_retries``: Ray runs a chunk again this many times when its worker dies.
-    ``out``: the run folder (see the module's docstring); refused (FolderError) if it holds
-    another spec, a chunk of another run, a corrupt file, or chunks without ``spec.json``.
-    ``progress``: a tqdm bar in throws (throws/s). The result does not depend on ``ray``,
-    ``workers``, ``out`` or on interruptions.
+    ``ray``: None (in this process, all numba threads) or an address, each chunk then a Ray
+    task on one thread: ``"auto"``, ``"ray://host:10001"`` or ``"local"`` (a fresh instance).
+    ``workers``: at most this many chunks at once on Ray (default: the cluster's CPUs);
+    ``max_retries``: Ray runs a chunk again this many times when its worker dies. ``out``: the
+    run folder, refused (FolderError) if it is another run's. ``progress``: a tqdm bar. The
+    result does not depend on ``ray``, ``workers``, ``out`` or on interruptions.
     """
     if isinstance(scene, str):
         if scene not in STANDARD_SIZES:
@@ -302,11 +276,9 @@ def run_throws(scene: Scene | str, throws: int, *, chunk: int = CHUNK, seed: int
 
 def hand_faces(scene: Scene, n: int, seed: int, *, ray: str | None = None,
                chunk: int = CHUNK, keep: Path | str | None = None) -> Faces:
-    """The faces of ``n`` hand throws of ``scene`` from ``seed`` by :func:`run_throws`.
+    """The faces of ``n`` hand throws of ``scene`` from ``seed`` by :func:`run_throws`, no bar.
 
-    A study's ``faces_of`` (``python -m dice_env.studies shapes [--ray ADDRESS] [--chunks
-    DIR]``); no bar. ``keep``: a folder holding one run folder per seed (``seed-N``), so that
-    an interrupted study continues from the chunks it had finished.
+    A study's ``faces_of``; ``keep``: a folder holding one run folder per seed (``seed-N``).
     """
     out = None if keep is None else Path(keep) / f"seed-{seed}"
     return run_throws(scene, n, chunk=chunk, seed=seed, ray=ray, out=out,
@@ -315,10 +287,7 @@ def hand_faces(scene: Scene, n: int, seed: int, *, ray: str | None = None,
 
 @contextlib.contextmanager
 def connected(address: str) -> Iterator[types.ModuleType]:
-    """Ray, connected to ``address`` for the block; a process already connected stays so.
-
-    ``"local"`` starts a fresh local instance (without its dashboard), stopped at the end.
-    """
+    """Ray, connected to ``address`` for the block; a process already connected stays so."""
     try:
         import ray
     except ImportError as error:
@@ -474,8 +443,7 @@ def main(argv: list[str] | None = None) -> None:
 
 
 if __name__ == "__main__":
-    # run the imported module's main, so Ray ships ``dice_env.studies.distributed.throw_chunk`` by
-    # reference and not this ``__main__`` copy by value
+    # the imported module's main, so that Ray ships throw_chunk by reference, not by value
     from dice_env.studies.distributed import main as imported_main
 
     imported_main()
