@@ -1,20 +1,11 @@
 """Two dice that meet: what their first collision does to them, and to the outcome's randomness.
 
-``run(out, quick, throws)`` writes ``out/collisions.md`` and ``out/figures/collisions.png``.
-Two default d6 leave one hand together into the tray (:func:`dice_env.studies.pairs.hand_throws`,
-the pairs study's throw), each throw until both faces are decided. The same throws are also
-thrown *apart*: each die alone, its own group, at the pair's step, so that a die alone moves
-bit for bit as in the pair until the dice first touch.
-
-- **The first collision**: each die's velocity and angular velocity when the dice first touch
-  and when that contact ends (:attr:`dice_env.simulation.group.GroupResult.meet_velocity`,
-  ``meet_spin``), against the same dice thrown apart over the same steps: the change of the
-  spin's and the velocity's magnitude and the angle they turn, as quantiles with
-  distribution-free 95% intervals.
-- **Randomness**: every throw again with die 1's release velocity changed by
-  :data:`PERTURBATION` along x; how often the faces change in the throws where the dice met,
-  together against apart (exact McNemar test on the same throws), and the entropy and
-  uniformity of the faces in each case.
+``run(out, quick, throws)`` writes ``out/collisions.md`` and ``out/figures/collisions.png``:
+the pairs study's throw (:func:`dice_env.studies.pairs.hand_throws`) thrown together and each
+die *apart* (alone, at the pair's step, so that it moves bit for bit as in the pair until the
+dice first touch); the first collision's change of velocity and spin
+(:attr:`dice_env.simulation.group.GroupResult.meet_velocity`), and how often a
+:data:`PERTURBATION` of the release changes the faces, together against apart.
 """
 
 from __future__ import annotations
@@ -115,11 +106,7 @@ def measures(velocity: np.ndarray, spin: np.ndarray) -> dict[str, np.ndarray]:
 
 
 def quantile_interval(x: np.ndarray, q: float, level: float = 0.95) -> tuple[float, float, float]:
-    """The ``q`` quantile of ``x`` and its distribution-free ``level`` interval.
-
-    The interval runs between the order statistics the binomial (n, q) puts on either side
-    (clipped to the sample's ends).
-    """
+    """The ``q`` quantile of ``x`` and its distribution-free ``level`` interval (binomial)."""
     x = np.sort(np.ravel(x))
     if not 0.0 < q < 1.0 or len(x) == 0:
         raise ValueError(f"q must be in (0, 1) and x non-empty, got q={q!r}, {len(x)} values")
@@ -140,9 +127,8 @@ def entropy_estimate(codes: np.ndarray, k: int,
                      rng: np.random.Generator) -> tuple[float, float, float]:
     """The bias-corrected entropy (bits) of ``codes`` (0..k-1) and its 95% interval.
 
-    The plug-in entropy ``H`` of a sample sits low, and its resamples' ``H*`` lower still by
-    about as much: the estimate is ``2 H - mean(H*)`` and the interval ``2 H - q`` over the
-    resamples' 97.5% and 2.5% quantiles ``q``.
+    The plug-in ``H`` sits low, its bootstrap resamples' ``H*`` lower by about as much: the
+    estimate is ``2 H - mean(H*)``, the interval ``2 H`` less the 97.5% and 2.5% quantiles.
     """
     plug_in = entropy_bits(np.bincount(codes, minlength=k))
     draws = rng.integers(0, len(codes), (BOOTSTRAP, len(codes)))
@@ -169,12 +155,11 @@ def faces_changed(a: GroupResult, b: GroupResult) -> np.ndarray:
 class Collisions:
     """The study's throws.
 
-    ``together``, ``nudged``: the pair and the pair with die 1 perturbed (B throws);
-    ``met`` (B,): the dice touched; ``apart``: each met throw's dice alone (2 M, 1), die 1 of
-    every met throw first; ``apart_nudged``: die 1 of each met throw alone, perturbed (M, 1);
-    ``window`` (B,): the first contact ended (parted) before the throw did; ``apart_velocity``,
-    ``apart_spin`` (W, 2, 3): the dice alone at the step the first contact ended, over the
-    ``window`` throws; ``dt`` the step (s).
+    ``together``, ``nudged``: the pair, and with die 1 perturbed (B throws); ``met`` (B,): the
+    dice touched; ``apart`` (2 M, 1): each met throw's dice alone, die 1 of each first;
+    ``apart_nudged`` (M, 1): die 1 alone, perturbed; ``window`` (B,): the first contact ended
+    before the throw did; ``apart_velocity``, ``apart_spin`` (W, 2, 3): the dice alone at the
+    step it ended; ``dt`` the step (s).
     """
 
     together: GroupResult
@@ -230,10 +215,8 @@ def throw(n: int, seed: int = SEED, bar: object = None) -> Collisions:
     state = hand_throws(scene, dice, n, np.random.default_rng(seed))
     nudged = state.copy()
     nudged.velocity[:, 0, 0] += PERTURBATION
-    together = simulate_in_batches(scene, dice, state, bar, until="decided",
-                                   free_flight=FLIGHT)
-    twin = simulate_in_batches(scene, dice, nudged, bar, until="decided",
-                               free_flight=FLIGHT)
+    together, twin = (simulate_in_batches(scene, dice, s, bar, until="decided", free_flight=FLIGHT)
+                      for s in (state, nudged))
     met = together.meet_steps[:, 0] >= 0
     chosen = GroupState(*(a[met] for a in state._arrays()))
     apart = simulate_in_batches(scene, dice[:1], alone(chosen), until="decided",
@@ -245,8 +228,7 @@ def throw(n: int, seed: int = SEED, bar: object = None) -> Collisions:
     if bar is not None:
         bar.total = 2 * n + int(window.sum())
         bar.refresh()
-    velocity, spin = alone_after(scene, dice[0], GroupState(*(a[window] for a in
-                                                               state._arrays())),
+    velocity, spin = alone_after(scene, dice[0], GroupState(*(a[window] for a in state._arrays())),
                                  together.meet_steps[window, 1], bar)
     return Collisions(together, twin, met, apart, apart_nudged, window, velocity, spin,
                       scene.dt)
@@ -388,13 +370,10 @@ def _markdown(study: Collisions, n: dict, seed: int) -> str:
           _share(n[f"{case}_joint"])) for case in ("together", "apart")))
     quick_note = "" if thrown >= FULL else (
         f" (fewer than the default {FULL}: `python -m dice_env.studies collisions`)")
-    significant = n["mcnemar_p"] < 0.01
     verdict = ("more often" if n["change_together"][0] > n["change_apart"][0] else "less often") \
-        if significant else "not detectably differently"
-    spin = n["together_spin_change"]
-    turn_q = n["together_spin_turn"]
+        if n["mcnemar_p"] < 0.01 else "not detectably differently"
     return study_page("collisions", DieContact=DieContact, HAND=HAND, PERTURBATION=PERTURBATION,
                       TRAY=TRAY, T_MAX=T_MAX, _quantile_rows=_quantile_rows, _share=_share,
                       entropies=entropies, n=n, np=np, numba=numba, quick_note=quick_note,
-                      scene=scene, seed=seed, spin=spin, thrown=thrown, turn_q=turn_q,
-                      verdict=verdict)
+                      scene=scene, seed=seed, spin=n["together_spin_change"], thrown=thrown,
+                      turn_q=n["together_spin_turn"], verdict=verdict)

@@ -1,19 +1,9 @@
 """The validation page: the simulator against experiments on real dice, one section each.
 
-``run(out, quick)`` writes ``out/validation.md``. Sections:
-
-- **Weldon's dice** (1894): the numbers ``python -m dice_env.studies weldon`` wrote to
-  ``out/weldon.json`` (run first when absent; an expensive study, so not rerun here);
-- **the initially-down face against throw energy** (Kapitaniak et al. 2012, the direction of
-  their finding): thrown here, :func:`initial_face_memory`;
-- **restitution and friction of the default table** against the sources in
-  :mod:`dice_env.model.table`: measured here on the simulator (:func:`sliding_friction`,
-  :func:`dice_env.simulation.calibration.measured_restitution`);
-- **square-cuboid dice**, a prediction: the numbers of ``out/cuboids.md``
-  (:func:`dice_env.studies.cuboids.read_page`; run first when absent).
-
-Every verdict is computed from the numbers; nothing is fitted to the data it is compared
-with, and where a parameter was set from the same source the page says so.
+``run(out, quick)`` writes ``out/validation.md``: Weldon's dice (from ``out/weldon.json``),
+the initially-down face against throw energy (:func:`initial_face_memory`), the default table's
+restitution and friction (:func:`sliding_friction`) and square-cuboid dice (from
+``out/cuboids.md``); the weldon and cuboids studies are run first where their output is absent.
 """
 
 from __future__ import annotations
@@ -61,9 +51,8 @@ def within(value: float, low: float, high: float) -> str:
 def sliding_friction(scene: Scene, speed: float = SLIDE_SPEED) -> float:
     """Friction coefficient the simulator produces: a die sliding flat, deceleration / g.
 
-    The die rests on its face with its centre at the resting height and starts sliding along
-    x at ``speed`` (m/s), no spin; the deceleration is the slope of a straight line through
-    its speed while that is between 20% and 80% of ``speed``.
+    The die starts at ``speed`` (m/s) along x; the deceleration is fitted to its speed while
+    that is between 20% and 80% of ``speed``.
     """
     die = scene.die
     face = int(np.argmin(die.resting_heights))
@@ -84,11 +73,9 @@ def sliding_friction(scene: Scene, speed: float = SLIDE_SPEED) -> float:
 def initial_face_memory(n: int, rng: np.random.Generator, scene: Scene | None = None) -> dict:
     """P(rests on the face down at release) in energy terciles: the fairness study's throws.
 
-    ``n`` throws of :func:`dice_env.studies.fairness.energy_throws` with energies log-uniform
-    over :data:`ENERGY_RANGE` (m g a above a gentle release), each until its face is decided.
-    Per tercile (low, middle, high energy among the counted throws): its energy range, the
-    throws, and the hits on the release-down and release-up faces. ``scene``'s die must be a
-    d6 (default: the default scene).
+    ``n`` throws of :func:`dice_env.studies.fairness.energy_throws` over :data:`ENERGY_RANGE`;
+    per tercile its energy range, throws, and hits on the release-down and release-up faces.
+    ``scene``'s die must be a d6.
     """
     scene = Scene() if scene is None else scene
     if scene.die.name != "d6":
@@ -105,8 +92,7 @@ def initial_face_memory(n: int, rng: np.random.Generator, scene: Scene | None = 
     bins = []
     for b in range(3):
         sel = ok & (which == b)
-        bins.append({"low": float(edges[b]), "high": float(edges[b + 1]),
-                     "n": int(sel.sum()),
+        bins.append({"low": float(edges[b]), "high": float(edges[b + 1]), "n": int(sel.sum()),
                      "down": int(np.sum(final_down[sel] == down0[sel])),
                      "up": int(np.sum(final_down[sel] == 7 - down0[sel]))})
     return {"thrown": n, "counted": int(ok.sum()), "bins": bins}
@@ -116,9 +102,8 @@ def memory_verdict(low: dict, high: dict) -> str:
     """Kapitaniak's direction: the release-down face favoured at low energy, less at high.
 
     "agrees" when the low tercile's 95% interval of P(release-down) lies above 1/6 and a
-    one-sided two-proportion test (5%) finds it above the high tercile's; "differs" when the
-    low tercile is below 1/6 or significantly below the high one; else "not resolvable at
-    this sample".
+    one-sided two-proportion test (5%) puts it above the high tercile's; "differs" when it is
+    below 1/6 or significantly below; else "not resolvable at this sample".
     """
     p_low, p_high = low["down"] / low["n"], high["down"] / high["n"]
     pooled = (low["down"] + high["down"]) / (low["n"] + high["n"])
@@ -150,13 +135,9 @@ def run(out: Path = DOCS, quick: bool = False, seed: int = SEED) -> dict[str, fl
     memory = initial_face_memory(MEMORY_THROWS[quick], rng, scene)
     restitution = {v: measured_restitution(scene, v) for v in SPEEDS}
     friction = sliding_friction(scene)
-    sections = [
-        _weldon_section(w),
-        _memory_section(memory, quick),
-        _table_section(scene, restitution, friction, quick),
-        _cuboid_section(cube_page),
-    ]
     command = COMMAND + (" --quick" if quick else "")
+    sections = [_weldon_section(w), _memory_section(memory, command),
+                _table_section(scene, restitution, friction, command), _cuboid_section(cube_page)]
     text = _header(sections, command) + "\n".join(body for _, body in sections)
     (out / "validation.md").write_text(text)
     low, high = memory["bins"][0], memory["bins"][-1]
@@ -226,7 +207,7 @@ def _offset_line(w: dict) -> str:
             f"model, used in no verdict: the size and pips of Weldon's dice are not recorded.")
 
 
-def _memory_section(m: dict, quick: bool) -> tuple[list, str]:
+def _memory_section(m: dict, command: str) -> tuple[list, str]:
     rows = []
     for name, b in zip(("low", "middle", "high"), m["bins"], strict=True):
         down, up = wilson(b["down"], b["n"]), wilson(b["up"], b["n"])
@@ -234,7 +215,6 @@ def _memory_section(m: dict, quick: bool) -> tuple[list, str]:
                      estimate(b["down"] / b["n"], down), estimate(b["up"] / b["n"], up)))
     low, high = m["bins"][0], m["bins"][-1]
     verdict = memory_verdict(low, high)
-    command = COMMAND + (" --quick" if quick else "")
     summary = [("Initially-down face against throw energy",
                 "favoured at low energy, fading with energy (Kapitaniak et al. 2012)",
                 f"P(release-down) {low['down'] / low['n']:.3f} (low) → "
@@ -247,13 +227,12 @@ def _memory_section(m: dict, quick: bool) -> tuple[list, str]:
 
 
 def _table_section(scene: Scene, restitution: dict[float, float], friction: float,
-                   quick: bool) -> tuple[list, str]:
+                   command: str) -> tuple[list, str]:
     g = scene.ground
-    e_verdicts = {v: within(e, *RESTITUTION_RANGE) for v, e in restitution.items()}
-    e_verdict = "agrees" if all(x == "agrees" for x in e_verdicts.values()) else "differs"
+    e_verdict = "agrees" if all(within(e, *RESTITUTION_RANGE) == "agrees"
+                                for e in restitution.values()) else "differs"
     f_verdict = within(friction, *FRICTION_RANGE)
     e_rows = ", ".join(f"{e:.3f} at {v:g} m/s" for v, e in restitution.items())
-    command = COMMAND + (" --quick" if quick else "")
     summary = [("Restitution of the default table", f"{RESTITUTION_RANGE[0]:g}–"
                 f"{RESTITUTION_RANGE[1]:g}", f"{restitution[1.0]:.3f} at 1 m/s (set from it)",
                 e_verdict),
