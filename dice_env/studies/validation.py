@@ -190,21 +190,10 @@ def _weldon_section(w: dict) -> tuple[list, str]:
                     if t.get("throws_to_resolve") else "")
                  + f"; variance of successes per throw {t['dispersion']:.2f} × the "
                  f"binomial's (1 for independent dice)" if "p" in t else "too few throws")
-    body = study_page("validation-weldon-section", _bold=_bold, _offset_line=_offset_line,
-                      dist=dist, dist_line=dist_line, map=map, math=math, meta=meta, ref=ref,
-                      sens=sens, t=t, t_verdict=t_verdict, together=together, w=w, wd=wd,
-                      weldon=weldon)
+    body = study_page("validation-weldon-section", _bold=_bold, dist=dist, dist_line=dist_line,
+                      map=map, math=math, meta=meta, ref=ref, s=weldon.sensitivity(w), sens=sens,
+                      t=t, t_verdict=t_verdict, together=together, wd=wd, weldon=weldon)
     return summary, body
-
-
-def _offset_line(w: dict) -> str:
-    s = weldon.sensitivity(w)
-    high = "no upper bound" if math.isinf(s["high"]) else f"{s['high']:.0f} µm"
-    return (f"On this throw the excess over 1/3 grows by {1e3 * s['slope']:.3f} ± "
-            f"{1e3 * s['se']:.3f} × 10⁻³ per µm of the centre's offset (a line through the "
-            f"origin, `weldon.excess_per_offset`); Weldon's excess would need about "
-            f"{s['offset']:.0f} µm (95%: {s['low']:.0f} µm to {high}). A reading of the "
-            f"model, used in no verdict: the size and pips of Weldon's dice are not recorded.")
 
 
 def _memory_section(m: dict, command: str) -> tuple[list, str]:

@@ -530,13 +530,14 @@ def markdown(n: dict) -> str:
         "die | 1 | 2 | 3 | 4 | 5 | 6",
         ((v["label"], *(f"{c / sum(v['counts']):.4f}" for c in v["counts"]))
          for key, v in n["alone"].items() if key in ("drilled16", "casino19")))
+    ref = n["alone"][VARIANTS[0][0]]
     return study_page("weldon", BLOCK=BLOCK, CHUNK_TOGETHER=CHUNK_TOGETHER, DICE=DICE,
-                      DieContact=DieContact, EFFECT=EFFECT, T_MAX_TOGETHER=T_MAX_TOGETHER,
-                      _distribution_text=_distribution_text, _p_rows=_p_rows,
-                      _sensitivity_text=_sensitivity_text, _test=_test,
-                      _together_reach=_together_reach, cup=CUP, faces=faces, meta=n["meta"],
-                      n=n, p_text=p_text, ref=n["alone"][VARIANTS[0][0]],
-                      sizes=n["meta"]["sizes"], successes=successes, t=t, variants=variants, w=w)
+                      DieContact=DieContact, EFFECT=EFFECT, T_MAX_TOGETHER=T_MAX_TOGETHER, Z95=Z95,
+                      _distribution_text=_distribution_text, _p_rows=_p_rows, _test=_test,
+                      _together_reach=_together_reach, cup=CUP, faces=faces, math=math,
+                      meta=n["meta"], n=n, p_text=p_text, r=math.hypot(*ref["com_um"]), ref=ref,
+                      s=sensitivity(n), sizes=n["meta"]["sizes"], successes=successes, t=t,
+                      variants=variants, w=w)
 
 
 def _together_reach(t: dict) -> str:
@@ -578,23 +579,6 @@ def sensitivity(n: dict) -> dict[str, float]:
                                   np.array([v["se"] for v in drilled]))
     offset, low, high = offset_for_weldon(slope, se)
     return {"slope": slope, "se": se, "offset": offset, "low": low, "high": high}
-
-
-def _sensitivity_text(n: dict) -> str:
-    s = sensitivity(n)
-    ref = n["alone"][VARIANTS[0][0]]
-    r = math.hypot(*ref["com_um"])
-    high = "no upper bound" if math.isinf(s["high"]) else f"{s['high']:.0f} µm"
-    return (
-        f"The pip-drilled dice move their centre of mass along one direction (3 : 1 : 5), so one "
-        f"number, its offset, measures them. A straight line through the origin (weighted "
-        f"least squares over the three drilled dice, `excess_per_offset`) gives "
-        f"{1e3 * s['slope']:+.3f} ± {1e3 * s['se']:.3f} (10⁻³ per µm; 95%: "
-        f"± {1e3 * Z95 * s['se']:.3f}): {s['slope'] * r:+.4f} for `drilled16` "
-        f"({r:.1f} µm). Weldon's excess of {EFFECT:.4f} would need an offset of about "
-        f"{s['offset']:.0f} µm (95%: {s['low']:.0f} µm to {high}) on this throw, "
-        f"{s['offset'] / r:.1f} times the `drilled16` die's. A reading of the model at Weldon's "
-        f"excess, used in no verdict: his dice's size and pips are not recorded.")
 
 
 def _distribution_text(t: dict) -> str:
