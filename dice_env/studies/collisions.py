@@ -261,7 +261,7 @@ def _rate(hits: np.ndarray) -> tuple[float, float, float, int, int]:
 
 def _numbers(study: Collisions, seconds: float, cpu: float,
              rng: np.random.Generator) -> dict[str, object]:
-    together = study.together
+    together, w = study.together, study.window
     faces = study.faces()
     changed = {name: faces[name] != faces[nudged] for name, nudged in
                (("together", "nudged"), ("apart", "apart_nudged"))}
@@ -270,18 +270,15 @@ def _numbers(study: Collisions, seconds: float, cpu: float,
     first = study.first_contact
     n = {
         "throws": float(len(study.met)), "met": float(study.met.mean()),
-        "counted_met": float(len(faces["together"])), "windows": float(study.window.sum()),
+        "counted_met": float(len(faces["together"])), "windows": float(w.sum()),
         "seconds": seconds, "cpu_seconds": cpu,
         "die_impacts": float(together.die_impacts[study.met, 0].mean()),
         "several_impacts": float((together.die_impacts[study.met, 0] > 1).mean()),
-        "contact_ms": float(np.median(np.diff(together.meet_steps[study.window], axis=1))
-                            * study.dt * 1e3),
-        "meet_time": float(np.median(together.meet_steps[study.window, 0]) * study.dt),
+        "contact_ms": float(np.median(np.diff(together.meet_steps[w], axis=1)) * study.dt * 1e3),
+        "meet_time": float(np.median(together.meet_steps[w, 0]) * study.dt),
         "in_flight": float(study.in_flight.mean()),
-        "spin_before": float(np.median(np.linalg.norm(together.meet_spin[study.window, 0],
-                                                      axis=-1))),
-        "speed_before": float(np.median(np.linalg.norm(
-            together.meet_velocity[study.window, 0], axis=-1))),
+        "spin_before": float(np.median(np.linalg.norm(together.meet_spin[w, 0], axis=-1))),
+        "speed_before": float(np.median(np.linalg.norm(together.meet_velocity[w, 0], axis=-1))),
         "change_together": _rate(changed["together"][:, 0]),
         "change_either": _rate(changed["together"].any(axis=1)),
         "change_die2": _rate(changed["together"][:, 1]),

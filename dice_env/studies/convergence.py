@@ -450,7 +450,6 @@ def _outcome_table(outcomes: dict[str, dict[str, dict[str, object]]]) -> str:
 
 
 def _outcome_row(scene_label: str, name: str, o: dict[str, object]) -> tuple:
-    """The outcome table's row of one release in one scene."""
     freq = 100 * o["counts"] / o["counts"].sum(1, keepdims=True)
     return (scene_label, name, *(" ".join(f"{v:.1f}" for v in f) for f in freq[:2]),
             f"{o['success'][0]:.4f}", f"{o['success'][1]:.4f}", f"{o['se']:.4f}",
@@ -459,7 +458,6 @@ def _outcome_row(scene_label: str, name: str, o: dict[str, object]) -> tuple:
 
 
 def _agreement_table(height: np.ndarray, agreement: dict[str, dict[str, np.ndarray]]) -> str:
-    """Per-throw face agreement and the chaos floor, binned by throw energy."""
     header = "E/(m g) (cm) | throws | " + " | ".join(
         f"{label}: dt vs dt/4 (%) | {label}: chaos floor (%)" for label in agreement)
     columns = [binned(height, result[key]) for result in agreement.values()
@@ -476,7 +474,6 @@ def _bin_labels(above: str) -> list[str]:
 
 
 def _gentle_table(gentle: dict[str, dict[str, np.ndarray]]) -> str:
-    """The gentle release's agreement and chaos floor per variant."""
     rows = []
     for name, g in gentle.items():
         p = g["step"].mean()

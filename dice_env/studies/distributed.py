@@ -1,13 +1,10 @@
 """Many throws in seeded chunks, in this process or on a Ray cluster, merged into one tally.
 
-:func:`run_throws` splits the throws into chunks; chunk ``i`` draws its throws from
-``SeedSequence(seed, spawn_key=(i,))`` alone, runs them to a decided face and is reduced to a
-:class:`Tally`. The tallies merge exactly, so the result is the same bit for bit in this process
-or on any number of Ray workers (each chunk a Ray task on one CPU, run again if its worker
-dies). A run folder (``out``) keeps ``spec.json`` and each finished chunk's outcomes
-(``chunk_NNNNNN.npz``), so a run started again computes only the missing chunks; a chunk not
-this run's or a corrupt file is refused by name
-(:class:`~dice_env.studies.chunks.FolderError`), never merged.
+Chunk ``i`` draws its throws from ``SeedSequence(seed, spawn_key=(i,))`` alone and the chunks'
+:class:`Tally` objects merge exactly, so :func:`run_throws` gives the same result bit for bit here
+or on any Ray workers. A run folder (``out``) keeps each finished chunk (``chunk_NNNNNN.npz``):
+a run started again computes only the missing ones, and refuses another run's by name
+(:class:`~dice_env.studies.chunks.FolderError`).
 
 Command line (prints the chi-square summary)::
 

@@ -143,8 +143,7 @@ def run(out: Path = DOCS, quick: bool = False, seed: int = SEED) -> dict[str, fl
     low, high = memory["bins"][0], memory["bins"][-1]
     return {"weldon_p": w["alone"]["drilled16"]["p"], "memory_low": low["down"] / low["n"],
             "memory_high": high["down"] / high["n"], "restitution": restitution[1.0],
-            "friction": friction,
-            "cube_p": cube_page.table[cuboids.CONDITIONS[0][0]][1.0][0]}
+            "friction": friction, "cube_p": cube_page.table[cuboids.CONDITIONS[0][0]][1.0][0]}
 
 
 # ---- the page ----------------------------------------------------------------------------
@@ -162,7 +161,7 @@ def _header(sections: list[tuple[list[tuple[str, str, str, str]], str]], command
 def _weldon_section(w: dict) -> tuple[list, str]:
     meta, wd, t, a = w["meta"], w["weldon"], w["together"], w["alone"]
     ref = a["drilled16"]
-    together = (weldon.p_text(t) if "p" in t else "too few throws")
+    together = weldon.p_text(t) if "p" in t else "too few throws"
     t_verdict = t["vs_weldon_p"]["verdict"] if "p" in t else "not resolvable at this sample"
     dist = t.get("distribution_verdict", "not resolvable at this sample")
     sens = markdown_table(
@@ -197,11 +196,9 @@ def _weldon_section(w: dict) -> tuple[list, str]:
 
 
 def _memory_section(m: dict, command: str) -> tuple[list, str]:
-    rows = []
-    for name, b in zip(("low", "middle", "high"), m["bins"], strict=True):
-        down, up = wilson(b["down"], b["n"]), wilson(b["up"], b["n"])
-        rows.append((name, f"{b['low']:.3g}–{b['high']:.3g}", b["n"],
-                     estimate(b["down"] / b["n"], down), estimate(b["up"] / b["n"], up)))
+    rows = [(name, f"{b['low']:.3g}–{b['high']:.3g}", b["n"],
+             *(estimate(b[face] / b["n"], wilson(b[face], b["n"])) for face in ("down", "up")))
+            for name, b in zip(("low", "middle", "high"), m["bins"], strict=True)]
     low, high = m["bins"][0], m["bins"][-1]
     verdict = memory_verdict(low, high)
     summary = [("Initially-down face against throw energy",
@@ -217,7 +214,6 @@ def _memory_section(m: dict, command: str) -> tuple[list, str]:
 
 def _table_section(scene: Scene, restitution: dict[float, float], friction: float,
                    command: str) -> tuple[list, str]:
-    g = scene.ground
     e_verdict = "agrees" if all(within(e, *RESTITUTION_RANGE) == "agrees"
                                 for e in restitution.values()) else "differs"
     f_verdict = within(friction, *FRICTION_RANGE)
@@ -231,7 +227,7 @@ def _table_section(scene: Scene, restitution: dict[float, float], friction: floa
                       FRICTION_SOURCE=FRICTION_SOURCE, RESTITUTION_RANGE=RESTITUTION_RANGE,
                       RESTITUTION_SOURCE=RESTITUTION_SOURCE, SLIDE_SPEED=SLIDE_SPEED,
                       command=command, e_rows=e_rows, e_verdict=e_verdict, f_verdict=f_verdict,
-                      friction=friction, g=g, table=table)
+                      friction=friction, g=scene.ground, table=table)
     return summary, body
 
 

@@ -110,12 +110,8 @@ def compare(a: Estimate, b: Estimate, effect: float = EFFECT) -> Comparison:
     """
     half = Z95 * math.hypot(a.se, b.se)
     difference = a.p - b.p
-    if abs(difference) > half:
-        verdict = "differs"
-    elif half > abs(effect):
-        verdict = "not resolvable at this sample"
-    else:
-        verdict = "agrees"
+    verdict = ("differs" if abs(difference) > half else
+               "not resolvable at this sample" if half > abs(effect) else "agrees")
     return Comparison(difference, half, verdict)
 
 
