@@ -47,13 +47,10 @@ from dice_env.studies.pairs import (
 # a die thrown apart moves bit for bit as in the pair until the dice first touch.
 FLIGHT = False
 
-# Throws of the pair in the full and the quick run; the fewest a run takes.
-FULL, QUICK, MIN_THROWS = 2400, 24, 20
-# Added to die 1's release velocity along x (m/s) in the perturbed throws.
-PERTURBATION = 1e-6
+FULL, QUICK, MIN_THROWS = 2400, 24, 20  # throws of the pair: full run, quick run, the fewest
+PERTURBATION = 1e-6  # m/s added to die 1's release velocity along x in the perturbed throws
 QUANTILES = (0.05, 0.25, 0.5, 0.75, 0.95)
-# Bootstrap resamples of the entropy's interval.
-BOOTSTRAP = 2000
+BOOTSTRAP = 2000  # bootstrap resamples of the entropy's interval
 # The first collision's measures: (key, label, unit).
 MEASURES = (("spin_change", "change of |angular velocity|", "rad/s"),
             ("spin_turn", "angle the angular velocity turns", "deg"),

@@ -24,8 +24,7 @@ from dice_env.studies.markdown import markdown_table
 from dice_env.studies.numbers import study_page
 
 T_THROW = 4.0  # s: the most a throw whose face is compared runs (all settle sooner)
-# Equivalent drop heights E / (m g) (m) that bound the energy bins of the agreement study.
-ENERGY_BINS = (0.0, 0.06, 0.12, 0.2, 0.3, np.inf)
+ENERGY_BINS = (0.0, 0.06, 0.12, 0.2, 0.3, np.inf)  # drop heights E / (m g) (m) of the bins
 
 
 @dataclass(frozen=True)
@@ -210,10 +209,8 @@ HORIZON = 0.25
 LISTING_FRICTION = "paper scheme, listing friction, analytic flight"
 DEFAULT = "default (midpoint, stick-slip, analytic flight)"
 LISTING = "listing (paper scheme, listing friction, every step)"
-# Step divisors of the gentle release's convergence table: dt/a against dt/(4a).
-GENTLE_DIVISORS = (1, 2, 4)
-# Step of the reference runs (s): 1/128 of the default step, midpoint scheme.
-REFERENCE_DT = Scene().step / 128
+GENTLE_DIVISORS = (1, 2, 4)  # the gentle release's steps compared: dt/a against dt/(4a)
+REFERENCE_DT = Scene().step / 128  # s: the reference runs' step (midpoint scheme)
 
 
 def variants() -> dict[str, tuple[Scene, bool]]:
@@ -387,10 +384,8 @@ def write_report(out: Path, numbers: dict[str, object], quick: bool) -> dict[str
     _plot_agreement(height, agreement, figures / "face-agreement.png")
     _plot_outcomes(outcomes["default"], figures / "outcome-statistics.png")
 
-    at_default = SAFETIES.index(scene.safety)
-    ratio = _ratio_at_equal_error(curves[LISTING], curves[DEFAULT], at_default)
-    orders = {name: observed_order(c["dt"][-4:], c["position"][-4:]) for name, c in
-              curves.items()}
+    ratio = _ratio_at_equal_error(curves[LISTING], curves[DEFAULT], SAFETIES.index(scene.safety))
+    orders = {name: observed_order(c["dt"][-4:], c["position"][-4:]) for name, c in curves.items()}
     pen = agreement["default"]["penetration"] / scene.die.size
     verdicts = {
         label: {"gentle": float(gentle[DEFAULT if label == "default" else label]
@@ -399,10 +394,10 @@ def write_report(out: Path, numbers: dict[str, object], quick: bool) -> dict[str
                 "order": orders[DEFAULT if label == "default" else label]}
         for label, per in outcomes.items()}
 
-    paper = scene.with_(scheme=Scheme.PAPER)
     text = study_page(
         "error-vs-runtime", quick=quick, sizes=numbers["sizes"], scene=scene, pen=pen, ratio=ratio,
-        orders=orders, verdicts=verdicts, gentle_steps=gentle_steps, paper=paper,
+        orders=orders, verdicts=verdicts, gentle_steps=gentle_steps,
+        paper=scene.with_(scheme=Scheme.PAPER),
         paper_gentle=float(gentle["paper scheme, stick-slip, analytic flight"]["step"].mean()),
         m_ratio=scene.die.mass / scene.effective_mass, restitution=_restitution_table(
             numbers["restitution"]), work=_work_table(curves),
@@ -418,8 +413,7 @@ def write_report(out: Path, numbers: dict[str, object], quick: bool) -> dict[str
             "min_p_value": verdicts["default"]["p_min"],
             "gentle_agreement_listing_friction": verdicts[LISTING_FRICTION]["gentle"],
             "min_p_value_listing_friction": verdicts[LISTING_FRICTION]["p_min"],
-            **{f"gentle_agreement_dt/{a}_vs_dt/{4 * a}": p
-               for a, p in gentle_steps.items()},
+            **{f"gentle_agreement_dt/{a}_vs_dt/{4 * a}": p for a, p in gentle_steps.items()},
             "corner_sink_max": float(pen.max())}
 
 

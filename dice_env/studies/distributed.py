@@ -42,8 +42,7 @@ from dice_env.studies.shapes import Faces, counted, hand_throws
 # Per-throw outcomes a chunk keeps (the arrays of ``chunk_NNNNNN.npz``).
 OUTCOMES = ("face", "counted", "decided", "settled", "unstable", "sunk", "steps", "time",
             "impacts")
-# Outcomes summarised by their sum and sum of squares (mean and standard deviation).
-MOMENTS = ("steps", "time", "impacts")
+MOMENTS = ("steps", "time", "impacts")  # outcomes summarised by their sum and sum of squares
 # Histogram bins: of the time to the end over [0, scene.t_max]; of impacts 0, 1, ... (the
 # last bin: that many or more).
 TIME_BINS, IMPACT_BINS = 50, 32
@@ -175,14 +174,11 @@ class Tally:
         parts = list(tallies)
         if not parts:
             raise ValueError("tallies must hold at least one Tally, got none")
+        added = {f.name: sum(getattr(p, f.name) for p in parts)
+                 for f in dataclasses.fields(cls) if f.name != "sums"}
         sums = np.array([[math.fsum(p.sums[i, j] for p in parts) for j in range(2)]
                          for i in range(len(MOMENTS))])
-        return cls(throws=sum(p.throws for p in parts),
-                   counts=np.sum([p.counts for p in parts], axis=0),
-                   unfinished=sum(p.unfinished for p in parts),
-                   unstable=sum(p.unstable for p in parts), sunk=sum(p.sunk for p in parts),
-                   sums=sums, time_hist=np.sum([p.time_hist for p in parts], axis=0),
-                   impacts_hist=np.sum([p.impacts_hist for p in parts], axis=0))
+        return cls(**added, sums=sums)
 
     @property
     def faces(self) -> Faces:
@@ -278,8 +274,7 @@ def hand_faces(scene: Scene, n: int, seed: int, *, ray: str | None = None,
     A study's ``faces_of``; ``keep``: a folder holding one run folder per seed (``seed-N``).
     """
     out = None if keep is None else Path(keep) / f"seed-{seed}"
-    return run_throws(scene, n, chunk=chunk, seed=seed, ray=ray, out=out,
-                      progress=False).faces
+    return run_throws(scene, n, chunk=chunk, seed=seed, ray=ray, out=out, progress=False).faces
 
 
 @contextlib.contextmanager

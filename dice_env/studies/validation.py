@@ -27,8 +27,7 @@ from dice_env.studies.markdown import estimate, markdown_table
 from dice_env.studies.numbers import study_page
 
 COMMAND = "python -m dice_env.studies validation"
-# Throws of the initially-down-face experiment: full and quick run.
-MEMORY_THROWS = {False: 4000, True: 300}
+MEMORY_THROWS = {False: 4000, True: 300}  # throws of the initially-down face, by ``quick``
 ENERGY_RANGE = (0.01, 100.0)  # throw energy above a gentle release (m g a), log-uniform
 Z_ONE_SIDED = 1.644854  # 5% one-sided
 # The default table's sources (dice_env/model/table.py, docs/error-vs-runtime.md).

@@ -429,10 +429,9 @@ def run(out: Path = DOCS, quick: bool = False, seed: int = SEED,
     alone_seconds = time.perf_counter() - alone_seconds
     bar.close()
     numbers = summarise(together, alone)
-    numbers["meta"] = {"command": command, "seed": seed,
-                       "threads": numba.get_num_threads(), "sizes": sizes,
-                       "seconds_together": together.seconds, "seconds_alone": alone_seconds,
-                       "quick": quick}
+    numbers["meta"] = {"command": command, "seed": seed, "threads": numba.get_num_threads(),
+                       "sizes": sizes, "seconds_together": together.seconds,
+                       "seconds_alone": alone_seconds, "quick": quick}
     out.mkdir(parents=True, exist_ok=True)
     (out / "weldon.json").write_text(json.dumps(numbers, indent=1) + "\n")
     _plot(numbers, out / "figures" / "weldon.png")
