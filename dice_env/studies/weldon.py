@@ -73,7 +73,8 @@ class Estimate:
     def per_throw(cls, successes: np.ndarray, dice: int = DICE) -> Estimate:
         """The share of successes among ``dice`` dice per throw (T,), the throw as the unit.
 
-        The error is the spread between throws, valid if the dice of a throw depend on each other.
+        The error is the spread between throws: valid whether or not the dice of a throw depend
+        on each other.
         """
         successes = np.asarray(successes, dtype=np.float64)
         if successes.ndim != 1 or successes.size < 2:
@@ -216,7 +217,7 @@ def throws_to_resolve(truth: np.ndarray, null: np.ndarray, test: Chi2,
     high = 1.0
     while stats.ncx2.sf(critical, test.dof, high) < target:
         high *= 2
-    needed = optimize.brentq(lambda lam: stats.ncx2.sf(critical, test.dof, lam) - target, 0, high)
+    needed = optimize.brentq(lambda lam: stats.ncx2.sf(critical, test.dof, lam) - target, 0.0, high)
     return math.ceil(needed / size)
 
 
@@ -224,7 +225,8 @@ def distribution_verdict(test: Chi2, power_against_fair: float) -> str:
     """The verdict of a test of a simulated distribution against Weldon's.
 
     "differs" when the test rejects at :data:`SIGNIFICANCE`; else "not resolvable at this
-    sample" when ``power_against_fair`` is below :data:`RESOLVING_POWER`; else "agrees".
+    sample" when it cannot be tested or ``power_against_fair`` is below
+    :data:`RESOLVING_POWER`; else "agrees".
     """
     if test.testable and test.p_value < SIGNIFICANCE:
         return "differs"
@@ -237,10 +239,11 @@ def distribution_verdict(test: Chi2, power_against_fair: float) -> str:
 
 @dataclass(frozen=True)
 class Cup:
-    """A cup of twelve dice tipped onto the table (described on the page).
+    """A cup of twelve dice tipped onto the table, in one layer (:data:`BLOCK`; see the page).
 
     Lengths in die edges, speeds in edges/s, spins in rad/s; ranges drawn uniformly. ``spacing``
-    exceeds the cube's diagonal (sqrt 3), so the dice start apart in any orientation.
+    exceeds the cube's diagonal (sqrt 3), so the dice start apart in any orientation; dice in
+    layers would pile onto each other and many end leaning.
     """
 
     height: tuple[float, float] = (3.0, 6.0)
