@@ -37,6 +37,7 @@ from dice_env.model.scene import Scene
 from dice_env.simulation.simulate import State, simulate
 from dice_env.studies.chunks import FolderError, identity, load, prepare, write_atomically
 from dice_env.studies.common import checked_int
+from dice_env.studies.markdown import bracket, markdown_table
 from dice_env.studies.shapes import Faces, counted, hand_throws
 
 # Per-throw outcomes a chunk keeps (the arrays of ``chunk_NNNNNN.npz``).
@@ -368,15 +369,12 @@ def _save_chunk(folder: Path, spec: Spec, index: int, outcomes: dict[str, np.nda
 def summary(tally: Tally, title: str) -> str:
     """A markdown summary of ``tally``: faces, chi-square, the other outcomes' moments."""
     faces = tally.faces
-    rows = "\n".join(f"| {label} | {c} | {s:.5f} | [{lo:.5f}, {hi:.5f}] |"
-                     for label, c, s, (lo, hi) in zip(range(1, len(faces.counts) + 1),
-                                                      faces.counts, faces.shares,
-                                                      faces.intervals, strict=True))
+    table = markdown_table("face | count | share | 95% interval", (
+        (label, c, f"{s:.5f}", bracket(interval, 5)) for label, (c, s, interval)
+        in enumerate(zip(faces.counts, faces.shares, faces.intervals, strict=True), 1)))
     return f"""{title}
 
-| face | count | share | 95% interval |
-|---|---|---|---|
-{rows}
+{table}
 
 Counted {faces.ended} of {tally.throws} throws (not counted: {tally.unfinished} unfinished, \
 {tally.unstable} unstable, {tally.sunk} sunk). Chi-square of uniformity: \
