@@ -36,8 +36,7 @@ def action_space(task: ThrowTask | None = None) -> spaces.Box:
 
     With ``set_dice`` also a rotation vector per die (``task.action_dim``; None: one die's 6).
     """
-    return spaces.Box(-1.0, 1.0, (ACTION_DIM if task is None else task.action_dim,),
-                      np.float32)
+    return spaces.Box(-1.0, 1.0, (ACTION_DIM if task is None else task.action_dim,), np.float32)
 
 
 def check_render(render_mode: str | None, modes: tuple[str, ...], width: int, height: int) -> None:
@@ -62,15 +61,11 @@ def check_frame_memory(render_mode: str | None, t_max: float, width: int, height
             f"t_max={t_max:g} s (at most 1 GiB); lower t_max or render_width/render_height")
 
 
-def configure(
-    env: Any, modes: tuple[str, ...], render_mode: str | None = None, *,
-    target_face: Any = None, target_sum: int | None = None, orientation_mode: str = "uniform",
-    render_width: int = 320, render_height: int = 240, **task_keywords: Any,
-) -> ThrowTask:
-    """Validate the keywords of the single and the vector env, set the episode's on ``env``.
-
-    Returns the :class:`ThrowTask` :func:`make_task` builds from ``task_keywords``.
-    """
+def configure(env: Any, modes: tuple[str, ...], render_mode: str | None = None, *,
+              target_face: Any = None, target_sum: int | None = None,
+              orientation_mode: str = "uniform", render_width: int = 320,
+              render_height: int = 240, **task_keywords: Any) -> ThrowTask:
+    """Validate the single or vector env's keywords, set the episode's on ``env``; the task."""
     check_render(render_mode, modes, render_width, render_height)
     task = make_task(**task_keywords)
     check_frame_memory(render_mode, task.scene.t_max, render_width, render_height)
@@ -87,9 +82,8 @@ def configure(
 RESET_OPTIONS = ("target_face", "target_sum", "orientation", "orientation_mode")
 
 
-def episode_hand(
-    env: Any, rng: np.random.Generator, options: dict[str, Any] | None
-) -> tuple[Any, np.ndarray]:
+def episode_hand(env: Any, rng: np.random.Generator,
+                 options: dict[str, Any] | None) -> tuple[Any, np.ndarray]:
     """One episode's target and hand orientation(s) for ``env``, ``reset`` options applied."""
     options = {} if options is None else options
     if not isinstance(options, dict) or set(options) - set(RESET_OPTIONS):
@@ -116,65 +110,17 @@ def check_hands(task: ThrowTask, name: str, value: object) -> np.ndarray:
 
 
 class DiceThrowEnv(gym.Env):
-    """Throw a die from the hand so that the target face ends up.
+    """Throw a die from the hand so that the target face ends up; one throw per episode.
 
-    ## Description
-    Each episode is one throw. The die sits in the hand ``release_height`` above the table in an
-    orientation drawn uniformly over all rotations; a target face 1 … n (the die's faces: 6
-    by default) is drawn uniformly. The
-    agent chooses the release velocity and spin; the release actually used is perturbed by
-    seeded hand noise; the throw is simulated to rest with the compiled corner-node model
-    (:func:`dice_env.simulate`) in the default :class:`dice_env.Scene` (a 16 mm d6 on a table;
-    ``die="d20"`` and ``walls="tray"`` choose another die and surroundings).
-
-    ## Action Space
-    ``Box(-1, 1, (6,), float32)``: release velocity ``(vx, vy, vz) * max_speed`` (m/s) and
-    angular velocity ``(wx, wy, wz) * max_spin`` (rad/s), world frame, z up. Out-of-range actions
-    are clipped (``info["action_clipped"]``); NaN/inf or another shape than (6,) raise
-    ``ValueError`` before anything is simulated.
-
-    ## Observation Space
-    ``Box((n + 9,), float32)`` for a die of n faces (15 for the d6): ``[0:n]`` one-hot target
-    face, ``[n:n+9]`` the die's orientation (body-to-world rotation matrix, row-major) in the
-    hand after ``reset`` and at rest after ``step``. The d6's body frame: face 1 +z, 2 +x, 3 +y,
-    4 -y, 5 -x, 6 -z; other dice: :class:`dice_env.Die` (``face_normals``, ``reading``).
-
-    ## Rewards
-    ``reward_success`` 1.0 if the target face is read at rest (up; the d4's face down), else
-    0.0, plus ``reward_shaping = shaping * (r_target . n_table)`` at rest (``r``: the target's
-    reading direction) (``shaping=0`` by default).
-    A void throw (foul, unstable, or not settled within ``t_max``: quiet for ``rest_hold``) gets 0;
-    ``info["void_reason"]`` says why. With ``until="decided"`` a throw ends as soon as its face
-    is decided (the face it rests on; about 2.4 times the throws per second at the defaults,
-    ``docs/performance.md``): "at rest" above then means "at that moment", ``settled`` is
-    False and an undecided throw's void reason is "not_decided".
-
-    ## Starting State
-    Centre ``release_height`` along the table normal; orientation per ``orientation_mode``
-    ("uniform", "flat": a random face up with a random turn, "identity"); ``reset`` options
-    ``target_face``, ``orientation`` (3x3 rotation) and ``orientation_mode`` override one episode.
-
-    ## Episode End
-    After one step: ``terminated=True``, ``truncated=False``. Stepping again re-throws from the
-    same hand with fresh noise.
-
-    ## Info
-    ``is_success``, ``target_face``, ``face`` (landed, 1 … n), ``settled``, ``unstable``, ``fair``,
-    ``void_reason`` ("" or "foul", "unstable", "sunk", "not_settled", "not_decided"), ``sunk``,
-    ``max_sink`` (m, the deepest corner's), ``rest_time`` (s),
-    ``impacts``, ``reward_success``, ``reward_shaping``, ``release_velocity`` (3),
-    ``release_spin`` (3), ``release_orientation`` (3, 3), ``action_clipped``.
-
-    ## Arguments
-    Every keyword of ``gym.make``, its default and its range: the table "Keywords" of
-    ``docs/environment.md`` (``tests/test_docs.py`` checks that it names them all).
-
-    ## Named tasks
-    Ids registered beside DiceThrow-v0, this env with keywords fixed:
+    Action ``Box(-1, 1, (6,))``: release velocity and spin, scaled by ``max_speed`` and
+    ``max_spin`` (3 more per die with ``set_dice``); out-of-range actions are clipped, NaN/inf
+    or another shape raise ``ValueError``. Observation: the target's one-hot and each die's
+    body-to-world rotation (row-major), in the hand after ``reset``, at rest after ``step``.
+    Reward: 1.0 if the target is read at rest, plus ``shaping`` times the target's alignment
+    with the table normal; a void throw gets 0 (``info["void_reason"]``). ``step`` ends the
+    episode (``terminated=True``). The spaces, rewards, ``info``, ``reset`` options and every
+    keyword with its default and range: ``docs/environment.md``; named tasks:
     :data:`dice_env.envs.tasks.TASKS`.
-
-    ## Version History
-    See ``CHANGELOG.md``: what each version of ``dice_env`` changed in DiceThrow-v0.
     """
 
     metadata: ClassVar[dict[str, Any]] = {"render_modes": list(RENDER_MODES),
@@ -191,9 +137,8 @@ class DiceThrowEnv(gym.Env):
         self._frames: list[np.ndarray] = []
         self._viewer: Any = None
 
-    def reset(
-        self, *, seed: int | None = None, options: dict[str, Any] | None = None
-    ) -> tuple[np.ndarray, dict[str, Any]]:
+    def reset(self, *, seed: int | None = None,
+              options: dict[str, Any] | None = None) -> tuple[np.ndarray, dict[str, Any]]:
         """Put the die in the hand and draw the target; options override one episode."""
         super().reset(seed=seed)
         self._target, self._hand = episode_hand(self, self.np_random, options)

@@ -1,16 +1,8 @@
 """The env's physical keywords: each validated where given, applied to a base scene.
 
-:class:`SceneKeywords` holds the ``gym.make`` keywords that build the scene;
-:meth:`SceneKeywords.build` turns them into a :class:`~dice_env.model.scene.Scene`. A keyword
-changes only what it names; every other field of the base scene (its die, ground, rest test,
-``t_max``, ...) is kept. A keyword that cannot be applied to the base scene (``mass`` on a
-loaded die) or that would have no effect (``safety`` with a fixed ``dt``) is refused, never
-dropped.
-
-:func:`check_scene` refuses scenes the env cannot run as throws, whether built from keywords or
-passed as ``scene``: a die whose weight alone sinks it into the table, ``t_max`` or a rest hold
-of more than :data:`ENV_MAX_STEPS` steps, and the paper's contact law with a damping whose
-air drag keeps the die from falling.
+:meth:`SceneKeywords.build` changes only what a keyword names and refuses one that cannot be
+applied or would have no effect; :func:`check_scene` refuses scenes the env cannot run as throws
+(``docs/environment.md``, "What gym.make refuses before any work").
 """
 
 from __future__ import annotations
@@ -27,14 +19,9 @@ from dice_env.model.surroundings import WALLS
 from dice_env.model.surroundings import walls as preset_walls
 
 DEFAULT_T_MAX = 5.0
-"""The env's simulated time limit per throw (s), the ``t_max`` of its scene when no ``scene``
-is given. Half of :class:`~dice_env.model.scene.Scene`'s 10 s, a bound for any run: the env's gentle
-throws settle in well under 2 s, so 5 s leaves them room and halves the compute of a die that
-never settles."""
+"""The env's simulated time limit per throw (s) when no ``scene`` is given."""
 ENV_MAX_STEPS = 10**7
-"""The most steps of one env throw (``t_max`` or ``rest_hold`` over the step): 21 times the
-default throw's 4.8e5, so that no keyword makes one ``step`` run for minutes;
-:data:`dice_env.model.scene.MAX_STEPS` (10**9) bounds any run of the simulator."""
+"""The most steps of one env throw (``t_max`` or ``rest_hold`` over the step)."""
 MAX_SINK = 0.1  # the weight's sink of a flat die's corners into the table, in die sizes
 
 
@@ -50,66 +37,37 @@ def check_face(name: str, value: object, n_faces: int = 6) -> int:
 class SceneKeywords:
     """The ``gym.make`` keywords that build the env's scene; each one None keeps the base's.
 
-    :meth:`build` applies the keywords given to a base scene (default
-    ``Scene(t_max=DEFAULT_T_MAX)``). ``size``, ``edge``, ``mass`` and ``load_*`` rebuild a uniform
-    standard die; the enum keywords take a member or its name (any case).
+    Meanings, units and ranges: the keyword table of ``docs/environment.md``. ``size``,
+    ``edge``, ``mass`` and ``load_*`` rebuild a uniform standard die; the enum keywords take a
+    member or its name (any case); ``walls`` a preset name or a tuple of :class:`Wall`.
     """
 
     t_max: float | None = None
-    """Simulated time limit per throw (s)."""
     die: str | Die | None = None
-    """The die: a :class:`Die` or a standard name ("d4" … "d20", :meth:`Die.standard` with its
-    default size and density)."""
     size: float | None = None
-    """The die's size (m, :attr:`Die.size`)."""
     edge: float | None = None
-    """The d6's size (m): ``size`` under the d6's name, never with ``size``."""
     mass: float | None = None
-    """The die's mass (kg)."""
     load_face: int | None = None
-    """The face a loaded die favours (1 … n; default n)."""
     load_fraction: float | None = None
-    """The load's share of the mass, [0, 1): > 0 loads the die (:meth:`Die.load`)."""
     load_depth: float | None = None
-    """The load's depth toward ``load_face``, [0, 1)."""
     stiffness: float | None = None
-    """The table's contact stiffness S (N/m)."""
     damping: float | None = None
-    """The table's contact damping D (N s/m)."""
     friction: float | None = None
-    """The table's friction coefficient μ."""
     tilt_deg: float | None = None
-    """The table's tilt about y from level (degrees, [0, 90))."""
     contact_law: str | ContactLaw | None = None
-    """The table's contact law, "gated" or "paper"."""
     gravity: float | None = None
-    """Gravity (m/s²)."""
     dt: float | None = None
-    """A fixed step (s); refuses ``safety``."""
     safety: float | None = None
-    """The automatic step's safety factor."""
     rest_speed: float | None = None
-    """The rest test's speed (> 0)."""
     rest_hold: float | None = None
-    """How long a die stays quiet to count as settled (s, >= 0)."""
     energy_tol: float | None = None
-    """The energy rise that flags a throw unstable."""
     scheme: str | Scheme | None = None
-    """The contact step, "paper" or "midpoint"."""
     friction_law: str | FrictionLaw | None = None
-    """Friction, "stick_slip" or "regularized"."""
     friction_vmin: float | None = None
-    """The regularized friction's umin (m/s); refused with any other ``friction_law``."""
     walls: str | tuple[Wall, ...] | None = None
-    """A preset of :mod:`dice_env.model.surroundings` ("none", "tray", "craps") or a tuple of
-    :class:`Wall`."""
 
     def build(self, scene: Scene | None = None) -> Scene:
-        """``scene`` (default ``Scene(t_max=DEFAULT_T_MAX)``) with the keywords given (not None).
-
-        ``tilt_deg`` tilts the table from level; a keyword the scene cannot take, or one
-        without effect, is refused (see the module).
-        """
+        """``scene`` (default ``Scene(t_max=DEFAULT_T_MAX)``) with the keywords given (not None)."""
         if scene is None:
             scene = Scene(t_max=DEFAULT_T_MAX)
         if not isinstance(scene, Scene):
@@ -133,10 +91,7 @@ class SceneKeywords:
         return built
 
     def _die(self, base: Die) -> Die:
-        """``base`` or the ``die`` keyword's die, with the die keywords given.
-
-        Only a uniform standard die can take ``size`` (``edge``), ``mass`` and ``load_*``.
-        """
+        """``base`` or the ``die`` keyword's die, with the die keywords given."""
         base = _base_die(base, self.die)
         size = _size(self.die, self.size, self.edge)
         size_name = "size" if self.edge is None else "edge"
@@ -201,7 +156,7 @@ class SceneKeywords:
 
 
 def check_scene(scene: Scene, release_height: float) -> None:
-    """Refuse a scene the env cannot run as throws from ``release_height``; see the module."""
+    """Refuse a scene the env cannot run as throws from ``release_height``."""
     _check_sink(scene)
     _check_steps(scene)
     if scene.ground.contact_law == ContactLaw.PAPER and scene.ground.damping > 0:
@@ -209,10 +164,7 @@ def check_scene(scene: Scene, release_height: float) -> None:
 
 
 def _check_sink(scene: Scene) -> None:
-    """The die's weight alone must not sink it more than :data:`MAX_SINK` die sizes.
-
-    The die lies on its face with the fewest corners (4 for the d6, 3 for the d4).
-    """
+    """The die's weight alone, on its face of fewest corners, must sink it < :data:`MAX_SINK`."""
     die, ground = scene.die, scene.ground
     corners = min(len(face) for face in die.faces)
     sink = die.mass * scene.gravity * ground.normal[2] / (corners * ground.stiffness)
@@ -243,10 +195,7 @@ def _check_steps(scene: Scene) -> None:
 
 
 def _check_paper_drag(scene: Scene, release_height: float) -> None:
-    """The paper law's air drag (8 D v) must not outweigh the die in a drop from the hand.
-
-    Without gravity toward the table the drag stops every die in the air: always refused.
-    """
+    """The paper law's air drag (8 D v) must not outweigh the die in a drop from the hand."""
     g = scene.gravity * scene.ground.normal[2]
     weight = scene.die.mass * g
     drop_speed = math.sqrt(2.0 * g * release_height)
@@ -256,13 +205,10 @@ def _check_paper_drag(scene: Scene, release_height: float) -> None:
     limit = weight / (8.0 * drop_speed) if g > 0 else 0.0
     raise ValueError(
         f"contact_law='paper' needs damping <= m g / (8 sqrt(2 g release_height)) = "
-        f"{limit:.4g} N s/m, got damping={damping:g}: the paper's law pushes every corner "
-        "moving toward the table with D times its speed even in the air, an air drag of 8 D v, "
-        f"so the die falls at most m g / (8 D) = {weight / (8.0 * damping):.3g} m/s (a drop "
-        f"from release_height={release_height:g} m reaches {drop_speed:.3g} m/s; gravity="
-        f"{scene.gravity:g} m/s^2) and the throws hardly land. Use contact_law='gated' (the "
-        "default: a real table), or a damping that small (the table then barely damps impacts: "
-        "restitution near 1)")
+        f"{limit:.4g} N s/m, got damping={damping:g}: with its air drag of 8 D v the die "
+        f"falls at most m g / (8 D) = {weight / (8.0 * damping):.3g} m/s (a drop from "
+        f"release_height={release_height:g} m reaches {drop_speed:.3g} m/s; gravity="
+        f"{scene.gravity:g} m/s^2). Use contact_law='gated' (the default) or a damping that small")
 
 
 def _step_origin(scene: Scene) -> str:

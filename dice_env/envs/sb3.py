@@ -5,11 +5,9 @@
 
 or by hand: ``DiceThrowSB3VecEnv(gym.make_vec("DiceThrow-v0", num_envs=16))``.
 
-Each ``step_wait`` throws all N dice in one kernel call. Every episode is one throw, so every
-step ends every episode: ``dones`` is all True, ``infos[i]["terminal_observation"]`` holds env
-``i``'s die at rest and the returned observations are already those of the next episodes (the
-vector env's SAME_STEP autoreset). ``infos[i]`` carries the single env's info keys as Python
-scalars, plus ``"TimeLimit.truncated": False``.
+Every step ends every episode: ``dones`` is all True, ``infos[i]["terminal_observation"]``
+holds env ``i``'s dice at rest, the observations are the next episodes'. ``infos[i]`` carries
+the single env's info keys, plus ``"TimeLimit.truncated": False``.
 """
 
 from __future__ import annotations
@@ -26,18 +24,12 @@ from stable_baselines3.common.vec_env.base_vec_env import VecEnvIndices, VecEnvS
 from dice_env.envs.vector import DiceThrowVectorEnv
 
 
-def make_sb3_env(
-    n_envs: int = 256, seed: int | None = None, *, env_id: str = "DiceThrow-v0",
-    **env_kwargs: Any,
-) -> VecMonitor:
-    """``n_envs`` DiceThrow envs as one SB3 VecEnv, stepped in one kernel call per step.
+def make_sb3_env(n_envs: int = 256, seed: int | None = None, *, env_id: str = "DiceThrow-v0",
+                 **env_kwargs: Any) -> VecMonitor:
+    """``n_envs`` DiceThrow envs as one SB3 VecEnv in SB3's ``VecMonitor``, like ``make_vec_env``.
 
-    The batch wrapped in :class:`DiceThrowSB3VecEnv` and SB3's ``VecMonitor`` (episode return
-    and length in ``infos[i]["episode"]``), as ``make_vec_env(env_id, n_envs, seed)`` would give.
     ``seed`` (None: unseeded) seeds env ``i`` with ``seed + i`` at the first ``reset``;
-    ``env_kwargs`` are ``gym.make("DiceThrow-v0")``'s keywords (e.g. ``shaping=0.5``,
-    ``until="decided"``), checked here. ``env_id`` must name an env with DiceThrow-v0's native
-    batch (a registered id or ``"module:Name"``).
+    ``env_kwargs``: ``gym.make``'s keywords. ``env_id``: an env with DiceThrow-v0's native batch.
     """
     if seed is not None and (isinstance(seed, bool) or not isinstance(seed, (int, np.integer))
                              or seed < 0):
@@ -52,11 +44,9 @@ def make_sb3_env(
 class DiceThrowSB3VecEnv(VecEnv):
     """SB3 ``VecEnv`` over a :class:`DiceThrowVectorEnv` (``gym.make_vec("DiceThrow-v0", n)``).
 
-    Seeding follows SB3: ``seed(s)`` makes the next ``reset`` seed env ``i`` with ``s + i`` (the
-    same throws as the vector env reset with ``seed=s`` and as single envs reset with ``s + i``);
-    ``set_options`` applies per env. The N envs are one batch, so attributes are shared:
-    ``get_attr`` returns the batch's value for each index, ``set_attr`` and ``env_method`` act on
-    the whole batch (``env_method`` calls the method once and returns its result per index).
+    ``seed(s)`` makes the next ``reset`` seed env ``i`` with ``s + i``. The N envs are one batch:
+    ``get_attr`` gives the batch's value per index; ``set_attr`` and ``env_method`` act on the
+    whole batch (``indices`` must cover every env).
     """
 
     def __init__(self, venv: VectorEnv) -> None:
@@ -87,7 +77,6 @@ class DiceThrowSB3VecEnv(VecEnv):
             raise RuntimeError("call step_async() before step_wait()")
         obs, rewards, terminated, truncated, info = self.venv.step(self._actions)
         self._actions = None
-        # Per-env columns: Python scalars (one tolist per key) or rows of the arrays.
         columns = {key: value.tolist() if value.ndim == 1 else value
                    for key, value in info["final_info"].items() if not key.startswith("_")}
         columns["terminal_observation"] = info["final_obs"]
@@ -116,18 +105,15 @@ class DiceThrowSB3VecEnv(VecEnv):
         self._check_all(indices)
         setattr(self.venv, attr_name, value)
 
-    def env_method(
-        self, method_name: str, *method_args: Any, indices: VecEnvIndices = None,
-        **method_kwargs: Any,
-    ) -> list[Any]:
+    def env_method(self, method_name: str, *method_args: Any, indices: VecEnvIndices = None,
+                   **method_kwargs: Any) -> list[Any]:
         """Call a method of the batch once; its result once per index."""
         self._check_all(indices)
         result = getattr(self.venv, method_name)(*method_args, **method_kwargs)
         return [result for _ in range(self.num_envs)]
 
-    def env_is_wrapped(
-        self, wrapper_class: type[gym.Wrapper], indices: VecEnvIndices = None
-    ) -> list[bool]:
+    def env_is_wrapped(self, wrapper_class: type[gym.Wrapper],
+                       indices: VecEnvIndices = None) -> list[bool]:
         """False for each index: the envs of a native batch carry no per-env wrappers."""
         return [False for _ in self._get_indices(indices)]
 

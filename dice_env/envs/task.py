@@ -39,14 +39,12 @@ ORIENTATION_DIM = 9  # the observation's orientation, row-major 3x3, after the t
 ACTION_DIM = 6  # release velocity (3) + angular velocity (3), world frame, in [-1, 1]
 NOISE_DIM = 9  # standard normals: velocity (3), spin (3), orientation rotation vector (3)
 ORIENTATION_MODES = ("uniform", "flat", "identity")
-# How far a throw is simulated, and the void reason of one that does not get there in t_max.
+# How far a throw is simulated -> the void reason of one that does not get there in t_max.
 UNTIL = {"rest": "not_settled", "decided": "not_decided"}
-# Default release height (m) of the d6, and the least gap (m) it leaves below the lowest corner
-# in any orientation: 1.5 cm against a half diagonal of 1.386 cm. A die whose corners reach
-# further is released higher by default, with the same gap.
+# Default release height (m) of the d6, and the gap (m) it leaves below its lowest corner; a die
+# that reaches further is released higher by default, with the same gap.
 RELEASE_HEIGHT = 0.015
 RELEASE_GAP = RELEASE_HEIGHT - math.sqrt(3.0) * 0.008
-# Several dice: how many, what the target names, how the hand holds them.
 MAX_NUM_DICE = 12
 TARGETS = ("faces", "sum", "avoid_sum")
 HAND_ROW = 4  # dice per row in the hand
@@ -58,35 +56,13 @@ SET_ANGLE = math.pi  # rad: a dice-setting action of 1 turns its die by this muc
 class ThrowTask:
     """A throw of N dice from the hand: how actions become releases and how a landing is scored.
 
-    ``dice``: the 1 … :data:`MAX_NUM_DICE` dice in the hand, mixed shapes allowed (default: the
-    scene's die alone); ``scene`` gives the table, walls and physics, and its die is set to the
-    first die. One die is thrown with :func:`dice_env.simulate`, several together with
-    :func:`dice_env.simulation.group.simulate_group` (die against die, the planes of ``scene``).
-    Per-die arrays (targets, hands, faces, releases) have a die axis only for several dice:
-    one die's target is a face, its hand (3, 3).
-
-    ``release_height`` (m): height of the hand's centre above the table at release (None:
-    :data:`RELEASE_HEIGHT`, or :data:`RELEASE_GAP` above the farthest corner of any die,
-    rounded to 0.1 mm, if that is higher).
-    ``max_speed`` (m/s) and ``max_spin`` (rad/s): release velocity and angular velocity per
-    component at action ±1. ``hand_noise``: standard deviation of the noise added to each action
-    component before scaling (so 0.05 is 5% of that component's maximum). ``orientation_noise``
-    (rad): standard deviation of each component of a random rotation vector applied to each
-    die's orientation in the hand. ``min_speed`` (m/s) and ``min_spin`` (rad/s): the fair-throw
-    rule; a die released slower than either is a foul (void, reward 0). ``shaping``: weight of
-    the dense term ``n_target . n_table`` at rest (1 target up, 0 on a side, -1 down; the mean
-    over the dice). ``num_threads`` caps the kernel's threads (None: all cores). ``until``:
-    "rest" simulates each throw to rest; "decided" ends it as soon as its faces are decided
-    (the same faces, 2–3 times faster; the final state, rest time and impacts are those of
-    that moment, and the shaping term is taken there; horizontal table only; see
-    :attr:`run_until`).
-
-    The hand (rows of up to :data:`HAND_ROW` dice :attr:`hand_spacing` apart, rigid: die ``i``
-    leaves it with ``v + w x r_i`` and spin ``w``, each die with its own :data:`NOISE_DIM` noise
-    and orientation), the targets (``"faces"``, ``"sum"``, ``"avoid_sum"``), the void throws
-    (foul, unstable, sunk, not settled or not decided, then "leaning") and ``set_dice`` (a
-    rotation vector ``SET_ANGLE * a`` per die): ``docs/environment.md``, "Several dice in one
-    throw".
+    ``dice``: 1 … :data:`MAX_NUM_DICE` dice, mixed shapes allowed (default: the scene's die);
+    the scene's die is set to the first. Per-die arrays (targets, hands, faces, releases) have a
+    die axis only for several dice. Units: m, m/s, rad/s, rad. ``hand_noise`` is relative to
+    each action component's maximum; ``release_height=None`` is :data:`RELEASE_HEIGHT`, or
+    :data:`RELEASE_GAP` above the farthest corner of any die if that is higher. ``until``:
+    "rest" or "decided" (see :attr:`run_until`). Every field, the hand, the targets and the
+    void throws: ``docs/environment.md`` ("Keywords", "Several dice in one throw").
     """
 
     scene: Scene
@@ -244,10 +220,7 @@ class ThrowTask:
 
     @property
     def hand_spacing(self) -> float:
-        """Distance (m) between neighbours' centres in the hand.
-
-        The largest die's diameter across corners plus :data:`HAND_GAP`.
-        """
+        """Distance (m) between neighbours' centres: twice the largest reach + :data:`HAND_GAP`."""
         return 2.0 * max(die.reach for die in self.dice) + HAND_GAP
 
     @property
@@ -258,13 +231,10 @@ class ThrowTask:
         x_axis /= np.linalg.norm(x_axis)
         y_axis = np.cross(normal, x_axis)
         n, rows = self.n_dice, -(-self.n_dice // HAND_ROW)
-        offsets = np.zeros((n, 3))
-        for i in range(n):
-            row, column = divmod(i, HAND_ROW)
-            in_row = min(HAND_ROW, n - row * HAND_ROW)
-            offsets[i] = self.hand_spacing * ((row - (rows - 1) / 2) * x_axis
-                                              + (column - (in_row - 1) / 2) * y_axis)
-        return offsets
+        row, column = np.divmod(np.arange(n), HAND_ROW)
+        in_row = np.minimum(HAND_ROW, n - row * HAND_ROW)
+        return self.hand_spacing * ((row - (rows - 1) / 2)[:, None] * x_axis
+                                    + (column - (in_row - 1) / 2)[:, None] * y_axis)
 
     @property
     def release_positions(self) -> np.ndarray:
@@ -311,32 +281,22 @@ class ThrowTask:
         return tuple(check_face("target_face", f, n) for f, n in zip(value, self.faces,
                                                                        strict=True))
 
-    def sample_hand(
-        self,
-        rng: np.random.Generator,
-        target: Any = None,
-        orientation_mode: str = "uniform",
-    ) -> tuple[Any, np.ndarray]:
+    def sample_hand(self, rng: np.random.Generator, target: Any = None,
+                    orientation_mode: str = "uniform") -> tuple[Any, np.ndarray]:
         """One episode's context: the target and the hand (3, 3), or hands (N, 3, 3).
 
-        ``target``: as :meth:`sample_hands`; ``orientation_mode`` "uniform": over all rotations;
-        "flat": a uniform face read (its reading direction along world z) with a uniform turn
-        about the vertical; "identity": the body frame, no draw.
+        ``target``: as :meth:`sample_hands`; ``orientation_mode``: "uniform" (all rotations),
+        "flat" (a uniform face up, a uniform turn about the vertical) or "identity".
         """
         targets, hands = self.sample_hands([rng], target, orientation_mode)
         return targets[0].tolist() if targets.ndim == 1 else targets[0], hands[0]
 
-    def sample_hands(
-        self,
-        rngs: Sequence[np.random.Generator],
-        target: Any = None,
-        orientation_mode: str = "uniform",
-    ) -> tuple[np.ndarray, np.ndarray]:
+    def sample_hands(self, rngs: Sequence[np.random.Generator], target: Any = None,
+                     orientation_mode: str = "uniform") -> tuple[np.ndarray, np.ndarray]:
         """One context per generator: targets (n, :attr:`target_shape`), hands (n, N, 3, 3).
 
-        ``target``: a fixed target as :meth:`fixed_target` returns it (None: drawn uniformly:
-        each die's face, or the total over :attr:`totals`). Each generator draws the target,
-        then each die's orientation in turn; the rotations are built in one batch.
+        ``target``: fixed, as :meth:`fixed_target` returns it, or None (drawn uniformly). Each
+        generator draws the target, then each die's orientation in turn.
         """
         check_orientation_mode(orientation_mode)
         n, faces = len(rngs), np.array(self.faces)
@@ -358,10 +318,7 @@ class ThrowTask:
                 hands.reshape(n, *self.die_shape, 3, 3))
 
     def sample_noise(self, rng: np.random.Generator, n: int = 1) -> np.ndarray:
-        """Hand noise for ``n`` throws: standard normals (n, :attr:`noise_dim`).
-
-        Scaled by :meth:`release`.
-        """
+        """Hand noise for ``n`` throws: standard normals (n, :attr:`noise_dim`)."""
         return rng.standard_normal((n, self.noise_dim))
 
     def observe(self, targets: np.ndarray, orientations: np.ndarray) -> np.ndarray:
@@ -380,8 +337,7 @@ class ThrowTask:
     def decode(self, observations: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Targets and hands from observations (n, :attr:`obs_dim`), as :meth:`observe` took.
 
-        The float32 matrices are projected back onto rotations (nearest in Frobenius norm), so
-        they can be thrown again with :meth:`throw`.
+        The float32 matrices are projected onto the nearest rotations, ready for :meth:`throw`.
         """
         observations = np.atleast_2d(np.asarray(observations, dtype=np.float64))
         if observations.shape[1] != self.obs_dim:
@@ -398,18 +354,16 @@ class ThrowTask:
         return (targets.reshape(n, *self.target_shape),
                 (u @ vt).reshape(n, *self.die_shape, 3, 3))
 
-    def release(
-        self, actions: np.ndarray, hands: np.ndarray,
-        noise: np.ndarray | Sequence[np.random.Generator], *,
-        action_shape: tuple[int, ...] | None = None,
-    ) -> tuple[State | GroupState, np.ndarray]:
+    def release(self, actions: np.ndarray, hands: np.ndarray,
+                noise: np.ndarray | Sequence[np.random.Generator], *,
+                action_shape: tuple[int, ...] | None = None,
+                ) -> tuple[State | GroupState, np.ndarray]:
         """Releases for ``actions`` (n, :attr:`action_dim`), ``hands`` and ``noise``.
 
         ``hands`` (n, 3, 3) or (n, N, 3, 3); ``noise`` (n, :attr:`noise_dim`) standard normals,
-        or one generator per throw that draws them (:meth:`sample_noise`) once the actions
-        pass. Actions are checked (finite, shape; ``action_shape`` as :func:`check_actions`'
-        ``shape``) and clipped to [-1, 1]. Returns the die's State (one die) or the group's,
-        and which actions were clipped (n,).
+        or one generator per throw that draws them once the actions pass. Actions are checked
+        (:func:`check_actions` with ``shape=action_shape``) and clipped to [-1, 1]. Returns the
+        State (one die) or GroupState, and which actions were clipped (n,).
         """
         actions = check_actions(actions, self.action_dim, action_shape)
         clipped = np.any(np.abs(actions) > 1.0, axis=1)
@@ -431,26 +385,17 @@ class ThrowTask:
                   for i, scene in enumerate(self.die_scenes)]
         return (GroupState.of(states) if dice > 1 else states[0]), clipped
 
-    def throw(
-        self,
-        actions: np.ndarray,
-        targets: np.ndarray,
-        hands: np.ndarray,
-        noise: np.ndarray | Sequence[np.random.Generator],
-        *,
-        record_every: int = 0,
-        action_shape: tuple[int, ...] | None = None,
-    ) -> Throw:
+    def throw(self, actions: np.ndarray, targets: np.ndarray, hands: np.ndarray,
+              noise: np.ndarray | Sequence[np.random.Generator], *, record_every: int = 0,
+              action_shape: tuple[int, ...] | None = None) -> Throw:
         """Simulate ``n`` throws of the dice in one kernel call and score them.
 
         ``actions`` (n, :attr:`action_dim`) in [-1, 1]; ``targets`` (n, :attr:`target_shape`);
         ``hands`` (n, 3, 3) or (n, N, 3, 3) orientations in the hand; ``noise`` and
         ``action_shape`` as :meth:`release`'s. ``record_every`` > 0 records the centres and
-        orientations every that many steps (for rendering). Info per throw (n,) as the env's,
-        per die (a die axis for several dice, :attr:`die_shape`): ``face`` (0: not read),
-        ``impacts``, ``release_velocity`` (.., 3), ``release_spin`` (.., 3),
-        ``release_orientation`` (.., 3, 3); several dice add ``total`` (n,) the faces' sum and
-        ``leaning`` per die.
+        orientations every that many steps (for rendering). Info: the env's keys over n, with a
+        die axis (:attr:`die_shape`) for ``face`` (0: not read), ``impacts`` and the releases;
+        several dice add ``total`` (n,) and ``leaning`` per die.
         """
         state, clipped = self.release(actions, hands, noise, action_shape=action_shape)
         n, by_face = len(clipped), self.target == "faces"
@@ -504,11 +449,10 @@ class ThrowTask:
 
     @property
     def run_until(self) -> str:
-        """The kernel's ``until`` of a throw (:data:`dice_env.simulation.simulate.ENDINGS`).
+        """The kernel's ``until`` (:data:`dice_env.simulation.simulate.ENDINGS`) of a throw.
 
-        ``until``, but one die alone runs to rest as ``"early_rest"``: the same face, rest time
-        and impacts as waiting out the rest hold, ~3x faster (docs/performance.md); the state
-        at rest is taken when rest is proven.
+        ``until``, but one die runs to rest as ``"early_rest"``: the same face, rest time and
+        impacts as waiting out the rest hold, faster (docs/performance.md).
         """
         return "early_rest" if self.until == "rest" and self.n_dice == 1 else self.until
 
@@ -538,7 +482,7 @@ class Throw:
     observation: np.ndarray
 
 
-# ThrowTask's fields that make_task takes as keywords (the scene and dice come from keywords).
+# ThrowTask's fields that make_task takes as keywords.
 TASK_KEYWORDS = tuple(f.name for f in fields(ThrowTask) if f.name not in ("scene", "dice"))
 
 
@@ -566,8 +510,7 @@ def check_actions(actions: np.ndarray, dim: int = ACTION_DIM,
                   shape: tuple[int, ...] | None = None) -> np.ndarray:
     """Actions as a float64 (n, dim) array; NaN/inf or a wrong shape raise ``ValueError``.
 
-    ``shape``: the one shape the caller takes (an env's: (dim,) or (num_envs, dim)); None:
-    (dim,) or (n, dim).
+    ``shape``: the one shape allowed (an env's); None: (dim,) or (n, dim).
     """
     allowed = f"({dim},) or (n, {dim})" if shape is None else str(shape)
     try:
@@ -605,16 +548,10 @@ def make_task(*, num_dice: int | None = None, scene: Scene | None = None,
               **keywords: Any) -> ThrowTask:
     """A validated :class:`ThrowTask` from flat keywords (the env's ``gym.make`` keywords).
 
-    ``keywords``: the task's fields :data:`TASK_KEYWORDS` (``release_height``, ``max_speed``,
-    ..., ``target``, ``set_dice``), and :class:`~dice_env.envs.keywords.SceneKeywords`' fields
-    (``t_max``, ``die``, ``mass``, ``stiffness``, ...): each one given modifies ``scene``
-    (default: ``Scene()`` with the env's ``t_max``,
-    :data:`~dice_env.envs.keywords.DEFAULT_T_MAX`), whose other fields are kept, so changes to
-    the default scene flow through.
-
-    Several dice: ``num_dice`` (1 … :data:`MAX_NUM_DICE`; None: 1, or the length of a ``die``
-    tuple) repeats the die; ``die`` may also be a tuple of names or :class:`Die`, one per die
-    (the die keywords ``size``, ``mass``, ``load_*`` apply to each).
+    ``keywords``: :data:`TASK_KEYWORDS` and :class:`~dice_env.envs.keywords.SceneKeywords`'
+    fields; the latter modify ``scene`` (default ``Scene(t_max=DEFAULT_T_MAX)``), keeping its
+    other fields. ``num_dice`` (None: 1, or the length of a ``die`` tuple) repeats the die;
+    ``die`` may be a tuple, one per die (the die keywords apply to each).
     """
     check_task_keywords(keywords)
     fields_given = {name: keywords.pop(name) for name in TASK_KEYWORDS if name in keywords}
@@ -624,11 +561,7 @@ def make_task(*, num_dice: int | None = None, scene: Scene | None = None,
 
 
 def check_num_dice(num_dice: object, die: object) -> tuple[Any, ...]:
-    """The ``die`` keyword per die: ``num_dice`` copies of it, or its entries if a tuple.
-
-    ``ValueError`` naming ``num_dice`` or ``die`` for a count outside 1 … :data:`MAX_NUM_DICE`
-    or a tuple whose length is not ``num_dice``.
-    """
+    """The ``die`` keyword per die: ``num_dice`` copies of it, or its entries if a tuple."""
     if num_dice is not None and (isinstance(num_dice, bool) or not isinstance(
             num_dice, (int, np.integer)) or not 1 <= num_dice <= MAX_NUM_DICE):
         raise ValueError(f"num_dice must be an int in [1, {MAX_NUM_DICE}], got {num_dice!r}")
@@ -661,10 +594,8 @@ def check_task_keywords(keywords: dict[str, object]) -> dict[str, object]:
 def _held_within_t_max(result: Result, scene: Scene) -> Result:
     """``result`` of an early-rest run with ``settled`` as if the rest hold had been waited out.
 
-    Early rest settles a die the moment its energy proves it stays quiet, with the same face
-    and rest time as waiting out ``scene.rest.hold``; waiting it out also needs the hold to end
-    within ``t_max`` (``simulate`` counts ``ceil(hold / dt)`` quiet steps after the first). A die
-    that went quiet later is not settled, its rest time ``t_max``, as without early rest.
+    Waiting it out needs the hold (``ceil(hold / dt)`` quiet steps after the first) to end
+    within ``t_max``: a die quiet later is not settled, its rest time ``t_max``.
     """
     dt = scene.step
     hold_steps = math.ceil(scene.rest.hold / dt)
@@ -678,27 +609,20 @@ def _held_within_t_max(result: Result, scene: Scene) -> Result:
 
 def _rotation_matrices(vectors: np.ndarray) -> np.ndarray:
     """Rotation matrices (..., 3, 3) of rotation vectors (..., 3)."""
-    shape = np.shape(vectors)[:-1]
-    quaternions = _rotation_vector_quaternion(np.reshape(vectors, (-1, 3)))
-    return quaternion_to_matrix(quaternions).reshape(*shape, 3, 3)
-
-
-def _rotation_vector_quaternion(vectors: np.ndarray) -> np.ndarray:
-    """Unit quaternions (n, 4), (w, x, y, z), of rotations by rotation vectors (n, 3)."""
-    angle = np.linalg.norm(vectors, axis=1, keepdims=True)
+    flat = np.reshape(vectors, (-1, 3))
+    angle = np.linalg.norm(flat, axis=1, keepdims=True)
     safe = np.where(angle > 0, angle, 1.0)
-    return np.hstack([np.cos(angle / 2), np.sin(angle / 2) * vectors / safe])
+    quaternions = np.hstack([np.cos(angle / 2), np.sin(angle / 2) * flat / safe])
+    return quaternion_to_matrix(quaternions).reshape(*np.shape(vectors)[:-1], 3, 3)
 
 
 def _orientation_draw(rng: np.random.Generator, mode: str, n_faces: int) -> np.ndarray:
     """The draws (3,) of one hand orientation: three uniforms, a face and a turn, or none."""
-    draw = np.zeros(3)
     if mode == "uniform":
-        draw[:] = rng.random(3)
-    elif mode == "flat":
-        draw[0] = rng.integers(0, n_faces)
-        draw[1] = rng.uniform(0, 2 * np.pi)
-    return draw
+        return rng.random(3)
+    if mode == "flat":
+        return np.array([rng.integers(0, n_faces), rng.uniform(0, 2 * np.pi), 0.0])
+    return np.zeros(3)
 
 
 def _orientations(mode: str, draws: np.ndarray, die: Die) -> np.ndarray:
@@ -717,9 +641,5 @@ def _z_turn(angle: float) -> np.ndarray:
 
 
 def face_up_rotation(die: Die, face: int) -> np.ndarray:
-    """An orientation (body to world, 3x3) in which ``die`` reads ``face`` (a label).
-
-    The face's reading direction (:attr:`Die.reading`) points to world +z
-    (:func:`dice_env.model.rotations.up_rotation`).
-    """
+    """An orientation (body to world, 3x3) in which ``die`` reads ``face``: its reading up."""
     return up_rotation(die.reading[check_face("face", face, die.n_faces) - 1])

@@ -25,13 +25,10 @@ MAX_NUM_ENVS = 2**20  # about 1 kB per env in the kernel's and the env's arrays
 class DiceThrowVectorEnv(VectorEnv):
     """``num_envs`` DiceThrow-v0 envs stepped together (``gym.make_vec("DiceThrow-v0", n)``).
 
-    Takes the keywords of :class:`~dice_env.envs.dice_throw.DiceThrowEnv`. Every episode lasts
-    one step, so the env autoresets in the same step (``AutoresetMode.SAME_STEP``): ``step``
-    returns the observations of the *next* episodes, and the throw's own outcome is in
-    ``info["final_obs"]`` (the dice at rest, (N, 15)) and ``info["final_info"]`` (the single
-    env's info keys as arrays over N, each with its ``_key`` mask). Env ``i`` owns a generator
-    seeded with ``seed + i`` (or ``seed[i]``) and draws from it exactly as a single env reset
-    with that seed, so N single envs give identical throws.
+    Takes :class:`~dice_env.envs.dice_throw.DiceThrowEnv`'s keywords. Autoreset in the same
+    step: ``step`` returns the *next* episodes' observations, the throw's own in
+    ``info["final_obs"]`` and ``info["final_info"]``. Env ``i`` draws from its generator
+    (seeded ``seed + i`` or ``seed[i]``) exactly as a single env reset with that seed.
     """
 
     metadata: ClassVar[dict[str, Any]] = {
@@ -55,9 +52,8 @@ class DiceThrowVectorEnv(VectorEnv):
         self._targets, self._hands = self.task.sample_hands(
             [np.random.default_rng(0)] * self.num_envs, orientation_mode="identity")
 
-    def reset(
-        self, *, seed: int | list[int | None] | None = None, options: dict[str, Any] | None = None
-    ) -> tuple[np.ndarray, dict[str, Any]]:
+    def reset(self, *, seed: int | list[int | None] | None = None,
+              options: dict[str, Any] | None = None) -> tuple[np.ndarray, dict[str, Any]]:
         """Seed (``seed + i`` per env, or a list) and draw every env's hand and target.
 
         ``options`` as the single env's, applied to all envs.
@@ -68,13 +64,11 @@ class DiceThrowVectorEnv(VectorEnv):
             seeds = list(seed)
         return self.reset_envs(seeds, [options or {}] * self.num_envs), {}
 
-    def reset_envs(
-        self, seeds: Sequence[int | None], options: Sequence[dict[str, Any] | None]
-    ) -> np.ndarray:
+    def reset_envs(self, seeds: Sequence[int | None],
+                   options: Sequence[dict[str, Any] | None]) -> np.ndarray:
         """Reset env ``i`` with ``seeds[i]`` and ``options[i]``, as a single env's ``reset``.
 
-        A ``None`` seed keeps env ``i``'s generator (a fresh one on the first reset). Returns the
-        observations (N, 15).
+        A ``None`` seed keeps env ``i``'s generator (a fresh one on the first reset).
         """
         for name, values in (("seed", seeds), ("options", options)):
             if len(values) != self.num_envs:
@@ -88,9 +82,8 @@ class DiceThrowVectorEnv(VectorEnv):
             self._targets[i], self._hands[i] = episode_hand(self, self._rngs[i], options[i])
         return self.task.observe(self._targets, self._hands)
 
-    def step(
-        self, actions: np.ndarray
-    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
+    def step(self, actions: np.ndarray,
+             ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
         """Throw all N dice in one kernel call, then start the next episodes."""
         if not self._rngs:
             raise RuntimeError("call reset() before step()")
