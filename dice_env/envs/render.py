@@ -1,19 +1,11 @@
 """A headless software renderer of any convex die with its labels, the walls and the floor.
 
-numpy only; a matplotlib window for "human". Orthographic camera looking down at the die from
-``elevation`` degrees above the floor, centred on the die so a rolling die stays in view. Each
-pixel casts a ray against the die (the intersection of its face half-spaces) and the walls;
-the floor carries a grid of one die size (to show motion) and the die's shadow straight
-below it. Faces are shaded by a fixed light and darkened near their rims. A d6-like die (six
-faces numbered like the d6: the d6 and the cuboids) shows pips in the standard layout; every
-other die shows numerals from a built-in stroke font (6 and 9 underlined), the d10 its digits
-0-9, the d4 on each face near each corner the label read when that corner is up.
-
-Walls are infinite half-spaces in the physics; they are drawn as boards of
-:data:`WALL_HEIGHT` above the floor and :data:`WALL_THICKNESS` behind their plane. Where a
-board stands between the camera and the die, it is drawn translucent so the die stays visible.
-
-``python -m dice_env.envs.render NAME --out PATH`` writes a figure of :data:`FIGURES`.
+numpy only (a matplotlib window for "human"): an orthographic camera looking down at the dice,
+centred on them; each pixel casts a ray against the dice (intersections of face half-spaces)
+and the walls, drawn as boards :data:`WALL_HEIGHT` high, translucent in front of a die. The
+floor has a grid of one die size and the dice's shadows. d6-like dice show pips, others
+numerals (the d4 one near each corner). ``python -m dice_env.envs.render NAME --out PATH``
+writes a figure of :data:`FIGURES`.
 """
 
 from __future__ import annotations
@@ -22,10 +14,9 @@ import argparse
 import math
 import os
 import sys
-from collections.abc import Iterator
 from dataclasses import dataclass
 from functools import lru_cache
-from typing import Any, NamedTuple
+from typing import Any
 
 import numpy as np
 
@@ -104,11 +95,10 @@ GLYPHS = _glyphs()
 class FaceArt:
     """What is drawn on one face, in its own frame (metres).
 
-    ``centre`` (3,) body frame; ``axes`` (2, 3): the in-face unit axes u, v (u x v the
-    outward normal); ``edges`` (P, 3): the polygon's inward edge lines ``(n_u, n_v, c)``,
-    distance ``n . (u, v) - c``; ``pips`` (Q, 2) and ``pip_radius``; ``strokes`` (S, 2, 2)
-    the numerals' segments, ``widths`` (S,) their half-widths, all within ``reach`` of the
-    face's origin.
+    ``centre`` (3,) body frame; ``axes`` (2, 3): the in-face unit axes u, v (u x v outward);
+    ``edges`` (P, 3): inward edge lines ``(n_u, n_v, c)``, distance ``n . (u, v) - c``;
+    ``pips`` (Q, 2); ``strokes`` (S, 2, 2) the numerals' segments, ``widths`` (S,) their
+    half-widths, all within ``reach`` of the face's origin.
     """
 
     centre: np.ndarray
@@ -125,9 +115,8 @@ class FaceArt:
 class View:
     """The camera of :func:`render_die` and :func:`render_dice`, given as their keywords.
 
-    ``size`` (height, width) in pixels; ``elevation`` (degrees, in (0, 90]) and ``azimuth``
-    (degrees, in [-360, 360]) place the camera; ``view_edges`` is the image width in die sizes
-    (:attr:`Die.size`).
+    ``size`` (height, width) in pixels; ``elevation`` (degrees, (0, 90]); ``azimuth`` (degrees,
+    [-360, 360]); ``view_edges``: the image width in die sizes.
     """
 
     size: tuple[int, int] = (240, 320)
@@ -158,7 +147,7 @@ def render_die(scene: Scene, position: np.ndarray, orientation: np.ndarray,
     position, orientation = _check_pose(position, orientation)
     die = scene.die
     centre = position - orientation @ np.asarray(die.com)  # geometric centre, camera target
-    return _render(scene, _Dice((die,), np.zeros((1, 3)), orientation[None]), centre,
+    return _render(scene, [(die, np.zeros(3), orientation)], centre,
                    camera.view_edges * die.size, camera)
 
 
@@ -167,9 +156,7 @@ def render_dice(scene: Scene, dice: tuple[Die, ...], positions: np.ndarray,
     """An RGB image (height, width, 3) uint8 of several dice in the scene, as :func:`render_die`.
 
     ``positions`` (N, 3) centres of mass, ``orientations`` (N, 3, 3). The camera looks at the
-    middle of the dice's bounding box; the image is ``view_edges`` sizes of the largest die
-    wide, or the dice's spread plus that, whichever is wider. Each pixel shows the nearest die
-    it sees; the floor's grid is one largest die's size.
+    middle of the dice; the image is ``view_edges`` largest dice wide, or wider to show all.
     """
     camera = View(**view)
     positions = np.asarray(positions, dtype=np.float64)
@@ -183,26 +170,12 @@ def render_dice(scene: Scene, dice: tuple[Die, ...], positions: np.ndarray,
     centre = (centres.min(axis=0) + centres.max(axis=0)) / 2
     largest = max(d.size for d in dice)
     spread = float(np.ptp(centres, axis=0).max()) + 2 * largest
-    return _render(scene, _Dice(tuple(dice), centres - centre, orientations), centre,
+    return _render(scene, list(zip(dice, centres - centre, orientations, strict=True)), centre,
                    max(camera.view_edges * largest, spread), camera)
 
 
-@dataclass(frozen=True)
-class _Dice:
-    """The dice to draw: their geometric centres relative to the camera's target, (N, 3)."""
-
-    dice: tuple[Die, ...]
-    offsets: np.ndarray
-    orientations: np.ndarray
-
-    @property
-    def unit(self) -> float:
-        """The floor grid's cell: the largest die's size (m)."""
-        return max(d.size for d in self.dice)
-
-    def __iter__(self) -> Iterator[tuple[Die, np.ndarray, np.ndarray]]:
-        """Each die with its offset and orientation."""
-        return iter(zip(self.dice, self.offsets, self.orientations, strict=True))
+# The dice to draw: each die, its geometric centre from the camera's target (m), its orientation.
+_Dice = list[tuple[Die, np.ndarray, np.ndarray]]
 
 
 def _render(scene: Scene, dice: _Dice, centre: np.ndarray, view: float,
@@ -230,19 +203,14 @@ def _render(scene: Scene, dice: _Dice, centre: np.ndarray, view: float,
         shade = 0.45 + 0.55 * np.maximum(0.0, planes[:, :3] @ light)
         image[near] = WALL_COLOUR * shade[face[near], None]
     nearest = np.full((height, width), np.inf)  # the nearest die drawn so far
-    shot = _Shot(camera, xs, ys, scale, light)
     for die, offset, orientation in dice:
-        _draw_die(image, depth, nearest, die, offset, orientation, shot)
+        _draw_die(image, depth, nearest, die, offset, orientation, camera, xs, ys, scale, light)
     return np.clip(image, 0, 255).astype(np.uint8)
 
 
 def render_task(task: ThrowTask, position: np.ndarray, orientation: np.ndarray,
                 **view: object) -> np.ndarray:
-    """The frame of a task's die or dice, ``view`` as :func:`render_die`'s keywords.
-
-    :func:`render_die` for one die ((3,), (3, 3)), :func:`render_dice` for several ((N, 3),
-    (N, 3, 3)).
-    """
+    """The frame of a task's die ((3,), (3, 3)) or dice ((N, 3), (N, 3, 3)); ``view`` as there."""
     if task.n_dice == 1:
         return render_die(task.scene, position, orientation, **view)
     return render_dice(task.scene, task.dice, position, orientation, **view)
@@ -270,8 +238,7 @@ def _clip(planes: np.ndarray, lines: _Lines, xs: np.ndarray,
           ys: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Where each line enters the convex set ``n . x <= c`` of ``planes`` (K, 4) rows (n, c).
 
-    Returns the entry parameter t along ``lines.direction`` (inf where the line misses the
-    set) and the index of the entry plane.
+    Returns the entry parameter t along ``lines.direction`` (inf: a miss) and the entry plane.
     """
     shape = (len(ys), len(xs))
     low, high = np.full(shape, -np.inf), np.full(shape, np.inf)
@@ -311,20 +278,13 @@ def _unit(v: np.ndarray) -> np.ndarray:
 
 
 def _die_planes(die: Die, orientation: np.ndarray, offset: np.ndarray) -> np.ndarray:
-    """The die's face half-spaces (F, 4) rows (n, c), world normals, about the camera's target.
-
-    ``offset``: the die's geometric centre from that target.
-    """
+    """The die's face half-spaces (F, 4) rows (n, c) about the camera's target, ``offset`` off."""
     normals = die.face_normals @ orientation.T
     return np.column_stack([normals, _face_offsets(die) + normals @ offset])
 
 
 def _boards(scene: Scene, centre: np.ndarray) -> list[np.ndarray]:
-    """Each wall's board as half-spaces (K, 4) rows (n, c) about ``centre``.
-
-    Behind the wall's plane by :data:`WALL_THICKNESS`, from the floor to :data:`WALL_HEIGHT`,
-    and along the wall as far as the other walls' outer faces.
-    """
+    """Each wall's board (to the other walls' outer faces) as rows (n, c) about ``centre``."""
     floor = _plane_row(scene.ground.normal, scene.ground.offset, centre)
     rows = [_plane_row(w.normal, w.offset, centre) for w in scene.walls]
     thick, high = np.array([0, 0, 0, WALL_THICKNESS]), np.array([0, 0, 0, WALL_HEIGHT])
@@ -336,11 +296,7 @@ def _boards(scene: Scene, centre: np.ndarray) -> list[np.ndarray]:
 
 
 def _in_view(planes: np.ndarray, floor: _Lines, xs: np.ndarray, ys: np.ndarray) -> bool:
-    """Whether the board (K, 4) may be in view.
-
-    It is not when every corner of the view's box, from the floor up to :data:`WALL_HEIGHT`,
-    lies outside one of its half-spaces.
-    """
+    """Whether the board (K, 4) may be in view: not all of the view's box outside one plane."""
     corners = np.array([floor.base + x * floor.dx + y * floor.dy + h * floor.direction
                         for x in xs[[0, -1]] for y in ys[[0, -1]] for h in (0.0, WALL_HEIGHT)])
     return not np.any(np.all(corners @ planes[:, :3].T > planes[:, 3], axis=0))
@@ -369,7 +325,7 @@ def _floor_lines(scene: Scene, centre: np.ndarray, camera: _Lines) -> _Lines:
 def _floor(scene: Scene, centre: np.ndarray, floor: _Lines, dice: _Dice,
            xs: np.ndarray, ys: np.ndarray, scale: float) -> np.ndarray:
     """Floor colour per pixel: felt inside the walls, a grid of one die size, the shadows."""
-    size = dice.unit
+    size = max(die.size for die, _, _ in dice)  # the grid's cell
     width = max(0.02, 0.6 * scale / size)  # grid line half-width, in sizes
     grid = np.zeros((len(ys), len(xs)), dtype=bool)
     for axis in _plane_axes(floor.direction):
@@ -381,22 +337,15 @@ def _floor(scene: Scene, centre: np.ndarray, floor: _Lines, dice: _Dice,
         beyond |= floor.at(row[:3], xs, ys, row[3]) < 0
     colour = np.where(beyond[..., None], BEYOND_COLOUR, TABLE_COLOUR)
     image = np.where(grid[..., None], colour * 1.25, colour)
-    shadow = np.zeros_like(grid)
+    shadow, normal = np.zeros_like(grid), np.asarray(scene.ground.normal)
     for die, offset, orientation in dice:
-        rows, cols = _box(_shadow_corners(scene, centre, die, offset, orientation), floor, xs,
-                          ys)
+        corners = np.asarray(die.vertices) @ orientation.T + offset  # dropped onto the floor:
+        lift = corners @ normal + normal @ centre - scene.ground.offset
+        rows, cols = _box(corners - np.outer(lift, normal), floor, xs, ys)
         t, _ = _clip(_die_planes(die, orientation, offset), floor, xs[cols], ys[rows])
         shadow[rows, cols] |= np.isfinite(t)
     image *= np.where(shadow, 0.55, 1.0)[..., None]
     return image
-
-
-def _shadow_corners(scene: Scene, centre: np.ndarray, die: Die, offset: np.ndarray,
-                    orientation: np.ndarray) -> np.ndarray:
-    """The die's corners dropped onto the floor, about ``centre`` (N, 3)."""
-    normal = np.asarray(scene.ground.normal)
-    corners = np.asarray(die.vertices) @ orientation.T + offset
-    return corners - np.outer(corners @ normal + normal @ centre - scene.ground.offset, normal)
 
 
 def _box(points: np.ndarray, lines: _Lines, xs: np.ndarray,
@@ -412,23 +361,14 @@ def _box(points: np.ndarray, lines: _Lines, xs: np.ndarray,
 
 # --- the die ------------------------------------------------------------------------------
 
-class _Shot(NamedTuple):
-    """The camera's pixel lines (``xs``, ``ys``: their offsets, ``scale`` m per pixel) and light."""
-
-    camera: _Lines
-    xs: np.ndarray
-    ys: np.ndarray
-    scale: float
-    light: np.ndarray
-
-
 def _draw_die(image: np.ndarray, depth: np.ndarray, nearest: np.ndarray, die: Die,
-              offset: np.ndarray, orientation: np.ndarray, shot: _Shot) -> None:
+              offset: np.ndarray, orientation: np.ndarray, camera: _Lines, xs: np.ndarray,
+              ys: np.ndarray, scale: float, light: np.ndarray) -> None:
     """Draw the die into ``image`` in place; a nearer board stays in front, translucent.
 
-    Drawn only where it is nearer than the dice in ``nearest`` (their depths, updated).
+    ``camera``: the pixel lines at offsets ``xs``, ``ys`` (``scale`` m per pixel). Drawn only
+    where it is nearer than the dice in ``nearest`` (their depths, updated).
     """
-    camera, xs, ys, scale, light = shot
     rows, cols = _box(np.asarray(die.vertices) @ orientation.T + offset, camera, xs, ys)
     planes = _die_planes(die, orientation, offset)
     t, entry = _clip(planes, camera, xs[cols], ys[rows])
@@ -501,17 +441,18 @@ def face_art(die: Die) -> tuple[FaceArt, ...]:
     polygons = [vertices[list(face)] for face in die.faces]
     if has_pips(die):
         return tuple(_pip_face(polygon, k) for k, polygon in enumerate(polygons))
-    texts = _texts(die)
+    shift = 1 if die.name == "d10" else 0  # the d10 prints digits 0-9
+    texts = [str(label - shift) for label in die.labels]
     fit = max(_text_radius(text, texts) for text in texts)
     art = []
     for text, polygon, normal in zip(texts, polygons, die.face_normals, strict=True):
         centre, axes = _numeral_frame(polygon, normal)
-        flat = _flat(polygon, centre, axes)
+        flat = (polygon - centre) @ axes.T
         if die.reads_down:
             placed = _corner_placements(die, texts, polygon, flat)
         else:
-            placed = [(text, np.zeros(2), np.array([0.0, 1.0]),
-                       NUMERAL_FILL * _inradius(flat) / fit)]
+            inradius = float(-_edge_lines(flat)[:, 2].max())  # about the face's origin
+            placed = [(text, np.zeros(2), np.array([0.0, 1.0]), NUMERAL_FILL * inradius / fit)]
         art.append(_numeral_face(centre, axes, flat, placed, texts))
     return tuple(art)
 
@@ -519,14 +460,14 @@ def face_art(die: Die) -> tuple[FaceArt, ...]:
 def _pip_face(polygon: np.ndarray, k: int) -> FaceArt:
     """Face ``k`` of a d6-like die: pips of face ``k + 1`` on its own axes FACE_U, FACE_V."""
     centre, axes = polygon.mean(axis=0), np.array([FACE_U[k], FACE_V[k]])
-    flat = _flat(polygon, centre, axes)
+    flat = (polygon - centre) @ axes.T
     half = float(np.ptp(flat, axis=0).min()) / 2
     return FaceArt(centre, axes, _edge_lines(flat), np.array(PIPS[k], float) * half,
                     PIP_RADIUS * half, np.zeros((0, 2, 2)), np.zeros(0), 0.0)
 
 
 def _numeral_frame(polygon: np.ndarray, normal: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The face's area centroid and in-face axes (u, v), v (the numeral's up) towards a corner.
+    """The face's area centroid and axes (u, v), v (the numeral's up) towards a corner.
 
     The corner nearest the body's +z seen along the face (+y for a face nearly level).
     """
@@ -540,27 +481,11 @@ def _numeral_frame(polygon: np.ndarray, normal: np.ndarray) -> tuple[np.ndarray,
     return centre, np.array([np.cross(up, normal), up])
 
 
-def _flat(polygon: np.ndarray, centre: np.ndarray, axes: np.ndarray) -> np.ndarray:
-    """The polygon's corners (P, 3) in face coordinates (P, 2)."""
-    return (polygon - centre) @ axes.T
-
-
 def _edge_lines(flat: np.ndarray) -> np.ndarray:
     """Inward edge lines (P, 3) ``(n_u, n_v, c)`` of a counter-clockwise polygon (P, 2)."""
     step = np.roll(flat, -1, axis=0) - flat
     inward = np.stack([-step[:, 1], step[:, 0]], axis=1) / np.linalg.norm(step, axis=1)[:, None]
     return np.column_stack([inward, (inward * flat).sum(axis=1)])
-
-
-def _inradius(flat: np.ndarray) -> float:
-    """Radius of the largest circle about the face's origin inside the polygon."""
-    return float(-_edge_lines(flat)[:, 2].max())
-
-
-def _texts(die: Die) -> list[str]:
-    """The printed text of each face: the label, or label - 1 on the d10 (digits 0-9)."""
-    shift = 1 if die.name == "d10" else 0
-    return [str(label - shift) for label in die.labels]
 
 
 def _underlined(text: str, texts: list[str]) -> bool:
@@ -571,10 +496,7 @@ def _underlined(text: str, texts: list[str]) -> bool:
 
 def _corner_placements(die: Die, texts: list[str], polygon: np.ndarray,
                        flat: np.ndarray) -> list[tuple[str, np.ndarray, np.ndarray, float]]:
-    """A d4's face: near each corner, upright towards it, the text read with that corner up.
-
-    ``polygon`` (P, 3) the corners in the body frame, ``flat`` (P, 2) in face coordinates.
-    """
+    """A d4's face: near each corner, upright towards it, the text read with that corner up."""
     placed = []
     for corner, spot in zip(polygon, flat, strict=True):
         label = int(np.argmax(die.reading @ _unit(corner)))

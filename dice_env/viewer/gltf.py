@@ -1,17 +1,10 @@
 """A recorded throw as binary glTF 2.0 (``.glb``), for Blender, Godot, three.js and the like.
 
-:func:`write_glb` writes one :class:`~dice_env.viewer.recording.Recording` with pygltflib:
-every die a flat-shaded mesh textured with its faces' labels
-(:func:`~dice_env.viewer.textures.face_atlas`), on a node that the animation ``"throw"``
-moves (its centre of mass and orientation at every frame, linear); equal dice share one
-mesh. The floor and the walls are finite quads in the colours of
-:mod:`dice_env.envs.render`: the floor :data:`MARGIN` beyond where the dice go and the
-walls' corners, each wall :data:`WALL_HEIGHT` high and as long as the other walls let it
-be. The simulation's z-up world hangs below a root node turned -90 degrees about x (glTF is
-y up). The recording's data rides in ``asset.extras["recordings"]`` as JSON text (a list
-of :meth:`~dice_env.viewer.recording.Recording.to_data`; text, since pygltflib drops the
-nulls and empty values of JSON objects, which the data holds), so :func:`read_glb`,
-:func:`dice_env.viewer.load` and :func:`dice_env.viewer.replay` get it back.
+Every die is a flat-shaded mesh textured with its labels
+(:func:`~dice_env.viewer.textures.face_atlas`) on a node the animation ``"throw"`` moves; the
+floor and walls are finite quads around where the dice go. A root node turns the z-up world to
+glTF's y up. The recording's data rides in ``asset.extras["recordings"]`` as JSON text (pygltflib
+drops a JSON object's nulls), so :func:`read_glb` gets it back.
 """
 
 from __future__ import annotations
@@ -25,7 +18,7 @@ from typing import Any
 import numpy as np
 import pygltflib as gl
 
-from dice_env.envs.render import TABLE_COLOUR, WALL_COLOUR
+from dice_env.envs.render import TABLE_COLOUR, WALL_COLOUR, _plane_axes, _unit
 from dice_env.model.die import Die
 from dice_env.model.rotations import matrix_to_quaternion
 from dice_env.model.scene import Plane
@@ -106,10 +99,7 @@ class _Blob:
 
     def accessor(self, array: np.ndarray, target: int | None = None,
                  bounds: bool = False) -> int:
-        """An accessor of ``array`` (M,) or (M, K) in its own view; returns its index.
-
-        With its ``min`` and ``max`` if ``bounds``.
-        """
+        """An accessor of ``array`` (M,) or (M, K) in its own view (``bounds``: with min, max)."""
         columns = 1 if array.ndim == 1 else array.shape[1]
         flat = array.reshape(len(array), columns)
         self.gltf.accessors.append(gl.Accessor(
@@ -121,11 +111,7 @@ class _Blob:
 
     def mesh(self, name: str, positions: np.ndarray, normals: np.ndarray,
              triangles: np.ndarray, material: int, uv: np.ndarray | None = None) -> int:
-        """A mesh of one primitive; returns its index.
-
-        ``positions`` (M, 3), ``normals`` (M, 3), ``triangles`` (T, 3) corner indices, ``uv``
-        (M, 2) texture coordinates if any.
-        """
+        """A mesh of one primitive (``triangles`` (T, 3) corner indices); returns its index."""
         attributes = gl.Attributes(
             POSITION=self.accessor(positions.astype(np.float32), gl.ARRAY_BUFFER, bounds=True),
             NORMAL=self.accessor(normals.astype(np.float32), gl.ARRAY_BUFFER),
@@ -139,10 +125,7 @@ class _Blob:
 
     def material(self, name: str, colour: np.ndarray | None = None,
                  texture: bytes | None = None) -> int:
-        """A matte material of an sRGB ``colour`` (3,) 0-255 or a PNG ``texture``; its index.
-
-        Plain colours (the floor, the walls) are double-sided.
-        """
+        """A matte material of an sRGB ``colour`` (3,) 0-255 (two-sided) or a PNG ``texture``."""
         pbr = gl.PbrMetallicRoughness(metallicFactor=0.0, roughnessFactor=0.7)
         if texture is None:
             pbr.baseColorFactor = [*_linear(colour), 1.0]
@@ -163,11 +146,7 @@ def _linear(colour: np.ndarray) -> list[float]:
 
 
 def _die_mesh(blob: _Blob, die: Die) -> int:
-    """The die's mesh, textured with its atlas; returns its index.
-
-    Each face has its own corners (about the centre of mass), normal and texture
-    coordinates, fanned into triangles.
-    """
+    """The die's mesh about its centre of mass, each face fanned into triangles; its index."""
     image, uv = face_atlas(die)
     vertices = die.vertices_body
     starts = np.cumsum([0, *(len(face) for face in die.faces)])
@@ -211,8 +190,7 @@ def _surroundings(blob: _Blob, recording: Recording) -> None:
     """
     floor, walls = recording.scene.ground, recording.scene.walls
     normal = np.asarray(floor.normal)
-    side = _unit(np.cross(normal, [1.0, 0.0, 0.0]))
-    axes = np.array([np.cross(side, normal), side])  # in the floor, axes[0] x axes[1] = normal
+    axes = np.array(_plane_axes(normal))  # in the floor, axes[0] x axes[1] = normal
     origin = normal * floor.offset
     lines = [_floor_line(wall, axes, origin) for wall in walls]
     dice = (_corners(recording) - origin) @ axes.T
@@ -257,10 +235,7 @@ def _corners(recording: Recording) -> np.ndarray:
 
 
 def _floor_line(wall: Plane, axes: np.ndarray, origin: np.ndarray) -> np.ndarray:
-    """Where ``wall`` meets the floor, in floor coordinates: a row (m_u, m_v, d).
-
-    The points of the floor with ``m . (u, v) >= d`` are on the wall's free side.
-    """
+    """Where ``wall`` meets the floor: a row (m_u, m_v, d), ``m . (u, v) >= d`` its free side."""
     n = np.asarray(wall.normal)
     return np.append(axes @ n, wall.offset - n @ origin)
 
@@ -283,8 +258,7 @@ def _wall_ends(line: np.ndarray, others: list[np.ndarray], low: np.ndarray,
                high: np.ndarray) -> np.ndarray | None:
     """The ends (2, 2) of a wall's ``line`` on the floor, or None where none of it is left.
 
-    The line is cut to the rectangle from ``low`` to ``high`` and to the ``others``' free
-    sides.
+    The line is cut to the rectangle ``low``-``high`` and to the ``others``' free sides.
     """
     m, d = line[:2], line[2]
     scale = m @ m
@@ -304,8 +278,3 @@ def _wall_ends(line: np.ndarray, others: list[np.ndarray], low: np.ndarray,
         else:
             stop = min(stop, gap / rate)
     return np.array([base + start * along, base + stop * along]) if start < stop else None
-
-
-def _unit(v: np.ndarray) -> np.ndarray:
-    v = np.asarray(v, dtype=np.float64)
-    return v / np.linalg.norm(v)
