@@ -1,11 +1,8 @@
 """A self-contained HTML page of recorded throws, drawn in 3D by three.js.
 
-:func:`write_html` writes one file that opens offline (from ``file://``): the viewer's bundle
-(``viewer.bundle.js``, three.js inside; rebuilt from ``js/`` as its README says) inlined in a
-script, and the recordings as JSON, with what the viewer draws prepared here: every die's
-triangles and face texture (:func:`dice_env.viewer.textures.face_atlas`, a PNG data URL),
-each throw's walls (bounded quads), floor plane and extent. :func:`read_html` gives the
-recordings' data back (:func:`dice_env.viewer.load` turns it into recordings).
+The page opens offline: the viewer's bundle (``viewer.bundle.js``, built from ``js/``) inlined,
+the recordings as JSON, and what the viewer draws prepared here (dice triangles and textures,
+walls, floor, extent). :func:`read_html` gives the recordings' data back.
 """
 
 from __future__ import annotations
@@ -43,11 +40,14 @@ def write_html(recordings: Recording | Sequence[Recording], path: str | Path, *,
     """
     if isinstance(recordings, Recording):
         items = [recordings]
-    elif _sequence(recordings) and all(isinstance(r, Recording) for r in recordings):
+    elif (isinstance(recordings, Sequence) and not isinstance(recordings, (str, bytes))
+          and all(isinstance(r, Recording) for r in recordings)):
         items = list(recordings)
     else:
-        raise TypeError("recordings must be a Recording or a sequence of them, got "
-                        f"{_describe(recordings)}")
+        got = type(recordings).__name__
+        if isinstance(recordings, (list, tuple)):
+            got += f" of {len(recordings)}: {[type(v).__name__ for v in recordings][:4]}"
+        raise TypeError(f"recordings must be a Recording or a sequence of them, got a {got}")
     if not items:
         raise ValueError("recordings must not be empty: give at least one Recording")
     if layout not in LAYOUTS:
@@ -98,33 +98,16 @@ def _bundle() -> str:
     return text
 
 
-def _sequence(value: Any) -> bool:
-    """Whether ``value`` is a sequence of items (a list, a tuple; not a string)."""
-    return isinstance(value, Sequence) and not isinstance(value, (str, bytes))
-
-
-def _describe(value: Any) -> str:
-    """A short description of a bad argument."""
-    if isinstance(value, (list, tuple)):
-        return f"a {type(value).__name__} of {len(value)}: {[type(v).__name__ for v in value][:4]}"
-    return f"a {type(value).__name__}"
-
-
 def _shape(die: Die) -> dict[str, Any]:
     """A die's triangles about its centre of mass, flat normals, texture coordinates, atlas."""
     image, uv = face_atlas(die, TEXTURE_PIXELS)
-    corners = die.vertices_body
-    normals = np.asarray(die.face_normals)
-    position, normal, coordinates = [], [], []
-    for k, face in enumerate(die.faces):
-        for i in range(1, len(face) - 1):  # a convex face as a fan of triangles
-            for c in (0, i, i + 1):
-                position.extend(corners[face[c]])
-                normal.extend(normals[k])
-                coordinates.extend(uv[k, c])
+    fan = [(k, c) for k, face in enumerate(die.faces)  # a convex face as a fan of triangles
+           for i in range(1, len(face) - 1) for c in (0, i, i + 1)]
+    face, corner = np.array(fan).T
+    position = die.vertices_body[[die.faces[k][c] for k, c in fan]]
     png = base64.b64encode(png_bytes(image)).decode("ascii")
-    return {"position": _rounded(position), "normal": _rounded(normal),
-            "uv": _rounded(coordinates), "texture": f"data:image/png;base64,{png}"}
+    return {"position": _rounded(position), "normal": _rounded(np.asarray(die.face_normals)[face]),
+            "uv": _rounded(uv[face, corner]), "texture": f"data:image/png;base64,{png}"}
 
 
 def _throw_view(recording: Recording, shapes: dict[Die, int]) -> dict[str, Any]:

@@ -1,10 +1,8 @@
 """A recorded throw: its scene, dice, release state and frames, as data that replays exactly.
 
-:func:`record` simulates throws and keeps, for each, what a viewer draws (every die's centre
-and orientation at a fixed frame rate, the outcome) and what a replay needs to throw it again
-(the scene, the dice and their contact as :mod:`dice_env.simulation.codec` data, the release state
-to the last bit, the run's keywords, the library version). The simulator is deterministic, so a
-replay lands the same faces; :func:`dice_env.viewer.files.replay` checks that it does.
+:func:`record` keeps what a viewer draws (each die's pose at a fixed frame rate, the outcome)
+and what a replay needs (scene, dice and contact as :mod:`dice_env.simulation.codec` data, the
+exact release state, the run's keywords, the library version).
 """
 
 from __future__ import annotations
@@ -41,15 +39,11 @@ STATE_FIELDS = ("position", "velocity", "angular_momentum", "orientation", "angu
 class Recording:
     """One throw of one or more dice, as recorded.
 
-    ``scene``, ``dice``, ``contact`` (between dice) and ``release`` (a :class:`GroupState` of
-    one throw) are what was thrown, ``run`` the keywords it ran with (``t_max``, ``until``)
-    and ``fps`` its frame rate. Frames: ``t`` (n,) from 0 (the release) to the end of the
-    throw, ``position`` (n, N, 3) and ``orientation`` (n, N, 3, 3) (body to world).
-    ``outcome``: ``faces`` and ``read`` (per die: the label read, and False for a die left
-    leaning on another), ``settled``, ``decided``, ``unstable``, ``sunk``, ``time`` (s
-    simulated) and ``void`` (why the throw does not count: ``""``, ``"unstable"``, ``"sunk"``,
-    ``"not_settled"``, ``"not_decided"``, ``"leaning"``, or the caller's, e.g. a task's
-    ``"foul"``). ``title``: a caption.
+    ``release``: a :class:`GroupState` of one throw; ``run``: its keywords (``t_max``,
+    ``until``). Frames from the release to the end: ``t`` (n,), ``position`` (n, N, 3),
+    ``orientation`` (n, N, 3, 3) body to world. ``outcome``: ``faces``, ``read`` (False: a die
+    leaning on another), ``settled``, ``decided``, ``unstable``, ``sunk``, ``time`` (s) and
+    ``void`` (``""`` where the throw counts, else why not, as the env's ``void_reason``).
     """
 
     scene: Scene
@@ -111,13 +105,10 @@ def record(scene: Scene, dice: Die | Sequence[Die], state: State | GroupState, *
            voids: Sequence[str] | None = None) -> list[Recording]:
     """Simulate the throws of ``state`` and record each at ``fps`` frames per simulated second.
 
-    ``dice``: one die (``state`` a :class:`State` of B throws, the die in ``scene`` replaced
-    by it) or several (``state`` a :class:`GroupState`). One die runs in
-    :func:`dice_env.simulate`, several in :func:`dice_env.simulation.group.simulate_group`
-    with ``contact``; ``t_max`` and ``until`` as there. Frames run from the release to the
-    end of the throw.
-    ``titles`` and ``voids`` (one per throw) caption the throws and override the void reason
-    (e.g. a task's ``"foul"``; ``""`` keeps the simulation's). Returns one recording a throw.
+    ``dice``: one die (``state`` a :class:`State`; it replaces the scene's die) or several
+    (``state`` a :class:`GroupState`, run by :func:`dice_env.simulation.group.simulate_group`
+    with ``contact``). ``titles`` and ``voids`` (one per throw): captions and void reasons that
+    override the simulation's (``""`` keeps it). Returns one recording a throw.
     """
     single = isinstance(dice, Die)
     dice = (dice,) if single else tuple(dice)

@@ -1,10 +1,7 @@
-"""Texture atlases of the dice's faces, drawn as :mod:`dice_env.envs.render` draws them.
+"""Texture atlases of the dice's faces, drawn unlit as :mod:`dice_env.envs.render` draws them.
 
-:func:`face_atlas` paints every face of a die (its colour, the rim darkened, pips or numerals
-in ink) into one RGBA image, a grid of square tiles, one a face, and gives the texture
-coordinates of each face's corners in it; :func:`png_bytes` encodes an image as PNG. The
-faces are drawn unlit: the viewer that shows them lights them. Used by the glTF export and
-the HTML page.
+:func:`face_atlas` paints every face of a die into one RGBA image of square tiles and gives the
+texture coordinates of each face's corners; :func:`png_bytes` encodes an image as PNG.
 """
 
 from __future__ import annotations
@@ -27,13 +24,10 @@ CHUNK = 1 << 14  # subpixels drawn at once (bounds the memory of the numerals' d
 def face_atlas(die: Die, pixels: int = 128) -> tuple[np.ndarray, np.ndarray]:
     """The texture atlas of ``die``'s faces and the texture coordinates of their corners.
 
-    ``image``: RGBA (rows * pixels, columns * pixels, 4) uint8, opaque, the faces in label
-    order row by row in ``ceil(sqrt(F))`` columns, each a square tile of ``pixels`` (>= 8) a
-    side: the face's (u, v) square (:class:`~dice_env.envs.render.FaceArt` axes) about its
-    polygon's extent, with a margin of :data:`PADDING`; tiles of no face are blank. ``uv``
-    (F, P, 2), P the most corners of a face: ``uv[k, i]`` is the texture coordinate (glTF:
-    origin top left, v down, in [0, 1]) of corner ``die.faces[k][i]``; NaN past a face's
-    corners. Computed once per die and pixel count; both read-only.
+    ``image``: opaque RGBA uint8, the faces in label order row by row in ``ceil(sqrt(F))``
+    columns, each a square tile ``pixels`` (>= 8) a side. ``uv`` (F, P, 2): ``uv[k, i]`` the
+    texture coordinate (origin top left, v down) of corner ``die.faces[k][i]``, NaN past a
+    face's corners. Cached, both read-only.
     """
     if not isinstance(die, Die):
         raise TypeError(f"die must be a Die, got {type(die).__name__}")
