@@ -9,6 +9,7 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
+from dice_env.envs.keywords import check_int
 from dice_env.envs.task import (
     ACTION_DIM,
     ORIENTATION_DIM,
@@ -43,10 +44,8 @@ def check_render(render_mode: str | None, modes: tuple[str, ...], width: int, he
     """Validate the render keywords."""
     if render_mode is not None and not (isinstance(render_mode, str) and render_mode in modes):
         raise ValueError(f"render_mode must be None or one of {modes}, got {render_mode!r}")
-    for name, value in (("render_width", width), ("render_height", height)):
-        if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not (
-                16 <= value <= 4096):
-            raise ValueError(f"{name} must be an int in [16, 4096], got {value!r}")
+    check_int("render_width", width, 16, 4096)
+    check_int("render_height", height, 16, 4096)
 
 
 def check_frame_memory(render_mode: str | None, t_max: float, width: int, height: int) -> None:

@@ -25,6 +25,14 @@ ENV_MAX_STEPS = 10**7
 MAX_SINK = 0.1  # the weight's sink of a flat die's corners into the table, in die sizes
 
 
+def check_int(name: str, value: object, low: int, high: int) -> int:
+    """``value`` as an int in [``low``, ``high``], or ``ValueError`` naming ``name``."""
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not (
+            low <= value <= high):
+        raise ValueError(f"{name} must be an int in [{low}, {high}], got {value!r}")
+    return int(value)
+
+
 def check_face(name: str, value: object, n_faces: int = 6) -> int:
     """``value`` as a face label 1 … ``n_faces``, or ``ValueError`` naming ``name``."""
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
@@ -98,10 +106,9 @@ class SceneKeywords:
         load_face, load_fraction, load_depth = self.load_face, self.load_fraction, self.load_depth
         if load_face is not None:
             check_face("load_face", load_face, base.n_faces)
-        if load_fraction is not None:
-            check_range("load_fraction", load_fraction, 0.0, 1.0, high_open=True)
-        if load_depth is not None:
-            check_range("load_depth", load_depth, 0.0, 1.0, high_open=True)
+        for name, value in (("load_fraction", load_fraction), ("load_depth", load_depth)):
+            if value is not None:
+                check_range(name, value, 0.0, 1.0, high_open=True)
         given = _given(**{size_name: size}, mass=self.mass, load_face=load_face,
                        load_fraction=load_fraction, load_depth=load_depth)
         if not given:
@@ -111,10 +118,8 @@ class SceneKeywords:
             com = ", ".join(f"{c:g}" for c in base.com)
             raise ValueError(
                 f"{', '.join(given)} cannot be applied to the scene's die: it is not a uniform "
-                f"die of a standard shape ({base!r}, com ({com}) m), so it cannot be rebuilt from "
-                "keywords without losing its shape or mass distribution. Build the die you want "
-                "in the scene (e.g. Die.standard(name, size, mass).load(face, fraction, depth)) "
-                f"and leave out {', '.join(given)}")
+                f"die of a standard shape ({base!r}, com ({com}) m); build the die you want in "
+                f"the scene and leave out {', '.join(given)}")
         dims = {"size": base.size if size is None else size,
                 "mass": base.mass if self.mass is None else self.mass}
         check_positive(size_name, dims["size"])
@@ -242,10 +247,7 @@ def _size(die: str | Die | None, size: float | None, edge: float | None) -> floa
 
 def _walls(walls: str | tuple[Wall, ...]) -> tuple[Wall, ...]:
     """The ``walls`` keyword: a preset name or the walls themselves."""
-    if isinstance(walls, str):
-        if walls not in WALLS:
-            raise ValueError(f"walls must be one of {sorted(WALLS)} or a tuple of Wall, "
-                             f"got {walls!r}")
+    if isinstance(walls, str) and walls in WALLS:
         return preset_walls(walls)
     if isinstance(walls, Wall):
         return (walls,)

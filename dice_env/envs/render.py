@@ -20,6 +20,7 @@ from typing import Any
 
 import numpy as np
 
+from dice_env.envs.keywords import check_int
 from dice_env.envs.task import ThrowTask
 from dice_env.model.checks import check_finite, check_positive, check_range
 from dice_env.model.die import Die
@@ -129,9 +130,7 @@ class View:
                 isinstance(n, (int, np.integer)) and not isinstance(n, bool) and n >= 1
                 for n in self.size)):
             raise ValueError(f"size must be (height, width), two ints >= 1, got {self.size!r}")
-        check_range("elevation", self.elevation, 0.0, 90.0)
-        if self.elevation == 0:
-            raise ValueError("elevation must be in (0, 90] degrees, got 0")
+        check_range("elevation", self.elevation, 0.0, 90.0, low_open=True)
         check_range("azimuth", self.azimuth, -360.0, 360.0)
         check_positive("view_edges", self.view_edges)
 
@@ -562,9 +561,7 @@ def resting(die: Die, label: int, at: tuple[float, float] = (0.0, 0.0),
     ``label`` read (its reading direction straight up), at ``at`` (x, y) (m), turned by
     ``turn`` (rad) about the vertical.
     """
-    if (isinstance(label, bool) or not isinstance(label, (int, np.integer))
-            or not 1 <= label <= die.n_faces):
-        raise ValueError(f"label must be an int in [1, {die.n_faces}], got {label!r}")
+    check_int("label", label, 1, die.n_faces)
     reading = die.reading[label - 1]
     axis = np.cross(reading, [0.0, 0.0, 1.0])
     if np.linalg.norm(axis) > 1e-12:

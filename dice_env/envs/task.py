@@ -22,8 +22,8 @@ from typing import Any
 
 import numpy as np
 
-from dice_env.envs.keywords import ENV_MAX_STEPS, SceneKeywords, check_face, check_scene
-from dice_env.model.checks import as_floats, check_nonnegative, check_positive, check_range
+from dice_env.envs.keywords import ENV_MAX_STEPS, SceneKeywords, check_face, check_int, check_scene
+from dice_env.model.checks import as_floats, check_nonnegative, check_positive
 from dice_env.model.die import Die
 from dice_env.model.rotations import (
     orthonormality_error,
@@ -92,11 +92,8 @@ class ThrowTask:
         check_positive("release_height", self.release_height)
         if self.release_height <= clearance:
             raise ValueError(
-                f"release_height must be > {clearance:.6g} m, the distance of the die's "
-                f"farthest corner from its centre of mass, so that no corner starts in the "
-                f"table; got {self.release_height!r}. Raise release_height, or make the die "
-                f"smaller (size={self.scene.die.size:g} m) or its load (load_fraction, "
-                "load_depth) lighter")
+                f"release_height must be > {clearance:.6g} m, the die's farthest corner from its "
+                f"centre of mass (no corner may start in the table), got {self.release_height!r}")
         for name in ("max_speed", "max_spin"):
             check_positive(name, getattr(self, name))
         for name in ("hand_noise", "orientation_noise", "min_speed", "min_spin", "shaping"):
@@ -113,8 +110,8 @@ class ThrowTask:
         if self.scene.t_max / self.step > ENV_MAX_STEPS:
             raise ValueError(
                 f"t_max must be at most {ENV_MAX_STEPS:.0e} steps: t_max={self.scene.t_max:g} s "
-                f"over the {self.n_dice} dice's step of {self.step:.3g} s (die against die "
-                f"included) is {self.scene.t_max / self.step:.3g} steps; lower t_max or num_dice")
+                f"over the {self.n_dice} dice's step of {self.step:.3g} s is "
+                f"{self.scene.t_max / self.step:.3g} steps; lower t_max or num_dice")
         self._check_walls()
 
     def _check_dice(self) -> None:
@@ -145,10 +142,8 @@ class ThrowTask:
             for wall in self.scene.walls:
                 gap = float(np.asarray(wall.normal) @ centre - wall.offset)
                 if gap <= die.reach:
-                    raise ValueError(
-                        f"die {i} in the hand (centre {centre.round(4)} m) would reach through "
-                        f"a wall (walls) by {die.reach - gap:.3g} m; use fewer or smaller "
-                        "dice (num_dice, size) or other walls")
+                    raise ValueError(f"die {i} in the hand (centre {centre.round(4)} m) would "
+                                     f"reach through a wall (walls) by {die.reach - gap:.3g} m")
 
     @cached_property
     def die_scenes(self) -> tuple[Scene, ...]:
@@ -254,21 +249,15 @@ class ThrowTask:
         """
         if self.target == "faces":
             if target_sum is not None:
-                raise ValueError(f"target_sum fixes the total of several dice with "
-                                 f"target='sum' or 'avoid_sum'; target is 'faces' (fix each "
-                                 f"die's face with target_face), got {target_sum!r}")
+                raise ValueError(f"target_sum needs target='sum' or 'avoid_sum'; target is 'faces' "
+                                 f"(fix the faces with target_face), got {target_sum!r}")
             return None if target_face is None else self._check_faces(target_face)
         if target_face is not None:
-            raise ValueError(f"target_face fixes each die's face with target='faces'; target "
-                             f"is {self.target!r} (fix the total with target_sum), got "
-                             f"{target_face!r}")
+            raise ValueError(f"target_face needs target='faces'; target is {self.target!r} (fix "
+                             f"the total with target_sum), got {target_face!r}")
         if target_sum is None:
             return None
-        if isinstance(target_sum, bool) or not isinstance(target_sum, (int, np.integer)):
-            raise ValueError(f"target_sum must be an int in [{self.totals[0]}, "
-                             f"{self.totals[-1]}], got {target_sum!r}")
-        check_range("target_sum", int(target_sum), self.totals[0], self.totals[-1])
-        return int(target_sum)
+        return check_int("target_sum", target_sum, self.totals[0], self.totals[-1])
 
     def _check_faces(self, value: object) -> int | tuple[int, ...]:
         """``target_face``: one die's face, or a sequence of one face per die."""
@@ -470,11 +459,7 @@ class ThrowTask:
 
 @dataclass
 class Throw:
-    """Outcome of a batch of n throws.
-
-    ``reward`` (n,); ``info`` arrays over n, keys as in the env's ``info``; ``observation``
-    (n, obs_dim) of the dice at rest; ``result`` from the kernel.
-    """
+    """Outcome of n throws: ``reward`` (n,), the env's ``info`` over n, ``observation`` at rest."""
 
     reward: np.ndarray
     info: dict[str, np.ndarray]
@@ -490,8 +475,7 @@ def void_reasons(fair: np.ndarray, unstable: np.ndarray, sunk: np.ndarray, ended
                  until: str, leaning: np.ndarray) -> np.ndarray:
     """Why each throw does not count, (n,) strings, ``""`` where it counts.
 
-    The first that applies of "foul" (not ``fair``), "unstable", "sunk", not ended
-    (:data:`UNTIL` of ``until``) and "leaning" (a die left leaning on another).
+    The first of "foul", "unstable", "sunk", not ended (:data:`UNTIL`) and "leaning" that applies.
     """
     return np.where(~fair, "foul", np.where(unstable, "unstable", np.where(
         sunk, "sunk", np.where(~ended, UNTIL[until], np.where(leaning, "leaning", "")))))
@@ -562,9 +546,8 @@ def make_task(*, num_dice: int | None = None, scene: Scene | None = None,
 
 def check_num_dice(num_dice: object, die: object) -> tuple[Any, ...]:
     """The ``die`` keyword per die: ``num_dice`` copies of it, or its entries if a tuple."""
-    if num_dice is not None and (isinstance(num_dice, bool) or not isinstance(
-            num_dice, (int, np.integer)) or not 1 <= num_dice <= MAX_NUM_DICE):
-        raise ValueError(f"num_dice must be an int in [1, {MAX_NUM_DICE}], got {num_dice!r}")
+    if num_dice is not None:
+        check_int("num_dice", num_dice, 1, MAX_NUM_DICE)
     if not isinstance(die, (tuple, list)):
         return (die,) * (1 if num_dice is None else int(num_dice))
     if not 1 <= len(die) <= MAX_NUM_DICE:

@@ -11,13 +11,9 @@ nearly solved to hard (the oracle's margin over chance, ``docs/environment.md``)
 - ``DiceThrowTray2d6Sum-v0``: ``num_dice=2``, ``target="sum"``, ``walls="tray"``,
   ``until="decided"``.
 - ``DiceThrowCraps-v0``: ``num_dice=2``, ``set_dice=True``, ``target="avoid_sum"``,
-  ``target_sum=7``,
-  ``walls="craps"``, ``release_height=0.12``, ``max_speed=4.0``, ``t_max=10.0``,
-  ``hand_noise=0.001``, ``orientation_noise=0.001``, ``until="decided"`` and the craps
-  layout's table (:data:`CRAPS_TABLE`: ``stiffness``, ``damping``, ``friction``).
-
-``until="decided"`` ends a throw when its face is decided: the same faces and rewards as to rest,
-2–3 times faster. ``benchmarks/tasks.py`` measures each task's random, rule and oracle success.
+  ``target_sum=7``, ``walls="craps"``, ``release_height=0.12``, ``max_speed=4.0``,
+  ``t_max=10.0``, ``hand_noise=0.001``, ``orientation_noise=0.001``, ``until="decided"`` and
+  the craps layout's table (:data:`CRAPS_TABLE`: ``stiffness``, ``damping``, ``friction``).
 """
 
 from __future__ import annotations
@@ -61,9 +57,8 @@ TASKS = (
               "two d6 from one hand into a 30 x 20 cm tray for a drawn total 2 … 12"),
     NamedTask("DiceThrowCraps-v0",
               {"num_dice": 2, "set_dice": True, "target": "avoid_sum", "target_sum": 7,
-               "walls": "craps",
-               "release_height": 0.12, "max_speed": 4.0, "t_max": 10.0, "hand_noise": 0.001,
-               "orientation_noise": 0.001, "until": "decided", **CRAPS_TABLE},
+               "walls": "craps", "release_height": 0.12, "max_speed": 4.0, "t_max": 10.0,
+               "hand_noise": 0.001, "orientation_noise": 0.001, "until": "decided", **CRAPS_TABLE},
               "two d6, set in the hand, thrown 1 m into the craps table's back wall, "
               "avoiding a seven, with a dice setter's steadiness"),
 )

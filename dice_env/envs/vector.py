@@ -17,6 +17,7 @@ from dice_env.envs.dice_throw import (
     episode_hand,
     observation_space,
 )
+from dice_env.envs.keywords import check_int
 from dice_env.envs.task import ThrowTask
 
 MAX_NUM_ENVS = 2**20  # about 1 kB per env in the kernel's and the env's arrays
@@ -38,9 +39,7 @@ class DiceThrowVectorEnv(VectorEnv):
 
     def __init__(self, num_envs: int = 1, render_mode: str | None = None,
                  **keywords: Any) -> None:
-        if isinstance(num_envs, bool) or not isinstance(num_envs, (int, np.integer)) or not (
-                1 <= num_envs <= MAX_NUM_ENVS):
-            raise ValueError(f"num_envs must be an int in [1, {MAX_NUM_ENVS}], got {num_envs!r}")
+        check_int("num_envs", num_envs, 1, MAX_NUM_ENVS)
         self.task: ThrowTask = configure(self, ("rgb_array",), render_mode, **keywords)
         self.num_envs = int(num_envs)
         self.single_observation_space = observation_space(self.task)
