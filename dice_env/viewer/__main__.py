@@ -59,12 +59,10 @@ def main(argv: list[str] | None = None) -> int:
         parser.error(f"argument --seed: must be an integer >= 0, got {args.seed}")
     if not 0 < args.fps <= 1000:
         parser.error(f"argument --fps: must be in (0, 1000], got {args.fps:g}")
-    if args.out.suffix.lower() != ".html":
-        parser.error(f"argument --out: must end in .html, got {args.out.name!r}")
-    if args.glb is not None and args.glb.suffix.lower() != ".glb":
-        parser.error(f"argument --glb: must end in .glb, got {args.glb.name!r}")
-    if args.screenshot is not None and args.screenshot.suffix.lower() != ".png":
-        parser.error(f"argument --screenshot: must end in .png, got {args.screenshot.name!r}")
+    for name, path, suffix in (("out", args.out, ".html"), ("glb", args.glb, ".glb"),
+                               ("screenshot", args.screenshot, ".png")):
+        if path is not None and path.suffix.lower() != suffix:
+            parser.error(f"argument --{name}: must end in {suffix}, got {path.name!r}")
     from dice_env.viewer.html import write_html
 
     task = make_task(die=args.die, walls=args.walls,

@@ -1,8 +1,4 @@
-"""Recordings kept and thrown again: :func:`save`, :func:`load` and :func:`replay`.
-
-Saved as JSON; loaded from a page, a glTF export or JSON alike; replayed with the installed
-version and checked to land the same faces.
-"""
+"""Recordings kept and thrown again: :func:`save`, :func:`load` and :func:`replay`."""
 
 from __future__ import annotations
 
@@ -23,11 +19,7 @@ class ReplayError(ValueError):
 
 
 def load(path: str | Path) -> list[Recording]:
-    """The recordings in ``path``: a page, a ``.glb`` export or a ``.json`` of :func:`save`.
-
-    Pages are those of :func:`dice_env.viewer.html.write_html`, exports those of
-    :func:`dice_env.viewer.gltf.write_glb` (reading one needs pygltflib: the ``viewer`` extra).
-    """
+    """The recordings in a page, a ``.glb`` export (needs pygltflib) or a ``.json`` at ``path``."""
     path = Path(path)
     suffix = path.suffix.lower()
     if suffix in (".html", ".htm"):
@@ -51,11 +43,9 @@ def save(recordings: Recording | Sequence[Recording], path: str | Path) -> Path:
 
 
 def replay(source: Recording | Sequence[Recording] | str | Path) -> list[Recording]:
-    """Throw again what ``source`` recorded and check that the dice land the same faces.
+    """Throw again what ``source`` (recordings or a file :func:`load` reads) recorded.
 
-    ``source``: a recording, several, or a file of them (as :func:`load` reads). Returns the
-    new recordings; raises :class:`ReplayError` naming each throw whose faces differ from the
-    recorded ones.
+    Returns the new recordings; raises :class:`ReplayError` naming each throw whose faces differ.
     """
     if isinstance(source, (str, Path)):
         recorded = load(source)

@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 
-from dice_env.envs.task import UNTIL
+from dice_env.envs.task import void_reasons
 from dice_env.model.die import Die
 from dice_env.model.rotations import matrix_to_quaternion, quaternion_to_matrix
 from dice_env.model.scene import Scene
@@ -170,18 +170,15 @@ def _simulate(scene: Scene, dice: tuple[Die, ...], release: GroupState, contact:
         result = simulate_group(scene, dice, release, contact=contact, t_max=run["t_max"],
                                 until=run["until"], record_every=stride, orientations=True)
         faces, read, sunk = result.face, result.read, result.sunk
-    ended = result.decided if decided else result.settled
-    unfinished = UNTIL["decided" if decided else "rest"]
-    outcomes = []
-    for b in range(len(faces)):
-        void = ("unstable" if result.unstable[b] else "sunk" if sunk[b].any()
-                else unfinished if not ended[b] else "leaning" if not read[b].all() else "")
-        outcomes.append({
-            "faces": faces[b].tolist(), "read": read[b].tolist(),
-            "settled": bool(result.settled[b]), "decided": bool(result.decided[b]),
-            "unstable": bool(result.unstable[b]), "sunk": bool(sunk[b].any()),
-            "time": float(result.steps[b] * (result.t[0] / stride)), "void": void})
-    return result, outcomes
+    voids = void_reasons(np.ones(len(faces), bool), result.unstable, sunk.any(axis=1),
+                         result.decided if decided else result.settled,
+                         "decided" if decided else "rest", ~read.all(axis=1))
+    return result, [{
+        "faces": faces[b].tolist(), "read": read[b].tolist(),
+        "settled": bool(result.settled[b]), "decided": bool(result.decided[b]),
+        "unstable": bool(result.unstable[b]), "sunk": bool(sunk[b].any()),
+        "time": float(result.steps[b] * (result.t[0] / stride)), "void": str(voids[b]),
+    } for b in range(len(faces))]
 
 
 def _run_keywords(run: dict[str, Any]) -> dict[str, Any]:
