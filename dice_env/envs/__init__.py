@@ -15,16 +15,11 @@ from dice_env.envs.vector import DiceThrowVectorEnv
 ENV_ID = "DiceThrow-v0"
 
 
-def _register(task: NamedTask) -> None:
-    """Register ``task`` (once per process: a reload keeps the registration)."""
-    if task.id not in registry:
-        register(id=task.id, entry_point="dice_env.envs.dice_throw:DiceThrowEnv",
-                 vector_entry_point="dice_env.envs.vector:DiceThrowVectorEnv",
-                 kwargs=dict(task.keywords))
-
-
 for _named in TASKS:
-    _register(_named)
+    if _named.id not in registry:  # once per process: a reload keeps the registration
+        register(id=_named.id, entry_point="dice_env.envs.dice_throw:DiceThrowEnv",
+                 vector_entry_point="dice_env.envs.vector:DiceThrowVectorEnv",
+                 kwargs=dict(_named.keywords))
 del _named
 
 __all__ = ["ENV_ID", "TASKS", "DiceThrowEnv", "DiceThrowSB3VecEnv", "DiceThrowVectorEnv",

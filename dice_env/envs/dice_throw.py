@@ -33,10 +33,7 @@ def observation_space(task: ThrowTask) -> spaces.Box:
 
 
 def action_space(task: ThrowTask | None = None) -> spaces.Box:
-    """Release velocity (3) and angular velocity (3), scaled to ±max_speed, ±max_spin.
-
-    With ``set_dice`` also a rotation vector per die (``task.action_dim``; None: one die's 6).
-    """
+    """Actions in [-1, 1]: velocity and spin, and with ``set_dice`` 3 per die (None: one die)."""
     return spaces.Box(-1.0, 1.0, (ACTION_DIM if task is None else task.action_dim,), np.float32)
 
 

@@ -523,8 +523,7 @@ def _numeral_face(centre: np.ndarray, axes: np.ndarray, flat: np.ndarray,
         widths.append(np.full(len(glyph), STROKE * height))
     strokes, widths = np.concatenate(strokes), np.concatenate(widths)
     reach = float(np.linalg.norm(strokes, axis=-1).max() + widths.max())
-    return FaceArt(centre, axes, _edge_lines(flat), np.zeros((0, 2)), 0.0, strokes, widths,
-                    reach)
+    return FaceArt(centre, axes, _edge_lines(flat), np.zeros((0, 2)), 0.0, strokes, widths, reach)
 
 
 @lru_cache(maxsize=256)
@@ -577,8 +576,7 @@ def _figure_d20() -> np.ndarray:
     """A d20 at rest on the default table showing 20, seen close."""
     scene = Scene(die=Die.standard("d20"))
     position, orientation = resting(scene.die, 20, turn=0.3 + math.pi)
-    return render_die(scene, position, orientation, size=(360, 480), elevation=40.0,
-                      view_edges=2.6)
+    return render_die(scene, position, orientation, size=(360, 480), elevation=40.0, view_edges=2.6)
 
 
 def _figure_tray() -> np.ndarray:
@@ -590,10 +588,7 @@ def _figure_tray() -> np.ndarray:
 
 
 def _figure_pair(frames: int = 6) -> np.ndarray:
-    """Two d6 thrown together into the tray: a seeded, simulated throw.
-
-    ``frames`` frames from the release to the decided faces, side by side.
-    """
+    """Two d6 thrown together into the tray, ``frames`` frames of a seeded throw side by side."""
     from dice_env.simulation.group import GroupState, simulate_group
     from dice_env.simulation.simulate import State
 

@@ -81,8 +81,7 @@ class DiceThrowSB3VecEnv(VecEnv):
                    for key, value in info["final_info"].items() if not key.startswith("_")}
         columns["terminal_observation"] = info["final_obs"]
         columns["TimeLimit.truncated"] = (truncated & ~terminated).tolist()
-        infos = [{key: column[i] for key, column in columns.items()}
-                 for i in range(self.num_envs)]
+        infos = [{key: column[i] for key, column in columns.items()} for i in range(self.num_envs)]
         dones = np.logical_or(terminated, truncated)
         return obs, rewards.astype(np.float32), dones, infos
 

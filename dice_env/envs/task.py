@@ -174,8 +174,7 @@ class ThrowTask:
     def n_faces(self) -> int:
         """Faces of the one die: its targets are 1 … ``n_faces`` (several dice: :attr:`faces`)."""
         if self.n_dice > 1:
-            raise ValueError("n_faces is one die's; a throw of several dice has faces (one "
-                             "count per die)")
+            raise ValueError("n_faces is one die's; several dice have faces, one count per die")
         return self.faces[0]
 
     @property
@@ -303,8 +302,7 @@ class ThrowTask:
                 draws[j, i] = _orientation_draw(rng, orientation_mode, self.faces[j])
         hands = np.stack([_orientations(orientation_mode, draws[j], die)
                           for j, die in enumerate(self.dice)], axis=1)
-        return (targets.reshape(n, *self.target_shape),
-                hands.reshape(n, *self.die_shape, 3, 3))
+        return (targets.reshape(n, *self.target_shape), hands.reshape(n, *self.die_shape, 3, 3))
 
     def sample_noise(self, rng: np.random.Generator, n: int = 1) -> np.ndarray:
         """Hand noise for ``n`` throws: standard normals (n, :attr:`noise_dim`)."""
@@ -324,10 +322,7 @@ class ThrowTask:
         return obs
 
     def decode(self, observations: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Targets and hands from observations (n, :attr:`obs_dim`), as :meth:`observe` took.
-
-        The float32 matrices are projected onto the nearest rotations, ready for :meth:`throw`.
-        """
+        """Targets and hands (the nearest rotations) from :meth:`observe`'s observations."""
         observations = np.atleast_2d(np.asarray(observations, dtype=np.float64))
         if observations.shape[1] != self.obs_dim:
             raise ValueError(f"observations must have {self.obs_dim} columns, got "
@@ -340,8 +335,7 @@ class ThrowTask:
             ends = np.cumsum(self.faces)
             targets = np.stack([encoding[:, end - f:end].argmax(axis=1) + 1
                                 for f, end in zip(self.faces, ends, strict=True)], axis=1)
-        return (targets.reshape(n, *self.target_shape),
-                (u @ vt).reshape(n, *self.die_shape, 3, 3))
+        return (targets.reshape(n, *self.target_shape), (u @ vt).reshape(n, *self.die_shape, 3, 3))
 
     def release(self, actions: np.ndarray, hands: np.ndarray,
                 noise: np.ndarray | Sequence[np.random.Generator], *,
@@ -390,8 +384,7 @@ class ThrowTask:
         n, by_face = len(clipped), self.target == "faces"
         targets = np.array(targets, dtype=np.int64).reshape(n, *self.target_shape)
         result = self._simulate(state, record_every)
-        leaning = (~result.read if isinstance(result, GroupResult)
-                   else np.zeros((n, 1), np.bool_))
+        leaning = (~result.read if isinstance(result, GroupResult) else np.zeros((n, 1), np.bool_))
         speed = np.linalg.norm(state.velocity, axis=-1).reshape(n, -1)
         spin = np.linalg.norm(state.angular_velocity, axis=-1).reshape(n, -1)
         fair = np.all((speed >= self.min_speed) & (spin >= self.min_spin), axis=1)
@@ -483,10 +476,7 @@ def void_reasons(fair: np.ndarray, unstable: np.ndarray, sunk: np.ndarray, ended
 
 def target_alignment(orientation: np.ndarray, die: Die, targets: np.ndarray,
                      normal: np.ndarray) -> np.ndarray:
-    """``n_target . n_table`` of each throw, (n,): 1 with the target up, -1 with it down.
-
-    ``orientation`` (n, 3, 3) the die's at the end, ``targets`` (n,) its target faces.
-    """
+    """``n_target . n_table`` (n,) of the die's final ``orientation``: 1 target up, -1 down."""
     return np.einsum("bij,bj,i->b", orientation, die.reading[np.asarray(targets) - 1], normal)
 
 
@@ -613,8 +603,7 @@ def _orientations(mode: str, draws: np.ndarray, die: Die) -> np.ndarray:
     if mode == "uniform":
         return uniform_rotations(draws.T)
     if mode == "flat":
-        return np.stack([_z_turn(turn) @ face_up_rotation(die, int(f) + 1)
-                         for f, turn, _ in draws])
+        return np.stack([_z_turn(turn) @ face_up_rotation(die, int(f) + 1) for f, turn, _ in draws])
     return np.tile(np.eye(3), (len(draws), 1, 1))
 
 

@@ -53,10 +53,7 @@ class DiceThrowVectorEnv(VectorEnv):
 
     def reset(self, *, seed: int | list[int | None] | None = None,
               options: dict[str, Any] | None = None) -> tuple[np.ndarray, dict[str, Any]]:
-        """Seed (``seed + i`` per env, or a list) and draw every env's hand and target.
-
-        ``options`` as the single env's, applied to all envs.
-        """
+        """Seed (``seed + i`` per env, or a list) and reset every env with ``options``."""
         if seed is None or isinstance(seed, (int, np.integer)):
             seeds = [None if seed is None else int(seed) + i for i in range(self.num_envs)]
         else:

@@ -61,7 +61,6 @@ def screenshot(page: str | Path, path: str | Path, *, t: float | None = None,
                size: tuple[int, int] = (1000, 700)) -> Path:
     """A PNG of ``page`` at simulated time ``t`` (s; None: the end of the first throw)."""
     with opened(page, size) as tab:
-        tab.evaluate("t => window.diceViewer.setTime(t)",
-                     1e9 if t is None else float(t))
+        tab.evaluate("t => window.diceViewer.setTime(t)", 1e9 if t is None else float(t))
         tab.screenshot(path=str(path))
     return Path(path)

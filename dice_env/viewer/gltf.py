@@ -130,8 +130,7 @@ class _Blob:
         if texture is None:
             pbr.baseColorFactor = [*_linear(colour), 1.0]
         else:
-            self.gltf.images.append(gl.Image(bufferView=self.view(texture),
-                                             mimeType="image/png"))
+            self.gltf.images.append(gl.Image(bufferView=self.view(texture), mimeType="image/png"))
             self.gltf.textures.append(gl.Texture(sampler=0, source=len(self.gltf.images) - 1))
             pbr.baseColorTexture = gl.TextureInfo(index=len(self.gltf.textures) - 1)
         self.gltf.materials.append(gl.Material(name=name, pbrMetallicRoughness=pbr,
@@ -178,22 +177,21 @@ def _animate(blob: _Blob, recording: Recording) -> None:
                 sampler=len(samplers) - 1, target=gl.AnimationChannelTarget(node=i, path=path)))
         blob.gltf.nodes[i].translation = recording.position[0, i].tolist()
         blob.gltf.nodes[i].rotation = quaternions[0, i].tolist()
-    blob.gltf.animations.append(gl.Animation(name=ANIMATION, samplers=samplers,
-                                             channels=channels))
+    blob.gltf.animations.append(gl.Animation(name=ANIMATION, samplers=samplers, channels=channels))
 
 
 def _surroundings(blob: _Blob, recording: Recording) -> None:
-    """Nodes of the floor and of each wall as quads around where the dice go.
-
-    The floor covers the dice's corners, the walls' corners and each wall's point nearest
-    the dice, :data:`MARGIN` beyond.
-    """
+    """Nodes of the floor and of each wall as quads, :data:`MARGIN` beyond where the dice go."""
     floor, walls = recording.scene.ground, recording.scene.walls
     normal = np.asarray(floor.normal)
     axes = np.array(_plane_axes(normal))  # in the floor, axes[0] x axes[1] = normal
     origin = normal * floor.offset
     lines = [_floor_line(wall, axes, origin) for wall in walls]
-    dice = (_corners(recording) - origin) @ axes.T
+    corners = np.concatenate([  # every die's at every frame
+        (recording.position[:, i, None] + np.einsum("nij,vj->nvi", recording.orientation[:, i],
+                                                     die.vertices_body)).reshape(-1, 3)
+        for i, die in enumerate(recording.dice)])
+    dice = (corners - origin) @ axes.T
     middle = (dice.min(axis=0) + dice.max(axis=0)) / 2
     feet = [middle + (line[2] - line[:2] @ middle) * line[:2] / (line[:2] @ line[:2])
             for line in lines if line[:2] @ line[:2] > 1e-18]  # the walls' nearest points
@@ -224,14 +222,6 @@ def _quad(blob: _Blob, name: str, corners: np.ndarray, normal: np.ndarray,
     mesh = blob.mesh(name, corners, np.tile(normal, (4, 1)), np.array([(0, 1, 2), (0, 2, 3)]),
                      material)
     blob.gltf.nodes.append(gl.Node(name=name, mesh=mesh))
-
-
-def _corners(recording: Recording) -> np.ndarray:
-    """Every die's corners at every frame, world frame (M, 3)."""
-    return np.concatenate([
-        (recording.position[:, i, None] + np.einsum("nij,vj->nvi", recording.orientation[:, i],
-                                                     die.vertices_body)).reshape(-1, 3)
-        for i, die in enumerate(recording.dice)])
 
 
 def _floor_line(wall: Plane, axes: np.ndarray, origin: np.ndarray) -> np.ndarray:

@@ -113,8 +113,7 @@ def _shape(die: Die) -> dict[str, Any]:
 def _throw_view(recording: Recording, shapes: dict[Die, int]) -> dict[str, Any]:
     """What the page draws of a throw besides its dice' frames: shapes, extent, floor, walls.
 
-    ``centre``: the middle of the dice' path on the floor; ``radius``: the horizontal reach
-    of the path (and of the walls near it) from there; ``size``: the largest die's.
+    ``radius``: the horizontal reach of the dice' path (and of walls near it) from ``centre``.
     """
     dice = [shapes.setdefault(die, len(shapes)) for die in recording.dice]
     size = max(die.size for die in recording.dice)
@@ -126,9 +125,10 @@ def _throw_view(recording: Recording, shapes: dict[Die, int]) -> dict[str, Any]:
     near = [abs(float(np.dot(w.normal, centre)) - w.offset) for w in walls]
     radius = max([reach, 6 * size] + [d + size for d in near if d < 4 * reach])
     height = max(3 * size, min(float(high[2]) + size, radius / 2))
+    u, w = _basis(np.asarray(floor.normal, dtype=np.float64))  # the floor's axes
     return {"dice": dice, "size": size, "centre": _rounded(centre), "radius": radius,
-            "floor": _floor(floor, centre), "walls": _walls(recording.scene, centre, radius,
-                                                           height)}
+            "floor": {"point": _rounded(centre), "u": _rounded(u), "w": _rounded(w)},
+            "walls": _walls(recording.scene, centre, radius, height)}
 
 
 def _onto(plane: Any, point: np.ndarray) -> np.ndarray:
@@ -144,12 +144,6 @@ def _basis(normal: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     u /= np.linalg.norm(u)
     w = np.cross(normal, u)
     return u, (w if w[2] >= 0 else -w)
-
-
-def _floor(plane: Any, centre: np.ndarray) -> dict[str, list[float]]:
-    """The floor plane as the page draws it: a point (under ``centre``) and two axes in it."""
-    u, w = _basis(np.asarray(plane.normal, dtype=np.float64))
-    return {"point": _rounded(centre), "u": _rounded(u), "w": _rounded(w)}
 
 
 def _walls(scene: Scene, centre: np.ndarray, radius: float,

@@ -15,9 +15,7 @@ def task_throws(task: ThrowTask, actions: np.ndarray, targets: Any, hands: np.nd
                 titles: list[str] | None = None) -> list[Recording]:
     """The recordings of ``task.throw(actions, targets, hands, noise)``, one per throw.
 
-    Each is the same throw as the task's (its release, its run keywords), recorded; the
-    task's void reason (e.g. ``"foul"``) is kept, its ``target`` and ``success`` join the
-    outcome, and ``titles`` default to the target and the outcome.
+    The task's void reason is kept, its ``target`` and ``success`` join the outcome.
     """
     throw = task.throw(actions, targets, hands, noise)
     state, _ = task.release(actions, hands, noise)
