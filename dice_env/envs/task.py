@@ -298,8 +298,11 @@ class ThrowTask:
                 targets[i] = rng.integers(1, faces + 1)
             else:
                 targets[i] = rng.integers(self.totals[0], self.totals[-1] + 1)
-            for j in range(self.n_dice):
-                draws[j, i] = _orientation_draw(rng, orientation_mode, self.faces[j])
+            for j in range(self.n_dice):  # three uniforms, or a face and a turn, or nothing
+                if orientation_mode == "uniform":
+                    draws[j, i] = rng.random(3)
+                elif orientation_mode == "flat":
+                    draws[j, i, :2] = rng.integers(0, self.faces[j]), rng.uniform(0, 2 * np.pi)
         hands = np.stack([_orientations(orientation_mode, draws[j], die)
                           for j, die in enumerate(self.dice)], axis=1)
         return (targets.reshape(n, *self.target_shape), hands.reshape(n, *self.die_shape, 3, 3))
@@ -589,17 +592,8 @@ def _rotation_matrices(vectors: np.ndarray) -> np.ndarray:
     return quaternion_to_matrix(quaternions).reshape(*np.shape(vectors)[:-1], 3, 3)
 
 
-def _orientation_draw(rng: np.random.Generator, mode: str, n_faces: int) -> np.ndarray:
-    """The draws (3,) of one hand orientation: three uniforms, a face and a turn, or none."""
-    if mode == "uniform":
-        return rng.random(3)
-    if mode == "flat":
-        return np.array([rng.integers(0, n_faces), rng.uniform(0, 2 * np.pi), 0.0])
-    return np.zeros(3)
-
-
 def _orientations(mode: str, draws: np.ndarray, die: Die) -> np.ndarray:
-    """Hand orientations (n, 3, 3) of ``die`` from :func:`_orientation_draw`'s draws (n, 3)."""
+    """Hand orientations (n, 3, 3) of ``die`` from :meth:`ThrowTask.sample_hands`' draws (n, 3)."""
     if mode == "uniform":
         return uniform_rotations(draws.T)
     if mode == "flat":
