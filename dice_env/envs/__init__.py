@@ -1,8 +1,7 @@
 """Gymnasium environments: DiceThrow-v0 (single and natively batched), its named tasks, SB3.
 
-Importing :mod:`dice_env` registers ``DiceThrow-v0`` and the named tasks beside it
-(:data:`dice_env.envs.tasks.TASKS`), so both ``gym.make("DiceThrow-v0")`` after
-``import dice_env`` and ``gym.make("dice_env:DiceThrow-v0")`` work.
+Importing :mod:`dice_env` registers ``DiceThrow-v0`` and the named tasks
+(:data:`dice_env.envs.tasks.TASKS`); ``gym.make("dice_env:DiceThrow-v0")`` imports it.
 """
 
 from gymnasium.envs.registration import register, registry

@@ -5,9 +5,8 @@
 
 or by hand: ``DiceThrowSB3VecEnv(gym.make_vec("DiceThrow-v0", num_envs=16))``.
 
-Every step ends every episode: ``dones`` is all True, ``infos[i]["terminal_observation"]``
-holds env ``i``'s dice at rest, the observations are the next episodes'. ``infos[i]`` carries
-the single env's info keys, plus ``"TimeLimit.truncated": False``.
+Every step ends every episode (``dones`` all True); ``infos[i]`` holds the single env's info,
+``"terminal_observation"`` (the dice at rest) and ``"TimeLimit.truncated": False``.
 """
 
 from __future__ import annotations

@@ -1,7 +1,6 @@
 """The DiceThrow task as pure functions over a batch: hands, noise, releases, throws, rewards.
 
-Everything the environments do with physics lives here, so the single env, the vector env, the
-SB3 adapter and an oracle that searches throws under the env's own hand noise share one code path:
+The single env, the vector env, the SB3 adapter and the oracle share this one code path:
 
     task = make_task(release_height=0.015)
     target, hand = task.sample_hand(rng)                 # one episode's context

@@ -31,9 +31,8 @@ def opened(page: str | Path, size: tuple[int, int] = (1000, 700),
            errors: list[str] | None = None) -> Iterator[Any]:
     """``page`` open and drawn in headless Chromium: yields Playwright's page object.
 
-    ``size``: the viewport (width, height) in CSS pixels. ``errors``, when given, collects
-    the console's errors and the page's uncaught exceptions. Raises ``RuntimeError`` where
-    Chromium or Playwright is missing.
+    ``size``: the viewport (width, height) in CSS pixels; ``errors`` collects console errors and
+    uncaught exceptions. ``RuntimeError`` where Chromium or Playwright is missing.
     """
     browser_path = chromium()
     if browser_path is None:

@@ -34,9 +34,8 @@ def write_html(recordings: Recording | Sequence[Recording], path: str | Path, *,
                layout: str = "sequence", title: str | None = None) -> Path:
     """Write a page of ``recordings`` to ``path`` (``.html``) and return the path.
 
-    ``layout``: ``"sequence"`` (one throw at a time, playing on to the next) or ``"side"``
-    (all at once, side by side); the page can switch. ``title``: the page's caption (default
-    a single recording's title, else ``"dice_env throws"``).
+    ``layout``: ``"sequence"`` (one throw after another) or ``"side"`` (side by side); the page
+    can switch. ``title``: default a single recording's title, else ``"dice_env throws"``.
     """
     if isinstance(recordings, Recording):
         items = [recordings]
