@@ -52,9 +52,8 @@ def check_frame_memory(render_mode: str | None, t_max: float, width: int, height
     if render_mode == "rgb_array_list" and size > MAX_FRAME_BYTES:
         raise ValueError(
             f"t_max must be at most {MAX_FRAME_BYTES / (width * height * 3 * RENDER_FPS):.4g} s "
-            f"with render_mode='rgb_array_list' at {width}x{height}: a throw that does not "
-            f"settle keeps t_max x {RENDER_FPS} frames, {size / 2**30:.3g} GiB at "
-            f"t_max={t_max:g} s (at most 1 GiB); lower t_max or render_width/render_height")
+            f"with render_mode='rgb_array_list' at {width}x{height} (at most 1 GiB of frames), "
+            f"got t_max={t_max:g} s ({size / 2**30:.3g} GiB); lower t_max or the render size")
 
 
 def configure(env: Any, modes: tuple[str, ...], render_mode: str | None = None, *,

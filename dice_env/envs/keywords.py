@@ -176,9 +176,8 @@ def _check_sink(scene: Scene) -> None:
     if sink > MAX_SINK * die.size:
         raise ValueError(
             f"the die's weight would press a flat face's corners {sink:.3g} m into the table, "
-            f"more than {MAX_SINK} of the die's size ({die.size:g} m): mass={die.mass:g} kg, "
-            f"gravity={scene.gravity:g} m/s^2, stiffness={ground.stiffness:g} N/m; raise "
-            "stiffness or size, or lower mass or gravity")
+            f"more than {MAX_SINK} of its size ({die.size:g} m): mass={die.mass:g} kg, "
+            f"gravity={scene.gravity:g} m/s^2, stiffness={ground.stiffness:g} N/m")
 
 
 def _check_steps(scene: Scene) -> None:

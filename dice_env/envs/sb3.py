@@ -50,9 +50,8 @@ class DiceThrowSB3VecEnv(VecEnv):
 
     def __init__(self, venv: VectorEnv) -> None:
         if not isinstance(venv, DiceThrowVectorEnv):
-            raise ValueError(f"venv must be an unwrapped DiceThrowVectorEnv (gym.make_vec("
-                             f"'DiceThrow-v0', n)); wrap the adapter in SB3's VecEnv wrappers "
-                             f"instead; got {type(venv).__name__}")
+            raise ValueError(f"venv must be an unwrapped DiceThrowVectorEnv (wrap the adapter in "
+                             f"SB3's wrappers instead), got {type(venv).__name__}")
         self.venv = venv
         self._actions: np.ndarray | None = None
         super().__init__(venv.num_envs, venv.single_observation_space, venv.single_action_space)
