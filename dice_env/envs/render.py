@@ -338,9 +338,9 @@ def _floor(scene: Scene, centre: np.ndarray, floor: _Lines, dice: _Dice,
     image = np.where(grid[..., None], colour * 1.25, colour)
     shadow, normal = np.zeros_like(grid), np.asarray(scene.ground.normal)
     for die, offset, orientation in dice:
-        corners = np.asarray(die.vertices) @ orientation.T + offset  # dropped onto the floor:
-        lift = corners @ normal + normal @ centre - scene.ground.offset
-        rows, cols = _box(corners - np.outer(lift, normal), floor, xs, ys)
+        corners = np.asarray(die.vertices) @ orientation.T + offset
+        lift = corners @ normal + normal @ centre - scene.ground.offset  # above the floor
+        rows, cols = _box(corners - np.outer(lift, normal), floor, xs, ys)  # the shadow's box
         t, _ = _clip(_die_planes(die, orientation, offset), floor, xs[cols], ys[rows])
         shadow[rows, cols] |= np.isfinite(t)
     image *= np.where(shadow, 0.55, 1.0)[..., None]
