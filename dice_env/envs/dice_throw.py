@@ -9,7 +9,6 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from dice_env.envs.keywords import check_int
 from dice_env.envs.task import (
     ACTION_DIM,
     ORIENTATION_DIM,
@@ -18,7 +17,7 @@ from dice_env.envs.task import (
     check_rotation,
     make_task,
 )
-from dice_env.model.checks import as_floats
+from dice_env.model.checks import as_floats, check_int
 
 RENDER_MODES = ("human", "rgb_array", "rgb_array_list")
 RENDER_FPS = 30

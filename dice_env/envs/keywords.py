@@ -25,14 +25,6 @@ ENV_MAX_STEPS = 10**7
 MAX_SINK = 0.1  # the weight's sink of a flat die's corners into the table, in die sizes
 
 
-def check_int(name: str, value: object, low: int, high: int) -> int:
-    """``value`` as an int in [``low``, ``high``], or ``ValueError`` naming ``name``."""
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not (
-            low <= value <= high):
-        raise ValueError(f"{name} must be an int in [{low}, {high}], got {value!r}")
-    return int(value)
-
-
 def check_face(name: str, value: object, n_faces: int = 6) -> int:
     """``value`` as a face label 1 … ``n_faces``, or ``ValueError`` naming ``name``."""
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)):

@@ -20,9 +20,8 @@ from typing import Any
 
 import numpy as np
 
-from dice_env.envs.keywords import check_int
 from dice_env.envs.task import ThrowTask
-from dice_env.model.checks import check_finite, check_positive, check_range
+from dice_env.model.checks import check_finite, check_int, check_positive, check_range
 from dice_env.model.die import Die
 from dice_env.model.rotations import axis_angle
 from dice_env.model.scene import Scene

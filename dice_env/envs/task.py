@@ -21,8 +21,8 @@ from typing import Any
 
 import numpy as np
 
-from dice_env.envs.keywords import ENV_MAX_STEPS, SceneKeywords, check_face, check_int, check_scene
-from dice_env.model.checks import as_floats, check_nonnegative, check_positive
+from dice_env.envs.keywords import ENV_MAX_STEPS, SceneKeywords, check_face, check_scene
+from dice_env.model.checks import as_floats, check_int, check_nonnegative, check_positive
 from dice_env.model.die import Die
 from dice_env.model.rotations import (
     orthonormality_error,

@@ -17,8 +17,8 @@ from dice_env.envs.dice_throw import (
     episode_hand,
     observation_space,
 )
-from dice_env.envs.keywords import check_int
 from dice_env.envs.task import ThrowTask
+from dice_env.model.checks import check_int
 
 MAX_NUM_ENVS = 2**20  # about 1 kB per env in the kernel's and the env's arrays
 

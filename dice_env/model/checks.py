@@ -39,8 +39,8 @@ def check_range(name: str, value: float, low: float, high: float, *, low_open: b
 
 
 def check_int(name: str, value: object, low: int, high: int | None = None, *,
-              also: str = "") -> None:
-    """Raise ``ValueError`` unless ``value`` is an int (not a bool) in ``[low, high]``.
+              also: str = "") -> int:
+    """``value`` as an int (not a bool) in ``[low, high]``, else a ``ValueError`` naming ``name``.
 
     No ``high``: ``>= low``; ``also`` is added to the allowed range in the message.
     """
@@ -48,6 +48,7 @@ def check_int(name: str, value: object, low: int, high: int | None = None, *,
             or (high is not None and value > high)):
         allowed = f">= {low}" if high is None else f"in [{low}, {high}]"
         raise ValueError(f"{name} must be an int {allowed}{also}, got {value!r}")
+    return int(value)
 
 
 def check_bool(name: str, value: object) -> None:

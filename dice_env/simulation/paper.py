@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from dice_env.model.checks import as_batch, check_positive
+from dice_env.model.checks import as_batch, check_int, check_positive
 from dice_env.model.die import Die
 from dice_env.model.scene import ContactLaw, FrictionLaw, Ground, Scene, Scheme
 from dice_env.simulation.simulate import Result, State, simulate
@@ -80,8 +80,7 @@ def _run(L0: object, rotation: bool, *, clockmax: int, tmax: float = 10.0,
          contact_law: ContactLaw = ContactLaw.PAPER, allow_unstable: bool = False,
          **listing: object) -> PaperRun:
     """Either listing's run; ``listing``: :func:`paper_scene`'s other keywords."""
-    if not isinstance(clockmax, (int, np.integer)) or clockmax < 1:
-        raise ValueError(f"clockmax must be an int >= 1, got {clockmax!r}")
+    check_int("clockmax", clockmax, 1)
     check_positive("tmax", tmax)
     # built at its own step, then checked once with the run's step, time and law
     listing_scene = paper_scene(**listing, dt=None, rotation=rotation)

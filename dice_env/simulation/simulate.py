@@ -455,8 +455,7 @@ def thread_count(num_threads: int | None) -> int:
     most = numba.config.NUMBA_NUM_THREADS
     if num_threads is None:
         return most
-    check_int("num_threads", num_threads, 1, most, also=" (NUMBA_NUM_THREADS) or None")
-    return int(num_threads)
+    return check_int("num_threads", num_threads, 1, most, also=" (NUMBA_NUM_THREADS) or None")
 
 
 def run_kernel(kind: str, inputs: tuple, outcome: tuple, *, batch: int, threads: int,

@@ -13,6 +13,7 @@ from functools import lru_cache
 import numpy as np
 
 from dice_env.envs.render import FACE_COLOUR, RIM_WIDTH, face_art, face_colour
+from dice_env.model.checks import check_int
 from dice_env.model.die import Die
 
 SUPERSAMPLE = 3  # subpixels a side averaged into one texture pixel (antialiasing)
@@ -31,8 +32,7 @@ def face_atlas(die: Die, pixels: int = 128) -> tuple[np.ndarray, np.ndarray]:
     """
     if not isinstance(die, Die):
         raise TypeError(f"die must be a Die, got {type(die).__name__}")
-    if isinstance(pixels, bool) or not isinstance(pixels, (int, np.integer)) or pixels < 8:
-        raise ValueError(f"pixels must be an int >= 8, got {pixels!r}")
+    check_int("pixels", pixels, 8)
     arts, vertices = face_art(die), np.asarray(die.vertices)
     columns = math.ceil(math.sqrt(len(arts)))
     rows = -(-len(arts) // columns)

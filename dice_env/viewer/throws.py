@@ -7,6 +7,7 @@ from typing import Any
 import numpy as np
 
 from dice_env.envs.task import ThrowTask
+from dice_env.model.checks import check_int
 from dice_env.viewer.recording import FPS, Recording, record
 
 
@@ -35,8 +36,7 @@ def task_throws(task: ThrowTask, actions: np.ndarray, targets: Any, hands: np.nd
 
 def random_throws(task: ThrowTask, count: int, seed: int, *, fps: float = FPS) -> list[Recording]:
     """``count`` throws of uniformly random actions from hands drawn as the env draws them."""
-    if not isinstance(count, int) or count < 1:
-        raise ValueError(f"count must be an int >= 1, got {count!r}")
+    check_int("count", count, 1)
     rng = np.random.default_rng(seed)
     rngs = [np.random.default_rng([seed, k]) for k in range(count)]
     targets, hands = task.sample_hands(rngs)
