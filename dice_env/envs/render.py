@@ -201,8 +201,8 @@ def _render(scene: Scene, dice: _Dice, centre: np.ndarray, view: float,
         shade = 0.45 + 0.55 * np.maximum(0.0, planes[:, :3] @ light)
         image[near] = WALL_COLOUR * shade[face[near], None]
     nearest = np.full((height, width), np.inf)  # the nearest die drawn so far
-    for die, offset, orientation in dice:
-        _draw_die(image, depth, nearest, die, offset, orientation, camera, xs, ys, scale, light)
+    for pose in dice:
+        _draw_die(image, depth, nearest, pose, camera, xs, ys, scale, light)
     return np.clip(image, 0, 255).astype(np.uint8)
 
 
@@ -359,14 +359,16 @@ def _box(points: np.ndarray, lines: _Lines, xs: np.ndarray,
 
 # --- the die ------------------------------------------------------------------------------
 
-def _draw_die(image: np.ndarray, depth: np.ndarray, nearest: np.ndarray, die: Die,
-              offset: np.ndarray, orientation: np.ndarray, camera: _Lines, xs: np.ndarray,
+def _draw_die(image: np.ndarray, depth: np.ndarray, nearest: np.ndarray,
+              pose: tuple[Die, np.ndarray, np.ndarray], camera: _Lines, xs: np.ndarray,
               ys: np.ndarray, scale: float, light: np.ndarray) -> None:
     """Draw the die into ``image`` in place; a nearer board stays in front, translucent.
 
-    ``camera``: the pixel lines at offsets ``xs``, ``ys`` (``scale`` m per pixel). Drawn only
-    where it is nearer than the dice in ``nearest`` (their depths, updated).
+    ``pose``: the die, its centre from the camera's target and its orientation; ``camera``:
+    the pixel lines at offsets ``xs``, ``ys`` (``scale`` m per pixel). Drawn only where it is
+    nearer than the dice in ``nearest`` (their depths, updated).
     """
+    die, offset, orientation = pose
     rows, cols = _box(np.asarray(die.vertices) @ orientation.T + offset, camera, xs, ys)
     planes = _die_planes(die, orientation, offset)
     t, entry = _clip(planes, camera, xs[cols], ys[rows])
