@@ -237,8 +237,7 @@ def run(out: Path = DOCS, quick: bool = False, throws: int | None = None,
 
     ``throws``: throws of the pair (default :data:`FULL`, :data:`QUICK` with ``quick``).
     """
-    throws = checked_throws(throws, MIN_THROWS)
-    n = throws if throws is not None else QUICK if quick else FULL
+    n = checked_throws(throws, MIN_THROWS, QUICK if quick else FULL)
     bar = progress(2 * n, "pair throws, then first contacts alone")
     start, cpu = time.perf_counter(), time.process_time()
     study = throw(n, seed, bar)
@@ -246,7 +245,7 @@ def run(out: Path = DOCS, quick: bool = False, throws: int | None = None,
     bar.close()
     numbers = _numbers(study, seconds, cpu, np.random.default_rng(seed))
     _plot(study, numbers, out / "figures" / "collisions.png")
-    (out / "collisions.md").write_text(_markdown(study, numbers, seed))
+    (out / "collisions.md").write_text(_markdown(numbers, seed))
     return {k: v for k, v in numbers.items() if isinstance(v, float)}
 
 
@@ -309,8 +308,7 @@ def _plot(study: Collisions, n: dict, path: Path) -> None:
             x = np.sort(first[case][key].ravel())
             ax.plot(x, np.arange(1, len(x) + 1) / len(x), color=colour,
                     label=f"{case} ({len(x)} dice)")
-        ax.set_xlabel(f"{label} ({unit})")
-        ax.set_ylabel("share of dice (cumulative)")
+        ax.set(xlabel=f"{label} ({unit})", ylabel="share of dice (cumulative)")
         ax.grid(alpha=0.3)
         ax.legend(fontsize=8)
     axes[0, 0].set_title("across the first die–die contact, and the same steps alone", fontsize=9)
@@ -334,8 +332,7 @@ def _plot(study: Collisions, n: dict, path: Path) -> None:
                label=f"{case}: {n[f'{case}_entropy1'][0]:.3f} / "
                f"{n[f'{case}_entropy2'][0]:.3f} bits")
     ax.axhline(1 / 6, color="k", ls="--", lw=1)
-    ax.set_xlabel("face (both dice)")
-    ax.set_ylabel("share")
+    ax.set(xlabel="face (both dice)", ylabel="share")
     ax.set_title(f"faces of the met throws (max entropy {np.log2(6):.3f} bits)", fontsize=9)
     ax.legend(fontsize=8)
     save_figure(fig, path)
@@ -354,7 +351,7 @@ def _share(value: tuple) -> str:
     return estimate(value[0], value[1:3]) + counts
 
 
-def _markdown(study: Collisions, n: dict, seed: int) -> str:
+def _markdown(n: dict, seed: int) -> str:
     scene, _ = pair_scene()
     thrown = int(n["throws"])
     entropies = markdown_table(
@@ -366,8 +363,7 @@ def _markdown(study: Collisions, n: dict, seed: int) -> str:
         f" (fewer than the default {FULL}: `python -m dice_env.studies collisions`)")
     verdict = ("more often" if n["change_together"][0] > n["change_apart"][0] else "less often") \
         if n["mcnemar_p"] < 0.01 else "not detectably differently"
-    return study_page("collisions", DieContact=DieContact, HAND=HAND, PERTURBATION=PERTURBATION,
-                      TRAY=TRAY, T_MAX=T_MAX, _quantile_rows=_quantile_rows, _share=_share,
-                      entropies=entropies, n=n, np=np, numba=numba, quick_note=quick_note,
+    return study_page("collisions", globals(), DieContact=DieContact, HAND=HAND, TRAY=TRAY,
+                      T_MAX=T_MAX, entropies=entropies, n=n, numba=numba, quick_note=quick_note,
                       scene=scene, seed=seed, spin=n["together_spin_change"], thrown=thrown,
                       turn_q=n["together_spin_turn"], verdict=verdict)

@@ -52,9 +52,9 @@ def checked_int(name: str, value: object, least: int) -> int:
     return int(value)
 
 
-def checked_throws(throws: object, least: int) -> int | None:
-    """A study's ``throws`` checked: None (the study's own size) or an int >= ``least``."""
-    return None if throws is None else checked_int("throws", throws, least)
+def checked_throws(throws: object, least: int, default: int | None = None) -> int | None:
+    """A study's ``throws`` checked: an int >= ``least``, or ``default`` (its own size) for None."""
+    return default if throws is None else checked_int("throws", throws, least)
 
 
 def code_version(tree: Path = DOCS.parent) -> str:

@@ -13,13 +13,16 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
+import matplotlib.pyplot as plt
 import numpy as np
+from scipy.stats import chi2_contingency, norm
 
 from dice_env.model.rotations import quaternion_to_matrix, random_rotations
 from dice_env.model.scene import FrictionLaw, Scene, Scheme
 from dice_env.model.table import DAMPING, FRICTION, RESTITUTION, STIFFNESS
 from dice_env.simulation.calibration import measured_restitution
 from dice_env.simulation.simulate import Result, State, simulate
+from dice_env.studies.common import SEED, progress
 from dice_env.studies.markdown import markdown_table
 from dice_env.studies.numbers import study_page
 
@@ -146,8 +149,6 @@ def outcome_test(scene: Scene, release: Release, n: int, rng: np.random.Generato
     Two-sample tests: chi-square homogeneity of the 2 x 6 count table (``p_faces``) and the
     two-proportion z-test of the success probability (``p_success``).
     """
-    from scipy.stats import chi2_contingency, norm
-
     fine = scene.with_(dt=scene.step / factor, t_max=T_THROW)
     coarse, cpu = timed(scene.with_(t_max=T_THROW), release.sample(scene, n, rng))
     finer, cpu_fine = timed(fine, release.sample(scene, n, rng))
@@ -229,16 +230,12 @@ def variants() -> dict[str, tuple[Scene, bool]]:
 
 def run(out: Path, quick: bool = False) -> dict[str, float]:
     """Run the study and write ``out/error-vs-runtime.md`` and its figures; headline numbers."""
-    from tqdm import tqdm
-
-    from dice_env.studies.common import SEED
-
     sizes = QUICK if quick else FULL
     rng = np.random.default_rng(SEED)
     scene = Scene()
     compared = {"default": scene, LISTING_FRICTION: variants()[LISTING_FRICTION][0]}
     parts = len(variants()) + len(compared) * (len(RELEASES) + 1) + 3  # gentle, steps, restitution
-    bar = tqdm(total=parts, desc="error study", unit="part")
+    bar = progress(parts, "error study", "part")
     numbers: dict[str, object] = {"scene": scene, "sizes": sizes}
 
     # 1. trajectory error against step and CPU time
@@ -298,8 +295,6 @@ def trajectory_start(scene: Scene, n: int, rng: np.random.Generator) -> State:
 
 
 def _plot_work_precision(curves: dict[str, dict[str, np.ndarray]], path: Path) -> None:
-    import matplotlib.pyplot as plt
-
     fig, (left, right) = plt.subplots(1, 2, figsize=(11, 4.2))
     for name, c in curves.items():
         left.loglog(c["dt"], 1e3 * c["position"], "o-", label=name)
@@ -321,8 +316,6 @@ def _plot_work_precision(curves: dict[str, dict[str, np.ndarray]], path: Path) -
 
 def _plot_agreement(height: np.ndarray, agreement: dict[str, dict[str, np.ndarray]],
                     path: Path) -> None:
-    import matplotlib.pyplot as plt
-
     fig, ax = plt.subplots(figsize=(7.5, 4.2))
     labels = _bin_labels(">")
     x = np.arange(len(labels))
@@ -345,8 +338,6 @@ def _plot_agreement(height: np.ndarray, agreement: dict[str, dict[str, np.ndarra
 
 
 def _plot_outcomes(outcomes: dict[str, dict[str, object]], path: Path) -> None:
-    import matplotlib.pyplot as plt
-
     fig, axes = plt.subplots(1, len(outcomes), figsize=(11, 3.4), sharey=True)
     for ax, (name, o) in zip(axes, outcomes.items(), strict=True):
         counts = o["counts"]
@@ -395,18 +386,16 @@ def write_report(out: Path, numbers: dict[str, object], quick: bool) -> dict[str
         for label, per in outcomes.items()}
 
     text = study_page(
-        "error-vs-runtime", quick=quick, sizes=numbers["sizes"], scene=scene, pen=pen, ratio=ratio,
-        orders=orders, verdicts=verdicts, gentle_steps=gentle_steps,
+        "error-vs-runtime", globals(), quick=quick, sizes=numbers["sizes"], scene=scene, pen=pen,
+        ratio=ratio, orders=orders, verdicts=verdicts, gentle_steps=gentle_steps,
         paper=scene.with_(scheme=Scheme.PAPER),
         paper_gentle=float(gentle["paper scheme, stick-slip, analytic flight"]["step"].mean()),
-        m_ratio=scene.die.mass / scene.effective_mass, restitution=_restitution_table(
-            numbers["restitution"]), work=_work_table(curves),
-        outcome_table=_outcome_table(outcomes), agreement_table=_agreement_table(
-            height, agreement), gentle_table=_gentle_table(gentle), verdict=_verdict,
-        markdown_table=markdown_table, median=np.median, percentile=np.percentile,
-        RESTITUTION=RESTITUTION, FRICTION=FRICTION, STIFFNESS=STIFFNESS, DAMPING=DAMPING,
-        HORIZON=HORIZON, LISTING_FRICTION=LISTING_FRICTION, RELEASES=RELEASES,
-        GENTLE_DIVISORS=GENTLE_DIVISORS)
+        m_ratio=scene.die.mass / scene.effective_mass,
+        restitution=_restitution_table(numbers["restitution"]), work=_work_table(curves),
+        outcome_table=_outcome_table(outcomes), agreement_table=_agreement_table(height, agreement),
+        gentle_table=_gentle_table(gentle), verdict=_verdict, median=np.median,
+        percentile=np.percentile, RESTITUTION=RESTITUTION, FRICTION=FRICTION, STIFFNESS=STIFFNESS,
+        DAMPING=DAMPING)
     (out / "error-vs-runtime.md").write_text(text)
     return {"cpu_ratio_at_equal_error": ratio, "order_default": orders[DEFAULT],
             "gentle_agreement": verdicts["default"]["gentle"],

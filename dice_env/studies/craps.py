@@ -104,14 +104,19 @@ def reasons(result: GroupResult) -> dict[str, np.ndarray]:
 
 
 def tally(result: GroupResult) -> dict[str, object]:
-    """Counted throws, sevens, totals (11,) and voided throws by reason of one cell."""
+    """One cell's counted throws, sevens, totals (11,), voided throws by reason, P(7) and so on.
+
+    ``p7``, ``ci``, ``binom_p``: P(7), its Wilson interval, its binomial p against 1/6.
+    """
     why = reasons(result)
     counted = not_void(why)
     total = result.face.sum(axis=1)[counted]
-    return {"n": int(counted.sum()), "sevens": int((total == 7).sum()),
-            "totals": np.bincount(total, minlength=13)[2:],
+    n, sevens = int(counted.sum()), int((total == 7).sum())
+    return {"n": n, "sevens": sevens, "totals": np.bincount(total, minlength=13)[2:],
             "voided": {k: int(v.sum()) for k, v in why.items()}, "thrown": len(counted),
-            "met": float((result.overlap > 0).mean())}
+            "met": float((result.overlap > 0).mean()), "p7": sevens / n if n else float("nan"),
+            "ci": wilson(sevens, n) if n else np.array([np.nan, np.nan]),
+            "binom_p": float(stats.binomtest(sevens, n, 1 / 6).pvalue) if n else float("nan")}
 
 
 def run(out: Path = DOCS, quick: bool = False, throws: int | None = None,
@@ -120,8 +125,7 @@ def run(out: Path = DOCS, quick: bool = False, throws: int | None = None,
 
     ``throws``: throws per cell (default :data:`FULL`, :data:`QUICK` with ``quick``).
     """
-    throws = checked_throws(throws, MIN_THROWS)
-    n = throws if throws is not None else QUICK if quick else FULL
+    n = checked_throws(throws, MIN_THROWS, QUICK if quick else FULL)
     noises, speeds = (QUICK_NOISES, QUICK_SPEEDS) if quick else (NOISES, SPEEDS)
     rng = np.random.default_rng(seed)
     bar = progress(n * len(noises) * len(speeds) * len(HANDS), "craps throws", "throw")
@@ -130,7 +134,11 @@ def run(out: Path = DOCS, quick: bool = False, throws: int | None = None,
              for noise in noises for speed in speeds for way in HANDS}
     seconds, cpu = time.perf_counter() - start, time.process_time() - cpu
     bar.close()
-    _tests(cells)
+    for (noise, speed, way), c in cells.items():
+        if way == "set":  # Fisher's exact test of the set dice against the random ones
+            r = cells[(noise, speed, "random")]
+            table = [[c["sevens"], c["n"] - c["sevens"]], [r["sevens"], r["n"] - r["sevens"]]]
+            c["fisher_p"] = float(stats.fisher_exact(table).pvalue)
     _plot(cells, noises, speeds, out / "figures" / "craps.png")
     (out / "craps.md").write_text(_markdown(cells, noises, speeds, n, seconds, cpu, seed))
     numbers = {"throws_per_cell": float(n), "seconds": seconds}
@@ -138,20 +146,6 @@ def run(out: Path = DOCS, quick: bool = False, throws: int | None = None,
         numbers[f"p7_{way}_{noise:g}_{speed:g}"] = c["p7"]
     numbers["voided"] = sum(c["thrown"] - c["n"] for c in cells.values()) / (n * len(cells))
     return numbers
-
-
-def _tests(cells: dict) -> None:
-    """Add to each cell its P(7), Wilson interval, binomial p against 1/6 and Fisher p."""
-    for (noise, speed, way), c in cells.items():
-        c["p7"] = c["sevens"] / c["n"] if c["n"] else float("nan")
-        c["ci"] = wilson(c["sevens"], c["n"]) if c["n"] else np.array([np.nan, np.nan])
-        c["binom_p"] = (float(stats.binomtest(c["sevens"], c["n"], 1 / 6).pvalue)
-                        if c["n"] else float("nan"))
-        if way == "set":
-            other = cells[(noise, speed, "random")]
-            table = [[c["sevens"], c["n"] - c["sevens"]],
-                     [other["sevens"], other["n"] - other["sevens"]]]
-            c["fisher_p"] = float(stats.fisher_exact(table).pvalue)
 
 
 def _plot(cells: dict, noises: tuple, speeds: tuple, path: Path) -> None:
@@ -200,10 +194,7 @@ def _markdown(cells: dict, noises: tuple, speeds: tuple, n: int, seconds: float,
             if all(cells[(noise, s, "set")]["binom_p"] >= SIGNIFICANT for s in speeds)]
     command = "python -m dice_env.studies craps" + ("" if n == FULL else f" --throws {n}")
     scene = craps_scene()
-    return study_page("craps", BACKSPIN=BACKSPIN, BACK_WALL=BACK_WALL, CRAPS=CRAPS, LIFT=LIFT,
-                      MAX_SPEED=MAX_SPEED, MAX_SPIN=MAX_SPIN, RELEASE_HEIGHT=RELEASE_HEIGHT,
-                      SIGNIFICANT=SIGNIFICANT, T_MAX=T_MAX, _HEADER=_HEADER, cells=cells,
-                      command=command, controlled=controlled, cpu=cpu, lost=lost,
-                      markdown_table=markdown_table, n=n, noises=noises, np=np, numba=numba,
+    return study_page("craps", globals(), CRAPS=CRAPS, cells=cells, command=command,
+                      controlled=controlled, cpu=cpu, lost=lost, n=n, noises=noises, numba=numba,
                       random_off=random_off, rows=rows, scene=scene, seconds=seconds, seed=seed,
                       speeds=speeds, thrown=thrown, voided_rows=voided_rows)

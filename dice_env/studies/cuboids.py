@@ -74,8 +74,7 @@ def run(out: Path = DOCS, quick: bool = False, seed: int = SEED,
 
     ``throws`` per shape and condition (default :data:`FULL`, or :data:`QUICK` with ``quick``).
     """
-    throws = checked_throws(throws, 20)
-    n = throws if throws is not None else (QUICK if quick else FULL)
+    n = checked_throws(throws, 20, QUICK if quick else FULL)
     ratios = QUICK_RATIOS if quick else RATIOS
     rng = np.random.default_rng(seed)
     bar = progress(len(ratios) * len(CONDITIONS) * n, "cuboid throws", "throw")
@@ -170,6 +169,5 @@ def _markdown(table: dict, ratios: tuple[float, ...], n: int, seed: int, quick: 
         f"{'inside' if ci[0] <= 1 / 3 <= ci[1] else 'OUTSIDE'} the interval."
         for label in labels for _, p, ci in [table[label, 1.0]])
     shares = markdown_table("x/y | y × x (mm) | solid angle | " + " | ".join(labels), rows)
-    return study_page("cuboids", RESTITUTION=RESTITUTION, SOFT=SOFT, command=command,
-                      cube_lines=cube_lines, g=Ground(), n=n, s=GENTLE, seed=seed, shares=shares,
-                      undecided=undecided, v=VIGOROUS)
+    return study_page("cuboids", globals(), command=command, cube_lines=cube_lines, g=Ground(), n=n,
+                      s=GENTLE, seed=seed, shares=shares, undecided=undecided, v=VIGOROUS)

@@ -186,25 +186,22 @@ def run(out: Path = DOCS, quick: bool = False, seed: int = SEED) -> dict[str, fl
     memory_result = throw_batches(scene, memory_state, bar)
     bar.close()
     memory = _memory_table(scene, memory_state, memory_result, bins=5 if quick else 10)
-    fair_energy = throw_energy(scene, fair_state)
-
-    figs = out / "figures"
-    _plot_faces(fair, loaded, figs / "fairness_faces.png")
-    _plot_memory(memory, figs / "fairness_memory_vs_energy.png")
+    _plot_faces(fair, loaded, out / "figures" / "fairness_faces.png")
+    _plot_memory(memory, out / "figures" / "fairness_memory_vs_energy.png")
     numbers = {
         "fair_throws": fair.total, "fair_unsettled": fair.unsettled, "fair_chi2": fair.chi2,
-        "fair_p": fair.p_value, "fair_max_dev": float(np.abs(fair.counts / fair.total - 1 / 6)
-                                                      .max()),
-        "loaded_p6": float(loaded.counts[5] / loaded.total), "loaded_p1": float(
-            loaded.counts[0] / loaded.total), "loaded_p": loaded.p_value,
-        "loaded_unsettled": loaded.unsettled,
+        "fair_p": fair.p_value,
+        "fair_max_dev": float(np.abs(fair.counts / fair.total - 1 / 6).max()),
+        "loaded_p6": float(loaded.counts[5] / loaded.total),
+        "loaded_p1": float(loaded.counts[0] / loaded.total),
+        "loaded_p": loaded.p_value, "loaded_unsettled": loaded.unsettled,
         "memory_unsettled": float(1 - memory_result.settled.mean()),
         "down_gentle": float(memory["p_down"][0]), "down_vigorous": float(memory["p_down"][-1]),
         "up_gentle": float(memory["p_up"][0]), "up_vigorous": float(memory["p_up"][-1]),
-        "fair_energy_median": float(np.median(fair_energy)),
+        "fair_energy_median": float(np.median(throw_energy(scene, fair_state))),
     }
     (out / "fairness.md").write_text(_markdown(scene, loaded_die, fair, loaded, memory, numbers,
-                                               fair_energy, sizes, seed))
+                                               sizes, seed))
     return numbers
 
 
@@ -304,7 +301,7 @@ def _plot_memory(m: dict, path: Path) -> None:
 
 
 def _markdown(scene: Scene, loaded_die: Die, fair: FaceCounts, loaded: FaceCounts, m: dict,
-              n: dict, fair_energy: np.ndarray, sizes: dict, seed: int) -> str:
+              n: dict, sizes: dict, seed: int) -> str:
     def cells(c: FaceCounts, f: int) -> tuple:
         return c.counts[f - 1], f"{c.counts[f - 1] / c.total:.4f}", bracket(c.intervals[f - 1], 4)
 
@@ -317,8 +314,6 @@ def _markdown(scene: Scene, loaded_die: Die, fair: FaceCounts, loaded: FaceCount
         ((f"{m['e_lo'][b]:.3g}–{m['e_hi'][b]:.3g}", f"{m['e_mid'][b]:.3g}", m["n"][b],
           estimate(m["p_down"][b], m["ci_down"][b]), estimate(m["p_up"][b], m["ci_up"][b]))
          for b in range(len(m["n"]))))
-    return study_page("fairness", BATCH=BATCH, T_MAX=T_MAX, _beats_sides=_beats_sides,
-                      _trend=_trend, _vigorous_sentence=_vigorous_sentence, bracket=bracket,
-                      faces=faces, fair=fair, g=scene.ground, loaded=loaded,
-                      loaded_die=loaded_die, m=m, memory=memory, n=n, np=np, scene=scene,
-                      seed=seed, sizes=sizes, v=VIGOROUS)
+    return study_page("fairness", globals(), faces=faces, fair=fair, g=scene.ground, loaded=loaded,
+                      loaded_die=loaded_die, m=m, memory=memory, n=n, scene=scene, seed=seed,
+                      sizes=sizes, v=VIGOROUS)

@@ -206,8 +206,6 @@ def _markdown(results: dict, restitution: dict, energy: dict, sizes: tuple, seco
         (label, name, estimate(*kinds[label].memory("down")), estimate(*kinds[label].memory("up")))
         for label, _ in KINDS for name, kinds in results.items()))
     die = materials.scene("wood").die
-    return study_page("materials", GENTLE=GENTLE, T_MAX=T_MAX, VIGOROUS=VIGOROUS, _hand=_hand,
-                      _kapitaniak=_kapitaniak, die=die, energy=energy, memory=memory,
-                      memory_differs=memory_differs, numba=numba, outcomes=outcomes,
-                      presets=presets, restitution=restitution, results=results, seconds=seconds,
-                      seed=seed, sizes=sizes)
+    return study_page("materials", globals(), die=die, energy=energy, memory=memory, numba=numba,
+                      outcomes=outcomes, presets=presets, restitution=restitution, results=results,
+                      seconds=seconds, seed=seed, sizes=sizes)

@@ -120,10 +120,15 @@ def substitute(template: str, names: dict[str, object], where: str) -> str:
     return FIELD.sub(field, template)
 
 
-def study_page(name: str, **names: object) -> str:
-    """The study page ``docs/templates/NAME.md`` with its fields filled from ``names``."""
+def study_page(name: str, namespace: dict[str, object] | None = None, /, **names: object) -> str:
+    """The study page ``docs/templates/NAME.md`` with its fields filled from ``names``.
+
+    ``namespace``: more names, ``names`` taking precedence (a study passes its ``globals()``, so
+    that its template sees its constants and helpers).
+    """
     path = TEMPLATES / f"{name}.md"
-    return substitute(path.read_text(), names, _shown(path))
+    scope = {k: v for k, v in (namespace or {}).items() if not k.startswith("__")} | names
+    return substitute(path.read_text(), scope, _shown(path))
 
 
 def _shown(path: Path) -> str:

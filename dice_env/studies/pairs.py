@@ -253,8 +253,7 @@ def run(out: Path = DOCS, quick: bool = False, throws: int | None = None,
     ``throws``: throws of the pair (default :data:`FULL`, :data:`QUICK` with ``quick``);
     ``keep``: a folder for the chunks (:func:`chunked_pairs`).
     """
-    throws = checked_throws(throws, MIN_THROWS)
-    n = throws if throws is not None else QUICK if quick else FULL
+    n = checked_throws(throws, MIN_THROWS, QUICK if quick else FULL)
     scene = tray_scene()
     dice = (scene.die, scene.die)
     bar = progress(n, "two-dice throws", "throw")
@@ -350,11 +349,9 @@ def _markdown(pairs: Pairs, n: dict, scene: Scene, seed: int) -> str:
     more = (f"; {FULL:,} throws would narrow it to ±{_half_width(FULL):.4f}."
             if thrown < FULL else ".")
     return study_page(
-        "pairs-markdown", CHUNK=CHUNK, DieContact=DieContact, SIGNIFICANT=SIGNIFICANT,
-        TOTALS=TOTALS, TRAY=TRAY, T_MAX=T_MAX, _detected=_detected, _half_width=_half_width,
-        chi2=chi2, dependence=dependence, dof=dof, faces=faces, full=full, h=HAND,
-        ind_chi2=ind_chi2, met_dependence=met_dependence, missed=missed, more=more, n=n,
-        numba=numba, pairs=pairs, scene=scene, seed=seed, shares=shares, thrown=thrown,
-        totals=totals, triangle=triangle,
+        "pairs-markdown", globals(), TRAY=TRAY, chi2=chi2, dependence=dependence, dof=dof,
+        faces=faces, full=full, h=HAND, ind_chi2=ind_chi2, met_dependence=met_dependence,
+        missed=missed, more=more, n=n, numba=numba, pairs=pairs, scene=scene, seed=seed,
+        shares=shares, thrown=thrown, totals=totals,
         uniform=[f"die {d + 1}: p = {n[f'die{d + 1}_p']:.3g}" for d in range(2)],
         uniformity=uniformity, voided=voided, worst=int(np.argmax(np.abs(shares - triangle()))))

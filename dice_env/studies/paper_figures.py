@@ -281,6 +281,5 @@ def _markdown(n: dict[str, float], throws: dict, stiffnesses: np.ndarray,
         ((f"{s:.3g}", *(int(search[name][i]) for name in search),
           f"{theory_steps(s, False)[0]:.0f}", f"{theory_steps(s, True)[0]:.0f}")
          for i, s in enumerate(stiffnesses)))
-    return study_page("paper_figures", ContactLaw=ContactLaw, THROW_SEED=THROW_SEED, claims=claims,
-                      n=n, np=np, steps=steps, throws=throws)
+    return study_page("paper_figures", globals(), claims=claims, n=n, steps=steps, throws=throws)
 

@@ -315,7 +315,6 @@ def _markdown(fair: dict[str, Faces], loaded: dict[str, Loaded], flight: dict,
         "die from the study's seed; `--chunks DIR` keeps them, `--ray ADDRESS` runs them on Ray): "
         "the same numbers here or on any Ray cluster, not those of a run without chunks.\n"
         if chunked else "")
-    return study_page("shapes", DIE_EDGE=DIE_EDGE, FLIGHT_HEIGHT=FLIGHT_HEIGHT,
-                      FLIGHT_TIME=FLIGHT_TIME, Scene=Scene, _load_verdict=_load_verdict,
-                      command=command, fairness=fairness, flights=flights, g=Scene().ground,
-                      loaded=loaded, loads=loads, note=note, seed=seed, sizes=sizes, v=VIGOROUS)
+    return study_page("shapes", globals(), command=command, fairness=fairness, flights=flights,
+                      g=Scene().ground, loaded=loaded, loads=loads, note=note, seed=seed,
+                      sizes=sizes, v=VIGOROUS)

@@ -252,9 +252,7 @@ def _markdown(stiffnesses: np.ndarray, ratios: np.ndarray, maps: dict, rows: lis
             f"{100 * r['max_penetration']:.3g}% in the throws" for c, r in rows
             if c.group == "mass"]
     return study_page(
-        "stability-markdown", DRIFT_LIMIT=DRIFT_LIMIT, MAP_T_MAX=MAP_T_MAX,
-        _above_stable_phrase=_above_stable_phrase, _indent=_indent,
-        _sweep_sentence=_sweep_sentence, base=base, by_label={c.label: r for c, r in rows},
+        "stability-markdown", globals(), base=base, by_label={c.label: r for c, r in rows},
         d_rows=[(c.label, r) for c, r in rows if c.group == "damping"], flagged=flagged,
         g=base.ground, law_lines=law_lines, n=n, nan_cases=nan_cases, ratios=ratios, sink=sink,
         slip=float(np.degrees(np.arctan(base.ground.friction))),

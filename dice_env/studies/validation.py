@@ -154,7 +154,7 @@ def _bold(verdict: str) -> str:
 def _header(sections: list[tuple[list[tuple[str, str, str, str]], str]], command: str) -> str:
     rows = markdown_table("experiment | real dice | simulator | verdict", (
         (a, b, c, _bold(d)) for summary, _ in sections for a, b, c, d in summary))
-    return study_page("validation-header", SEED=SEED, command=command, rows=rows)
+    return study_page("validation-header", globals(), command=command, rows=rows)
 
 
 def _weldon_section(w: dict) -> tuple[list, str]:
@@ -188,9 +188,9 @@ def _weldon_section(w: dict) -> tuple[list, str]:
                     if t.get("throws_to_resolve") else "")
                  + f"; variance of successes per throw {t['dispersion']:.2f} × the "
                  f"binomial's (1 for independent dice)" if "p" in t else "too few throws")
-    body = study_page("validation-weldon-section", _bold=_bold, dist=dist, dist_line=dist_line,
-                      map=map, math=math, meta=meta, ref=ref, s=weldon.sensitivity(w), sens=sens,
-                      t=t, t_verdict=t_verdict, together=together, wd=wd, weldon=weldon)
+    body = study_page("validation-weldon-section", globals(), dist=dist, dist_line=dist_line,
+                      map=map, meta=meta, ref=ref, s=weldon.sensitivity(w), sens=sens, t=t,
+                      t_verdict=t_verdict, together=together, wd=wd)
     return summary, body
 
 
@@ -206,8 +206,8 @@ def _memory_section(m: dict, command: str) -> tuple[list, str]:
                 f"{high['down'] / high['n']:.3f} (high)", verdict)]
     table = markdown_table("energy | m g a | throws | P(rests on release-down face) [95%] | "
                            "P(release-up face) [95%]", rows)
-    body = study_page("validation-memory-section", ENERGY_RANGE=ENERGY_RANGE, command=command, m=m,
-                      table=table, verdict=verdict)
+    body = study_page("validation-memory-section", globals(), command=command, m=m, table=table,
+                      verdict=verdict)
     return summary, body
 
 
@@ -222,11 +222,9 @@ def _table_section(scene: Scene, restitution: dict[float, float], friction: floa
                 e_verdict),
                ("Sliding friction of the default table", f"{FRICTION_RANGE[0]:g}–"
                 f"{FRICTION_RANGE[1]:g}", f"{friction:.3f} (an input)", f_verdict)]
-    body = study_page("validation-table-section", FRICTION_RANGE=FRICTION_RANGE,
-                      FRICTION_SOURCE=FRICTION_SOURCE, RESTITUTION_RANGE=RESTITUTION_RANGE,
-                      RESTITUTION_SOURCE=RESTITUTION_SOURCE, SLIDE_SPEED=SLIDE_SPEED,
-                      command=command, e_rows=e_rows, e_verdict=e_verdict, f_verdict=f_verdict,
-                      friction=friction, g=scene.ground, table=table)
+    body = study_page("validation-table-section", globals(), command=command, e_rows=e_rows,
+                      e_verdict=e_verdict, f_verdict=f_verdict, friction=friction, g=scene.ground,
+                      table=table)
     return summary, body
 
 
@@ -257,6 +255,6 @@ def _cuboid_section(page: cuboids.Page) -> tuple[list, str]:
                 f"{page.table[record][tall][0]:.3f} at {tall:g}", "prediction"),
                ("Square cuboid at x/y = 1 (the cube) against 1/3", "1/3 by symmetry",
                 f"{page.table[record][1.0][0]:.3f}", check)]
-    body = study_page("validation-cuboid-section", _steepness=_steepness, check=check, cube=cube,
-                      cuboids=cuboids, flat=flat, page=page, record=record, rows=rows, tall=tall)
+    body = study_page("validation-cuboid-section", globals(), check=check, cube=cube, flat=flat,
+                      page=page, record=record, rows=rows, tall=tall)
     return summary, body

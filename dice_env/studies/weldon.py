@@ -529,13 +529,9 @@ def markdown(n: dict) -> str:
         ((v["label"], *(f"{c / sum(v['counts']):.4f}" for c in v["counts"]))
          for key, v in n["alone"].items() if key in ("drilled16", "casino19")))
     ref = n["alone"][VARIANTS[0][0]]
-    return study_page("weldon", BLOCK=BLOCK, CHUNK_TOGETHER=CHUNK_TOGETHER, DICE=DICE,
-                      DieContact=DieContact, EFFECT=EFFECT, T_MAX_TOGETHER=T_MAX_TOGETHER, Z95=Z95,
-                      _distribution_text=_distribution_text, _p_rows=_p_rows, _test=_test,
-                      _together_reach=_together_reach, cup=CUP, faces=faces, math=math,
-                      meta=n["meta"], n=n, p_text=p_text, r=math.hypot(*ref["com_um"]), ref=ref,
-                      s=sensitivity(n), sizes=n["meta"]["sizes"], successes=successes, t=t,
-                      variants=variants, w=w)
+    return study_page("weldon", globals(), cup=CUP, faces=faces, meta=n["meta"], n=n,
+                      r=math.hypot(*ref["com_um"]), ref=ref, s=sensitivity(n),
+                      sizes=n["meta"]["sizes"], successes=successes, t=t, variants=variants, w=w)
 
 
 def _together_reach(t: dict) -> str:
@@ -605,8 +601,7 @@ def _plot(n: dict, path: Path) -> None:
         axes[0].bar(k + 0.2, together / together.sum(), 0.4,
                     label=f"(a) together ({int(together.sum())} throws)")
     axes[0].plot(k, binomial_probabilities(FAIR), "k.--", lw=1, label="binomial at 1/3")
-    axes[0].set_xlabel("dice showing 5 or 6 (of 12)")
-    axes[0].set_ylabel("share of throws")
+    axes[0].set(xlabel="dice showing 5 or 6 (of 12)", ylabel="share of throws")
     axes[0].legend(fontsize=8)
     rows = [("Weldon", n["weldon"])]
     if "p" in n["together"]:
