@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import time
 import warnings
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import matplotlib.pyplot as plt
@@ -86,10 +86,9 @@ def extreme_cases(quick: bool) -> list[Case]:
     cases = [Case("baseline", "default scene", base)]
     for v in (10.0, 100.0):
         cases.append(Case("speed", f"{v:g} edges/s ({v * die.size:.2g} m/s)", base,
-                          Vigour(MODERATE.clearance, (v, v), MODERATE.spin)))
+                          replace(MODERATE, speed=(v, v))))
     for w in (100.0, 1000.0):
-        cases.append(Case("spin", f"{w:g} rad/s", base,
-                          Vigour(MODERATE.clearance, MODERATE.speed, (w, w))))
+        cases.append(Case("spin", f"{w:g} rad/s", base, replace(MODERATE, spin=(w, w))))
     for mu in (0.0, 1.0, 2.0):
         cases.append(Case("friction", f"mu = {mu:g}", base.with_(ground=g.with_(friction=mu))))
     for frac in (0.0, 0.5, 1.0):

@@ -345,13 +345,11 @@ def chunked_together(scene: Scene, throws: int, seed: int, keep: Path | None = N
         cups = cup_throws(scene, size, np.random.default_rng([seed, i]))
         return {k: np.asarray(v) for k, v in asdict(throw_together(scene, cups)).items()}
 
-    parts = [Together(**{f.name: p[f.name] for f in fields(Together)})
-             for p in kept_chunks(throw, throws, chunk, keep, f"together-{seed}", bar, DICE)]
-    return Together(np.concatenate([p.successes for p in parts]),
-                    np.sum([p.faces for p in parts], axis=0),
-                    *(int(sum(getattr(p, k) for p in parts))
-                      for k in ("thrown", "leaning", "undecided")),
-                    float(sum(p.seconds for p in parts)))
+    parts = kept_chunks(throw, throws, chunk, keep, f"together-{seed}", bar, DICE)
+    return Together(np.concatenate([p["successes"] for p in parts]),
+                    np.sum([p["faces"] for p in parts], axis=0),
+                    *(int(sum(p[k] for p in parts)) for k in ("thrown", "leaning", "undecided")),
+                    float(sum(p["seconds"] for p in parts)))
 
 
 def throw_alone(scene: Scene, cups: list[State], bar: object = None) -> Faces:
