@@ -122,7 +122,6 @@ class Die:
             pips, size, mass = with_defaults(name, pips, size, mass)
         size = STANDARD_SIZES[name] if size is None else size
         check_positive("size", size)
-        _check_mass(mass)
         shape = _unit_shape(name)
         vertices = shape.vertices * size
         volume = size * size * size if name == "d6" else polyhedra.mass_properties(
@@ -141,7 +140,6 @@ class Die:
         sides = np.asarray(sides, dtype=np.float64)
         if sides.shape != (3,) or not np.all(np.isfinite(sides)) or np.any(sides <= 0):
             raise ValueError(f"sides must be three finite numbers > 0 (x, y, z), got {sides}")
-        _check_mass(mass)
         x, y, z = (float(s) for s in sides)
         if x == y == z:
             return cls.standard("d6", size=x, mass=mass)
@@ -158,13 +156,12 @@ class Die:
         ``labels`` follows: a permutation of 1 … F, default 1 … F). ``mass`` defaults to
         :data:`DENSITY` times the volume; ``reads_down`` reads the face down.
         """
-        _check_mass(mass)
         if not isinstance(reads_down, (bool, np.bool_)):
             raise ValueError(f"reads_down must be a bool, got {reads_down!r}")
         faces = polyhedra.convex_faces(vertices, "vertices")
         points = np.asarray(vertices, dtype=np.float64)
         if labels is not None:
-            faces = _in_label_order(faces, _checked_labels(labels, len(faces)))
+            faces = _in_label_order(faces, labels)
         volume, centroid, _ = polyhedra.mass_properties(points, faces)
         if np.abs(centroid).max() > 1e-12 * np.abs(points).max():
             points = points - centroid
@@ -396,9 +393,7 @@ def _unit_shape(name: str) -> _Shape:
 
 def _nearest_labels(normals: np.ndarray, directions: np.ndarray) -> np.ndarray:
     """Label ``k + 1`` for the face whose normal is nearest ``directions[k]``."""
-    labels = np.argmax(normals @ directions.T, axis=1) + 1
-    assert sorted(labels) == list(range(1, len(normals) + 1))
-    return labels
+    return np.argmax(normals @ directions.T, axis=1) + 1
 
 
 def _labels_by_azimuth(normals: np.ndarray, upper: object) -> np.ndarray:
@@ -411,7 +406,6 @@ def _labels_by_azimuth(normals: np.ndarray, upper: object) -> np.ndarray:
     labels[top] = list(upper)
     for f in np.flatnonzero(z < 0):
         labels[f] = len(normals) + 1 - labels[np.argmin(normals @ normals[f])]
-    assert sorted(labels) == list(range(1, len(normals) + 1))
     return labels
 
 
@@ -427,17 +421,14 @@ def _face_along_z(points: np.ndarray) -> np.ndarray:
 
 
 def _in_label_order(faces: tuple[tuple[int, ...], ...],
-                    labels: np.ndarray) -> tuple[tuple[int, ...], ...]:
-    return tuple(faces[i] for i in np.argsort(labels))
-
-
-def _checked_labels(labels: object, n: int) -> np.ndarray:
-    values = np.asarray(labels)
+                    labels: object) -> tuple[tuple[int, ...], ...]:
+    """``faces`` in the order of ``labels``, a permutation of 1 … F (else ``ValueError``)."""
+    values, n = np.asarray(labels), len(faces)
     if (values.shape != (n,) or not np.issubdtype(values.dtype, np.integer)
             or sorted(values.tolist()) != list(range(1, n + 1))):
         raise ValueError(f"labels must be a permutation of 1 … {n} (one per hull face), "
                          f"got {labels!r}")
-    return values
+    return tuple(faces[i] for i in np.argsort(values))
 
 
 def _face_distances(vertices: np.ndarray, faces: tuple[tuple[int, ...], ...],
@@ -452,13 +443,8 @@ def _least_height(vertices: np.ndarray, faces: tuple[tuple[int, ...], ...]) -> f
     return float(np.ptp(spans, axis=1).min())
 
 
-def _check_mass(mass: float | None) -> None:
-    if mass is not None:
-        check_positive("mass", mass)
-
-
 def _mass(mass: float | None, volume: float) -> float:
-    """``mass`` if given, else the default density's: ``DIE_MASS`` per ``DIE_VOLUME``."""
+    """``mass`` if given (checked when the die is built), else the default density's."""
     return DIE_MASS * (volume / DIE_VOLUME) if mass is None else mass
 
 

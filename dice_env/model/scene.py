@@ -199,19 +199,16 @@ class Scene:
         if not isinstance(walls, (tuple, list)) or not all(isinstance(w, Wall) for w in walls):
             raise TypeError(f"walls must be a tuple of Wall, got {self.walls!r}")
         object.__setattr__(self, "walls", tuple(walls))
-        check_bool("rotation", self.rotation)
-        check_bool("allow_unstable", self.allow_unstable)
-        check_positive("sink_limit", self.sink_limit)
+        for name in ("rotation", "allow_unstable"):
+            check_bool(name, getattr(self, name))
+        for name in ("sink_limit", "t_max", "friction_vmin", "energy_tol"):
+            check_positive(name, getattr(self, name))
         check_nonnegative("gravity", self.gravity)
         check_range("safety", self.safety, 0.0, 1.0, low_open=True)
-        check_positive("t_max", self.t_max)
-        check_positive("friction_vmin", self.friction_vmin)
-        check_positive("energy_tol", self.energy_tol)
-        object.__setattr__(self, "scheme", as_enum("scheme", Scheme, self.scheme))
-        object.__setattr__(self, "friction_law",
-                           as_enum("friction_law", FrictionLaw, self.friction_law))
         if self.dt is not None:
             check_positive("dt", self.dt)
+        for name, kind in (("scheme", Scheme), ("friction_law", FrictionLaw)):
+            object.__setattr__(self, name, as_enum(name, kind, getattr(self, name)))
         step = self.step_within(self.critical_dt, self.stiffest_plane())
         if not (math.isfinite(step) and 0.0 < step <= self.t_max):
             raise ValueError(f"the step must be in (0, t_max = {self.t_max:g}] s, got "

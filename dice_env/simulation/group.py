@@ -256,20 +256,14 @@ def _bodies(scenes: list[Scene], decide: bool) -> group_kernel.Bodies:
     """The kernel's :class:`~dice_env.physics.group_kernel.Bodies`, one scene per die."""
     dice = [s.die for s in scenes]
     packed = [pack_scene(s)[0] for s in scenes]
-    n = len(dice)
-    n_v = max(len(d.vertices) for d in dice)
-    n_f = max(d.n_faces for d in dice)
-    vertices, faces = np.zeros((n, n_v, 3)), np.zeros((n, n_f, 3))
-    lock = np.full((n, n_f), -math.inf)
-    floor = np.zeros(n)
+    lock = [np.full(d.n_faces, -math.inf) for d in dice]
+    floor = np.zeros(len(dice))
     for i, (scene, die) in enumerate(zip(scenes, dice, strict=True)):
-        vertices[i, :len(die.vertices)] = packed[i].vertices
-        faces[i, :die.n_faces] = die.face_normals
         if not decide:  # the locks and floors serve the decision rule alone
-            continue
+            break
         weight = die.mass * scene.gravity
         try:
-            lock[i, :die.n_faces] = lock_energy(scene)
+            lock[i] = lock_energy(scene)
             floor[i] = weight * float(die.resting_heights.min()) - weight**2 / (
                 2.0 * scene.ground.stiffness)
         except OverflowError as error:  # (m g)^2 beyond floats: a gravity near 1e300
@@ -280,36 +274,37 @@ def _bodies(scenes: list[Scene], decide: bool) -> group_kernel.Bodies:
     per_die = {name: np.array([getattr(p, name) for p in packed])
                for name in ("mass", "inv_inertia", "inv_iso", "inv_i_min", "r_max", "reads_down")}
     return group_kernel.Bodies(
-        vertices=vertices, n_vertices=np.array([len(d.vertices) for d in dice]), faces=faces,
-        n_faces=np.array([d.n_faces for d in dice]), lock=lock, floor=floor, **per_die)
+        vertices=_padded([p.vertices for p in packed], 0.0),
+        n_vertices=np.array([len(d.vertices) for d in dice]),
+        faces=_padded([d.face_normals for d in dice], 0.0),
+        n_faces=np.array([d.n_faces for d in dice]), lock=_padded(lock, -math.inf), floor=floor,
+        **per_die)
 
 
 def _hulls(scenes: list[Scene], bodies: group_kernel.Bodies) -> group_kernel.Hulls:
     """The kernel's :class:`~dice_env.physics.group_kernel.Hulls`, one scene per die."""
     dice = [s.die for s in scenes]
     vertices = [bodies.vertices[i, :len(d.vertices)] for i, d in enumerate(dice)]
-    axes = [d.face_normals[_distinct_axes(d.face_normals)] for d in dice]
     classes = [_edge_classes(v, d.edges) for v, d in zip(vertices, dice, strict=True)]
     planes = [np.column_stack([d.face_normals, [v[face[0]] @ normal for face, normal in zip(
         d.faces, d.face_normals, strict=True)]]) for v, d in zip(vertices, dice, strict=True)]
-    n_c = max(len(directions) for _, _, directions in classes)
-    starts = np.zeros((len(dice), n_c + 1), np.int64)
-    edges = np.zeros((len(dice), max(len(d.edges) for d in dice), 2), np.int64)
-    for i, (order, start, _) in enumerate(classes):
-        edges[i, :len(order)] = dice[i].edges[order]
-        starts[i, :len(start)] = start
-        starts[i, len(start):] = start[-1]  # padded classes are empty
+    n_starts = max(len(start) for _, start, _ in classes)
     return group_kernel.Hulls(
-        axes=_repeat_first(axes), directions=_repeat_first([d for *_, d in classes]),
-        edges=edges, classes=starts, planes=_repeat_first(planes),
-        n_planes=np.array([len(p) for p in planes]), n_vertices=bodies.n_vertices,
-        r_max=bodies.r_max)
+        axes=_padded([d.face_normals[_distinct_axes(d.face_normals)] for d in dice]),
+        directions=_padded([d for *_, d in classes]),
+        edges=_padded([d.edges[order] for d, (order, *_) in zip(dice, classes, strict=True)], 0),
+        classes=np.stack([np.pad(start, (0, n_starts - len(start)), mode="edge")
+                          for _, start, _ in classes]),  # padded classes are empty
+        planes=_padded(planes), n_planes=np.array([len(p) for p in planes]),
+        n_vertices=bodies.n_vertices, r_max=bodies.r_max)
 
 
-def _repeat_first(rows: list[np.ndarray]) -> np.ndarray:
-    """The rows stacked, each padded to the longest by repeating its first entry."""
+def _padded(rows: list[np.ndarray], fill: float | None = None) -> np.ndarray:
+    """The rows stacked, each padded to the longest with ``fill`` (None: its first entry)."""
     size = max(len(r) for r in rows)
-    return np.stack([np.concatenate([r, np.repeat(r[:1], size - len(r), axis=0)]) for r in rows])
+    return np.stack([np.concatenate([r, np.repeat(r[:1], size - len(r), axis=0) if fill is None
+                                     else np.full((size - len(r), *r.shape[1:]), fill, r.dtype)])
+                     for r in rows])
 
 
 def _distinct_axes(normals: np.ndarray, tol: float = 1e-9) -> np.ndarray:
@@ -341,14 +336,14 @@ def _edge_classes(vertices: np.ndarray, edges: np.ndarray,
 
 def _check_apart(dice: tuple[Die, ...], state: GroupState) -> None:
     """Refuse dice that overlap by more than :data:`TOUCH` of the smaller one's size."""
-    depth = overlaps(dice, state)
-    for i in range(len(dice)):
-        for j in range(i + 1, len(dice)):
-            inside = depth[:, i, j] > TOUCH * min(dice[i].size, dice[j].size)
-            if inside.any():
-                throw = int(np.flatnonzero(inside)[0])
-                raise ValueError(f"state.position: dice {i} and {j} of throw {throw} overlap "
-                                 "at the start (no plane separates them)")
+    sizes = np.array([d.size for d in dice])
+    inside = overlaps(dice, state) > TOUCH * np.minimum.outer(sizes, sizes)  # (B, N, N)
+    pairs = np.argwhere(np.triu(inside.any(axis=0), 1))
+    if len(pairs):
+        i, j = pairs[0]
+        throw = int(np.flatnonzero(inside[:, i, j])[0])
+        raise ValueError(f"state.position: dice {i} and {j} of throw {throw} overlap at the "
+                         "start (no plane separates them)")
 
 
 def overlaps(dice: Sequence[Die], state: GroupState) -> np.ndarray:

@@ -66,7 +66,6 @@ def paper_scene(*, r: float = 1.0, total_mass: float = 1.0,
     Change the rest with :meth:`Scene.with_` (a step above the critical one together with
     ``allow_unstable=True``).
     """
-    check_positive("r", r)
     return Scene(die=Die.paper(r, total_mass),
                  ground=Ground(stiffness=S, damping=D, friction=mu, normal=normal,
                                contact_law=ContactLaw.PAPER),

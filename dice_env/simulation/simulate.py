@@ -482,34 +482,30 @@ def _run_interruptibly(run: Callable, args: tuple, abort: np.ndarray, threads: i
     A ``long`` run goes on a worker thread (the kernel releases the GIL) so that this one can
     take the signal and set the kernel's ``abort`` flag; a short one is called directly.
     """
+    failure: list[BaseException] = []
+
     def call() -> None:
         previous = numba.get_num_threads()  # per thread in numba
         numba.set_num_threads(threads)
         try:
             run(*args)
+        except BaseException as error:  # raised again in the caller's thread
+            failure.append(error)
         finally:
             numba.set_num_threads(previous)
 
-    if not long:
-        call()
-        return
-    failure: list[BaseException] = []
-
-    def target() -> None:
+    if long:
+        worker = threading.Thread(target=call, name="dice_env-kernel", daemon=True)
+        worker.start()
         try:
-            call()
-        except BaseException as error:  # raised again in the caller's thread
-            failure.append(error)
-
-    worker = threading.Thread(target=target, name="dice_env-kernel", daemon=True)
-    worker.start()
-    try:
-        while worker.is_alive():
-            worker.join(0.05)
-    except KeyboardInterrupt:
-        abort[0] = 1
-        worker.join()
-        raise
+            while worker.is_alive():
+                worker.join(0.05)
+        except KeyboardInterrupt:
+            abort[0] = 1
+            worker.join()
+            raise
+    else:
+        call()
     if failure:
         raise failure[0]
 
