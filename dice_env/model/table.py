@@ -43,9 +43,7 @@ def damping_ratio(target: float, *, clipped: bool = True) -> float:
 
     Unclipped: ``zeta = -ln e / sqrt(pi^2 + ln^2 e)``; clipped: solved by bisection.
     """
-    check_range("restitution", target, 0.0, 1.0)
-    if target == 0.0:
-        raise ValueError("restitution must be in (0, 1], got 0")
+    check_range("restitution", target, 0.0, 1.0, low_open=True)
     log_e = math.log(target)
     zeta = -log_e / math.sqrt(math.pi**2 + log_e**2)
     if not clipped:

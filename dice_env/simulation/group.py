@@ -14,6 +14,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from itertools import combinations
 from typing import ClassVar
 
 import numpy as np
@@ -139,8 +140,8 @@ class GroupResult(RunResult):
 def pair_mass(scene: Scene, dice: Sequence[Die]) -> float:
     """The smallest reduced :attr:`Scene.effective_mass` of a pair of ``dice`` (kg; inf for one)."""
     masses = [scene.with_(die=die).effective_mass for die in _dice(dice)]
-    return min((m_i * m_j / (m_i + m_j) for i, m_i in enumerate(masses)
-                for m_j in masses[i + 1:]), default=math.inf)
+    return min((m_i * m_j / (m_i + m_j) for m_i, m_j in combinations(masses, 2)),
+               default=math.inf)
 
 
 def group_step(scene: Scene, dice: Sequence[Die], contact: DieContact = DieContact()) -> float:
@@ -360,17 +361,16 @@ def overlaps(dice: Sequence[Die], state: GroupState) -> np.ndarray:
              for c, die in zip(corners, dice, strict=True)]
     b, n = state.batch_size, len(dice)
     depth = np.full((b, n, n), -np.inf)
-    for i in range(n):
-        for j in range(i + 1, n):
-            crossed = np.cross(edges[i][:, :, None], edges[j][:, None, :]).reshape(b, -1, 3)
-            length = np.linalg.norm(crossed, axis=-1, keepdims=True)
-            crossed = crossed / np.where(length > 0, length, 1.0)
-            axes = np.concatenate([normals[i], normals[j], crossed], axis=1)  # (B, A, 3)
-            on_i = np.einsum("bai,bki->bak", axes, corners[i])
-            on_j = np.einsum("bai,bki->bak", axes, corners[j])
-            overlap = np.minimum(on_i.max(-1) - on_j.min(-1), on_j.max(-1) - on_i.min(-1))
-            faces = normals[i].shape[1] + normals[j].shape[1]
-            real = np.concatenate([np.ones((b, faces), bool), length[..., 0] > 1e-9 * (
-                dice[i].size * dice[j].size)], axis=1)
-            depth[:, i, j] = depth[:, j, i] = np.where(real, overlap, np.inf).min(axis=1)
+    for i, j in combinations(range(n), 2):
+        crossed = np.cross(edges[i][:, :, None], edges[j][:, None, :]).reshape(b, -1, 3)
+        length = np.linalg.norm(crossed, axis=-1, keepdims=True)
+        crossed = crossed / np.where(length > 0, length, 1.0)
+        axes = np.concatenate([normals[i], normals[j], crossed], axis=1)  # (B, A, 3)
+        on_i = np.einsum("bai,bki->bak", axes, corners[i])
+        on_j = np.einsum("bai,bki->bak", axes, corners[j])
+        overlap = np.minimum(on_i.max(-1) - on_j.min(-1), on_j.max(-1) - on_i.min(-1))
+        faces = normals[i].shape[1] + normals[j].shape[1]
+        real = np.concatenate([np.ones((b, faces), bool),
+                               length[..., 0] > 1e-9 * (dice[i].size * dice[j].size)], axis=1)
+        depth[:, i, j] = depth[:, j, i] = np.where(real, overlap, np.inf).min(axis=1)
     return depth

@@ -8,7 +8,7 @@ import math
 import os
 import threading
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from types import ModuleType
 from typing import ClassVar, NamedTuple, Self
 
@@ -51,8 +51,7 @@ class DiceArrays:
     def __post_init__(self) -> None:
         owner, lead = type(self).__name__, len(self.LEAD)
         axes = ", ".join(self.LEAD)
-        for name in ("position", "velocity", "angular_momentum", "angular_velocity",
-                     "orientation"):
+        for name in (f.name for f in fields(self)):
             tail = (3, 3) if name == "orientation" else (3,)
             array = np.asarray(getattr(self, name), dtype=np.float64)
             if array.ndim != len(tail) + lead or array.shape[lead:] != tail:
@@ -221,11 +220,11 @@ def simulate(scene: Scene, state: State, *, t_max: float | None = None, until: s
             inputs = (*inputs[:-1], vector_kernel.stop_tests(stops))
         run_kernel("paper" if paper else "die", inputs, outcome, batch=b, threads=threads,
                    work=b * n_steps)
-    fields = {"energy": records.energy, "orientations": records.orientation, "nodes": records.nodes}
+    arrays = {"energy": records.energy, "orientations": records.orientation, "nodes": records.nodes}
     return Result(face=scene.die.face_read(out.orientation, UP), final=out,
                   **outcome_fields(scene, outcome, scene.die.size),
                   **recorded(record_every, records, scene.step,
-                             {name: fields[name] for name in record}))
+                             {name: arrays[name] for name in record}))
 
 
 class Ending(NamedTuple):
@@ -298,14 +297,13 @@ def pack_scene(scene: Scene) -> tuple[kernel.Body, kernel.Contact]:
 def _records(record: tuple[str, ...], record_every: int, b: int, n_steps: int,
              n_vertices: int) -> kernel.Records:
     """Empty records for ``b`` dice every ``record_every`` steps (0: none), size-checked."""
-    sizes = {"energy": 1, "orientations": 9, "nodes": 3 * n_vertices}
+    tails = {"energy": (), "orientations": (3, 3), "nodes": (n_vertices, 3)}  # RECORDS' order
     stride, n_rec = record_plan(record_every, n_steps,
-                                b * (3 + sum(sizes[name] for name in record)), f"{b} dice")
-    return kernel.Records(
-        stride=stride, x=np.zeros((b, n_rec, 3)),
-        energy=np.zeros((b, n_rec if "energy" in record else 0)),
-        orientation=np.zeros((b, n_rec if "orientations" in record else 0, 3, 3)),
-        nodes=np.zeros((b, n_rec if "nodes" in record else 0, n_vertices, 3)))
+                                b * (3 + sum(math.prod(tails[name]) for name in record)),
+                                f"{b} dice")
+    return kernel.Records(stride, np.zeros((b, n_rec, 3)),
+                          *(np.zeros((b, n_rec if name in record else 0, *tail))
+                            for name, tail in tails.items()))
 
 
 def check_run(scene: Scene, state: object, kind: type, record_every: object,
