@@ -381,19 +381,13 @@ def _unit_shape(name: str) -> _Shape:
     raw = raw()
     faces = polyhedra.convex_faces(raw)
     normals = polyhedra.face_normals(raw, faces)
-    if name == "d4":  # face k opposite corner k
-        labels = _nearest_labels(normals, -raw / math.sqrt(3.0))
-    elif name == "d6":
-        labels = _nearest_labels(normals, _CUBE_NORMALS)
+    if name in ("d4", "d6"):  # face k + 1 nearest direction k; the d4's face k opposite corner k
+        directions = -raw / math.sqrt(3.0) if name == "d4" else _CUBE_NORMALS
+        labels = np.argmax(normals @ directions.T, axis=1) + 1
     else:
         labels = _labels_by_azimuth(normals, upper)
     faces = _in_label_order(faces, labels)
     return _Shape(_frozen(raw / _least_height(raw, faces)), faces, name == "d4")
-
-
-def _nearest_labels(normals: np.ndarray, directions: np.ndarray) -> np.ndarray:
-    """Label ``k + 1`` for the face whose normal is nearest ``directions[k]``."""
-    return np.argmax(normals @ directions.T, axis=1) + 1
 
 
 def _labels_by_azimuth(normals: np.ndarray, upper: object) -> np.ndarray:

@@ -339,7 +339,8 @@ def _effective_mass(die: Die, tangential: float) -> float:
     """:meth:`Scene.effective_mass_on` for ``die``, sticking springs ``tangential`` times S."""
     inv_sqrt_m = np.zeros((6, 6))
     inv_sqrt_m[:3, :3] = np.eye(3) / math.sqrt(die.mass)
-    inv_sqrt_m[3:, 3:] = _inv_sqrt_spd(die.inertia_body)
+    values, vectors = np.linalg.eigh(die.inertia_body)
+    inv_sqrt_m[3:, 3:] = vectors @ np.diag(values**-0.5) @ vectors.T  # I^(-1/2)
     vertices = die.vertices_body
     worst = 0.0
     for face, n in zip(die.faces, die.face_normals, strict=True):
@@ -362,8 +363,3 @@ def _tangents(normal: np.ndarray) -> np.ndarray:
     first = np.cross(normal, np.eye(3)[np.argmin(np.abs(normal))])
     first /= np.linalg.norm(first)
     return np.array([first, np.cross(normal, first)])
-
-
-def _inv_sqrt_spd(matrix: np.ndarray) -> np.ndarray:
-    values, vectors = np.linalg.eigh(matrix)
-    return vectors @ np.diag(values**-0.5) @ vectors.T
