@@ -117,9 +117,8 @@ class State(DiceArrays):
         size = sizes.pop() if sizes else 1
         if size == 0:
             raise ValueError("release arguments must hold at least one die, got a batch of 0")
-        position, velocity, spin = (np.broadcast_to(a, (size, 3))
-                                    for a in (position, velocity, spin))
-        rot = np.broadcast_to(rot, (size, 3, 3))
+        position, velocity, spin, rot = (np.broadcast_to(a, (size, *a.shape[1:]))
+                                         for a in (position, velocity, spin, rot))
         sink = scene.sink(position, rot)
         pressed = max(RELEASE_SINK * scene.die.size,
                       scene.die.mass * scene.gravity / scene.ground.stiffness)
