@@ -303,9 +303,9 @@ def _hulls(scenes: list[Scene], bodies: group_kernel.Bodies) -> group_kernel.Hul
 def _padded(rows: list[np.ndarray], fill: float | None = None) -> np.ndarray:
     """The rows stacked, each padded to the longest with ``fill`` (None: its first entry)."""
     size = max(len(r) for r in rows)
-    return np.stack([np.concatenate([r, np.repeat(r[:1], size - len(r), axis=0) if fill is None
-                                     else np.full((size - len(r), *r.shape[1:]), fill, r.dtype)])
-                     for r in rows])
+    pads = [np.repeat(r[:1], size - len(r), axis=0) if fill is None
+            else np.full((size - len(r), *r.shape[1:]), fill, r.dtype) for r in rows]
+    return np.stack([np.concatenate([r, pad]) for r, pad in zip(rows, pads, strict=True)])
 
 
 def _distinct_axes(normals: np.ndarray, tol: float = 1e-9) -> np.ndarray:
