@@ -12,12 +12,12 @@ from gymnasium import spaces
 from dice_env.envs.task import (
     ACTION_DIM,
     ORIENTATION_DIM,
+    ORIENTATION_MODES,
     ThrowTask,
-    check_orientation_mode,
     check_rotation,
     make_task,
 )
-from dice_env.model.checks import as_floats, check_int
+from dice_env.model.checks import check_choice, check_int
 
 RENDER_MODES = ("human", "rgb_array", "rgb_array_list")
 RENDER_FPS = 30
@@ -36,14 +36,6 @@ def action_space(task: ThrowTask | None = None) -> spaces.Box:
     return spaces.Box(-1.0, 1.0, (ACTION_DIM if task is None else task.action_dim,), np.float32)
 
 
-def check_render(render_mode: str | None, modes: tuple[str, ...], width: int, height: int) -> None:
-    """Validate the render keywords."""
-    if render_mode is not None and not (isinstance(render_mode, str) and render_mode in modes):
-        raise ValueError(f"render_mode must be None or one of {modes}, got {render_mode!r}")
-    check_int("render_width", width, 16, 4096)
-    check_int("render_height", height, 16, 4096)
-
-
 def check_frame_memory(render_mode: str | None, t_max: float, width: int, height: int) -> None:
     """Refuse an "rgb_array_list" env whose throw could keep more than 1 GiB of frames."""
     frames = math.ceil(t_max * RENDER_FPS) + 2  # in the hand, the throw, at rest
@@ -60,11 +52,14 @@ def configure(env: Any, modes: tuple[str, ...], render_mode: str | None = None, 
               orientation_mode: str = "uniform", render_width: int = 320,
               render_height: int = 240, **task_keywords: Any) -> ThrowTask:
     """Validate the single or vector env's keywords, set the episode's on ``env``; the task."""
-    check_render(render_mode, modes, render_width, render_height)
+    if render_mode is not None and not (isinstance(render_mode, str) and render_mode in modes):
+        raise ValueError(f"render_mode must be None or one of {modes}, got {render_mode!r}")
+    check_int("render_width", render_width, 16, 4096)
+    check_int("render_height", render_height, 16, 4096)
     task = make_task(**task_keywords)
     check_frame_memory(render_mode, task.scene.t_max, render_width, render_height)
     task.fixed_target(target_face, target_sum)
-    check_orientation_mode(orientation_mode)
+    check_choice("orientation_mode", orientation_mode, ORIENTATION_MODES)
     env.target_face = target_face
     env.target_sum = target_sum
     env.orientation_mode = orientation_mode
@@ -88,19 +83,9 @@ def episode_hand(env: Any, rng: np.random.Generator,
     target, hand = env.task.sample_hand(rng, fixed,
                                         options.get("orientation_mode", env.orientation_mode))
     if "orientation" in options:
-        hand = check_hands(env.task, "options['orientation']", options["orientation"])
+        hand = check_rotation("options['orientation']", options["orientation"],
+                              env.task.die_shape)
     return target, hand
-
-
-def check_hands(task: ThrowTask, name: str, value: object) -> np.ndarray:
-    """``value`` as the hand's orientation: (3, 3) for one die, (N, 3, 3) for N dice."""
-    if task.n_dice == 1:
-        return check_rotation(name, value)
-    hands = as_floats(name, value)
-    if hands.shape != (task.n_dice, 3, 3):
-        raise ValueError(f"{name} must be {task.n_dice} rotation matrices, shape "
-                         f"({task.n_dice}, 3, 3), got {hands.shape}")
-    return np.stack([check_rotation(f"{name}[{i}]", h) for i, h in enumerate(hands)])
 
 
 class DiceThrowEnv(gym.Env):

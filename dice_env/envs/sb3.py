@@ -21,6 +21,7 @@ from stable_baselines3.common.vec_env import VecEnv, VecMonitor
 from stable_baselines3.common.vec_env.base_vec_env import VecEnvIndices, VecEnvStepReturn
 
 from dice_env.envs.vector import DiceThrowVectorEnv
+from dice_env.model.checks import check_int
 
 
 def make_sb3_env(n_envs: int = 256, seed: int | None = None, *, env_id: str = "DiceThrow-v0",
@@ -30,9 +31,8 @@ def make_sb3_env(n_envs: int = 256, seed: int | None = None, *, env_id: str = "D
     ``seed`` (None: unseeded) seeds env ``i`` with ``seed + i`` at the first ``reset``;
     ``env_kwargs``: ``gym.make``'s keywords. ``env_id``: an env with DiceThrow-v0's native batch.
     """
-    if seed is not None and (isinstance(seed, bool) or not isinstance(seed, (int, np.integer))
-                             or seed < 0):
-        raise ValueError(f"seed must be None or an int >= 0, got {seed!r}")
+    if seed is not None:
+        check_int("seed", seed, 0, also=" or None")
     env = DiceThrowSB3VecEnv(gym.make_vec(env_id, num_envs=n_envs, vectorization_mode=None,
                                           **env_kwargs))
     if seed is not None:

@@ -22,7 +22,14 @@ from typing import Any
 import numpy as np
 
 from dice_env.envs.keywords import ENV_MAX_STEPS, SceneKeywords, check_face, check_scene
-from dice_env.model.checks import as_floats, check_int, check_nonnegative, check_positive
+from dice_env.model.checks import (
+    as_batch,
+    as_floats,
+    check_choice,
+    check_int,
+    check_nonnegative,
+    check_positive,
+)
 from dice_env.model.die import Die
 from dice_env.model.rotations import (
     orthonormality_error,
@@ -97,8 +104,7 @@ class ThrowTask:
             check_positive(name, getattr(self, name))
         for name in ("hand_noise", "orientation_noise", "min_speed", "min_spin", "shaping"):
             check_nonnegative(name, getattr(self, name))
-        if not isinstance(self.until, str) or self.until not in UNTIL:
-            raise ValueError(f"until must be one of {list(UNTIL)}, got {self.until!r}")
+        check_choice("until", self.until, UNTIL)
         if self.until == "decided" and not all(np.isfinite(lock_energy(s)).all()
                                                for s in self.die_scenes):
             raise ValueError("until='decided' needs a horizontal table with gravity (no energy "
@@ -125,8 +131,7 @@ class ThrowTask:
         several = len(dice) > 1
         if self.target is None:
             object.__setattr__(self, "target", "sum" if several else "faces")
-        if not (isinstance(self.target, str) and self.target in TARGETS):
-            raise ValueError(f"target must be one of {TARGETS}, got {self.target!r}")
+        check_choice("target", self.target, TARGETS)
         if not isinstance(self.set_dice, bool):
             raise ValueError(f"set_dice must be True or False, got {self.set_dice!r}")
         if not several and self.target != "faces":
@@ -285,7 +290,7 @@ class ThrowTask:
         ``target``: fixed, as :meth:`fixed_target` returns it, or None (drawn uniformly). Each
         generator draws the target, then each die's orientation in turn.
         """
-        check_orientation_mode(orientation_mode)
+        check_choice("orientation_mode", orientation_mode, ORIENTATION_MODES)
         n, faces = len(rngs), np.array(self.faces)
         by_face = self.target == "faces"
         targets = np.zeros((n, self.n_dice) if by_face else n, np.int64)
@@ -488,35 +493,21 @@ def check_actions(actions: np.ndarray, dim: int = ACTION_DIM,
 
     ``shape``: the one shape allowed (an env's); None: (dim,) or (n, dim).
     """
-    allowed = f"({dim},) or (n, {dim})" if shape is None else str(shape)
-    try:
-        array = np.asarray(actions, dtype=np.float64)
-    except (TypeError, ValueError) as error:
-        raise ValueError(f"action must be an array of numbers, shape {allowed}, "
-                         f"got {actions!r}") from error
+    array = as_floats("action", actions)
     if shape is not None and array.shape != shape:
         raise ValueError(f"action{'s' if len(shape) > 1 else ''} must have shape {shape}, "
                          f"got {array.shape}")
-    if array.shape == (dim,):
-        array = array[None]
-    if array.ndim != 2 or array.shape[1] != dim:
-        raise ValueError(f"action must have shape {allowed}, got {array.shape}")
-    if not np.all(np.isfinite(array)):
-        raise ValueError(f"action must be finite (no NaN or inf), got {actions!r}")
-    return array
+    return as_batch("action", array, (dim,))
 
 
-def check_orientation_mode(value: object) -> None:
-    """``ValueError`` unless ``value`` is one of :data:`ORIENTATION_MODES`."""
-    if not (isinstance(value, str) and value in ORIENTATION_MODES):
-        raise ValueError(f"orientation_mode must be one of {ORIENTATION_MODES}, got {value!r}")
-
-
-def check_rotation(name: str, value: object) -> np.ndarray:
-    """``value`` as a (3, 3) rotation matrix, or ``ValueError`` naming ``name``."""
+def check_rotation(name: str, value: object, shape: tuple[int, ...] = ()) -> np.ndarray:
+    """``value`` as rotation matrices of ``(*shape, 3, 3)``, or ``ValueError`` naming ``name``."""
     rot = as_floats(name, value)
-    if rot.shape != (3, 3) or not np.all(np.isfinite(rot)) or orthonormality_error(rot) > 1e-9:
-        raise ValueError(f"{name} must be a 3x3 rotation matrix (R R^T = I, det R = +1)")
+    if (rot.shape != (*shape, 3, 3) or not np.all(np.isfinite(rot))
+            or np.max(orthonormality_error(rot)) > 1e-9):
+        what = f"{shape[0]} rotation matrices" if shape else "a rotation matrix"
+        raise ValueError(f"{name} must be {what}, shape {(*shape, 3, 3)} (R R^T = I, det R = +1),"
+                         f" got shape {rot.shape}")
     return rot
 
 

@@ -86,10 +86,8 @@ class DiceThrowVectorEnv(VectorEnv):
         throw = self.task.throw(actions, self._targets, self._hands, self._rngs,
                                 action_shape=self.action_space.shape)
         mask = np.ones(self.num_envs, np.bool_)
-        final_info: dict[str, Any] = {}
-        for key, value in throw.info.items():
-            final_info[key] = value
-            final_info["_" + key] = mask
+        final_info = {k: v for key, value in throw.info.items()
+                      for k, v in ((key, value), ("_" + key, mask))}
         info = {"final_obs": throw.observation, "_final_obs": mask,
                 "final_info": final_info, "_final_info": mask}
         self._targets, self._hands = self.task.sample_hands(

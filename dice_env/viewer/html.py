@@ -18,6 +18,7 @@ from typing import Any
 
 import numpy as np
 
+from dice_env.model.checks import check_choice
 from dice_env.model.die import Die
 from dice_env.model.scene import Scene
 from dice_env.viewer.recording import Recording, as_data
@@ -49,8 +50,7 @@ def write_html(recordings: Recording | Sequence[Recording], path: str | Path, *,
         raise TypeError(f"recordings must be a Recording or a sequence of them, got a {got}")
     if not items:
         raise ValueError("recordings must not be empty: give at least one Recording")
-    if layout not in LAYOUTS:
-        raise ValueError(f"layout must be one of {LAYOUTS}, got {layout!r}")
+    check_choice("layout", layout, LAYOUTS)
     path = Path(path)
     if path.suffix.lower() != ".html":
         raise ValueError(f"path must end in .html, got {path.name!r}")
