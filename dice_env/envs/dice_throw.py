@@ -137,7 +137,9 @@ class DiceThrowEnv(gym.Env):
             shown = int(result.steps[0]) // self._record_every()
             self._draw([*zip(result.x_cm[0, :shown], result.orientations[0, :shown],
                              strict=True), self._pose])
-        info = {key: _scalar(value[0]) for key, value in throw.info.items()}
+        # Per-throw numpy scalars as Python bool/int/float/str; per-die arrays unchanged.
+        info = {key: value[0] if np.ndim(value[0]) else value[0].item()
+                for key, value in throw.info.items()}
         return throw.observation[0], float(throw.reward[0]), True, False, info
 
     def render(self) -> np.ndarray | list[np.ndarray] | None:
@@ -176,8 +178,3 @@ class DiceThrowEnv(gym.Env):
                 self._viewer = Viewer(RENDER_FPS)
             for pose in poses:
                 self._viewer.show(self._frame(*pose))
-
-
-def _scalar(value: np.ndarray) -> Any:
-    """Numpy scalars as Python bool/int/float/str; arrays unchanged."""
-    return value.item() if np.ndim(value) == 0 else value

@@ -70,12 +70,10 @@ class DiceThrowVectorEnv(VectorEnv):
             if len(values) != self.num_envs:
                 raise ValueError(f"{name} must be one per env ({self.num_envs}), "
                                  f"got {len(values)}")
-        if not self._rngs:
-            self._rngs = [seeding.np_random(s)[0] for s in seeds]
-        for i in range(self.num_envs):
-            if seeds[i] is not None:
-                self._rngs[i] = seeding.np_random(seeds[i])[0]
-            self._targets[i], self._hands[i] = episode_hand(self, self._rngs[i], options[i])
+        self._rngs = [seeding.np_random(seed)[0] if seed is not None or not self._rngs
+                      else self._rngs[i] for i, seed in enumerate(seeds)]
+        for i, rng in enumerate(self._rngs):
+            self._targets[i], self._hands[i] = episode_hand(self, rng, options[i])
         return self.task.observe(self._targets, self._hands)
 
     def step(self, actions: np.ndarray,

@@ -38,16 +38,12 @@ def write_html(recordings: Recording | Sequence[Recording], path: str | Path, *,
     ``layout``: ``"sequence"`` (one throw after another) or ``"side"`` (side by side); the page
     can switch. ``title``: default a single recording's title, else ``"dice_env throws"``.
     """
-    if isinstance(recordings, Recording):
-        items = [recordings]
-    elif (isinstance(recordings, Sequence) and not isinstance(recordings, (str, bytes))
-          and all(isinstance(r, Recording) for r in recordings)):
-        items = list(recordings)
-    else:
-        got = type(recordings).__name__
-        if isinstance(recordings, (list, tuple)):
-            got += f" of {len(recordings)}: {[type(v).__name__ for v in recordings][:4]}"
-        raise TypeError(f"recordings must be a Recording or a sequence of them, got a {got}")
+    items = [recordings] if isinstance(recordings, Recording) else recordings
+    if (not isinstance(items, Sequence) or isinstance(items, (str, bytes))
+            or not all(isinstance(r, Recording) for r in items)):
+        got = [type(r).__name__ for r in items] if isinstance(items, (list, tuple)) else items
+        raise TypeError(f"recordings must be a Recording or a sequence of them, got {got!r:.80}")
+    items = list(items)
     if not items:
         raise ValueError("recordings must not be empty: give at least one Recording")
     check_choice("layout", layout, LAYOUTS)

@@ -136,15 +136,16 @@ def record(scene: Scene, dice: Die | Sequence[Die], state: State | GroupState, *
     recordings = []
     for b in range(count):
         frames = min(result.x_cm.shape[1], -(-int(result.steps[b]) // stride))
+        shape = (frames, len(dice), 3)  # one die's frames get their die axis
         outcome = outcomes[b] | ({"void": voids[b]} if voids[b] else {})
         recordings.append(Recording(
             scene=scene.with_(die=dice[0]) if single else scene, dice=dice, contact=contact,
             release=GroupState(*(getattr(release, name)[b:b + 1] for name in STATE_FIELDS)),
             run=run, fps=float(fps), t=np.arange(frames + 1) * (stride * dt),
             position=np.concatenate([release.position[b:b + 1],
-                                     _per_die(result.x_cm[b, :frames], single)]),
+                                     result.x_cm[b, :frames].reshape(shape)]),
             orientation=np.concatenate([release.orientation[b:b + 1],
-                                        _per_die(result.orientations[b, :frames], single)]),
+                                        result.orientations[b, :frames].reshape(*shape, 3)]),
             outcome=outcome, title=titles[b]))
     return recordings
 
@@ -188,8 +189,3 @@ def _run_keywords(run: dict[str, Any]) -> dict[str, Any]:
     until = ("decided" if run["stop_when_decided"] else
              "early_rest" if run["early_rest"] else "rest")
     return {"t_max": run["t_max"], "until": until}
-
-
-def _per_die(frames: np.ndarray, single: bool) -> np.ndarray:
-    """Frames of one die (n, ...) given a die axis (n, 1, ...); several dice's as they are."""
-    return frames[:, None] if single else frames
