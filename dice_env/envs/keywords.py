@@ -95,14 +95,13 @@ class SceneKeywords:
         base = _base_die(base, self.die)
         size = _size(self.die, self.size, self.edge)
         size_name = "size" if self.edge is None else "edge"
-        load_face, load_fraction, load_depth = self.load_face, self.load_fraction, self.load_depth
-        if load_face is not None:
-            check_face("load_face", load_face, base.n_faces)
-        for name, value in (("load_fraction", load_fraction), ("load_depth", load_depth)):
-            if value is not None:
-                check_range(name, value, 0.0, 1.0, high_open=True)
-        given = _given(**{size_name: size}, mass=self.mass, load_face=load_face,
-                       load_fraction=load_fraction, load_depth=load_depth)
+        given = _given(**{size_name: size}, mass=self.mass, load_face=self.load_face,
+                       load_fraction=self.load_fraction, load_depth=self.load_depth)
+        if "load_face" in given:
+            check_face("load_face", self.load_face, base.n_faces)
+        for name in ("load_fraction", "load_depth"):
+            if name in given:
+                check_range(name, given[name], 0.0, 1.0, high_open=True)
         if not given:
             return base
         if base.name not in STANDARD_SIZES or base != Die.standard(base.name, base.size,
@@ -117,12 +116,12 @@ class SceneKeywords:
         check_positive(size_name, dims["size"])
         check_positive("mass", dims["mass"])
         problem = (f"{size_name}={dims['size']:g} m, mass={dims['mass']:g} kg and load_fraction="
-                   f"{load_fraction} give no valid die (a {base.name})")
+                   f"{self.load_fraction} give no valid die (a {base.name})")
         try:
             die = Die.standard(base.name, **dims)
-            if load_fraction:
-                die = die.load(**_given(face=load_face if load_face is not None else die.n_faces,
-                                        fraction=load_fraction, depth=load_depth))
+            if self.load_fraction:
+                die = die.load(**_given(face=given.get("load_face", die.n_faces),
+                                        fraction=self.load_fraction, depth=self.load_depth))
         except ValueError as error:  # the inertia of an extreme size underflows
             raise ValueError(f"{problem}: {error}") from error
         with np.errstate(all="ignore"):

@@ -313,11 +313,8 @@ def _floor_lines(scene: Scene, centre: np.ndarray, camera: _Lines) -> _Lines:
     normal, offset = np.asarray(scene.ground.normal), scene.ground.offset
     rate = camera.direction @ normal
     base = camera.direction * (offset - normal @ centre) / rate
-
-    def along(d: np.ndarray) -> np.ndarray:
-        return d - camera.direction * (normal @ d) / rate
-
-    return _Lines(base, normal, along(camera.dx), along(camera.dy))
+    dx, dy = (d - camera.direction * (normal @ d) / rate for d in (camera.dx, camera.dy))
+    return _Lines(base, normal, dx, dy)
 
 
 def _floor(scene: Scene, centre: np.ndarray, floor: _Lines, dice: _Dice,

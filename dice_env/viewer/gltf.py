@@ -197,8 +197,7 @@ def _surroundings(blob: _Blob, recording: Recording) -> None:
             for line in lines if line[:2] @ line[:2] > 1e-18]  # the walls' nearest points
     flat = np.concatenate([dice, _wall_corners(lines), np.reshape(feet, (-1, 2))])
     low, high = flat.min(axis=0) - MARGIN, flat.max(axis=0) + MARGIN
-    rectangle = np.array([(low[0], low[1]), (high[0], low[1]), (high[0], high[1]),
-                       (low[0], high[1])])
+    rectangle = np.array([low, (high[0], low[1]), high, (low[0], high[1])])
     _quad(blob, "floor", origin + rectangle @ axes, normal,
           blob.material("floor", colour=TABLE_COLOUR))
     if not walls:
