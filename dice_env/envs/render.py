@@ -24,7 +24,7 @@ from dice_env.envs.task import ThrowTask
 from dice_env.model.checks import check_finite, check_int, check_positive, check_range
 from dice_env.model.die import Die
 from dice_env.model.rotations import axis_angle
-from dice_env.model.scene import Scene
+from dice_env.model.scene import Plane, Scene
 from dice_env.model.surroundings import walls
 
 # In-face axes (u, v) of the d6's pip faces, body frame, so that u x v is the outward normal.
@@ -283,14 +283,11 @@ def _die_planes(die: Die, orientation: np.ndarray, offset: np.ndarray) -> np.nda
 
 def _boards(scene: Scene, centre: np.ndarray) -> list[np.ndarray]:
     """Each wall's board (to the other walls' outer faces) as rows (n, c) about ``centre``."""
-    floor = _plane_row(scene.ground.normal, scene.ground.offset, centre)
-    rows = [_plane_row(w.normal, w.offset, centre) for w in scene.walls]
+    floor, *rows = (_plane_row(plane, centre) for plane in scene.planes)
     thick, high = np.array([0, 0, 0, WALL_THICKNESS]), np.array([0, 0, 0, WALL_HEIGHT])
-    boards = []
-    for i, wall in enumerate(rows):
-        ends = [thick - row for j, row in enumerate(rows) if j != i]
-        boards.append(np.array([wall, thick - wall, floor + high, -floor, *ends]))
-    return boards
+    return [np.array([wall, thick - wall, floor + high, -floor,  # then the other walls' ends
+                      *(thick - row for j, row in enumerate(rows) if j != i)])
+            for i, wall in enumerate(rows)]
 
 
 def _in_view(planes: np.ndarray, floor: _Lines, xs: np.ndarray, ys: np.ndarray) -> bool:
@@ -300,10 +297,10 @@ def _in_view(planes: np.ndarray, floor: _Lines, xs: np.ndarray, ys: np.ndarray) 
     return not np.any(np.all(corners @ planes[:, :3].T > planes[:, 3], axis=0))
 
 
-def _plane_row(normal: tuple[float, ...], offset: float, centre: np.ndarray) -> np.ndarray:
-    """The half-space ``normal . x <= offset`` about ``centre``, as a row (n, c)."""
-    n = np.asarray(normal)
-    return np.append(n, offset - n @ centre)
+def _plane_row(plane: Plane, centre: np.ndarray) -> np.ndarray:
+    """The half-space ``normal . x <= offset`` of ``plane`` about ``centre``, as a row (n, c)."""
+    n = np.asarray(plane.normal)
+    return np.append(n, plane.offset - n @ centre)
 
 
 # --- the floor ----------------------------------------------------------------------------
@@ -328,7 +325,7 @@ def _floor(scene: Scene, centre: np.ndarray, floor: _Lines, dice: _Dice,
         grid |= np.abs((cells + 0.5) % 1.0 - 0.5) < width
     beyond = np.zeros_like(grid)
     for wall in scene.walls:
-        row = _plane_row(wall.normal, wall.offset, centre)
+        row = _plane_row(wall, centre)
         beyond |= floor.at(row[:3], xs, ys, row[3]) < 0
     colour = np.where(beyond[..., None], BEYOND_COLOUR, TABLE_COLOUR)
     image = np.where(grid[..., None], colour * 1.25, colour)

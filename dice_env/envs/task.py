@@ -477,8 +477,8 @@ def void_reasons(fair: np.ndarray, unstable: np.ndarray, sunk: np.ndarray, ended
 
     The first of "foul", "unstable", "sunk", not ended (:data:`UNTIL`) and "leaning" that applies.
     """
-    return np.where(~fair, "foul", np.where(unstable, "unstable", np.where(
-        sunk, "sunk", np.where(~ended, UNTIL[until], np.where(leaning, "leaning", "")))))
+    return np.select([~fair, unstable, sunk, ~ended, leaning],
+                     ["foul", "unstable", "sunk", UNTIL[until], "leaning"], "")
 
 
 def target_alignment(orientation: np.ndarray, die: Die, targets: np.ndarray,
