@@ -291,17 +291,12 @@ class ThrowTask:
         generator draws the target, then each die's orientation in turn.
         """
         check_choice("orientation_mode", orientation_mode, ORIENTATION_MODES)
-        n, faces = len(rngs), np.array(self.faces)
-        by_face = self.target == "faces"
+        n, by_face = len(rngs), self.target == "faces"
+        low, high = (1, np.array(self.faces)) if by_face else (self.totals[0], self.totals[-1])
         targets = np.zeros((n, self.n_dice) if by_face else n, np.int64)
         draws = np.zeros((self.n_dice, n, 3))
         for i, rng in enumerate(rngs):
-            if target is not None:
-                targets[i] = target
-            elif by_face:
-                targets[i] = rng.integers(1, faces + 1)
-            else:
-                targets[i] = rng.integers(self.totals[0], self.totals[-1] + 1)
+            targets[i] = rng.integers(low, high + 1) if target is None else target
             for j in range(self.n_dice):  # three uniforms, or a face and a turn, or nothing
                 if orientation_mode == "uniform":
                     draws[j, i] = rng.random(3)
@@ -320,11 +315,9 @@ class ThrowTask:
         orientations = np.asarray(orientations).reshape(-1, ORIENTATION_DIM * self.n_dice)
         n = len(orientations)
         obs = np.zeros((n, self.obs_dim), np.float32)
-        if self.target == "faces":
-            starts = np.cumsum([0, *self.faces[:-1]])
-            obs[np.arange(n)[:, None], starts + np.asarray(targets).reshape(n, -1) - 1] = 1.0
-        else:
-            obs[np.arange(n), np.asarray(targets).reshape(n) - self.totals[0]] = 1.0
+        # A target's column: its one-hot's start, plus the target less the lowest one.
+        shift = np.cumsum([0, *self.faces[:-1]]) - 1 if self.target == "faces" else -self.totals[0]
+        obs[np.arange(n)[:, None], np.asarray(targets).reshape(n, -1) + shift] = 1.0
         obs[:, self.target_dim:] = np.clip(orientations, -1.0, 1.0)
         return obs
 
@@ -336,12 +329,10 @@ class ThrowTask:
                              f"{observations.shape[1]}")
         n, encoding = len(observations), observations[:, :self.target_dim]
         u, _, vt = np.linalg.svd(observations[:, self.target_dim:].reshape(-1, 3, 3))
-        if self.target != "faces":
-            targets = encoding.argmax(axis=1) + self.totals[0]
-        else:
-            ends = np.cumsum(self.faces)
-            targets = np.stack([encoding[:, end - f:end].argmax(axis=1) + 1
-                                for f, end in zip(self.faces, ends, strict=True)], axis=1)
+        by_face = self.target == "faces"  # a one-hot per die, or one over the totals
+        one_hots = np.split(encoding, np.cumsum(self.faces[:-1]) if by_face else [], axis=1)
+        lowest = 1 if by_face else self.totals[0]
+        targets = np.stack([one_hot.argmax(axis=1) + lowest for one_hot in one_hots], axis=1)
         return (targets.reshape(n, *self.target_shape), (u @ vt).reshape(n, *self.die_shape, 3, 3))
 
     def release(self, actions: np.ndarray, hands: np.ndarray,
