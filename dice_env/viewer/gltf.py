@@ -21,7 +21,6 @@ import pygltflib as gl
 from dice_env.envs.render import TABLE_COLOUR, WALL_COLOUR, _plane_axes, _unit
 from dice_env.model.die import Die
 from dice_env.model.rotations import matrix_to_quaternion
-from dice_env.model.scene import Plane
 from dice_env.viewer.recording import Recording, library_version
 from dice_env.viewer.textures import face_atlas, png_bytes
 
@@ -186,7 +185,8 @@ def _surroundings(blob: _Blob, recording: Recording) -> None:
     normal = np.asarray(floor.normal)
     axes = np.array(_plane_axes(normal))  # in the floor, axes[0] x axes[1] = normal
     origin = normal * floor.offset
-    lines = [_floor_line(wall, axes, origin) for wall in walls]
+    # Where each wall meets the floor: a row (m_u, m_v, d), m . (u, v) >= d its free side.
+    lines = [np.append(axes @ w.normal, w.offset - np.asarray(w.normal) @ origin) for w in walls]
     corners = np.concatenate([  # every die's at every frame
         (recording.position[:, i, None] + np.einsum("nij,vj->nvi", recording.orientation[:, i],
                                                      die.vertices_body)).reshape(-1, 3)
@@ -221,12 +221,6 @@ def _quad(blob: _Blob, name: str, corners: np.ndarray, normal: np.ndarray,
     mesh = blob.mesh(name, corners, np.tile(normal, (4, 1)), np.array([(0, 1, 2), (0, 2, 3)]),
                      material)
     blob.gltf.nodes.append(gl.Node(name=name, mesh=mesh))
-
-
-def _floor_line(wall: Plane, axes: np.ndarray, origin: np.ndarray) -> np.ndarray:
-    """Where ``wall`` meets the floor: a row (m_u, m_v, d), ``m . (u, v) >= d`` its free side."""
-    n = np.asarray(wall.normal)
-    return np.append(axes @ n, wall.offset - n @ origin)
 
 
 def _wall_corners(lines: list[np.ndarray]) -> np.ndarray:
