@@ -27,7 +27,6 @@ from dice_env.studies.markdown import markdown_table
 from dice_env.studies.numbers import study_page
 
 STABLE, DRIFTING, BLOWUP = 0, 1, 2
-CLASS_NAMES = ("stable", "drifting", "blowing up")
 DRIFT_LIMIT = 10.0  # worst energy rise (fraction of KE0 + m g (h0 + edge)) still drifting
 MAP_T_MAX = 5.0  # simulated time of each map cell (s): the paper throw lands at about 1.5 s
 
