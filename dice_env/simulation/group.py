@@ -259,9 +259,8 @@ def _bodies(scenes: list[Scene], decide: bool) -> group_kernel.Bodies:
     packed = [pack_scene(s)[0] for s in scenes]
     lock = [np.full(d.n_faces, -math.inf) for d in dice]
     floor = np.zeros(len(dice))
-    for i, (scene, die) in enumerate(zip(scenes, dice, strict=True)):
-        if not decide:  # the locks and floors serve the decision rule alone
-            break
+    deciding = zip(scenes, dice, strict=True) if decide else ()  # the rule's locks and floors
+    for i, (scene, die) in enumerate(deciding):
         weight = die.mass * scene.gravity
         try:
             lock[i] = lock_energy(scene)
