@@ -60,11 +60,8 @@ def configure(env: Any, modes: tuple[str, ...], render_mode: str | None = None, 
     check_frame_memory(render_mode, task.scene.t_max, render_width, render_height)
     task.fixed_target(target_face, target_sum)
     check_choice("orientation_mode", orientation_mode, ORIENTATION_MODES)
-    env.target_face = target_face
-    env.target_sum = target_sum
-    env.orientation_mode = orientation_mode
-    env.render_mode = render_mode
-    env.render_size = (render_height, render_width)
+    env.target_face, env.target_sum, env.render_mode = target_face, target_sum, render_mode
+    env.orientation_mode, env.render_size = orientation_mode, (render_height, render_width)
     return task
 
 
@@ -91,15 +88,9 @@ def episode_hand(env: Any, rng: np.random.Generator,
 class DiceThrowEnv(gym.Env):
     """Throw a die from the hand so that the target face ends up; one throw per episode.
 
-    Action ``Box(-1, 1, (6,))``: release velocity and spin, scaled by ``max_speed`` and
-    ``max_spin`` (3 more per die with ``set_dice``); out-of-range actions are clipped, NaN/inf
-    or another shape raise ``ValueError``. Observation: the target's one-hot and each die's
-    body-to-world rotation (row-major), in the hand after ``reset``, at rest after ``step``.
-    Reward: 1.0 if the target is read at rest, plus ``shaping`` times the target's alignment
-    with the table normal; a void throw gets 0 (``info["void_reason"]``). ``step`` ends the
-    episode (``terminated=True``). The spaces, rewards, ``info``, ``reset`` options and every
-    keyword with its default and range: ``docs/environment.md``; named tasks:
-    :data:`dice_env.envs.tasks.TASKS`.
+    Out-of-range actions are clipped, NaN/inf or another shape raise ``ValueError``; ``step``
+    ends the episode. The spaces, rewards, ``info``, ``reset`` options and every keyword:
+    ``docs/environment.md``; named tasks: :data:`dice_env.envs.tasks.TASKS`.
     """
 
     metadata: ClassVar[dict[str, Any]] = {"render_modes": list(RENDER_MODES),

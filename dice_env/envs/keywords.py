@@ -152,15 +152,12 @@ class SceneKeywords:
 
 
 def check_scene(scene: Scene, release_height: float) -> None:
-    """Refuse a scene the env cannot run as throws from ``release_height``."""
-    _check_sink(scene)
-    _check_steps(scene)
-    if scene.ground.contact_law == ContactLaw.PAPER and scene.ground.damping > 0:
-        _check_paper_drag(scene, release_height)
+    """Refuse a scene the env cannot run as throws from ``release_height``.
 
-
-def _check_sink(scene: Scene) -> None:
-    """The die's weight alone, on its face of fewest corners, must sink it < :data:`MAX_SINK`."""
+    The die's weight alone, on its face of fewest corners, must sink it < :data:`MAX_SINK` sizes;
+    a throw may take :data:`ENV_MAX_STEPS` steps at most; the paper law's air drag (8 D v) must
+    not outweigh the die in a drop from the hand.
+    """
     die, ground = scene.die, scene.ground
     corners = min(len(face) for face in die.faces)
     sink = die.mass * scene.gravity * ground.normal[2] / (corners * ground.stiffness)
@@ -169,6 +166,20 @@ def _check_sink(scene: Scene) -> None:
             f"the die's weight would press a flat face's corners {sink:.3g} m into the table, "
             f"more than {MAX_SINK} of its size ({die.size:g} m): mass={die.mass:g} kg, "
             f"gravity={scene.gravity:g} m/s^2, stiffness={ground.stiffness:g} N/m")
+    _check_steps(scene)
+    if ground.contact_law != ContactLaw.PAPER or ground.damping <= 0:
+        return
+    g = scene.gravity * ground.normal[2]
+    weight, drop_speed, damping = die.mass * g, math.sqrt(2.0 * g * release_height), ground.damping
+    if g > 0 and 8.0 * damping * drop_speed <= weight:
+        return
+    limit = weight / (8.0 * drop_speed) if g > 0 else 0.0
+    raise ValueError(
+        f"contact_law='paper' needs damping <= m g / (8 sqrt(2 g release_height)) = "
+        f"{limit:.4g} N s/m, got damping={damping:g}: with its air drag of 8 D v the die "
+        f"falls at most m g / (8 D) = {weight / (8.0 * damping):.3g} m/s (a drop from "
+        f"release_height={release_height:g} m reaches {drop_speed:.3g} m/s; gravity="
+        f"{scene.gravity:g} m/s^2). Use contact_law='gated' (the default) or a damping that small")
 
 
 def _check_steps(scene: Scene) -> None:
@@ -187,23 +198,6 @@ def _check_steps(scene: Scene) -> None:
                 f"{name} must be at most {ENV_MAX_STEPS:.0e} steps: {name}={value:g} s over a step "
                 f"of {step:.3g} s is {value / step:.3g} steps ({_step_origin(scene)}); lower "
                 f"{name}, or make the step longer")
-
-
-def _check_paper_drag(scene: Scene, release_height: float) -> None:
-    """The paper law's air drag (8 D v) must not outweigh the die in a drop from the hand."""
-    g = scene.gravity * scene.ground.normal[2]
-    weight = scene.die.mass * g
-    drop_speed = math.sqrt(2.0 * g * release_height)
-    damping = scene.ground.damping
-    if g > 0 and 8.0 * damping * drop_speed <= weight:
-        return
-    limit = weight / (8.0 * drop_speed) if g > 0 else 0.0
-    raise ValueError(
-        f"contact_law='paper' needs damping <= m g / (8 sqrt(2 g release_height)) = "
-        f"{limit:.4g} N s/m, got damping={damping:g}: with its air drag of 8 D v the die "
-        f"falls at most m g / (8 D) = {weight / (8.0 * damping):.3g} m/s (a drop from "
-        f"release_height={release_height:g} m reaches {drop_speed:.3g} m/s; gravity="
-        f"{scene.gravity:g} m/s^2). Use contact_law='gated' (the default) or a damping that small")
 
 
 def _step_origin(scene: Scene) -> str:

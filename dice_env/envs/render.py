@@ -21,7 +21,7 @@ from typing import Any
 import numpy as np
 
 from dice_env.envs.task import ThrowTask
-from dice_env.model.checks import check_finite, check_int, check_positive, check_range
+from dice_env.model.checks import as_shaped, check_int, check_positive, check_range
 from dice_env.model.die import Die
 from dice_env.model.rotations import axis_angle
 from dice_env.model.scene import Plane, Scene
@@ -356,11 +356,9 @@ def _box(points: np.ndarray, lines: _Lines, xs: np.ndarray,
 def _draw_die(image: np.ndarray, depth: np.ndarray, nearest: np.ndarray,
               pose: tuple[Die, np.ndarray, np.ndarray], camera: _Lines, xs: np.ndarray,
               ys: np.ndarray, scale: float, light: np.ndarray) -> None:
-    """Draw the die into ``image`` in place; a nearer board stays in front, translucent.
+    """Draw ``pose`` (die, offset, orientation) into ``image`` where no drawn die is nearer.
 
-    ``pose``: the die, its centre from the camera's target and its orientation; ``camera``:
-    the pixel lines at offsets ``xs``, ``ys`` (``scale`` m per pixel). Drawn only where it is
-    nearer than the dice in ``nearest`` (their depths, updated).
+    A nearer board stays in front, translucent; ``nearest``: the depths of the dice drawn so far.
     """
     die, offset, orientation = pose
     rows, cols = _box(np.asarray(die.vertices) @ orientation.T + offset, camera, xs, ys)
@@ -537,15 +535,7 @@ def _text_strokes(text: str, underline: bool) -> np.ndarray:
 # --- input and figures --------------------------------------------------------------------
 
 def _check_pose(position: np.ndarray, orientation: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """``position`` (3,) and ``orientation`` (3, 3) as finite float arrays, else ``ValueError``."""
-    position = np.asarray(position, dtype=np.float64)
-    orientation = np.asarray(orientation, dtype=np.float64)
-    for name, value, shape in (("position", position, (3,)),
-                               ("orientation", orientation, (3, 3))):
-        if value.shape != shape:
-            raise ValueError(f"{name} must have shape {shape}, got {value.shape}")
-        check_finite(name, value)
-    return position, orientation
+    return as_shaped("position", position, (3,)), as_shaped("orientation", orientation, (3, 3))
 
 
 def resting(die: Die, label: int, at: tuple[float, float] = (0.0, 0.0),
@@ -567,19 +557,10 @@ def resting(die: Die, label: int, at: tuple[float, float] = (0.0, 0.0),
     return np.array([*at, die.resting_heights[label - 1]]), orientation
 
 
-def _figure_d20() -> np.ndarray:
-    """A d20 at rest on the default table showing 20, seen close."""
-    scene = Scene(die=Die.standard("d20"))
-    position, orientation = resting(scene.die, 20, turn=0.3 + math.pi)
-    return render_die(scene, position, orientation, size=(360, 480), elevation=40.0, view_edges=2.6)
-
-
-def _figure_tray() -> np.ndarray:
-    """The default d6 at rest in the dice tray, the whole tray in view."""
-    scene = Scene(walls=walls("tray"))
-    position, orientation = resting(scene.die, 5, at=(-0.01, 0.01), turn=0.4)
-    return render_die(scene, position, orientation, size=(480, 640), elevation=50.0,
-                      view_edges=25.0)
+def _figure_resting(scene: Scene, label: int, turn: float, at: tuple[float, float] = (0.0, 0.0),
+                    **view: Any) -> np.ndarray:
+    """The scene's die at rest showing ``label`` (:func:`resting`), seen through ``view``."""
+    return render_die(scene, *resting(scene.die, label, at, turn), **view)
 
 
 def _figure_pair(frames: int = 6) -> np.ndarray:
@@ -604,9 +585,13 @@ def _figure_pair(frames: int = 6) -> np.ndarray:
     return np.concatenate([part for image in images for part in (image, gap)][:-1], axis=1)
 
 
-# The README's pictures: ``python -m dice_env.envs.render NAME --out PATH``. The single dice
-# are placed by construction (no simulation), the pair is a short simulated throw.
-FIGURES = {"die-d20": _figure_d20, "tray": _figure_tray, "pair": _figure_pair}
+# The README's pictures: ``python -m dice_env.envs.render NAME --out PATH``.
+FIGURES = {  # a d20 seen close, a d6 in the whole tray, a pair's throw
+    "die-d20": lambda: _figure_resting(Scene(die=Die.standard("d20")), 20, 0.3 + math.pi,
+                                       size=(360, 480), elevation=40.0, view_edges=2.6),
+    "tray": lambda: _figure_resting(Scene(walls=walls("tray")), 5, 0.4, (-0.01, 0.01),
+                                    size=(480, 640), elevation=50.0, view_edges=25.0),
+    "pair": _figure_pair}
 
 
 def has_display() -> bool:

@@ -1,10 +1,5 @@
 """DiceThrow-v0's native batch as a Stable-Baselines3 ``VecEnv`` (SB3 cannot take a Gymnasium one).
 
-    env = make_sb3_env(n_envs=256, seed=0)       # one call, like SB3's make_vec_env
-    model = PPO("MlpPolicy", env)
-
-or by hand: ``DiceThrowSB3VecEnv(gym.make_vec("DiceThrow-v0", num_envs=16))``.
-
 Every step ends every episode (``dones`` all True); ``infos[i]`` holds the single env's info,
 ``"terminal_observation"`` (the dice at rest) and ``"TimeLimit.truncated": False``.
 """

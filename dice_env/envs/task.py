@@ -1,13 +1,7 @@
-"""The DiceThrow task as pure functions over a batch: hands, noise, releases, throws, rewards.
+"""The DiceThrow task over a batch: hands, noise, releases, throws, rewards.
 
-The single env, the vector env, the SB3 adapter and the oracle share this one code path:
-
-    task = make_task(release_height=0.015)
-    target, hand = task.sample_hand(rng)                 # one episode's context
-    noise = task.sample_noise(rng, n)                    # (n, 9) standard normals
-    throw = task.throw(actions, targets, hands, noise)   # (n, 6) actions -> rewards, info
-
-Frames: world frame, z up on a level table; the table's unit normal is ``task.scene.ground.normal``.
+The single env, the vector env, the SB3 adapter and the oracle share this code path: a
+context from :meth:`ThrowTask.sample_hand`, then :meth:`ThrowTask.throw`. World frame, z up.
 """
 
 from __future__ import annotations
@@ -117,7 +111,12 @@ class ThrowTask:
                 f"t_max must be at most {ENV_MAX_STEPS:.0e} steps: t_max={self.scene.t_max:g} s "
                 f"over the {self.n_dice} dice's step of {self.step:.3g} s is "
                 f"{self.scene.t_max / self.step:.3g} steps; lower t_max or num_dice")
-        self._check_walls()
+        for i, (centre, die) in enumerate(zip(self.release_positions, self.dice, strict=True)):
+            for wall in self.scene.walls:  # every die in the hand clears every wall by its reach
+                gap = float(np.asarray(wall.normal) @ centre - wall.offset)
+                if gap <= die.reach:
+                    raise ValueError(f"die {i} in the hand (centre {centre.round(4)} m) would "
+                                     f"reach through a wall (walls) by {die.reach - gap:.3g} m")
 
     def _check_dice(self) -> None:
         """Check ``dice``, ``target`` and ``set_dice``; set their defaults and the scene's die."""
@@ -139,15 +138,6 @@ class ThrowTask:
                              f"needs num_dice >= 2)")
         if not several and self.set_dice:
             raise ValueError(f"set_dice needs num_dice >= 2, got set_dice={self.set_dice!r}")
-
-    def _check_walls(self) -> None:
-        """Every die in the hand must clear every wall by its reach."""
-        for i, (centre, die) in enumerate(zip(self.release_positions, self.dice, strict=True)):
-            for wall in self.scene.walls:
-                gap = float(np.asarray(wall.normal) @ centre - wall.offset)
-                if gap <= die.reach:
-                    raise ValueError(f"die {i} in the hand (centre {centre.round(4)} m) would "
-                                     f"reach through a wall (walls) by {die.reach - gap:.3g} m")
 
     @cached_property
     def die_scenes(self) -> tuple[Scene, ...]:
@@ -250,35 +240,33 @@ class ThrowTask:
         "faces": ``target_face``, a face (one die) or a sequence of N faces; "sum" and
         "avoid_sum": ``target_sum``, an int in :attr:`totals`. The other is refused.
         """
-        if self.target == "faces":
-            if target_sum is not None:
-                raise ValueError(f"target_sum needs target='sum' or 'avoid_sum'; target is 'faces' "
-                                 f"(fix the faces with target_face), got {target_sum!r}")
-            return None if target_face is None else self._check_faces(target_face)
-        if target_face is not None:
-            raise ValueError(f"target_face needs target='faces'; target is {self.target!r} (fix "
-                             f"the total with target_sum), got {target_face!r}")
-        if target_sum is None:
+        if self.target != "faces":
+            if target_face is not None:
+                raise ValueError(f"target_face needs target='faces'; target is {self.target!r} "
+                                 f"(fix the total with target_sum), got {target_face!r}")
+            if target_sum is None:
+                return None
+            return check_int("target_sum", target_sum, self.totals[0], self.totals[-1])
+        if target_sum is not None:
+            raise ValueError(f"target_sum needs target='sum' or 'avoid_sum'; target is 'faces' "
+                             f"(fix the faces with target_face), got {target_sum!r}")
+        if target_face is None:
             return None
-        return check_int("target_sum", target_sum, self.totals[0], self.totals[-1])
-
-    def _check_faces(self, value: object) -> int | tuple[int, ...]:
-        """``target_face``: one die's face, or a sequence of one face per die."""
         if self.n_dice == 1:
-            return check_face("target_face", value, self.faces[0])
-        if isinstance(value, (str, bytes)) or not isinstance(value, Sequence | np.ndarray) \
-                or len(value) != self.n_dice:
+            return check_face("target_face", target_face, self.faces[0])
+        if (not isinstance(target_face, Sequence | np.ndarray) or len(target_face) != self.n_dice
+                or isinstance(target_face, (str, bytes))):
             raise ValueError(f"target_face must be a sequence of {self.n_dice} faces, one per "
-                             f"die (faces {self.faces}), got {value!r}")
-        return tuple(check_face("target_face", f, n) for f, n in zip(value, self.faces,
-                                                                       strict=True))
+                             f"die (faces {self.faces}), got {target_face!r}")
+        return tuple(check_face("target_face", f, n)
+                     for f, n in zip(target_face, self.faces, strict=True))
 
     def sample_hand(self, rng: np.random.Generator, target: Any = None,
                     orientation_mode: str = "uniform") -> tuple[Any, np.ndarray]:
         """One episode's context: the target and the hand (3, 3), or hands (N, 3, 3).
 
-        ``target``: as :meth:`sample_hands`; ``orientation_mode``: "uniform" (all rotations),
-        "flat" (a uniform face up, a uniform turn about the vertical) or "identity".
+        ``orientation_mode``: "uniform" (all rotations), "flat" (a uniform face up and turn) or
+        "identity".
         """
         targets, hands = self.sample_hands([rng], target, orientation_mode)
         return targets[0].tolist() if targets.ndim == 1 else targets[0], hands[0]
@@ -405,34 +393,22 @@ class ThrowTask:
         reward_success = success.astype(np.float64)
         shaping = np.where(counts, self.shaping * alignment, 0.0)
         several = {"total": faces.sum(axis=1), "leaning": leaning} if self.n_dice > 1 else {}
-        info = {
-            "is_success": success,
-            "target_face" if by_face else "target_sum": targets,
-            "face": result.face, **several,
-            "settled": result.settled,
-            "unstable": result.unstable,
-            "sunk": sunk,
-            "max_sink": result.max_penetration.reshape(n, -1).max(axis=1),
-            "fair": fair,
-            "void_reason": void,
-            "rest_time": result.rest_time,
-            "impacts": result.impacts,
-            "reward_success": reward_success,
-            "reward_shaping": shaping,
-            "release_velocity": state.velocity,
-            "release_spin": state.angular_velocity,
-            "release_orientation": state.orientation,
-            "action_clipped": clipped,
-        }
+        info = {"is_success": success, "target_face" if by_face else "target_sum": targets,
+                "face": result.face, **several, "settled": result.settled,
+                "unstable": result.unstable, "sunk": sunk,
+                "max_sink": result.max_penetration.reshape(n, -1).max(axis=1), "fair": fair,
+                "void_reason": void, "rest_time": result.rest_time, "impacts": result.impacts,
+                "reward_success": reward_success, "reward_shaping": shaping,
+                "release_velocity": state.velocity, "release_spin": state.angular_velocity,
+                "release_orientation": state.orientation, "action_clipped": clipped}
         return Throw(reward=reward_success + shaping, info=info, result=result,
                      observation=self.observe(targets, result.final.orientation))
 
     @property
     def run_until(self) -> str:
-        """The kernel's ``until`` (:data:`dice_env.simulation.simulate.ENDINGS`) of a throw.
+        """The kernel's ``until`` of a throw: ``until``, but ``"early_rest"`` for one die to rest.
 
-        ``until``, but one die runs to rest as ``"early_rest"``: the same face, rest time and
-        impacts as waiting out the rest hold, faster (docs/performance.md).
+        Early rest gives the same face, rest time and impacts, faster (docs/performance.md).
         """
         return "early_rest" if self.until == "rest" and self.n_dice == 1 else self.until
 
@@ -464,10 +440,7 @@ TASK_KEYWORDS = tuple(f.name for f in fields(ThrowTask) if f.name not in ("scene
 
 def void_reasons(fair: np.ndarray, unstable: np.ndarray, sunk: np.ndarray, ended: np.ndarray,
                  until: str, leaning: np.ndarray) -> np.ndarray:
-    """Why each throw does not count, (n,) strings, ``""`` where it counts.
-
-    The first of "foul", "unstable", "sunk", not ended (:data:`UNTIL`) and "leaning" that applies.
-    """
+    """Why each throw does not count, (n,) strings, ``""`` where it counts (the first reason)."""
     return np.select([~fair, unstable, sunk, ~ended, leaning],
                      ["foul", "unstable", "sunk", UNTIL[until], "leaning"], "")
 
@@ -549,10 +522,9 @@ def check_task_keywords(keywords: dict[str, object]) -> dict[str, object]:
 
 
 def _held_within_t_max(result: Result, scene: Scene) -> Result:
-    """``result`` of an early-rest run with ``settled`` as if the rest hold had been waited out.
+    """``result`` of an early-rest run, ``settled`` as if the rest hold had been waited out.
 
-    Waiting it out needs the hold (``ceil(hold / dt)`` quiet steps after the first) to end
-    within ``t_max``: a die quiet later is not settled, its rest time ``t_max``.
+    A die whose hold (``ceil(hold / dt)`` quiet steps) ends after ``t_max`` is not settled.
     """
     dt = scene.step
     hold_steps = math.ceil(scene.rest.hold / dt)
