@@ -111,8 +111,7 @@ class SceneKeywords:
                 f"{', '.join(given)} cannot be applied to the scene's die: it is not a uniform "
                 f"die of a standard shape ({base!r}, com ({com}) m); build the die you want in "
                 f"the scene and leave out {', '.join(given)}")
-        dims = {"size": base.size if size is None else size,
-                "mass": base.mass if self.mass is None else self.mass}
+        dims = {"size": base.size, "mass": base.mass} | _given(size=size, mass=self.mass)
         check_positive(size_name, dims["size"])
         check_positive("mass", dims["mass"])
         problem = (f"{size_name}={dims['size']:g} m, mass={dims['mass']:g} kg and load_fraction="

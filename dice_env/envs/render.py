@@ -1,11 +1,8 @@
-"""A headless software renderer of any convex die with its labels, the walls and the floor.
+"""A headless numpy renderer of convex dice with their labels, the walls and the floor.
 
-numpy only (a matplotlib window for "human"): an orthographic camera looking down at the dice,
-centred on them; each pixel casts a ray against the dice (intersections of face half-spaces)
-and the walls, drawn as boards :data:`WALL_HEIGHT` high, translucent in front of a die. The
-floor has a grid of one die size and the dice's shadows. d6-like dice show pips, others
-numerals (the d4 one near each corner). ``python -m dice_env.envs.render NAME --out PATH``
-writes a figure of :data:`FIGURES`.
+An orthographic camera looks down at the dice; each pixel casts a ray against the dice (face
+half-spaces) and the walls (boards :data:`WALL_HEIGHT` high, translucent in front of a die).
+``python -m dice_env.envs.render NAME --out PATH`` writes a figure of :data:`FIGURES`.
 """
 
 from __future__ import annotations
@@ -459,10 +456,7 @@ def _pip_face(polygon: np.ndarray, k: int) -> FaceArt:
 
 
 def _numeral_frame(polygon: np.ndarray, normal: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The face's area centroid and axes (u, v), v (the numeral's up) towards a corner.
-
-    The corner nearest the body's +z seen along the face (+y for a face nearly level).
-    """
+    """The face's area centroid and axes (u, v), v (up) towards the corner nearest +z (or +y)."""
     fan = np.cross(polygon[1:-1] - polygon[0], polygon[2:] - polygon[0]) @ normal
     centre = (fan @ (polygon[0] + polygon[1:-1] + polygon[2:]) / 3) / fan.sum()
     reference = np.eye(3)[2] - normal[2] * normal
@@ -540,10 +534,9 @@ def _check_pose(position: np.ndarray, orientation: np.ndarray) -> tuple[np.ndarr
 
 def resting(die: Die, label: int, at: tuple[float, float] = (0.0, 0.0),
             turn: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
-    """Centre of mass and orientation of ``die`` at rest on a level floor through the origin.
+    """Centre of mass and orientation of ``die`` reading ``label`` on a level floor at z = 0.
 
-    ``label`` read (its reading direction straight up), at ``at`` (x, y) (m), turned by
-    ``turn`` (rad) about the vertical.
+    ``at``: (x, y) (m); ``turn``: rad about the vertical.
     """
     check_int("label", label, 1, die.n_faces)
     reading = die.reading[label - 1]
@@ -596,18 +589,15 @@ FIGURES = {  # a d20 seen close, a d6 in the whole tray, a pair's throw
 
 def has_display() -> bool:
     """True when a window can be opened (a display on Linux; always on macOS and Windows)."""
-    if sys.platform.startswith(("darwin", "win")):
-        return True
-    return bool(os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
+    return sys.platform.startswith(("darwin", "win")) or bool(
+        os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
 
 
 class Viewer:
     """A matplotlib window showing frames at ``fps``; does nothing where there is no display."""
 
     def __init__(self, fps: float) -> None:
-        self.fps = fps
-        self._figure = None
-        self._image = None
+        self.fps, self._figure, self._image = fps, None, None
 
     def show(self, frame: np.ndarray) -> None:
         """Show ``frame`` (H, W, 3) uint8 and wait one frame interval."""

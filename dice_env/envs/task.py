@@ -56,13 +56,10 @@ SET_ANGLE = math.pi  # rad: a dice-setting action of 1 turns its die by this muc
 class ThrowTask:
     """A throw of N dice from the hand: how actions become releases and how a landing is scored.
 
-    ``dice``: 1 … :data:`MAX_NUM_DICE` dice, mixed shapes allowed (default: the scene's die);
-    the scene's die is set to the first. Per-die arrays (targets, hands, faces, releases) have a
-    die axis only for several dice. Units: m, m/s, rad/s, rad. ``hand_noise`` is relative to
-    each action component's maximum; ``release_height=None`` is :data:`RELEASE_HEIGHT`, or
-    :data:`RELEASE_GAP` above the farthest corner of any die if that is higher. ``until``:
-    "rest" or "decided" (see :attr:`run_until`). Every field, the hand, the targets and the
-    void throws: ``docs/environment.md`` ("Keywords", "Several dice in one throw").
+    ``dice``: 1 … :data:`MAX_NUM_DICE` dice (default: the scene's die; the scene takes the
+    first). Per-die arrays have a die axis only for several dice. ``release_height=None`` is
+    :data:`RELEASE_HEIGHT`, or :data:`RELEASE_GAP` above any die's farthest corner if higher.
+    Every field, the hand, the targets and void throws: ``docs/environment.md``.
     """
 
     scene: Scene
@@ -327,12 +324,11 @@ class ThrowTask:
                 noise: np.ndarray | Sequence[np.random.Generator], *,
                 action_shape: tuple[int, ...] | None = None,
                 ) -> tuple[State | GroupState, np.ndarray]:
-        """Releases for ``actions`` (n, :attr:`action_dim`), ``hands`` and ``noise``.
+        """Releases for ``actions`` (n, :attr:`action_dim`), ``hands`` (n, [N,] 3, 3), ``noise``.
 
-        ``hands`` (n, 3, 3) or (n, N, 3, 3); ``noise`` (n, :attr:`noise_dim`) standard normals,
-        or one generator per throw that draws them once the actions pass. Actions are checked
-        (:func:`check_actions` with ``shape=action_shape``) and clipped to [-1, 1]. Returns the
-        State (one die) or GroupState, and which actions were clipped (n,).
+        ``noise``: (n, :attr:`noise_dim`) standard normals, or one generator per throw (drawn
+        once the actions pass :func:`check_actions`). Returns the State or GroupState, and which
+        actions were clipped to [-1, 1] (n,).
         """
         actions = check_actions(actions, self.action_dim, action_shape)
         clipped = np.any(np.abs(actions) > 1.0, axis=1)
@@ -359,12 +355,9 @@ class ThrowTask:
               action_shape: tuple[int, ...] | None = None) -> Throw:
         """Simulate ``n`` throws of the dice in one kernel call and score them.
 
-        ``actions`` (n, :attr:`action_dim`) in [-1, 1]; ``targets`` (n, :attr:`target_shape`);
-        ``hands`` (n, 3, 3) or (n, N, 3, 3) orientations in the hand; ``noise`` and
-        ``action_shape`` as :meth:`release`'s. ``record_every`` > 0 records the centres and
-        orientations every that many steps (for rendering). Info: the env's keys over n, with a
-        die axis (:attr:`die_shape`) for ``face`` (0: not read), ``impacts`` and the releases;
-        several dice add ``total`` (n,) and ``leaning`` per die.
+        ``targets`` (n, :attr:`target_shape`), the rest as :meth:`release`'s; ``record_every`` > 0
+        records the centres and orientations every that many steps. Info: the env's keys over n
+        (``docs/environment.md``), per-die ones with a die axis (:attr:`die_shape`).
         """
         state, clipped = self.release(actions, hands, noise, action_shape=action_shape)
         n, by_face = len(clipped), self.target == "faces"
@@ -453,10 +446,7 @@ def target_alignment(orientation: np.ndarray, die: Die, targets: np.ndarray,
 
 def check_actions(actions: np.ndarray, dim: int = ACTION_DIM,
                   shape: tuple[int, ...] | None = None) -> np.ndarray:
-    """Actions as a float64 (n, dim) array; NaN/inf or a wrong shape raise ``ValueError``.
-
-    ``shape``: the one shape allowed (an env's); None: (dim,) or (n, dim).
-    """
+    """Actions as float64 (n, dim); ``ValueError`` for NaN/inf or a shape other than ``shape``."""
     array = as_floats("action", actions)
     if shape is not None and array.shape != shape:
         raise ValueError(f"action{'s' if len(shape) > 1 else ''} must have shape {shape}, "
