@@ -1,8 +1,6 @@
 """The env's physical keywords: each validated where given, applied to a base scene.
 
-:meth:`SceneKeywords.build` changes only what a keyword names and refuses one that cannot be
-applied or would have no effect; :func:`check_scene` refuses scenes the env cannot run as throws
-(``docs/environment.md``, "What gym.make refuses before any work").
+What is refused and why: ``docs/environment.md``, "What gym.make refuses before any work".
 """
 
 from __future__ import annotations

@@ -23,6 +23,8 @@ from dice_env.model.die import Die
 from dice_env.model.rotations import axis_angle
 from dice_env.model.scene import Plane, Scene
 from dice_env.model.surroundings import walls
+from dice_env.simulation.group import GroupState, simulate_group
+from dice_env.simulation.simulate import State
 
 # In-face axes (u, v) of the d6's pip faces, body frame, so that u x v is the outward normal.
 FACE_U = np.array([[1, 0, 0], [0, 1, 0], [0, 0, 1], [0, 0, 1], [0, 0, 1], [0, 1, 0]], float)
@@ -558,9 +560,6 @@ def _figure_resting(scene: Scene, label: int, turn: float, at: tuple[float, floa
 
 def _figure_pair(frames: int = 6) -> np.ndarray:
     """Two d6 thrown together into the tray, ``frames`` frames of a seeded throw side by side."""
-    from dice_env.simulation.group import GroupState, simulate_group
-    from dice_env.simulation.simulate import State
-
     scene = Scene(walls=walls("tray"), t_max=3.0)
     dice = (Die(), Die())
     rng = np.random.default_rng(11)

@@ -26,12 +26,11 @@ def make_sb3_env(n_envs: int = 256, seed: int | None = None, *, env_id: str = "D
     ``seed`` (None: unseeded) seeds env ``i`` with ``seed + i`` at the first ``reset``;
     ``env_kwargs``: ``gym.make``'s keywords. ``env_id``: an env with DiceThrow-v0's native batch.
     """
-    if seed is not None:
-        check_int("seed", seed, 0, also=" or None")
+    seed = None if seed is None else check_int("seed", seed, 0, also=" or None")
     env = DiceThrowSB3VecEnv(gym.make_vec(env_id, num_envs=n_envs, vectorization_mode=None,
                                           **env_kwargs))
     if seed is not None:
-        env.seed(int(seed))
+        env.seed(seed)
     return VecMonitor(env)
 
 
