@@ -164,7 +164,7 @@ def check_scene(scene: Scene, release_height: float) -> None:
             f"more than {MAX_SINK} of its size ({die.size:g} m): mass={die.mass:g} kg, "
             f"gravity={scene.gravity:g} m/s^2, stiffness={ground.stiffness:g} N/m")
     _check_steps(scene)
-    if ground.contact_law != ContactLaw.PAPER or ground.damping <= 0:
+    if not (ground.contact_law == ContactLaw.PAPER and ground.damping > 0):
         return
     g = scene.gravity * ground.normal[2]
     weight, drop_speed, damping = die.mass * g, math.sqrt(2.0 * g * release_height), ground.damping
