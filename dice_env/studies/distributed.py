@@ -1,16 +1,12 @@
 """Many throws in seeded chunks, in this process or on a Ray cluster, merged into one tally.
 
-Chunk ``i`` draws its throws from ``SeedSequence(seed, spawn_key=(i,))`` alone and the chunks'
-:class:`Tally` objects merge exactly, so :func:`run_throws` gives the same result bit for bit here
-or on any Ray workers. A run folder (``out``) keeps each finished chunk (``chunk_NNNNNN.npz``):
-a run started again computes only the missing ones, and refuses another run's by name
-(:class:`~dice_env.studies.chunks.FolderError`).
-
-Command line (prints the chi-square summary)::
+Chunk ``i`` draws from ``SeedSequence(seed, spawn_key=(i,))`` alone and :class:`Tally` objects
+merge exactly, so :func:`run_throws` gives the same result bit for bit here or on Ray. A run
+folder keeps each finished chunk; run again, it computes only the missing ones. Command line::
 
     python -m dice_env.studies.distributed --die d20 --throws 1000000 --ray auto --out runs/d20
 
-Ray is an optional extra (``pip install 'dice_env[ray]'``); without it the local path works.
+Ray is an optional extra (``pip install 'dice_env[ray]'``).
 """
 
 from __future__ import annotations
@@ -40,12 +36,11 @@ from dice_env.studies.common import checked_int
 from dice_env.studies.markdown import bracket, markdown_table
 from dice_env.studies.shapes import Faces, counted, hand_throws
 
-# Per-throw outcomes a chunk keeps (the arrays of ``chunk_NNNNNN.npz``).
+# Per-throw outcomes a chunk keeps.
 OUTCOMES = ("face", "counted", "decided", "settled", "unstable", "sunk", "steps", "time",
             "impacts")
 MOMENTS = ("steps", "time", "impacts")  # outcomes summarised by their sum and sum of squares
-# Histogram bins: of the time to the end over [0, scene.t_max]; of impacts 0, 1, ... (the
-# last bin: that many or more).
+# Histogram bins: time to the end over [0, t_max]; impacts 0, 1, ... (the last: that or more)
 TIME_BINS, IMPACT_BINS = 50, 32
 CHUNK = 10_000  # throws per chunk by default: seconds of work for one thread
 INSTALL_RAY = "pip install 'dice_env[ray]'"
@@ -57,9 +52,8 @@ Draw = Callable[[Scene, int, np.random.Generator], State]
 class Spec:
     """What a run throws; a run folder holds one spec.
 
-    ``chunk``: throws per chunk (the last takes the rest); ``draw(scene, n, rng)``: a chunk's
-    throws, picklable for Ray, and recorded in a run folder by its importable name (a lambda or
-    local function is refused there).
+    ``chunk``: throws per chunk (the last takes the rest); ``draw(scene, n, rng)``: picklable
+    for Ray and, in a run folder, named by its import path (no lambda or local function).
     """
 
     scene: Scene
@@ -96,8 +90,7 @@ class Spec:
             draw = _named(self.draw)
         except ValueError as error:
             raise ValueError(f"draw={self.draw!r} cannot be recorded in a run folder: {error}; "
-                             "pass a module-level function or a functools.partial of one") \
-                from None
+                             "pass a module-level function or a functools.partial of one") from None
         data = {"scene": dataclasses.asdict(self.scene), "throws": self.throws,
                 "chunk": self.chunk, "seed": self.seed, "draw": draw}
         return json.loads(json.dumps(data))

@@ -1,10 +1,8 @@
 """Weldon's dice (1894): twelve pip-drilled dice, the chance of a 5 or a 6.
 
-``run(out, quick, throws)`` writes ``out/weldon.md``, its numbers ``out/weldon.json`` (read by
-the validation page) and ``out/figures/weldon.png``. The cups' dice are thrown together
-(:func:`throw_together`) and each alone (:func:`throw_alone`), the pip variants
-(:data:`VARIANTS`) alone; the page explains the statistics (95% intervals, chi-square tests
-with tails pooled to :data:`MIN_EXPECTED`). Nothing is fitted to Weldon's numbers.
+``run`` writes ``weldon.md``, ``weldon.json`` (read by the validation page) and
+``figures/weldon.png``: the cups' dice thrown together (:func:`throw_together`) and each alone
+(:func:`throw_alone`), the pip :data:`VARIANTS` alone. Nothing is fitted to Weldon's numbers.
 """
 
 from __future__ import annotations
@@ -73,8 +71,7 @@ class Estimate:
     def per_throw(cls, successes: np.ndarray, dice: int = DICE) -> Estimate:
         """The share of successes among ``dice`` dice per throw (T,), the throw as the unit.
 
-        The error is the spread between throws: valid whether or not the dice of a throw depend
-        on each other.
+        The error is the spread between throws, valid whether or not a throw's dice interact.
         """
         successes = np.asarray(successes, dtype=np.float64)
         if successes.ndim != 1 or successes.size < 2:
@@ -224,9 +221,8 @@ def throws_to_resolve(truth: np.ndarray, null: np.ndarray, test: Chi2,
 def distribution_verdict(test: Chi2, power_against_fair: float) -> str:
     """The verdict of a test of a simulated distribution against Weldon's.
 
-    "differs" when the test rejects at :data:`SIGNIFICANCE`; else "not resolvable at this
-    sample" when it cannot be tested or ``power_against_fair`` is below
-    :data:`RESOLVING_POWER`; else "agrees".
+    "differs" when it rejects at :data:`SIGNIFICANCE`; "not resolvable at this sample" when it
+    cannot be tested or ``power_against_fair`` < :data:`RESOLVING_POWER`; else "agrees".
     """
     if test.testable and test.p_value < SIGNIFICANCE:
         return "differs"
@@ -362,7 +358,7 @@ def excess_per_offset(offsets: np.ndarray, excess: np.ndarray, se: np.ndarray
                       ) -> tuple[float, float]:
     """Slope (per µm) of p(5 or 6) - 1/3 against the centre's offset (µm), and its error.
 
-    Weighted least squares (weights ``1 / se^2``) of a line through the origin.
+    Weighted least squares (weights ``1 / se^2``) through the origin.
     """
     x, y, s = (np.asarray(v, dtype=np.float64) for v in (offsets, excess, se))
     weights = 1.0 / s**2
@@ -373,10 +369,7 @@ def excess_per_offset(offsets: np.ndarray, excess: np.ndarray, se: np.ndarray
 
 
 def offset_for_weldon(slope: float, se: float) -> tuple[float, float, float]:
-    """The offset (µm) whose excess the slope puts at Weldon's, and its 95% low and high.
-
-    An end is inf where the slope's 95% interval reaches zero.
-    """
+    """The offset (µm) whose excess the slope puts at Weldon's, its 95% low and high (or inf)."""
     return tuple(EFFECT / s if s > 0 else math.inf
                  for s in (slope, slope + Z95 * se, slope - Z95 * se))
 
@@ -489,10 +482,6 @@ def summarise(together: Together, alone: dict[str, Faces]) -> dict:
     return out
 
 
-def _verdict(verdict: str) -> str:
-    return f"**{verdict}**"
-
-
 def p_text(entry: dict) -> str:
     """An entry's ``p [low, high]`` (four decimals)."""
     return estimate(entry["p"], entry["interval"], 4)
@@ -520,8 +509,8 @@ def markdown(n: dict) -> str:
         "vs 1/3 | vs Weldon",
         ((v["label"], f"{v['edge_mm']:.2f}", f"{v['mass_g']:.3f}",
           ", ".join(f"{c:.1f}" for c in v["com_um"]), v["n"], p_text(v),
-          f"{v['p'] - FAIR:+.4f}", _verdict(v["vs_fair_p"]["verdict"]),
-          _verdict(v["vs_weldon_p"]["verdict"])) for v in n["alone"].values()))
+          f"{v['p'] - FAIR:+.4f}", f"**{v['vs_fair_p']['verdict']}**",
+          f"**{v['vs_weldon_p']['verdict']}**") for v in n["alone"].values()))
     faces = markdown_table(
         "die | 1 | 2 | 3 | 4 | 5 | 6",
         ((v["label"], *(f"{c / sum(v['counts']):.4f}" for c in v["counts"]))
@@ -532,19 +521,6 @@ def markdown(n: dict) -> str:
                       sizes=n["meta"]["sizes"], successes=successes, t=t, variants=variants, w=w)
 
 
-def _together_reach(t: dict) -> str:
-    """What the together throws can tell at their sample, from their verdict."""
-    if "p" not in t:
-        return "Too few throws were counted for an estimate."
-    if t["vs_weldon_p"]["verdict"] == "not resolvable at this sample":
-        return ("They show the distribution of successes and whether the dice of one throw "
-                "depend on each other (their collisions); at this sample they cannot resolve "
-                "p to Weldon's precision.")
-    return ("At this sample they resolve p to Weldon's precision, with the dice colliding, and "
-            "show the distribution of successes and whether the dice of one throw depend on "
-            "each other.")
-
-
 def _p_rows(n: dict) -> str:
     w, t, ref = n["weldon"], n["together"], n["alone"][VARIANTS[0][0]]
     rows = [f"| Weldon (1894) | {w['n']:,} | {p_text(w)} | | | |"]
@@ -553,10 +529,10 @@ def _p_rows(n: dict) -> str:
             rows.append(f"| {label}, `drilled16` | {entry['counted'] * DICE} | too few throws "
                         "| | | |")
             continue
+        vs = entry["vs_weldon_p"]
         rows.append(f"| {label}, `drilled16` | {entry['n']:,} | {p_text(entry)} | "
-                    f"{entry['vs_weldon_p']['difference']:+.4f} | "
-                    f"{_verdict(entry['vs_weldon_p']['verdict'])} | "
-                    f"{_verdict(entry['vs_fair_p']['verdict'])} |")
+                    f"{vs['difference']:+.4f} | **{vs['verdict']}** | "
+                    f"**{entry['vs_fair_p']['verdict']}** |")
     return "\n".join(rows)
 
 
@@ -580,7 +556,7 @@ def _distribution_text(t: dict) -> str:
               if t["throws_to_resolve"] else "its cells cannot tell the two apart")
     return (
         f"- (a) against Weldon's distribution (2 × cells contingency table): "
-        f"{_test(t['vs_weldon'])}: {_verdict(t['distribution_verdict'])}. At "
+        f"{_test(t['vs_weldon'])}: **{t['distribution_verdict']}**. At "
         f"{t['counted']} throws this test detects Weldon's distribution against the "
         f"binomial at 1/3 with probability {t['power_against_fair']:.2f}; {needed}.\n"
         f"- (a) against the binomial at 1/3: {_test(t['vs_fair'])}.\n"
