@@ -1,8 +1,7 @@
 """Error against run time: ``python -m dice_env.studies error`` writes docs/error-vs-runtime.md.
 
-Trajectory error against step and CPU time (:func:`trajectory_errors`), outcome statistics at
-``dt`` and ``dt/4`` (:func:`outcome_test`) and per-throw face agreement beside the chaos floor
-(:func:`face_agreement`); the page explains each.
+:func:`trajectory_errors` against step and CPU time, :func:`outcome_test` (``dt`` against
+``dt/4``) and :func:`face_agreement` beside the chaos floor; the page explains each.
 """
 
 from __future__ import annotations
@@ -34,9 +33,8 @@ ENERGY_BINS = (0.0, 0.06, 0.12, 0.2, 0.3, np.inf)  # drop heights E / (m g) (m) 
 class Release:
     """A nominal release and the thrower's hand noise (SI units, angles in rad).
 
-    ``height`` of the centre, ``velocity``, ``spin`` (angular velocity) and ``tilt`` (rotation
-    vector); each throw adds normal noise of the ``sigma_*`` standard deviations per component.
-    ``target`` is the face that counts as success.
+    ``height`` of the centre, ``spin`` (angular velocity), ``tilt`` (rotation vector); normal
+    noise of the ``sigma_*`` per component; ``target``: the face that counts as success.
     """
 
     name: str
@@ -113,8 +111,8 @@ def trajectory_errors(scene: Scene, start: State, horizon: float, safeties: tupl
                       reference: Result, *, free_flight: bool = True) -> dict[str, np.ndarray]:
     """Median centre and orientation error at ``horizon`` for steps ``safety * critical_dt``.
 
-    Each step is rounded to divide ``horizon``; ``reference``: the same model at a much finer
-    step. Returns ``dt``, ``position`` (m), ``angle`` (rad) and ``cpu`` (s per throw).
+    ``reference``: the same model at a much finer step. Returns ``dt`` (rounded to divide
+    ``horizon``), ``position`` (m), ``angle`` (rad) and ``cpu`` (s per throw).
     """
     out: dict[str, list[float]] = {"dt": [], "position": [], "angle": [], "cpu": []}
     for safety in safeties:
@@ -294,6 +292,12 @@ def trajectory_start(scene: Scene, n: int, rng: np.random.Generator) -> State:
                          rng.normal(0.0, 10.0, (n, 3)), random_rotations(rng, n))
 
 
+def _save(fig: plt.Figure, path: Path) -> None:
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
 def _plot_work_precision(curves: dict[str, dict[str, np.ndarray]], path: Path) -> None:
     fig, (left, right) = plt.subplots(1, 2, figsize=(11, 4.2))
     for name, c in curves.items():
@@ -309,9 +313,7 @@ def _plot_work_precision(curves: dict[str, dict[str, np.ndarray]], path: Path) -
     right.set(xlabel="CPU time per throw, 0.25 s of throw (ms)",
               ylabel="median centre error at 0.25 s (mm)", title="error against run time")
     left.legend(fontsize=7)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    _save(fig, path)
 
 
 def _plot_agreement(height: np.ndarray, agreement: dict[str, dict[str, np.ndarray]],
@@ -332,9 +334,7 @@ def _plot_agreement(height: np.ndarray, agreement: dict[str, dict[str, np.ndarra
            xlabel="throw energy as drop height E/(m g) (cm)",
            title="per-throw face agreement (±2 s.e.)")
     ax.legend(fontsize=7)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    _save(fig, path)
 
 
 def _plot_outcomes(outcomes: dict[str, dict[str, object]], path: Path) -> None:
@@ -350,9 +350,7 @@ def _plot_outcomes(outcomes: dict[str, dict[str, object]], path: Path) -> None:
         ax.set(title=f"{name}: chi² p = {o['p_faces']:.2f}", xlabel="face up", xticks=faces)
     axes[0].set_ylabel("frequency (%), ±2 s.e.")
     axes[0].legend()
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    _save(fig, path)
 
 
 def _ratio_at_equal_error(slow: dict[str, np.ndarray], fast: dict[str, np.ndarray],
@@ -393,9 +391,8 @@ def write_report(out: Path, numbers: dict[str, object], quick: bool) -> dict[str
         m_ratio=scene.die.mass / scene.effective_mass,
         restitution=_restitution_table(numbers["restitution"]), work=_work_table(curves),
         outcome_table=_outcome_table(outcomes), agreement_table=_agreement_table(height, agreement),
-        gentle_table=_gentle_table(gentle), verdict=_verdict, median=np.median,
-        percentile=np.percentile, RESTITUTION=RESTITUTION, FRICTION=FRICTION, STIFFNESS=STIFFNESS,
-        DAMPING=DAMPING)
+        gentle_table=_gentle_table(gentle), RESTITUTION=RESTITUTION, FRICTION=FRICTION,
+        STIFFNESS=STIFFNESS, DAMPING=DAMPING)
     (out / "error-vs-runtime.md").write_text(text)
     return {"cpu_ratio_at_equal_error": ratio, "order_default": orders[DEFAULT],
             "gentle_agreement": verdicts["default"]["gentle"],
