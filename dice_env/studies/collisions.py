@@ -1,10 +1,8 @@
 """Two dice that meet: what their first collision does to them, and to the outcome's randomness.
 
-``run(out, quick, throws)`` writes ``out/collisions.md`` and ``out/figures/collisions.png``:
-the pairs study's throw (:func:`dice_env.studies.pairs.hand_throws`) thrown together and each
-die *apart* (alone, at the pair's step, so that it moves bit for bit as in the pair until the
-dice first touch); the first collision's change of velocity and spin
-(:attr:`dice_env.simulation.group.GroupResult.meet_velocity`), and how often a
+``run`` writes ``collisions.md`` and ``figures/collisions.png``: the pairs study's throw thrown
+together and each die *apart* (alone, moving bit for bit as in the pair until the dice first
+touch); the first collision's change of velocity and spin, and how often a
 :data:`PERTURBATION` of the release changes the faces, together against apart.
 """
 
@@ -92,10 +90,7 @@ def turn(before: np.ndarray, after: np.ndarray) -> np.ndarray:
 
 
 def measures(velocity: np.ndarray, spin: np.ndarray) -> dict[str, np.ndarray]:
-    """The changes from ``[:, 0]`` to ``[:, 1]`` of ``velocity`` and ``spin`` (B, 2, N, 3).
-
-    Per die (B, N), keyed as :data:`MEASURES`.
-    """
+    """:data:`MEASURES` (B, N) from ``[:, 0]`` to ``[:, 1]`` of velocity, spin (B, 2, N, 3)."""
     speed, rate = np.linalg.norm(velocity, axis=-1), np.linalg.norm(spin, axis=-1)
     return {"spin_change": rate[:, 1] - rate[:, 0], "spin_turn": turn(spin[:, 0], spin[:, 1]),
             "speed_change": speed[:, 1] - speed[:, 0],
@@ -104,12 +99,10 @@ def measures(velocity: np.ndarray, spin: np.ndarray) -> dict[str, np.ndarray]:
 
 def quantile_interval(x: np.ndarray, q: float, level: float = 0.95) -> tuple[float, float, float]:
     """The ``q`` quantile of ``x`` and its distribution-free ``level`` interval (binomial)."""
-    x = np.sort(np.ravel(x))
-    if not 0.0 < q < 1.0 or len(x) == 0:
-        raise ValueError(f"q must be in (0, 1) and x non-empty, got q={q!r}, {len(x)} values")
-    n = len(x)
-    low = int(stats.binom.ppf((1 - level) / 2, n, q))
-    high = int(stats.binom.ppf(1 - (1 - level) / 2, n, q))
+    x, n = np.sort(np.ravel(x)), np.size(x)
+    if not 0.0 < q < 1.0 or n == 0:
+        raise ValueError(f"q must be in (0, 1) and x non-empty, got q={q!r}, {n} values")
+    low, high = stats.binom.ppf([(1 - level) / 2, 1 - (1 - level) / 2], n, q).astype(int)
     return float(np.quantile(x, q)), float(x[max(low - 1, 0)]), float(x[min(high, n - 1)])
 
 
@@ -125,7 +118,7 @@ def entropy_estimate(codes: np.ndarray, k: int,
     """The bias-corrected entropy (bits) of ``codes`` (0..k-1) and its 95% interval.
 
     The plug-in ``H`` sits low, its bootstrap resamples' ``H*`` lower by about as much: the
-    estimate is ``2 H - mean(H*)``, the interval ``2 H`` less the 97.5% and 2.5% quantiles.
+    estimate is ``2 H - mean(H*)``, the interval ``2 H`` less the 97.5% and 2.5% quantiles of H*.
     """
     plug_in = entropy_bits(np.bincount(codes, minlength=k))
     draws = rng.integers(0, len(codes), (BOOTSTRAP, len(codes)))
