@@ -226,10 +226,7 @@ def throw(n: int, seed: int = SEED, bar: object = None) -> Collisions:
 
 def run(out: Path = DOCS, quick: bool = False, throws: int | None = None,
         seed: int = SEED) -> dict[str, float]:
-    """Regenerate ``collisions.md`` and its figure under ``out``; return the headline numbers.
-
-    ``throws``: throws of the pair (default :data:`FULL`, :data:`QUICK` with ``quick``).
-    """
+    """Regenerate ``collisions.md`` and its figure under ``out`` from ``throws`` pair throws."""
     n = checked_throws(throws, MIN_THROWS, QUICK if quick else FULL)
     bar = progress(2 * n, "pair throws, then first contacts alone")
     start, cpu = time.perf_counter(), time.process_time()

@@ -376,12 +376,19 @@ def write_report(out: Path, numbers: dict[str, object], quick: bool) -> dict[str
     ratio = _ratio_at_equal_error(curves[LISTING], curves[DEFAULT], SAFETIES.index(scene.safety))
     orders = {name: observed_order(c["dt"][-4:], c["position"][-4:]) for name, c in curves.items()}
     pen = agreement["default"]["penetration"] / scene.die.size
-    verdicts = {
-        label: {"gentle": float(gentle[DEFAULT if label == "default" else label]
-                                ["step"].mean()),
-                "p_min": min(min(o["p_faces"], o["p_success"]) for o in per.values()),
-                "order": orders[DEFAULT if label == "default" else label]}
-        for label, per in outcomes.items()}
+    verdicts = {}
+    for label, per in outcomes.items():
+        name = DEFAULT if label == "default" else label
+        verdicts[label] = {"gentle": float(gentle[name]["step"].mean()), "order": orders[name],
+                           "p_min": min(min(o["p_faces"], o["p_success"]) for o in per.values())}
+    e = numbers["restitution"]
+    restitution = markdown_table("impact speed (m/s) | at dt | at dt/4", (
+        (speed, f"{e[(speed, 1)]:.4f}", f"{e[(speed, 4)]:.4f}") for speed in (0.3, 1.0, 3.0)))
+    work = markdown_table(
+        "variant | dt (µs) | centre error (mm) | angle error (mrad) | CPU (µs/throw)",
+        ((name, f"{1e6 * c['dt'][j]:.2f}", f"{1e3 * c['position'][j]:.4f}",
+          f"{1e3 * c['angle'][j]:.3f}", f"{1e6 * c['cpu'][j]:.0f}")
+         for name, c in curves.items() for j in range(len(SAFETIES))))
 
     text = study_page(
         "error-vs-runtime", globals(), quick=quick, sizes=numbers["sizes"], scene=scene, pen=pen,
@@ -389,7 +396,7 @@ def write_report(out: Path, numbers: dict[str, object], quick: bool) -> dict[str
         paper=scene.with_(scheme=Scheme.PAPER),
         paper_gentle=float(gentle["paper scheme, stick-slip, analytic flight"]["step"].mean()),
         m_ratio=scene.die.mass / scene.effective_mass,
-        restitution=_restitution_table(numbers["restitution"]), work=_work_table(curves),
+        restitution=restitution, work=work,
         outcome_table=_outcome_table(outcomes), agreement_table=_agreement_table(height, agreement),
         gentle_table=_gentle_table(gentle), RESTITUTION=RESTITUTION, FRICTION=FRICTION,
         STIFFNESS=STIFFNESS, DAMPING=DAMPING)
@@ -405,20 +412,6 @@ def write_report(out: Path, numbers: dict[str, object], quick: bool) -> dict[str
 
 def _verdict(ok: bool) -> str:
     return "met" if ok else "**not met**"
-
-
-def _restitution_table(restitution: dict[tuple[float, int], float]) -> str:
-    return markdown_table("impact speed (m/s) | at dt | at dt/4", (
-        (speed, f"{restitution[(speed, 1)]:.4f}", f"{restitution[(speed, 4)]:.4f}")
-        for speed in (0.3, 1.0, 3.0)))
-
-
-def _work_table(curves: dict[str, dict[str, np.ndarray]]) -> str:
-    return markdown_table(
-        "variant | dt (µs) | centre error (mm) | angle error (mrad) | CPU (µs/throw)",
-        ((name, f"{1e6 * c['dt'][j]:.2f}", f"{1e3 * c['position'][j]:.4f}",
-          f"{1e3 * c['angle'][j]:.3f}", f"{1e6 * c['cpu'][j]:.0f}")
-         for name, c in curves.items() for j in range(len(SAFETIES))))
 
 
 def _outcome_table(outcomes: dict[str, dict[str, dict[str, object]]]) -> str:

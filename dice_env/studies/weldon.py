@@ -114,7 +114,7 @@ def compare(a: Estimate, b: Estimate, effect: float = EFFECT) -> Comparison:
 
 
 def trials_to_resolve(p: float, reference: Estimate, effect: float = EFFECT) -> int | None:
-    """The fewest trials at ``p`` whose 95% half-width, with ``reference``'s, is below ``effect``.
+    """Fewest trials at ``p`` whose 95% half-width with ``reference``'s is below ``effect``.
 
     None when the reference's own error is too wide for any.
     """
@@ -542,9 +542,8 @@ def sensitivity(n: dict) -> dict[str, float]:
     ``slope`` (per µm), ``se``, and Weldon's ``offset`` (µm) with its 95% ``low``, ``high``.
     """
     drilled = [v for key, v in n["alone"].items() if key != "casino19"]
-    slope, se = excess_per_offset(np.array([math.hypot(*v["com_um"]) for v in drilled]),
-                                  np.array([v["p"] - FAIR for v in drilled]),
-                                  np.array([v["se"] for v in drilled]))
+    slope, se = excess_per_offset([math.hypot(*v["com_um"]) for v in drilled],
+                                  [v["p"] - FAIR for v in drilled], [v["se"] for v in drilled])
     offset, low, high = offset_for_weldon(slope, se)
     return {"slope": slope, "se": se, "offset": offset, "low": low, "high": high}
 
