@@ -132,10 +132,9 @@ def _named(value: object) -> str:
 class Tally:
     """Counts and sums over a set of throws; :meth:`merge` adds tallies exactly.
 
-    ``counts`` (F,): the faces of the throws that count (:func:`~dice_env.studies.shapes.counted`);
-    ``unfinished``: no face by the time limit; ``sums`` (3, 2): the sum and the sum of squares
-    of each of :data:`MOMENTS` over all throws; ``time_hist``, ``impacts_hist``: the histograms
-    of :data:`TIME_BINS` and :data:`IMPACT_BINS`.
+    ``counts`` (F,): faces of the throws that count (:func:`~dice_env.studies.shapes.counted`);
+    ``unfinished``: no face by the time limit; ``sums`` (3, 2): sum and sum of squares of each
+    of :data:`MOMENTS`; ``time_hist``, ``impacts_hist``: :data:`TIME_BINS`, :data:`IMPACT_BINS`.
     """
 
     throws: int
@@ -217,12 +216,11 @@ def run_throws(scene: Scene | str, throws: int, *, chunk: int = CHUNK, seed: int
     """Throw ``throws`` throws of ``scene`` in seeded chunks of ``chunk``; merge their tallies.
 
     ``scene``: a :class:`Scene`, or a standard die's name (``"d20"``) on the default table.
-    ``ray``: None (in this process, all numba threads) or an address, each chunk then a Ray
-    task on one thread: ``"auto"``, ``"ray://host:10001"`` or ``"local"`` (a fresh instance).
-    ``workers``: at most this many chunks at once on Ray (default: the cluster's CPUs);
-    ``max_retries``: Ray runs a chunk again this many times when its worker dies. ``out``: the
-    run folder, refused (FolderError) if it is another run's. ``progress``: a tqdm bar. The
-    result does not depend on ``ray``, ``workers``, ``out`` or on interruptions.
+    ``ray``: None (this process, all numba threads) or an address (``"auto"``,
+    ``"ray://host:10001"``, ``"local"``: a fresh instance), one Ray task on one thread per chunk;
+    ``workers``: chunks at once on Ray (default: its CPUs); ``max_retries``: reruns of a chunk
+    whose worker died; ``out``: the run folder (FolderError if another run's). The result does
+    not depend on ``ray``, ``workers``, ``out`` or on interruptions.
     """
     if isinstance(scene, str):
         if scene not in STANDARD_SIZES:
