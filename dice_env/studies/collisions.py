@@ -183,10 +183,9 @@ class Collisions:
     def counted(self) -> np.ndarray:
         """(M,) met throws counted in all four runs (together, nudged, apart, apart nudged)."""
         m = int(self.met.sum())
-        ok = [not_void(void_reasons(r)) for r in (self.together, self.nudged)]
-        apart = not_void(void_reasons(self.apart))
-        return (ok[0][self.met] & ok[1][self.met] & apart[:m] & apart[m:]
-                & not_void(void_reasons(self.apart_nudged)))
+        ok = [not_void(void_reasons(r))
+              for r in (self.together, self.nudged, self.apart, self.apart_nudged)]
+        return ok[0][self.met] & ok[1][self.met] & ok[2][:m] & ok[2][m:] & ok[3]
 
     def faces(self) -> dict[str, np.ndarray]:
         """Faces (C, 2) of the counted met throws: together, nudged, apart, apart nudged."""
