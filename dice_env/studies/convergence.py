@@ -340,9 +340,8 @@ def _plot_agreement(height: np.ndarray, agreement: dict[str, dict[str, np.ndarra
 def _plot_outcomes(outcomes: dict[str, dict[str, object]], path: Path) -> None:
     fig, axes = plt.subplots(1, len(outcomes), figsize=(11, 3.4), sharey=True)
     for ax, (name, o) in zip(axes, outcomes.items(), strict=True):
-        counts = o["counts"]
-        n = counts.sum(1, keepdims=True)
-        freq = counts / n
+        n = o["counts"].sum(1, keepdims=True)
+        freq = o["counts"] / n
         err = 2 * np.sqrt(freq * (1 - freq) / n)
         faces = np.arange(1, 7)
         ax.bar(faces - 0.2, 100 * freq[0], 0.4, yerr=100 * err[0], capsize=2, label="dt")
