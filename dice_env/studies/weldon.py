@@ -521,6 +521,19 @@ def markdown(n: dict) -> str:
                       sizes=n["meta"]["sizes"], successes=successes, t=t, variants=variants, w=w)
 
 
+def _together_reach(t: dict) -> str:
+    """What the together throws can tell at their sample, from their verdict."""
+    if "p" not in t:
+        return "Too few throws were counted for an estimate."
+    if t["vs_weldon_p"]["verdict"] == "not resolvable at this sample":
+        return ("They show the distribution of successes and whether the dice of one throw "
+                "depend on each other (their collisions); at this sample they cannot resolve "
+                "p to Weldon's precision.")
+    return ("At this sample they resolve p to Weldon's precision, with the dice colliding, and "
+            "show the distribution of successes and whether the dice of one throw depend on "
+            "each other.")
+
+
 def _p_rows(n: dict) -> str:
     w, t, ref = n["weldon"], n["together"], n["alone"][VARIANTS[0][0]]
     rows = [f"| Weldon (1894) | {w['n']:,} | {p_text(w)} | | | |"]
