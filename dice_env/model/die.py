@@ -12,7 +12,6 @@ import itertools
 import math
 from dataclasses import dataclass, fields
 from functools import cache, cached_property
-from typing import NamedTuple
 
 import numpy as np
 
@@ -44,8 +43,7 @@ ARC_STEP = 1.0 / (2000.0 * math.sqrt(2.0))
 def paper_side_length(r: float) -> float:
     """The paper's side length for corner distance ``r``: ``s = -sqrt(2) + 2*sqrt(0.5 + r^2)``.
 
-    A quirk kept for paper mode only: its corners lie at ``s*sqrt(3)/2`` (0.8966 for r = 1)
-    from the centre, not at ``r`` (that cube's side would be ``2r/sqrt(3)``).
+    Paper mode only: its corners lie at ``s*sqrt(3)/2`` from the centre, not at ``r``.
     """
     return -math.sqrt(2.0) + 2.0 * math.sqrt(0.5 + r * r)
 
@@ -53,14 +51,6 @@ def paper_side_length(r: float) -> float:
 def solid_cube_inertia(mass: float, edge: float) -> np.ndarray:
     """Inertia tensor of a uniform solid cube about its centre: ``(1/6) m s^2`` times identity."""
     return np.eye(3) * (mass * edge * edge / 6.0)
-
-
-class _Shape(NamedTuple):
-    """A die's geometry at size 1: centred corners, faces in label order, how it is read."""
-
-    vertices: np.ndarray
-    faces: tuple[tuple[int, ...], ...]
-    reads_down: bool
 
 
 @dataclass(frozen=True, init=False, repr=False)
@@ -91,8 +81,8 @@ class Die:
                  com: tuple[float, float, float] = (0.0, 0.0, 0.0),
                  inertia: tuple[tuple[float, ...], ...] | None = None) -> None:
         check_positive("edge", edge)
-        shape = _unit_shape("d6")
-        self._set("d6", shape.vertices * edge, shape.faces, edge, mass, False, com, inertia)
+        vertices, faces = _unit_shape("d6")
+        self._set("d6", vertices * edge, faces, edge, mass, False, com, inertia)
 
     @classmethod
     def standard(cls, name: str = "d6", size: float | None = None,
@@ -102,31 +92,28 @@ class Die:
         ``size`` (m) as the field (default :data:`STANDARD_SIZES`); ``mass`` (kg) defaults to
         :data:`DENSITY` times the volume. ``pips`` (d6 only): a
         :class:`~dice_env.model.pips.Pips` or a preset of :data:`dice_env.model.pips.DRILLINGS`
-        (which also supplies a size and mass left None); ``mass`` is then the weighed mass
-        (:func:`dice_env.model.pips.drill`). Opposite faces sum to ``n + 1`` on the d6, d8,
-        d12 and d20.
+        (which also supplies a size and mass left None); ``mass`` is then the weighed mass.
+        Opposite faces sum to ``n + 1`` on the d6, d8, d12 and d20. Numbering:
 
-        - d4: regular tetrahedron, corners ``(1, 1, 1), (1, -1, -1), (-1, 1, -1),
-          (-1, -1, 1)`` (scaled); face ``k`` lies opposite corner ``k``; read face down.
-        - d8: regular octahedron, corners on the axes; the odd faces meet at the +z corner
-          (counter-clockwise from azimuth 45 degrees), the even ones at -z.
-        - d10: :func:`polyhedra.pentagonal_trapezohedron`, apexes on the z axis. Labels 1–10
-          are the digits 0–9 plus one (opposite digits sum to 9); counter-clockwise around the
-          zigzag from azimuth 0 the digits read 0, 7, 4, 1, 6, 9, 2, 5, 8, 3.
-        - d12, d20: regular dodecahedron and icosahedron lying on face 1 (normal +z); the
-          upper faces take 1 … n/2 by descending height, then counter-clockwise azimuth from
-          +x; each lower face takes ``n + 1`` minus its opposite's label (our arrangement).
+        - d4: corners ``(1, 1, 1), (1, -1, -1), (-1, 1, -1), (-1, -1, 1)`` (scaled); face ``k``
+          opposite corner ``k``; read face down.
+        - d8: corners on the axes; the odd faces meet at +z (counter-clockwise from azimuth
+          45 degrees), the even ones at -z.
+        - d10: :func:`polyhedra.pentagonal_trapezohedron`; labels are the digits 0–9 plus one
+          (opposite digits sum to 9), reading 0, 7, 4, 1, 6, 9, 2, 5, 8, 3 counter-clockwise
+          around the zigzag from azimuth 0.
+        - d12, d20: lying on face 1 (normal +z); the upper faces take 1 … n/2 by descending
+          height, then azimuth from +x; each lower face ``n + 1`` minus its opposite's label.
         """
         check_choice("name", name, STANDARD_SIZES)
         if pips is not None:
             pips, size, mass = with_defaults(name, pips, size, mass)
         size = STANDARD_SIZES[name] if size is None else size
         check_positive("size", size)
-        shape = _unit_shape(name)
-        vertices = shape.vertices * size
-        volume = size * size * size if name == "d6" else polyhedra.mass_properties(
-            vertices, shape.faces)[0]
-        die = cls._new(name, vertices, shape.faces, size, _mass(mass, volume), shape.reads_down)
+        vertices, faces = _unit_shape(name)
+        vertices = vertices * size
+        volume = _volume(name, vertices, faces, size)
+        die = cls._new(name, vertices, faces, size, _mass(mass, volume), name == "d4")
         mass_properties = None if pips is None else drill(size, die.mass, pips)
         return die if mass_properties is None else die._with_mass(die.mass, *mass_properties)
 
@@ -143,9 +130,9 @@ class Die:
         x, y, z = (float(s) for s in sides)
         if x == y == z:
             return cls.standard("d6", size=x, mass=mass)
-        shape = _unit_shape("d6")
-        return cls._new("cuboid", shape.vertices * sides, shape.faces, min(x, y, z),
-                        _mass(mass, x * y * z), False)
+        vertices, faces = _unit_shape("d6")
+        return cls._new("cuboid", vertices * sides, faces, min(x, y, z), _mass(mass, x * y * z),
+                        False)
 
     @classmethod
     def from_vertices(cls, vertices: np.ndarray, labels: np.ndarray | None = None,
@@ -228,10 +215,7 @@ class Die:
 
     @cached_property
     def reading(self) -> np.ndarray:
-        """Reading directions (F, 3), body frame, in label order: the normals, negated for the d4.
-
-        Face ``k + 1`` is read when its direction points most along ``up`` (read-only).
-        """
+        """Reading directions (F, 3), body frame, label order: the normals, negated for the d4."""
         return _frozen(-self.face_normals if self.reads_down else self.face_normals)
 
     @property
@@ -252,15 +236,12 @@ class Die:
     @cached_property
     def volume(self) -> float:
         """Volume of the solid (m^3)."""
-        if self.name == "d6":
-            return self.size * self.size * self.size
-        return polyhedra.mass_properties(np.array(self.vertices), self.faces)[0]
+        return _volume(self.name, np.array(self.vertices), self.faces, self.size)
 
     def face_read(self, orientation: np.ndarray, up: np.ndarray) -> np.ndarray:
         """The label read in each orientation (..., 3, 3) (body to world): int array (...).
 
-        Along :attr:`reading`: the face pointing most along ``up`` (3,), the d4's most along
-        ``-up``.
+        The face whose :attr:`reading` direction points most along ``up`` (3,).
         """
         orientation = np.asarray(orientation, dtype=np.float64)
         up = np.asarray(up, dtype=np.float64)
@@ -272,19 +253,15 @@ class Die:
 
     @property
     def resting_heights(self) -> np.ndarray:
-        """Height (m) of the centre of mass above its lowest corner, each face read, (F,).
-
-        With the face's :attr:`reading` direction straight up.
-        """
-        return _heights_above_lowest_corner(self.vertices_body, self.reading)
+        """Height (m) of the centre of mass above its lowest corner, each face read up, (F,)."""
+        return (-(self.reading @ self.vertices_body.T)).max(axis=-1)
 
     @cached_property
     def tipping_heights(self) -> np.ndarray:
         """Least height (m) of the centre of mass above its lowest corner as each face tips, (F,).
 
-        The minimum over the orientations where the face ties with another (``docs/
-        performance.md``), each tie arc sampled :data:`ARC_STEP` apart and lowered by the
-        Lipschitz bound, so never above the true minimum (fair cube: ``sqrt(2)`` half edges).
+        Over the orientations where the face ties with another (``docs/performance.md``), each
+        tie arc sampled :data:`ARC_STEP` apart and lowered by the Lipschitz bound.
         """
         corners, reading = self.vertices_body, self.reading
         out = np.full(self.n_faces, np.inf)
@@ -297,7 +274,7 @@ class Die:
             phi = np.linspace(lo, hi, n)
             up = np.cos(phi)[:, None] * m + np.sin(phi)[:, None] * w
             gap = (hi - lo) / (n - 1) if n > 1 else 0.0
-            low = float(_heights_above_lowest_corner(corners, up).min()) - self.reach * gap / 2
+            low = float((-(up @ corners.T)).max(axis=-1).min()) - self.reach * gap / 2
             out[f], out[g] = min(out[f], low), min(out[g], low)
         return _frozen(out)
 
@@ -326,7 +303,7 @@ class Die:
         """The die whose fields are these (as :func:`dataclasses.asdict` gives them), checked."""
         faces = tuple(tuple(int(k) for k in face) for face in faces)
         return cls._new(str(name), np.asarray(vertices, dtype=np.float64), faces, size, mass,
-                        bool(reads_down), com, _as_tuple(np.asarray(inertia, dtype=np.float64)))
+                        bool(reads_down), com, inertia)
 
     def __repr__(self) -> str:
         com = "" if not any(self.com) else f", com={tuple(round(c, 9) for c in self.com)}"
@@ -340,7 +317,7 @@ class Die:
 
     def _with_mass(self, mass: float, com: np.ndarray, inertia: np.ndarray) -> Die:
         return self._new(self.name, np.array(self.vertices), self.faces, self.size, mass,
-                         self.reads_down, com, _as_tuple(inertia))
+                         self.reads_down, com, inertia)
 
     def _set(self, name: str, vertices: np.ndarray, faces: tuple[tuple[int, ...], ...],
              size: float, mass: float, reads_down: bool,
@@ -354,10 +331,15 @@ class Die:
                              f"every face plane), got {tuple(com)}")
         if inertia is None:
             inertia = _solid_inertia(name, vertices, faces, size, mass)
-        _check_inertia(inertia)
+        inertia = as_shaped("inertia", inertia, (3, 3))
+        if not np.allclose(inertia, inertia.T, rtol=1e-12, atol=0.0):
+            raise ValueError("inertia must be symmetric")
+        principal = np.linalg.eigvalsh(inertia)
+        if principal[0] <= 0 or principal[2] > principal[0] + principal[1] * (1 + 1e-12):
+            raise ValueError("inertia must be positive definite with principal moments obeying "
+                             f"the triangle inequality, got principal moments {principal}")
         values = (name, _as_tuple(vertices), faces, float(size), float(mass),
-                  tuple(float(c) for c in com), _as_tuple(np.asarray(inertia, dtype=np.float64)),
-                  reads_down)
+                  tuple(float(c) for c in com), _as_tuple(inertia), reads_down)
         for field, value in zip(fields(self), values, strict=True):
             object.__setattr__(self, field.name, value)
 
@@ -368,8 +350,8 @@ class Die:
 
 
 @cache
-def _unit_shape(name: str) -> _Shape:
-    """The standard die ``name`` at size 1 (its least height on a face)."""
+def _unit_shape(name: str) -> tuple[np.ndarray, tuple[tuple[int, ...], ...]]:
+    """Corners (centred) and faces (in label order) of the standard die ``name`` at size 1."""
     raw, upper = {
         "d4": (polyhedra.tetrahedron, None),
         "d6": (lambda: _CORNER_SIGNS, None),
@@ -387,7 +369,7 @@ def _unit_shape(name: str) -> _Shape:
     else:
         labels = _labels_by_azimuth(normals, upper)
     faces = _in_label_order(faces, labels)
-    return _Shape(_frozen(raw / _least_height(raw, faces)), faces, name == "d4")
+    return _frozen(raw / _least_height(raw, faces)), faces
 
 
 def _labels_by_azimuth(normals: np.ndarray, upper: object) -> np.ndarray:
@@ -437,6 +419,12 @@ def _least_height(vertices: np.ndarray, faces: tuple[tuple[int, ...], ...]) -> f
     return float(np.ptp(spans, axis=1).min())
 
 
+def _volume(name: str, vertices: np.ndarray, faces: tuple[tuple[int, ...], ...],
+            size: float) -> float:
+    """Volume of the solid: the d6's ``size^3``, else integrated."""
+    return size * size * size if name == "d6" else polyhedra.mass_properties(vertices, faces)[0]
+
+
 def _mass(mass: float | None, volume: float) -> float:
     """``mass`` if given (checked when the die is built), else the default density's."""
     return DIE_MASS * (volume / DIE_VOLUME) if mass is None else mass
@@ -459,23 +447,12 @@ def _solid_inertia(name: str, vertices: np.ndarray, faces: tuple[tuple[int, ...]
     return mass * per_mass
 
 
-def _check_inertia(inertia: object) -> None:
-    inertia = as_shaped("inertia", inertia, (3, 3))
-    if not np.allclose(inertia, inertia.T, rtol=1e-12, atol=0.0):
-        raise ValueError("inertia must be symmetric")
-    principal = np.linalg.eigvalsh(inertia)
-    if principal[0] <= 0 or principal[2] > principal[0] + principal[1] * (1 + 1e-12):
-        raise ValueError("inertia must be positive definite with principal moments obeying the "
-                         f"triangle inequality, got principal moments {principal}")
-
-
 def _tie_arc(reading: np.ndarray, f: int, g: int
              ) -> tuple[float, float, np.ndarray, np.ndarray] | None:
-    """The arc where faces ``f`` and ``g`` tie and no other face reads more, or None.
+    """Where faces ``f`` and ``g`` tie and no other reads more: ``(lo, hi, m, w)``, or None.
 
-    Up directions ``u = cos(phi) m + sin(phi) w``, ``m`` the bisector of the two reading
-    directions, ``w`` their common normal, ``phi`` in ``[lo, hi]`` within ``[-pi/2, pi/2]``;
-    each other face ``k`` asks ``(a_f - a_k) . u >= 0``, a half circle in ``phi``.
+    Up directions ``cos(phi) m + sin(phi) w``, ``phi`` in ``[lo, hi]``; ``m`` bisects the two
+    reading directions, ``w`` is normal to both.
     """
     a, b = reading[f], reading[g]
     bisector = a + b
@@ -490,11 +467,6 @@ def _tie_arc(reading: np.ndarray, f: int, g: int
     lo = max(-math.pi / 2, float((psi - math.pi / 2).max(initial=-math.inf)))
     hi = min(math.pi / 2, float((psi + math.pi / 2).min(initial=math.inf)))
     return (lo, hi, m, w) if lo <= hi else None
-
-
-def _heights_above_lowest_corner(corners: np.ndarray, up: np.ndarray) -> np.ndarray:
-    """Height of the centre of mass above the lowest of ``corners`` for each up direction."""
-    return (-(up @ corners.T)).max(axis=-1)
 
 
 def _as_tuple(matrix: np.ndarray) -> tuple[tuple[float, ...], ...]:

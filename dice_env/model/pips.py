@@ -1,23 +1,18 @@
 """Drilled pips on the d6: spherical-cap cavities, empty or filled flush with paint.
 
-``Die.standard("d6", pips=...)`` takes a :class:`Pips` or a preset of :data:`DRILLINGS` and
-gives the exact mass properties of the cube minus its 21 cavities (plus the paint of casino
-dice); the geometry stays the cube's.
+``Die.standard("d6", pips=...)`` takes a :class:`Pips` or a preset of :data:`DRILLINGS`: the
+geometry stays the cube's, the mass properties are the cube's minus its 21 cavities (plus the
+paint of casino dice).
 
-**Layout** (:func:`layout`, which lists the centres): pips at 0 or ``±offset`` times the
-half-width along each face's two axes. Handedness: on the right-handed die
-(:mod:`dice_env.model.die`), with the 1 up, the 2 on the left and the 3 on the right, the 3's
-diagonal runs up from the left and the 2's down from the left, as dice-play.com ("Casino
-Dice") describes casino dice: both end at the 2-3-6 corner. The 6's rows run along x (our
-choice, no source found).
-
-Each face's pattern is centrally symmetric, so the centre of mass moves toward the 1-2-3
-corner, 5 : 3 : 1 along z, x, y; the handedness and the 6's rows change only the products
-and the split of the moments of inertia.
+**Layout** (:func:`layout`): pips at 0 or ``±offset`` times the half-width along each face's
+axes. With the 1 up, the 2 left and the 3 right, the 3's diagonal runs up from the left and the
+2's down from the left (casino dice, dice-play.com), both ending at the 2-3-6 corner; the 6's
+rows run along x (our choice). Each pattern is centrally symmetric, so the centre of mass moves
+toward the 1-2-3 corner, 5 : 3 : 1 along z, x, y.
 
 **Mass** (:func:`drill`): ``mass`` is the weighed mass. With ``n = 21`` cavities of volume
-``V_c``, outer volume ``V = s^3`` and paint density ``rho_p`` (0: empty), the body's density
-is ``rho = (mass - rho_p n V_c) / (V - n V_c)``; each cavity adds a signed mass
+``V_c``, ``V = s^3`` and paint density ``rho_p`` (0: empty), the body's density is
+``rho = (mass - rho_p n V_c) / (V - n V_c)``; each cavity adds a signed mass
 ``(rho_p - rho) V_c`` at its centroid with its own inertia (parallel-axis theorem).
 """
 
@@ -103,18 +98,12 @@ DRILLINGS = {
 def cap_properties(radius: float, depth: float) -> tuple[float, float, float, float]:
     """Volume and second moments of a spherical cap of opening ``radius`` a and ``depth`` h.
 
-    Of a sphere of radius ``R = (a^2 + h^2) / (2h)``; integrating the disks at height ``s``
-    above the deepest point, ``r^2 = 2Rs - s^2`` (per unit density):
-
-    - volume ``V = pi ∫ r^2 ds = pi h^2 (3R - h) / 3``;
-    - centroid height ``s_c = pi ∫ s r^2 ds / V = h (8R - 3h) / (4 (3R - h))``;
-    - moment about the axis ``I_a = (pi/2) ∫ r^4 ds = (pi/2) (4R^2 h^3/3 - R h^4 + h^5/5)``;
-    - about a transverse axis through the deepest point ``I_0 = ∫ (r^2/4 + s^2) pi r^2 ds
-      = I_a / 2 + pi (R h^4 / 2 - h^5 / 5)``, through the centroid ``I_t = I_0 - V s_c^2``.
-
-    (Hemisphere, a = h = R: ``2 pi R^3/3``, centroid ``3R/8`` below the face, ``I_a = 2/5``
-    and ``I_t = 83/320`` of ``V R^2``.) Returns ``V``, the centroid's depth below the face
-    ``h - s_c``, ``I_a`` and ``I_t``; multiply the moments by a density for an inertia.
+    Integrating disks ``r^2 = 2Rs - s^2`` at height ``s`` above the deepest point of a sphere
+    of radius ``R = (a^2 + h^2) / (2h)``: ``V = pi h^2 (3R - h) / 3``, centroid height
+    ``s_c = h (8R - 3h) / (4 (3R - h))``, axial moment
+    ``I_a = (pi/2) (4R^2 h^3/3 - R h^4 + h^5/5)``, transverse moment about the centroid
+    ``I_t = I_a / 2 + pi (R h^4 / 2 - h^5 / 5) - V s_c^2``. Returns ``V``, the centroid's
+    depth ``h - s_c`` below the face, ``I_a`` and ``I_t``, the moments per unit density.
     """
     a, h = radius, depth
     r = (a * a + h * h) / (2 * h)

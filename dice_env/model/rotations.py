@@ -4,6 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 
+# Row k: where 4 q_k q_j (j = w, x, y, z) sits among the squares and pairs of a quaternion.
+_PRODUCTS = np.array([[0, 4, 5, 6], [4, 1, 7, 8], [5, 7, 2, 9], [6, 8, 9, 3]])
+
 
 def random_rotations(rng: np.random.Generator, size: int) -> np.ndarray:
     """``size`` rotation matrices drawn uniformly (Haar) over SO(3), shape (size, 3, 3)."""
@@ -42,13 +45,8 @@ def matrix_to_quaternion(rot: np.ndarray) -> np.ndarray:
         r[..., 2, 1] - r[..., 1, 2], r[..., 0, 2] - r[..., 2, 0], r[..., 1, 0] - r[..., 0, 1],
         r[..., 1, 0] + r[..., 0, 1], r[..., 0, 2] + r[..., 2, 0], r[..., 2, 1] + r[..., 1, 2],
     ], axis=-1)
-    wx, wy, wz, xy, xz, yz = np.moveaxis(pairs, -1, 0)
-    products = np.stack([  # row k: 4 q_k q_j for j = w, x, y, z
-        np.stack([squares[..., 0], wx, wy, wz], -1), np.stack([wx, squares[..., 1], xy, xz], -1),
-        np.stack([wy, xy, squares[..., 2], yz], -1), np.stack([wz, xz, yz, squares[..., 3]], -1),
-    ], axis=-2)
     k = squares.argmax(axis=-1)
-    row = np.take_along_axis(products, k[..., None, None], axis=-2)[..., 0, :]
+    row = np.take_along_axis(np.concatenate([squares, pairs], axis=-1), _PRODUCTS[k], axis=-1)
     quat = row / np.sqrt(np.take_along_axis(squares, k[..., None], axis=-1))
     quat = quat / np.linalg.norm(quat, axis=-1, keepdims=True)
     return np.where(quat[..., :1] < 0, -quat, quat)

@@ -170,10 +170,8 @@ class Scene:
     the ``REGULARIZED`` :class:`FrictionLaw`. A throw is flagged unstable when its energy
     (kinetic + potential + normal springs) exceeds its start by more than ``energy_tol`` times
     ``KE0 + m*g*(h0 + size)``, and ``sunk`` when a vertex sinks more than ``sink_limit`` times
-    the die's size into a plane.
-
-    Checked when built: every field's type and range, and a step that is finite, > 0, at most
-    ``t_max`` and at most :data:`MAX_STEPS` steps to ``t_max``.
+    the die's size into a plane. Every field is checked when built, and the step (at most
+    ``t_max`` and :data:`MAX_STEPS` steps).
     """
 
     die: Die = field(default_factory=Die)
@@ -230,8 +228,8 @@ class Scene:
     def effective_mass_on(self, plane: Plane) -> float:
         """Smallest effective mass per contact vertex on ``plane``, ``S / omega_max**2`` (kg).
 
-        ``omega_max``: the fastest contact mode with a whole face on the plane, sticking
-        springs included (``docs/model.md``, "Stable step"); ``m/4`` with ``rotation=False``.
+        ``omega_max``: the fastest mode with a face on the plane (``docs/model.md``, "Stable
+        step"); ``m/4`` with ``rotation=False``.
         """
         if not self.rotation:
             return self.die.mass / 4
@@ -240,24 +238,20 @@ class Scene:
 
     @property
     def critical_dt(self) -> float:
-        """Largest stable step (s) of the scheme for the stiffest contact mode of any plane.
-
-        :func:`critical_step` on :meth:`effective_mass_on` (``docs/model.md``, "Stable step").
-        """
-        return min(self._critical_dt(plane) for plane in self.planes)
+        """Largest stable step (s): :func:`critical_step` of the stiffest plane's contact mode."""
+        return min(self._critical_dts())
 
     def stiffest_plane(self) -> str:
         """The plane that sets :attr:`critical_dt`, named with its contact constants."""
-        steps = [self._critical_dt(plane) for plane in self.planes]
-        i = int(np.argmin(steps))
+        i = int(np.argmin(self._critical_dts()))
         plane = self.planes[i]
         name = "the table" if i == 0 else f"wall {i - 1}"
         return (f"{name} (stiffness {plane.stiffness:g}, damping {plane.damping:g}, effective "
                 f"mass {self.effective_mass_on(plane):.6g})")
 
-    def _critical_dt(self, plane: Plane) -> float:
-        return critical_step(plane.stiffness, plane.damping, self.effective_mass_on(plane),
-                             self.scheme)
+    def _critical_dts(self) -> list[float]:
+        return [critical_step(p.stiffness, p.damping, self.effective_mass_on(p), self.scheme)
+                for p in self.planes]
 
     @property
     def step(self) -> float:
@@ -265,9 +259,9 @@ class Scene:
         return self.dt if self.dt is not None else self.safety * self.critical_dt
 
     def step_within(self, critical: float, of: str) -> float:
-        """``safety * critical`` (s), or ``dt``: refused above ``critical`` (set by ``of``).
+        """``dt`` (above ``critical`` only if ``allow_unstable``), else ``safety * critical`` (s).
 
-        ``allow_unstable`` lets a larger ``dt`` through.
+        ``of`` names what sets ``critical``, for the error message.
         """
         if self.dt is None:
             return self.safety * critical
@@ -282,10 +276,7 @@ class Scene:
         return self.steps_for()
 
     def steps_for(self, t_max: float | None = None, step: float | None = None) -> int:
-        """Steps of ``step`` (s, default :attr:`step`) to reach ``t_max`` (s, default the scene's).
-
-        Refused above :data:`MAX_STEPS`.
-        """
+        """Steps of ``step`` (s, default :attr:`step`) to ``t_max`` (s), <= :data:`MAX_STEPS`."""
         t_max = self.t_max if t_max is None else t_max
         check_positive("t_max", t_max)
         own = step is None
@@ -357,9 +348,8 @@ def _effective_mass(die: Die, tangential: float) -> float:
 
 def _tangents(normal: np.ndarray) -> np.ndarray:
     """Two orthonormal vectors across the unit ``normal`` (the other two axes for an axis)."""
-    axis = np.abs(normal) < 0.5
     if np.count_nonzero(normal) == 1:
-        return np.eye(3)[axis]
+        return np.eye(3)[np.abs(normal) < 0.5]
     first = np.cross(normal, np.eye(3)[np.argmin(np.abs(normal))])
     first /= np.linalg.norm(first)
     return np.array([first, np.cross(normal, first)])
