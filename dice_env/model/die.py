@@ -266,10 +266,21 @@ class Die:
         corners, reading = self.vertices_body, self.reading
         out = np.full(self.n_faces, np.inf)
         for f, g in itertools.combinations(range(self.n_faces), 2):
-            arc = _tie_arc(reading, f, g)
-            if arc is None:
+            # up = cos(phi) m + sin(phi) w on the tie of f and g, m bisecting their reading
+            # directions, w normal to both; each other face k asks (a_f - a_k) . up >= 0
+            a, b = reading[f], reading[g]
+            length = np.linalg.norm(a + b)
+            if length < 1e-9:  # opposite directions: another face always reads more on their tie
                 continue
-            lo, hi, m, w = arc
+            m = (a + b) / length
+            w = np.cross(a, b)
+            w /= np.linalg.norm(w)
+            d = a - np.delete(reading, [f, g], axis=0)
+            psi = np.arctan2(d @ w, d @ m)
+            lo = max(-math.pi / 2, float((psi - math.pi / 2).max(initial=-math.inf)))
+            hi = min(math.pi / 2, float((psi + math.pi / 2).min(initial=math.inf)))
+            if lo > hi:
+                continue
             n = math.ceil((hi - lo) / ARC_STEP) + 1
             phi = np.linspace(lo, hi, n)
             up = np.cos(phi)[:, None] * m + np.sin(phi)[:, None] * w
@@ -366,23 +377,16 @@ def _unit_shape(name: str) -> tuple[np.ndarray, tuple[tuple[int, ...], ...]]:
     if name in ("d4", "d6"):  # face k + 1 nearest direction k; the d4's face k opposite corner k
         directions = -raw / math.sqrt(3.0) if name == "d4" else _CUBE_NORMALS
         labels = np.argmax(normals @ directions.T, axis=1) + 1
-    else:
-        labels = _labels_by_azimuth(normals, upper)
+    else:  # upper faces by descending n_z then azimuth; below, F + 1 minus the opposite's label
+        z = np.round(normals[:, 2], 9)
+        azimuth = np.mod(np.round(np.arctan2(normals[:, 1], normals[:, 0]), 9), 2 * math.pi)
+        top = np.flatnonzero(z > 0)
+        labels = np.zeros(len(normals), dtype=np.int64)
+        labels[top[np.lexsort((azimuth[top], -z[top]))]] = list(upper)
+        for f in np.flatnonzero(z < 0):
+            labels[f] = len(normals) + 1 - labels[np.argmin(normals @ normals[f])]
     faces = _in_label_order(faces, labels)
     return _frozen(raw / _least_height(raw, faces)), faces
-
-
-def _labels_by_azimuth(normals: np.ndarray, upper: object) -> np.ndarray:
-    """Labels: ``upper`` by descending ``n_z`` then azimuth, ``F + 1`` - opposite's below."""
-    z = np.round(normals[:, 2], 9)
-    azimuth = np.mod(np.round(np.arctan2(normals[:, 1], normals[:, 0]), 9), 2 * math.pi)
-    top = np.flatnonzero(z > 0)
-    top = top[np.lexsort((azimuth[top], -z[top]))]
-    labels = np.zeros(len(normals), dtype=np.int64)
-    labels[top] = list(upper)
-    for f in np.flatnonzero(z < 0):
-        labels[f] = len(normals) + 1 - labels[np.argmin(normals @ normals[f])]
-    return labels
 
 
 def _face_along_z(points: np.ndarray) -> np.ndarray:
@@ -445,28 +449,6 @@ def _solid_inertia(name: str, vertices: np.ndarray, faces: tuple[tuple[int, ...]
     if not (per_mass - np.diag(moments)).any() and np.ptp(moments) <= 1e-12 * scale:
         per_mass = np.eye(3) * (scale / 3.0)
     return mass * per_mass
-
-
-def _tie_arc(reading: np.ndarray, f: int, g: int
-             ) -> tuple[float, float, np.ndarray, np.ndarray] | None:
-    """Where faces ``f`` and ``g`` tie and no other reads more: ``(lo, hi, m, w)``, or None.
-
-    Up directions ``cos(phi) m + sin(phi) w``, ``phi`` in ``[lo, hi]``; ``m`` bisects the two
-    reading directions, ``w`` is normal to both.
-    """
-    a, b = reading[f], reading[g]
-    bisector = a + b
-    length = np.linalg.norm(bisector)
-    if length < 1e-9:  # opposite directions: another face always reads more on their tie
-        return None
-    m = bisector / length
-    w = np.cross(a, b)
-    w /= np.linalg.norm(w)
-    d = a - np.delete(reading, [f, g], axis=0)
-    psi = np.arctan2(d @ w, d @ m)
-    lo = max(-math.pi / 2, float((psi - math.pi / 2).max(initial=-math.inf)))
-    hi = min(math.pi / 2, float((psi + math.pi / 2).min(initial=math.inf)))
-    return (lo, hi, m, w) if lo <= hi else None
 
 
 def _as_tuple(matrix: np.ndarray) -> tuple[tuple[float, ...], ...]:

@@ -56,10 +56,7 @@ def preset(name: str) -> Material:
 
 
 def ground(name: str, die: Die | None = None) -> Ground:
-    """The ground of preset ``name`` for ``die`` (default: the default die).
-
-    The damping gives the preset's restitution for the die's mass.
-    """
+    """The ground of preset ``name``, damped to its restitution for ``die`` (default: ``Die()``)."""
     material = preset(name)
     mass = (Die() if die is None else die).mass
     return Ground(stiffness=material.stiffness, friction=material.friction,
@@ -68,10 +65,7 @@ def ground(name: str, die: Die | None = None) -> Ground:
 
 
 def scene(name: str, die: Die | None = None, **options: object) -> Scene:
-    """A :class:`Scene` with ``die`` (default: the default die) on preset ``name``.
-
-    ``options`` go to :class:`Scene` (``t_max``, ``safety``, ...).
-    """
+    """A :class:`Scene` with ``die`` (default: ``Die()``) on preset ``name``, plus ``options``."""
     die = Die() if die is None else die
     return Scene(die=die, ground=ground(name, die), **options)
 

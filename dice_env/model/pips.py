@@ -160,7 +160,14 @@ def drill(size: float, mass: float, pips: Pips) -> tuple[np.ndarray, np.ndarray]
     outweighs ``mass``.
     """
     half = size / 2
-    _check_fit(pips, half)
+    spacing = pips.offset * half
+    if 2 * pips.radius > spacing:
+        raise ValueError(f"pips overlap: 2 radius ({2e3 * pips.radius:g} mm) must be <= "
+                         f"offset x size/2 ({1e3 * spacing:g} mm), the spacing of the 6's rows")
+    if spacing + pips.radius + pips.depth > half:
+        raise ValueError(f"pips reach the face's edge: offset x size/2 + radius + depth "
+                         f"({1e3 * (spacing + pips.radius + pips.depth):g} mm) must be <= "
+                         f"size/2 ({1e3 * half:g} mm)")
     volume, below, axial, transverse = cap_properties(pips.radius, pips.depth)
     centres = np.concatenate(list(layout(pips.offset).values()))
     normals = np.where(np.abs(centres) == 1.0, centres, 0.0)
@@ -181,17 +188,6 @@ def drill(size: float, mass: float, pips: Pips) -> tuple[np.ndarray, np.ndarray]
                     + change * (volume * sum(point_inertia(c) for c in centroids)
                                 + transverse * (n * np.eye(3) - along) + axial * along))
     return com, about_centre - mass * point_inertia(com)
-
-
-def _check_fit(pips: Pips, half: float) -> None:
-    spacing = pips.offset * half
-    if 2 * pips.radius > spacing:
-        raise ValueError(f"pips overlap: 2 radius ({2e3 * pips.radius:g} mm) must be <= "
-                         f"offset x size/2 ({1e3 * spacing:g} mm), the spacing of the 6's rows")
-    if spacing + pips.radius + pips.depth > half:
-        raise ValueError(f"pips reach the face's edge: offset x size/2 + radius + depth "
-                         f"({1e3 * (spacing + pips.radius + pips.depth):g} mm) must be <= "
-                         f"size/2 ({1e3 * half:g} mm)")
 
 
 SOURCES = (

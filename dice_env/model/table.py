@@ -1,10 +1,9 @@
 """A real die on a real table: measured material values, damping from restitution.
 
-The default scene is a 16 mm acrylic die (4.5 g) on a wooden table; the values and their
-sources are in ``docs/error-vs-runtime.md``. The ground law is a spring-dashpot per corner,
-``fn = max(0, S dg - D un)``: :func:`restitution` gives its restitution for a flat landing
-(one corner carrying ``m/4``; Schwager & Pöschel 2007) and :func:`damping_for_restitution`
-inverts it. The package's bottom layer: it imports only :mod:`dice_env.model.checks`.
+The default scene is a 16 mm acrylic die (4.5 g) on a wooden table (values and sources:
+``docs/error-vs-runtime.md``). :func:`restitution` gives the flat-landing restitution of the
+per-corner spring-dashpot ``fn = max(0, S dg - D un)``; :func:`damping_for_restitution`
+inverts it. Imports only :mod:`dice_env.model.checks`.
 """
 
 from __future__ import annotations
@@ -39,10 +38,7 @@ def restitution(zeta: float, *, clipped: bool = True) -> float:
 
 
 def damping_ratio(target: float, *, clipped: bool = True) -> float:
-    """The damping ratio whose :func:`restitution` is ``target`` (in (0, 1]).
-
-    Unclipped: ``zeta = -ln e / sqrt(pi^2 + ln^2 e)``; clipped: solved by bisection.
-    """
+    """The damping ratio giving :func:`restitution` ``target`` in (0, 1] (bisection if clipped)."""
     check_range("restitution", target, 0.0, 1.0, low_open=True)
     log_e = math.log(target)
     zeta = -log_e / math.sqrt(math.pi**2 + log_e**2)
