@@ -1,9 +1,8 @@
 """The die: a convex polyhedron whose corners are the contact nodes, its mass and its faces.
 
-Body frame: origin at the geometric centre (the uniform solid's centroid); the centre of mass
-``com`` is measured from it. Face ``k`` (0-based) carries the printed label ``k + 1``. The d6
-(:class:`Die` ``()``) is the standard right-handed die of ``docs/model.md`` (1 +z, 2 +x, 3 +y;
-opposite faces sum to 7); :meth:`Die.standard` and :meth:`Die.from_vertices` give the others.
+Body frame: origin at the geometric centre (the uniform solid's centroid). Face ``k``
+(0-based) carries the label ``k + 1``. The d6 is the right-handed die of ``docs/model.md``
+(1 +z, 2 +x, 3 +y; opposite faces sum to 7).
 """
 
 from __future__ import annotations
@@ -190,7 +189,8 @@ class Die:
         check_int("face", face, 1, self.n_faces)
         check_range("fraction", fraction, 0.0, 1.0, high_open=True)
         check_range("depth", depth, 0.0, 1.0, high_open=True)
-        p = self.face_normals[face - 1] * depth * self._face_distances[face - 1]
+        distance = _face_distances(np.array(self.vertices), self.faces, self.face_normals)
+        p = self.face_normals[face - 1] * depth * distance[face - 1]
         c0 = np.asarray(self.com)
         solid = (1 - fraction) * (self.inertia_body + self.mass * polyhedra.point_inertia(c0))
         weight = fraction * self.mass * polyhedra.point_inertia(p)
@@ -239,7 +239,7 @@ class Die:
         return _volume(self.name, np.array(self.vertices), self.faces, self.size)
 
     def face_read(self, orientation: np.ndarray, up: np.ndarray) -> np.ndarray:
-        """The label read in each orientation (..., 3, 3) (body to world): int array (...).
+        """The label read in each body-to-world orientation (..., 3, 3): int array (...).
 
         The face whose :attr:`reading` direction points most along ``up`` (3,).
         """
@@ -353,11 +353,6 @@ class Die:
                   tuple(float(c) for c in com), _as_tuple(inertia), reads_down)
         for field, value in zip(fields(self), values, strict=True):
             object.__setattr__(self, field.name, value)
-
-    @cached_property
-    def _face_distances(self) -> np.ndarray:
-        """Distance (m) of each face plane from the geometric centre, (F,)."""
-        return _face_distances(np.array(self.vertices), self.faces, self.face_normals)
 
 
 @cache

@@ -129,14 +129,13 @@ def octahedron() -> np.ndarray:
 
 def icosahedron() -> np.ndarray:
     """Regular icosahedron, edge 2: the cyclic permutations of ``(0, +-1, +-phi)``."""
-    return _cyclic([[0.0, s1, s2 * GOLDEN] for s1 in (1, -1) for s2 in (1, -1)])
+    return _cyclic(1.0, GOLDEN)
 
 
 def dodecahedron() -> np.ndarray:
     """Regular dodecahedron, edge ``2/phi``: ``(+-1)^3`` and cyclic ``(0, +-1/phi, +-phi)``."""
     cube = [[x, y, z] for x in (1.0, -1.0) for y in (1.0, -1.0) for z in (1.0, -1.0)]
-    rest = _cyclic([[0.0, s1 / GOLDEN, s2 * GOLDEN] for s1 in (1, -1) for s2 in (1, -1)])
-    return np.vstack([cube, rest])
+    return np.vstack([cube, _cyclic(1.0 / GOLDEN, GOLDEN)])
 
 
 def pentagonal_trapezohedron(apex: float = 1.0 + math.cos(math.pi / 5)) -> np.ndarray:
@@ -163,8 +162,8 @@ def _outer(v: np.ndarray) -> np.ndarray:
     return v[:, :, None] * v[:, None, :]
 
 
-def _cyclic(rows: list[list[float]]) -> np.ndarray:
-    base = np.array(rows, dtype=np.float64)
+def _cyclic(a: float, b: float) -> np.ndarray:
+    base = np.array([[0.0, s1 * a, s2 * b] for s1 in (1, -1) for s2 in (1, -1)])
     return np.vstack([np.roll(base, k, axis=1) for k in range(3)])
 
 
