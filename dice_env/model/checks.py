@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import math
-from collections.abc import Hashable, Iterable
+from collections.abc import Callable, Hashable, Iterable
 from enum import Enum, IntEnum
 
 import numpy as np
@@ -17,25 +17,20 @@ def check_finite(name: str, value: float | np.ndarray) -> None:
 
 def check_positive(name: str, value: float) -> None:
     """Raise ``ValueError`` unless ``value`` is a finite number > 0."""
-    if not _is_real(value) or not math.isfinite(value) or value <= 0:
-        raise ValueError(f"{name} must be a finite number > 0, got {value!r}")
+    _check_number(name, value, lambda v: v > 0, "a finite number > 0")
 
 
 def check_nonnegative(name: str, value: float) -> None:
     """Raise ``ValueError`` unless ``value`` is a finite number >= 0."""
-    if not _is_real(value) or not math.isfinite(value) or value < 0:
-        raise ValueError(f"{name} must be a finite number >= 0, got {value!r}")
+    _check_number(name, value, lambda v: v >= 0, "a finite number >= 0")
 
 
 def check_range(name: str, value: float, low: float, high: float, *, low_open: bool = False,
                 high_open: bool = False) -> None:
     """Raise ``ValueError`` unless ``low <= value <= high`` (``<`` at an open end)."""
-    ok = _is_real(value) and math.isfinite(value)
-    ok = ok and (low < value if low_open else low <= value)
-    ok = ok and (value < high if high_open else value <= high)
-    if not ok:
-        interval = f"{'(' if low_open else '['}{low}, {high}{')' if high_open else ']'}"
-        raise ValueError(f"{name} must be in {interval}, got {value!r}")
+    interval = f"{'(' if low_open else '['}{low}, {high}{')' if high_open else ']'}"
+    _check_number(name, value, lambda v: (low < v if low_open else low <= v)
+                  and (v < high if high_open else v <= high), f"in {interval}")
 
 
 def check_int(name: str, value: object, low: int, high: int | None = None, *,
@@ -116,5 +111,7 @@ def as_batch(name: str, value: np.ndarray, tail: tuple[int, ...]) -> np.ndarray:
     return np.ascontiguousarray(array)
 
 
-def _is_real(value: object) -> bool:
-    return isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool)
+def _check_number(name: str, value: object, ok: Callable[[float], bool], allowed: str) -> None:
+    real = isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool)
+    if not (real and math.isfinite(value) and ok(value)):
+        raise ValueError(f"{name} must be {allowed}, got {value!r}")

@@ -51,10 +51,7 @@ def damping_ratio(target: float, *, clipped: bool = True) -> float:
                          f"got {target}")
     for _ in range(100):
         mid = 0.5 * (low + high)
-        if restitution(mid) > target:
-            low = mid
-        else:
-            high = mid
+        low, high = (mid, high) if restitution(mid) > target else (low, mid)
     return 0.5 * (low + high)
 
 
