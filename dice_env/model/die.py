@@ -23,9 +23,8 @@ from dice_env.model.table import DIE_EDGE, DIE_MASS
 _CORNER_SIGNS = np.array([[1, 1, 1], [1, -1, 1], [-1, -1, 1], [-1, 1, 1],
                           [1, 1, -1], [1, -1, -1], [-1, -1, -1], [-1, 1, -1]], dtype=np.float64)
 # The d6's outward body-frame normal of face k+1.
-_CUBE_NORMALS = np.array(
-    [[0, 0, 1], [1, 0, 0], [0, 1, 0], [0, -1, 0], [-1, 0, 0], [0, 0, -1]], dtype=np.float64
-)
+_CUBE_NORMALS = np.array([[0, 0, 1], [1, 0, 0], [0, 1, 0], [0, -1, 0], [-1, 0, 0], [0, 0, -1]],
+                         dtype=np.float64)
 
 # Default density (kg/m^3), the default d6's: 4.5 g at 16 mm, 1099 kg/m^3 (acrylic/resin).
 DIE_VOLUME = DIE_EDGE * DIE_EDGE * DIE_EDGE
