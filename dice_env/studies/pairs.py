@@ -103,10 +103,7 @@ def triangle() -> np.ndarray:
 
 
 def independence(table: np.ndarray) -> tuple[float, float, int]:
-    """Chi-square test of independence of the count ``table``'s non-empty rows and columns.
-
-    Returns (chi2, p, degrees of freedom).
-    """
+    """Chi-square test of independence of ``table``'s non-empty rows and columns: (chi2, p, dof)."""
     table = np.asarray(table)
     table = table[table.sum(axis=1) > 0][:, table.sum(axis=0) > 0]
     if min(table.shape) < 2:
@@ -312,10 +309,6 @@ def _plot(pairs: Pairs, path: Path) -> None:
     save_figure(fig, path)
 
 
-def _detected(p: float) -> str:
-    return "departs from" if p < SIGNIFICANT else "agrees with"
-
-
 def _half_width(n: int) -> float:
     """Half-width of the 95% interval of P(7) = 1/6 after ``n`` counted throws."""
     return 1.959964 * float(np.sqrt(triangle()[5] * (1 - triangle()[5]) / n))
@@ -333,25 +326,8 @@ def _markdown(pairs: Pairs, n: dict, scene: Scene, seed: int) -> str:
     thrown = len(pairs.counted)
     voided = markdown_table("reason | throws | share", ((reason, count, f"{count / thrown:.4%}")
                                               for reason, count in pairs.voided.items()))
-    chi2, _ = pairs.total_test()
-    ind_chi2, _, dof = independence(pairs.table)
-    full = "" if thrown >= FULL else (
-        f"; at that rate the study's default of {FULL:,} throws (`python -m dice_env.studies "
-        f"pairs`) would take about {FULL / n['rate'] / 3600:.1f} h")
     shares = pairs.totals / pairs.n
-    dependence = ("shows a dependence" if n["independence_p"] < SIGNIFICANT
-                  else "shows no detectable dependence")
-    uniformity = ("both dice's faces are consistent with uniform"
-                  if min(n["die1_p"], n["die2_p"]) >= SIGNIFICANT
-                  else "a die's faces depart from uniform")
-    met_dependence = "does" if n["met_independence_p"] < SIGNIFICANT else "does not"
-    missed = int(np.sum((triangle() < ci[:, 0]) | (triangle() > ci[:, 1])))
-    more = (f"; {FULL:,} throws would narrow it to ±{_half_width(FULL):.4f}."
-            if thrown < FULL else ".")
     return study_page(
-        "pairs-markdown", globals(), TRAY=TRAY, chi2=chi2, dependence=dependence, dof=dof,
-        faces=faces, full=full, h=HAND, ind_chi2=ind_chi2, met_dependence=met_dependence,
-        missed=missed, more=more, n=n, numba=numba, pairs=pairs, scene=scene, seed=seed,
-        shares=shares, thrown=thrown, totals=totals,
-        uniform=[f"die {d + 1}: p = {n[f'die{d + 1}_p']:.3g}" for d in range(2)],
-        uniformity=uniformity, voided=voided, worst=int(np.argmax(np.abs(shares - triangle()))))
+        "pairs-markdown", globals(), TRAY=TRAY, ci=ci, faces=faces, h=HAND, n=n, numba=numba,
+        pairs=pairs, scene=scene, seed=seed, shares=shares, thrown=thrown, totals=totals,
+        voided=voided, worst=int(np.argmax(np.abs(shares - triangle()))))

@@ -116,69 +116,46 @@ def memory_verdict(low: dict, high: dict) -> str:
     return "not resolvable at this sample"
 
 
-def _study_numbers(out: Path, quick: bool) -> tuple[dict, cuboids.Page]:
-    """Weldon's numbers and the cuboid page under ``out``; each study is run when absent."""
+def run(out: Path = DOCS, quick: bool = False, seed: int = SEED) -> dict[str, float]:
+    """Write ``validation.md`` under ``out``; return the headline numbers."""
+    out.mkdir(parents=True, exist_ok=True)
     if not (out / "weldon.json").exists():
         weldon.run(out, quick)
     if not (out / "cuboids.md").exists():
         cuboids.run(out, quick)
-    return json.loads((out / "weldon.json").read_text()), cuboids.read_page(out / "cuboids.md")
-
-
-def run(out: Path = DOCS, quick: bool = False, seed: int = SEED) -> dict[str, float]:
-    """Write ``validation.md`` under ``out``; return the headline numbers."""
-    out.mkdir(parents=True, exist_ok=True)
-    w, cube_page = _study_numbers(out, quick)
-    rng = np.random.default_rng(seed)
+    w, page = json.loads((out / "weldon.json").read_text()), cuboids.read_page(out / "cuboids.md")
     scene = Scene()
-    memory = initial_face_memory(MEMORY_THROWS[quick], rng, scene)
+    memory = initial_face_memory(MEMORY_THROWS[quick], np.random.default_rng(seed), scene)
     restitution = {v: measured_restitution(scene, v) for v in SPEEDS}
     friction = sliding_friction(scene)
     command = COMMAND + (" --quick" if quick else "")
-    sections = [_weldon_section(w), _memory_section(memory, command),
-                _table_section(scene, restitution, friction, command), _cuboid_section(cube_page)]
-    text = _header(sections, command) + "\n".join(body for _, body in sections)
-    (out / "validation.md").write_text(text)
+    e_verdict = "agrees" if all(within(e, *RESTITUTION_RANGE) == "agrees"
+                                for e in restitution.values()) else "differs"
+    (out / "validation.md").write_text(study_page(
+        "validation", globals(), command=command, e_verdict=e_verdict, friction=friction,
+        g=scene.ground, m=memory, map=map, restitution=restitution, table=table,
+        **_weldon_names(w),
+        **_memory_names(memory), **_cuboid_names(page)))
     low, high = memory["bins"][0], memory["bins"][-1]
     return {"weldon_p": w["alone"]["drilled16"]["p"], "memory_low": low["down"] / low["n"],
             "memory_high": high["down"] / high["n"], "restitution": restitution[1.0],
-            "friction": friction, "cube_p": cube_page.table[cuboids.CONDITIONS[0][0]][1.0][0]}
+            "friction": friction, "cube_p": page.table[cuboids.CONDITIONS[0][0]][1.0][0]}
 
 
-# ---- the page ----------------------------------------------------------------------------
+# ---- the page: the names its template reads ----------------------------------------------
 
 def _bold(verdict: str) -> str:
     return f"**{verdict}**"
 
 
-def _header(sections: list[tuple[list[tuple[str, str, str, str]], str]], command: str) -> str:
-    rows = markdown_table("experiment | real dice | simulator | verdict", (
-        (a, b, c, _bold(d)) for summary, _ in sections for a, b, c, d in summary))
-    return study_page("validation-header", globals(), command=command, rows=rows)
-
-
-def _weldon_section(w: dict) -> tuple[list, str]:
-    meta, wd, t, a = w["meta"], w["weldon"], w["together"], w["alone"]
-    ref = a["drilled16"]
-    together = weldon.p_text(t) if "p" in t else "too few throws"
-    t_verdict = t["vs_weldon_p"]["verdict"] if "p" in t else "not resolvable at this sample"
-    dist = t.get("distribution_verdict", "not resolvable at this sample")
+def _weldon_names(w: dict) -> dict[str, object]:
+    t, a = w["together"], w["alone"]
     sens = markdown_table(
         "die | com x, y, z (µm) | die-throws | p(5 or 6) [95%] | − 1/3 | vs 1/3 | vs Weldon",
         ((v["label"], ", ".join(f"{c:.1f}" for c in v["com_um"]), f"{v['n']:,}",
           weldon.p_text(v), f"{v['p'] - 1 / 3:+.4f}",
           _bold(v["vs_fair_p"]["verdict"]), _bold(v["vs_weldon_p"]["verdict"]))
          for v in a.values()))
-    summary = [
-        ("Weldon's dice: p(5 or 6), one die at a time",
-         f"{weldon.p_text(wd)} (Weldon 1894)",
-         f"`drilled16`: {weldon.p_text(ref)}", ref["vs_weldon_p"]["verdict"]),
-        ("Weldon's dice: twelve thrown together",
-         f"{weldon.p_text(wd)}; its distribution of 0–12",
-         f"{t['counted']:,} throws: {together}", t_verdict),
-        ("Weldon's dice: distribution of successes per throw",
-         "26,306 throws", f"{t['counted']:,} throws, chi-square vs Weldon's", dist),
-    ]
     dist_line = (f"chi-square against Weldon's (tails pooled, cells "
                  f"{weldon.cells_text(t['vs_weldon'])}): chi2 = {t['vs_weldon']['statistic']:.2f}, "
                  f"{t['vs_weldon']['dof']} d.f., p = {t['vs_weldon']['p_value']:.3g}; this "
@@ -188,44 +165,22 @@ def _weldon_section(w: dict) -> tuple[list, str]:
                     if t.get("throws_to_resolve") else "")
                  + f"; variance of successes per throw {t['dispersion']:.2f} × the "
                  f"binomial's (1 for independent dice)" if "p" in t else "too few throws")
-    body = study_page("validation-weldon-section", globals(), dist=dist, dist_line=dist_line,
-                      map=map, meta=meta, ref=ref, s=weldon.sensitivity(w), sens=sens, t=t,
-                      t_verdict=t_verdict, together=together, wd=wd)
-    return summary, body
+    return {"meta": w["meta"], "wd": w["weldon"], "t": t, "ref": a["drilled16"], "sens": sens,
+            "s": weldon.sensitivity(w), "dist_line": dist_line,
+            "together": weldon.p_text(t) if "p" in t else "too few throws",
+            "t_verdict": t["vs_weldon_p"]["verdict"] if "p" in t
+            else "not resolvable at this sample",
+            "dist": t.get("distribution_verdict", "not resolvable at this sample")}
 
 
-def _memory_section(m: dict, command: str) -> tuple[list, str]:
+def _memory_names(m: dict) -> dict[str, object]:
     rows = [(name, f"{b['low']:.3g}–{b['high']:.3g}", b["n"],
              *(estimate(b[face] / b["n"], wilson(b[face], b["n"])) for face in ("down", "up")))
             for name, b in zip(("low", "middle", "high"), m["bins"], strict=True)]
     low, high = m["bins"][0], m["bins"][-1]
-    verdict = memory_verdict(low, high)
-    summary = [("Initially-down face against throw energy",
-                "favoured at low energy, fading with energy (Kapitaniak et al. 2012)",
-                f"P(release-down) {low['down'] / low['n']:.3f} (low) → "
-                f"{high['down'] / high['n']:.3f} (high)", verdict)]
-    table = markdown_table("energy | m g a | throws | P(rests on release-down face) [95%] | "
-                           "P(release-up face) [95%]", rows)
-    body = study_page("validation-memory-section", globals(), command=command, m=m, table=table,
-                      verdict=verdict)
-    return summary, body
-
-
-def _table_section(scene: Scene, restitution: dict[float, float], friction: float,
-                   command: str) -> tuple[list, str]:
-    e_verdict = "agrees" if all(within(e, *RESTITUTION_RANGE) == "agrees"
-                                for e in restitution.values()) else "differs"
-    f_verdict = within(friction, *FRICTION_RANGE)
-    e_rows = ", ".join(f"{e:.3f} at {v:g} m/s" for v, e in restitution.items())
-    summary = [("Restitution of the default table", f"{RESTITUTION_RANGE[0]:g}–"
-                f"{RESTITUTION_RANGE[1]:g}", f"{restitution[1.0]:.3f} at 1 m/s (set from it)",
-                e_verdict),
-               ("Sliding friction of the default table", f"{FRICTION_RANGE[0]:g}–"
-                f"{FRICTION_RANGE[1]:g}", f"{friction:.3f} (an input)", f_verdict)]
-    body = study_page("validation-table-section", globals(), command=command, e_rows=e_rows,
-                      e_verdict=e_verdict, f_verdict=f_verdict, friction=friction, g=scene.ground,
-                      table=table)
-    return summary, body
+    return {"low": low, "high": high, "m_verdict": memory_verdict(low, high),
+            "memory_table": markdown_table("energy | m g a | throws | P(rests on release-down "
+                                           "face) [95%] | P(release-up face) [95%]", rows)}
 
 
 def _steepness(page: cuboids.Page) -> str:
@@ -239,7 +194,7 @@ def _steepness(page: cuboids.Page) -> str:
     return "not steeper than the solid-angle share at both ends"
 
 
-def _cuboid_section(page: cuboids.Page) -> tuple[list, str]:
+def _cuboid_names(page: cuboids.Page) -> dict[str, object]:
     record = cuboids.CONDITIONS[0][0]
     labels = list(page.table)
     rows = markdown_table("x/y | " + " | ".join(labels), (
@@ -247,14 +202,6 @@ def _cuboid_section(page: cuboids.Page) -> tuple[list, str]:
                      (page.table[label][r] for label in labels)))
         for r in page.table[record]))
     cube = {label: page.table[label][1.0] for label in labels if 1.0 in page.table[label]}
-    symmetric = all(lo <= 1 / 3 <= hi for _, lo, hi in cube.values())
-    check = "agrees" if symmetric else "differs"
-    flat, tall = min(page.table[record]), max(page.table[record])
-    summary = [("Square-cuboid dice: P(square face) against x/y", "no measurement known to us",
-                f"{page.table[record][flat][0]:.3f} at x/y = {flat:g}, "
-                f"{page.table[record][tall][0]:.3f} at {tall:g}", "prediction"),
-               ("Square cuboid at x/y = 1 (the cube) against 1/3", "1/3 by symmetry",
-                f"{page.table[record][1.0][0]:.3f}", check)]
-    body = study_page("validation-cuboid-section", globals(), check=check, cube=cube, flat=flat,
-                      page=page, record=record, rows=rows, tall=tall)
-    return summary, body
+    return {"page": page, "record": record, "cuboid_rows": rows, "cube": cube,
+            "check": "agrees" if all(lo <= 1 / 3 <= hi for _, lo, hi in cube.values())
+            else "differs", "flat": min(page.table[record]), "tall": max(page.table[record])}
