@@ -179,10 +179,9 @@ def run(out: Path = DOCS, quick: bool = False, seed: int = SEED) -> dict[str, fl
     bar = progress(sum(sizes.values()), "fairness throws", "throw")
     fair_state = vigorous_throws(scene, sizes["fair"], rng)
     fair = FaceCounts.of(throw_batches(scene, fair_state, bar))
-    loaded_state = vigorous_throws(loaded_scene, sizes["loaded"], rng)
-    loaded = FaceCounts.of(throw_batches(loaded_scene, loaded_state, bar))
-    excess = 10 ** rng.uniform(-2, 2, sizes["memory"])
-    memory_state = energy_throws(scene, excess, rng)
+    loaded = FaceCounts.of(throw_batches(
+        loaded_scene, vigorous_throws(loaded_scene, sizes["loaded"], rng), bar))
+    memory_state = energy_throws(scene, 10 ** rng.uniform(-2, 2, sizes["memory"]), rng)
     memory_result = throw_batches(scene, memory_state, bar)
     bar.close()
     memory = _memory_table(scene, memory_state, memory_result, bins=5 if quick else 10)

@@ -60,11 +60,10 @@ def throw(scene: object, state: State, bar: object = None) -> MaterialThrows:
     parts = []
     for chunk in batches(state, BATCH, bar):
         res = simulate(scene, chunk, t_max=T_MAX, until="decided")
-        ok = counted(res)
         rests_on = die.face_read(res.final.orientation, -UP)
-        down = rests_on == die.face_read(chunk.orientation, -UP)
-        up = rests_on == die.face_read(chunk.orientation, UP)
-        parts.append((ok, res.face, res.impacts, res.rest_time, down, up, res.max_penetration))
+        parts.append((counted(res), res.face, res.impacts, res.rest_time,
+                      rests_on == die.face_read(chunk.orientation, -UP),
+                      rests_on == die.face_read(chunk.orientation, UP), res.max_penetration))
     ok, face, impacts, when, down, up, sink = map(np.concatenate, zip(*parts, strict=True))
     faces = Faces.of(np.bincount(face[ok], minlength=die.n_faces + 1)[1:], len(ok))
     return MaterialThrows(faces, impacts[ok], when[ok], int(down[ok].sum()), int(up[ok].sum()),

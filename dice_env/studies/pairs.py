@@ -43,12 +43,11 @@ TOTALS = np.arange(2, 13)
 
 @dataclass(frozen=True)
 class Hand:
-    """A hand that throws several dice at once; lengths in metres, speeds in m/s, spin in rad/s.
+    """A hand that throws several dice at once (docs/pairs.md); metres, m/s, rad/s.
 
-    Dice in rows of at most ``per_row`` along y, ``spacing`` apart, centred above the origin at
-    ``clearance`` above touching; one hand velocity ``speed`` toward the table plus each die's
-    normal ``noise`` per component; each die its own uniform axis of ``spin`` and orientation.
-    Ranges are drawn uniformly per throw.
+    Dice in rows of ``per_row`` along y, ``spacing`` apart, ``clearance`` above touching; one
+    velocity ``speed`` toward the table plus each die's normal ``noise``; each die its own
+    ``spin`` and orientation. Ranges are drawn uniformly per throw.
     """
 
     spacing: float = 0.03
@@ -200,9 +199,8 @@ def chunked_pairs(scene: Scene, dice: tuple[Die, ...], throws: int, seed: int,
                   chunk: int = CHUNK) -> tuple[Pairs, float, float]:
     """``throws`` hand throws in chunks of ``chunk`` seeded ``(seed, i)``, joined.
 
-    Returns the pairs and the wall-clock and CPU seconds their throwing took. With ``keep``,
-    each chunk is kept in that folder and read back when present (:mod:`dice_env.studies.chunks`),
-    so a stopped run continues; the result does not depend on ``keep``.
+    Returns the pairs and the wall-clock and CPU seconds their throwing took. ``keep``: a folder
+    keeping the chunks, read back when present (:mod:`dice_env.studies.chunks`): same result.
     """
     if keep is not None:
         prepare(keep, {"dice": [d.name for d in dice], "hand": asdict(HAND), "chunk": chunk,

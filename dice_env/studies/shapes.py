@@ -201,8 +201,7 @@ def flight_dice() -> dict[str, Die]:
     return dice
 
 
-def run(out: Path = DOCS, quick: bool = False, seed: int = SEED,
-        throws: int | None = None,
+def run(out: Path = DOCS, quick: bool = False, seed: int = SEED, throws: int | None = None,
         faces_of: Callable[[Scene, int, int], Faces] | None = None) -> dict[str, float]:
     """Regenerate ``shapes.md`` and its figure under ``out``; return the headline numbers.
 
