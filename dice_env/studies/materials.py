@@ -119,8 +119,7 @@ def _plot(results: dict, path: Path) -> None:
     fig, axes = plt.subplots(1, 3, figsize=(14, 4), layout="constrained")
     for k, (label, _) in enumerate(KINDS):
         shift = (k - 0.5) * 0.3
-        impacts = [results[n][label].impacts for n in names]
-        axes[0].bar(x + shift, [i.mean() for i in impacts], 0.3, label=label)
+        axes[0].bar(x + shift, [results[n][label].impacts.mean() for n in names], 0.3, label=label)
         for which, marker in (("down", "o"), ("up", "s")):
             p, ci = zip(*(results[n][label].memory(which) for n in names), strict=True)
             p, ci = np.array(p), np.array(ci)

@@ -70,8 +70,7 @@ def layout(n_dice: int, hand: Hand = HAND) -> np.ndarray:
     """Horizontal offsets (n_dice, 3) of the dice in the hand, centred on the origin."""
     if not isinstance(n_dice, int) or isinstance(n_dice, bool) or n_dice < 1:
         raise ValueError(f"n_dice must be an int >= 1, got {n_dice!r}")
-    index = np.arange(n_dice)
-    row, column = divmod(index, hand.per_row)
+    row, column = divmod(np.arange(n_dice), hand.per_row)
     rows, columns = row.max() + 1, min(n_dice, hand.per_row)
     offsets = np.zeros((n_dice, 3))
     offsets[:, 0] = (row - (rows - 1) / 2) * hand.spacing

@@ -1,9 +1,7 @@
 """The validation page: the simulator against experiments on real dice, one section each.
 
-``run(out, quick)`` writes ``out/validation.md``: Weldon's dice (from ``out/weldon.json``),
-the initially-down face against throw energy (:func:`initial_face_memory`), the default table's
-restitution and friction (:func:`sliding_friction`) and square-cuboid dice (from
-``out/cuboids.md``); the weldon and cuboids studies are run first where their output is absent.
+``run(out, quick)`` writes ``out/validation.md`` from its own throws and the weldon and cuboids
+studies' output under ``out`` (``weldon.json``, ``cuboids.md``; each study run first if absent).
 """
 
 from __future__ import annotations
@@ -100,9 +98,9 @@ def initial_face_memory(n: int, rng: np.random.Generator, scene: Scene | None = 
 def memory_verdict(low: dict, high: dict) -> str:
     """Kapitaniak's direction: the release-down face favoured at low energy, less at high.
 
-    "agrees" when the low tercile's 95% interval of P(release-down) lies above 1/6 and a
-    one-sided two-proportion test (5%) puts it above the high tercile's; "differs" when it is
-    below 1/6 or significantly below; else "not resolvable at this sample".
+    "agrees": the low tercile's 95% interval of P(release-down) above 1/6 and it significantly
+    above the high's (one-sided, 5%); "differs": below 1/6 or significantly below; else
+    "not resolvable at this sample".
     """
     p_low, p_high = low["down"] / low["n"], high["down"] / high["n"]
     pooled = (low["down"] + high["down"]) / (low["n"] + high["n"])
