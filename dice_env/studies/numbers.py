@@ -41,30 +41,15 @@ class Tree(dict):
 
     def __getattr__(self, name: str) -> object:
         try:
-            return wrap(self[name])
+            return self[name]
         except KeyError:
             raise AttributeError(name) from None
 
-    def __getitem__(self, key: str) -> object:
-        return wrap(dict.__getitem__(self, key))
-
-    def get(self, key: str, default: object = None) -> object:
-        """``dict.get``, the value wrapped."""
-        return wrap(dict.get(self, key, default))
-
-    def values(self) -> list:
-        """The values, wrapped."""
-        return [wrap(v) for v in dict.values(self)]
-
-    def items(self) -> list[tuple[str, object]]:
-        """The (key, value) pairs, values wrapped."""
-        return [(k, wrap(v)) for k, v in dict.items(self)]
-
 
 def wrap(value: object) -> object:
-    """JSON objects as :class:`Tree`, lists element-wise; numbers and strings as they are."""
-    if isinstance(value, dict) and not isinstance(value, Tree):
-        return Tree(value)
+    """JSON objects as :class:`Tree`, lists element-wise, all the way down; the rest as it is."""
+    if isinstance(value, dict):
+        return Tree({k: wrap(v) for k, v in value.items()})
     if isinstance(value, list):
         return [wrap(v) for v in value]
     return value
@@ -167,13 +152,8 @@ def stale() -> list[str]:
 def fill(page: Path) -> bool:
     """Rewrite the page's blocks from their JSONs; whether anything changed."""
     text = page.read_text()
-
-    def filled(match: re.Match) -> str:
-        start, end = match.span("text")
-        return (match.group(0)[:start - match.start()] + _block(page, text, match).render()
-                + match.group(0)[end - match.start():])
-
-    new = BLOCK.sub(filled, text)
+    new = BLOCK.sub(lambda m: f"<!-- numbers {m['sources']}\n{m['template']}-->\n"
+                              f"{_block(page, text, m).render()}<!-- /numbers -->", text)
     if new != text:
         page.write_text(new)
     return new != text
