@@ -44,10 +44,8 @@ def write_glb(recording: Recording, path: str | os.PathLike[str]) -> Path:
                     samplers=[gl.Sampler(magFilter=gl.LINEAR, minFilter=gl.LINEAR_MIPMAP_LINEAR,
                                          wrapS=gl.CLAMP_TO_EDGE, wrapT=gl.CLAMP_TO_EDGE)])
     blob = _Blob(gltf)
-    meshes: dict[Die, int] = {}
+    meshes = {die: _die_mesh(blob, die) for die in dict.fromkeys(recording.dice)}
     for i, die in enumerate(recording.dice):
-        if die not in meshes:
-            meshes[die] = _die_mesh(blob, die)
         gltf.nodes.append(gl.Node(name=f"die {i} ({die.name})", mesh=meshes[die]))
     _animate(blob, recording)
     _surroundings(blob, recording)
@@ -126,8 +124,10 @@ class _Blob:
                  texture: bytes | None = None) -> int:
         """A matte material of an sRGB ``colour`` (3,) 0-255 (two-sided) or a PNG ``texture``."""
         pbr = gl.PbrMetallicRoughness(metallicFactor=0.0, roughnessFactor=0.7)
-        if texture is None:
-            pbr.baseColorFactor = [*_linear(colour), 1.0]
+        if texture is None:  # sRGB to glTF's linear factors
+            c = np.asarray(colour) / 255.0
+            pbr.baseColorFactor = [*np.where(c <= 0.04045, c / 12.92,
+                                             ((c + 0.055) / 1.055) ** 2.4).tolist(), 1.0]
         else:
             self.gltf.images.append(gl.Image(bufferView=self.view(texture), mimeType="image/png"))
             self.gltf.textures.append(gl.Texture(sampler=0, source=len(self.gltf.images) - 1))
@@ -135,12 +135,6 @@ class _Blob:
         self.gltf.materials.append(gl.Material(name=name, pbrMetallicRoughness=pbr,
                                                doubleSided=texture is None))
         return len(self.gltf.materials) - 1
-
-
-def _linear(colour: np.ndarray) -> list[float]:
-    """An sRGB colour (3,) 0-255 in glTF's linear base colour factors."""
-    c = np.asarray(colour) / 255.0
-    return np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4).tolist()
 
 
 def _die_mesh(blob: _Blob, die: Die) -> int:

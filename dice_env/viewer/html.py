@@ -43,7 +43,6 @@ def write_html(recordings: Recording | Sequence[Recording], path: str | Path, *,
             or not all(isinstance(r, Recording) for r in items)):
         got = [type(r).__name__ for r in items] if isinstance(items, (list, tuple)) else items
         raise TypeError(f"recordings must be a Recording or a sequence of them, got {got!r:.80}")
-    items = list(items)
     if not items:
         raise ValueError("recordings must not be empty: give at least one Recording")
     check_choice("layout", layout, LAYOUTS)
@@ -106,10 +105,7 @@ def _shape(die: Die) -> dict[str, Any]:
 
 
 def _throw_view(recording: Recording, shapes: dict[Die, int]) -> dict[str, Any]:
-    """What the page draws of a throw besides its dice' frames: shapes, extent, floor, walls.
-
-    ``radius``: the horizontal reach of the dice' path (and of walls near it) from ``centre``.
-    """
+    """What the page draws of a throw besides its dice' frames: shapes, extent, floor, walls."""
     dice = [shapes.setdefault(die, len(shapes)) for die in recording.dice]
     size = max(die.size for die in recording.dice)
     points = recording.position.reshape(-1, 3)
