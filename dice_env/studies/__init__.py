@@ -35,12 +35,7 @@ KEPT = ("pairs", "weldon")
 
 def run(name: str, out: Path, quick: bool = False, throws: int | None = None,
         faces_of: Callable | None = None, keep: Path | None = None) -> dict[str, float]:
-    """Run study ``name`` (a key of :data:`STUDIES`) into ``out``.
-
-    ``throws`` (studies in :data:`SIZED` only) replaces the study's sample size;
-    ``faces_of`` (studies in :data:`CHUNKED` only) throws its dice (see ``shapes.run``);
-    ``keep`` (studies in :data:`KEPT` only) keeps its chunks (see ``pairs.run``).
-    """
+    """Run study ``name`` (a key of :data:`STUDIES`) into ``out`` (options: see the module)."""
     if name not in STUDIES:
         raise ValueError(f"name must be one of {sorted(STUDIES)}, got {name!r}")
     options = {}

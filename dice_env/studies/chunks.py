@@ -42,12 +42,11 @@ def prepare(folder: Path, record: dict, name: str = "keep") -> Path:
     if path.exists():
         try:
             saved = json.loads(path.read_text())
-        except ValueError as error:  # not JSON, or not text
+            if not isinstance(saved, dict):
+                raise ValueError(f"JSON {type(saved).__name__}, not an object")
+        except ValueError as error:  # not JSON, not text or not an object
             raise FolderError(f"{str(path)!r} is corrupt ({error}): delete {name}="
                               f"{str(folder)!r}, or pass another folder") from error
-        if not isinstance(saved, dict):
-            raise FolderError(f"{str(path)!r} is corrupt (JSON {type(saved).__name__}, not an "
-                              f"object): delete {name}={str(folder)!r}, or pass another folder")
         differ = [key for key in record | saved if saved.get(key) != record.get(key)]
         if differ:
             shown = "; ".join("another scene" if k == "scene" else

@@ -141,11 +141,9 @@ def run(out: Path = DOCS, quick: bool = False, throws: int | None = None,
             c["fisher_p"] = float(stats.fisher_exact(table).pvalue)
     _plot(cells, noises, speeds, out / "figures" / "craps.png")
     (out / "craps.md").write_text(_markdown(cells, noises, speeds, n, seconds, cpu, seed))
-    numbers = {"throws_per_cell": float(n), "seconds": seconds}
-    for (noise, speed, way), c in cells.items():
-        numbers[f"p7_{way}_{noise:g}_{speed:g}"] = c["p7"]
-    numbers["voided"] = sum(c["thrown"] - c["n"] for c in cells.values()) / (n * len(cells))
-    return numbers
+    p7 = {f"p7_{way}_{noise:g}_{speed:g}": c["p7"] for (noise, speed, way), c in cells.items()}
+    return {"throws_per_cell": float(n), "seconds": seconds, **p7,
+            "voided": sum(c["thrown"] - c["n"] for c in cells.values()) / (n * len(cells))}
 
 
 def _plot(cells: dict, noises: tuple, speeds: tuple, path: Path) -> None:

@@ -18,10 +18,7 @@ from dice_env.studies.numbers import study_page
 
 
 def run(out: Path = DOCS, quick: bool = False) -> dict[str, float]:
-    """Write ``out/pips.md``; returns the drilled 16 mm die's centre-of-mass offset.
-
-    ``quick`` changes nothing (the page is closed-form, instant).
-    """
+    """Write ``out/pips.md`` (``quick`` changes nothing); the drilled d6's com offset / edge."""
     # the presets, then the casino die with its spots left empty and with paint 10 % light
     rows = [(f"`{name}`", Die.standard("d6", pips=name), preset.pips)
             for name, preset in DRILLINGS.items()]

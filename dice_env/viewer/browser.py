@@ -1,8 +1,6 @@
 """A viewer page opened in headless Chromium (Playwright), for screenshots and tests.
 
-WebGL without a GPU: ANGLE on SwiftShader (software Vulkan). Debian's ``chromium`` package
-and the ``playwright`` Python package (no browser download: Playwright drives the installed
-Chromium).
+WebGL on ANGLE/SwiftShader (no GPU); needs Debian's ``chromium`` and the ``playwright`` package.
 """
 
 from __future__ import annotations

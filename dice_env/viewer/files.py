@@ -43,9 +43,9 @@ def save(recordings: Recording | Sequence[Recording], path: str | Path) -> Path:
 
 
 def replay(source: Recording | Sequence[Recording] | str | Path) -> list[Recording]:
-    """Throw again what ``source`` (recordings or a file :func:`load` reads) recorded.
+    """Throw ``source`` (recordings or a file :func:`load` reads) again; the new recordings.
 
-    Returns the new recordings; raises :class:`ReplayError` naming each throw whose faces differ.
+    :class:`ReplayError` names each throw whose faces differ.
     """
     if isinstance(source, (str, Path)):
         recorded = load(source)

@@ -233,10 +233,7 @@ def _wall_corners(lines: list[np.ndarray]) -> np.ndarray:
 
 def _wall_ends(line: np.ndarray, others: list[np.ndarray], low: np.ndarray,
                high: np.ndarray) -> np.ndarray | None:
-    """The ends (2, 2) of a wall's ``line`` on the floor, or None where none of it is left.
-
-    The line is cut to the rectangle ``low``-``high`` and to the ``others``' free sides.
-    """
+    """The ends (2, 2) of ``line`` within ``low``-``high`` and ``others``' free sides, or None."""
     m, d = line[:2], line[2]
     scale = m @ m
     if scale < 1e-18:  # the wall is parallel to the floor

@@ -1,8 +1,4 @@
-"""Texture atlases of the dice's faces, drawn unlit as :mod:`dice_env.envs.render` draws them.
-
-:func:`face_atlas` paints every face of a die into one RGBA image of square tiles and gives the
-texture coordinates of each face's corners; :func:`png_bytes` encodes an image as PNG.
-"""
+"""Texture atlases of the dice's faces, drawn unlit as :mod:`dice_env.envs.render` draws them."""
 
 from __future__ import annotations
 

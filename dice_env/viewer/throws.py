@@ -14,10 +14,7 @@ from dice_env.viewer.recording import FPS, Recording, record
 def task_throws(task: ThrowTask, actions: np.ndarray, targets: Any, hands: np.ndarray,
                 noise: np.ndarray, *, fps: float = FPS,
                 titles: list[str] | None = None) -> list[Recording]:
-    """The recordings of ``task.throw(actions, targets, hands, noise)``, one per throw.
-
-    The task's void reason is kept, its ``target`` and ``success`` join the outcome.
-    """
+    """Recordings of ``task.throw(...)``, with its void reasons, ``target`` and ``success``."""
     throw = task.throw(actions, targets, hands, noise)
     state, _ = task.release(actions, hands, noise)
     info = throw.info
