@@ -191,8 +191,7 @@ def _markdown(cells: dict, noises: tuple, speeds: tuple, n: int, seconds: float,
     lost = [noise for noise in noises
             if all(cells[(noise, s, "set")]["binom_p"] >= SIGNIFICANT for s in speeds)]
     command = "python -m dice_env.studies craps" + ("" if n == FULL else f" --throws {n}")
-    scene = craps_scene()
     return study_page("craps", globals(), CRAPS=CRAPS, cells=cells, command=command,
                       controlled=controlled, cpu=cpu, lost=lost, n=n, noises=noises, numba=numba,
-                      random_off=random_off, rows=rows, scene=scene, seconds=seconds, seed=seed,
-                      speeds=speeds, thrown=thrown, voided_rows=voided_rows)
+                      random_off=random_off, rows=rows, scene=craps_scene(), seconds=seconds,
+                      seed=seed, speeds=speeds, thrown=thrown, voided_rows=voided_rows)

@@ -106,10 +106,9 @@ def substitute(template: str, names: dict[str, object], where: str) -> str:
 
 
 def study_page(name: str, namespace: dict[str, object] | None = None, /, **names: object) -> str:
-    """The study page ``docs/templates/NAME.md`` with its fields filled from ``names``.
+    """The study page ``docs/templates/NAME.md`` filled from ``names``, then ``namespace``.
 
-    ``namespace``: more names, ``names`` taking precedence (a study passes its ``globals()``, so
-    that its template sees its constants and helpers).
+    A study passes its ``globals()`` as ``namespace``: its template sees its constants and helpers.
     """
     path = TEMPLATES / f"{name}.md"
     scope = {k: v for k, v in (namespace or {}).items() if not k.startswith("__")} | names

@@ -20,6 +20,7 @@ from dice_env.envs.task import MAX_NUM_DICE, make_task
 from dice_env.model.die import STANDARD_SIZES
 from dice_env.model.surroundings import WALLS
 from dice_env.viewer.files import ReplayError, load, replay
+from dice_env.viewer.html import write_html
 from dice_env.viewer.recording import FPS
 from dice_env.viewer.throws import random_throws
 
@@ -63,15 +64,12 @@ def main(argv: list[str] | None = None) -> int:
                                ("screenshot", args.screenshot, ".png")):
         if path is not None and path.suffix.lower() != suffix:
             parser.error(f"argument --{name}: must end in {suffix}, got {path.name!r}")
-    from dice_env.viewer.html import write_html
-
     task = make_task(die=args.die, walls=args.walls,
                      num_dice=args.num_dice if args.num_dice > 1 else None)
     recordings = random_throws(task, args.throws, args.seed, fps=args.fps)
     for k, rec in enumerate(recordings):
-        ending = rec.outcome["void"] or "counts"
         print(f"throw {k}: faces {rec.outcome['faces']} after {rec.outcome['time']:.2f} s "
-              f"({ending})")
+              f"({rec.outcome['void'] or 'counts'})")
     page = write_html(recordings, args.out, layout=args.layout)
     print(f"page: {page}")
     if args.glb is not None:

@@ -9,6 +9,7 @@ drops a JSON object's nulls), so :func:`read_glb` gets it back.
 
 from __future__ import annotations
 
+import itertools
 import json
 import math
 import os
@@ -220,11 +221,9 @@ def _quad(blob: _Blob, name: str, corners: np.ndarray, normal: np.ndarray,
 def _wall_corners(lines: list[np.ndarray]) -> np.ndarray:
     """The corners (K, 2) where two walls meet on the floor on every wall's free side."""
     corners = []
-    for i, first in enumerate(lines):
-        for second in lines[i + 1:]:
-            matrix = np.array([first[:2], second[:2]])
-            if abs(np.linalg.det(matrix)) < 1e-9:
-                continue
+    for first, second in itertools.combinations(lines, 2):
+        matrix = np.array([first[:2], second[:2]])
+        if abs(np.linalg.det(matrix)) >= 1e-9:
             point = np.linalg.solve(matrix, [first[2], second[2]])
             if all(line[:2] @ point >= line[2] - 1e-9 for line in lines):
                 corners.append(point)

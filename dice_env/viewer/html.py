@@ -1,8 +1,7 @@
 """A self-contained HTML page of recorded throws, drawn in 3D by three.js.
 
-The page opens offline: the viewer's bundle (``viewer.bundle.js``, built from ``js/``) inlined,
-the recordings as JSON, and what the viewer draws prepared here (dice triangles and textures,
-walls, floor, extent). :func:`read_html` gives the recordings' data back.
+It opens offline: the bundle ``viewer.bundle.js`` (built from ``js/``) inlined, the recordings as
+JSON and what the viewer draws (meshes, textures, walls, floor), which :func:`read_html` reads.
 """
 
 from __future__ import annotations
@@ -139,10 +138,9 @@ def _basis(normal: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 def _walls(scene: Scene, centre: np.ndarray, radius: float,
            height: float) -> list[list[list[float]]]:
-    """Each wall as a bounded polygon (its corners), ``height`` up from the floor.
+    """Each wall's corners, ``height`` up and within ``radius`` of ``centre`` in x and y.
 
-    The part of the wall within ``radius`` of ``centre`` along x and y, cut where it passes
-    behind the floor or another wall (so a tray's sides meet at its corners).
+    Cut where it passes behind the floor or another wall (a tray's sides meet at its corners).
     """
     floor, *walls = scene.planes
     box = [(np.array(axis), float(np.dot(axis, centre)) - radius)

@@ -1,9 +1,4 @@
-"""A recorded throw: its scene, dice, release state and frames, as data that replays exactly.
-
-:func:`record` keeps what a viewer draws (each die's pose at a fixed frame rate, the outcome)
-and what a replay needs (scene, dice and contact as :mod:`dice_env.simulation.codec` data, the
-exact release state, the run's keywords, the library version).
-"""
+"""A recorded throw: its scene, dice, release state and frames, as data that replays exactly."""
 
 from __future__ import annotations
 
