@@ -59,8 +59,7 @@ def write_html(recordings: Recording | Sequence[Recording], path: str | Path, *,
     try:
         text = json.dumps(data, separators=(",", ":"), allow_nan=False)
     except ValueError as error:  # JSON.parse in the page reads no NaN nor infinity
-        raise ValueError(f"recordings must hold finite numbers only to be shown: {error}") \
-            from None
+        raise ValueError(f"recordings must hold finite numbers only: {error}") from None
     # JSON strings may hold "<" only as an escape: no "</script>" or "<!--" ends the script.
     text = text.replace("<", "\\u003c")
     path.write_text(

@@ -20,8 +20,7 @@ def task_throws(task: ThrowTask, actions: np.ndarray, targets: Any, hands: np.nd
     info = throw.info
     targets = info.get("target_sum", info.get("target_face"))
     if titles is None:
-        titles = [f"target {np.asarray(target).tolist()}: "
-                  f"{'success' if success else 'failure'}"
+        titles = [f"target {np.asarray(target).tolist()}: {'success' if success else 'failure'}"
                   for target, success in zip(targets, info["is_success"], strict=True)]
     dice = task.scene.die if task.n_dice == 1 else task.dice
     recordings = record(task.scene, dice, state, fps=fps, until=task.run_until, titles=titles,
