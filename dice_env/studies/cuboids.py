@@ -83,13 +83,12 @@ def run(out: Path = DOCS, quick: bool = False, seed: int = SEED,
             table[label, ratio] = (faces, *square_share(faces))
     bar.close()
     _plot(table, ratios, n, out / "figures" / "cuboids.png")
-    first = CONDITIONS[0][0]
-    numbers = {f"p_{r:g}": table[first, r][1] for r in ratios}
-    numbers["cube_p"] = table[first, 1.0][1]
-    numbers["cube_lo"], numbers["cube_hi"] = (float(v) for v in table[first, 1.0][2])
-    numbers["undecided"] = max(f.undecided for f, _, _ in table.values()) / n
     (out / "cuboids.md").write_text(_markdown(table, ratios, n, seed, quick, throws))
-    return numbers
+    first = CONDITIONS[0][0]
+    _, cube_p, (cube_lo, cube_hi) = table[first, 1.0]
+    return {**{f"p_{r:g}": table[first, r][1] for r in ratios}, "cube_p": cube_p,
+            "cube_lo": float(cube_lo), "cube_hi": float(cube_hi),
+            "undecided": max(f.undecided for f, _, _ in table.values()) / n}
 
 
 class Page(NamedTuple):
