@@ -38,8 +38,7 @@ def main(argv: list[str] | None = None) -> None:
                         "auto, ray://host:10001, or local (a fresh local instance)")
     parser.add_argument("--chunks", metavar="DIR", type=Path, default=None,
                         help=f"throw in seeded chunks ({', '.join(CHUNKED + KEPT)} only), each "
-                        "kept under DIR (DIR/<study> for all): run again, the study continues "
-                        "from the chunks done")
+                        "kept under DIR: run again, the study continues from the chunks done")
     args = parser.parse_args(argv)
     if args.out is None:
         args.out = QUICK if args.quick else DOCS
@@ -56,8 +55,6 @@ def main(argv: list[str] | None = None) -> None:
     with contextlib.nullcontext() if args.ray is None else connected(args.ray):
         for name in STUDIES if args.study == "all" else [args.study]:
             keep = args.chunks if name in KEPT else None
-            if keep is not None and args.study == "all":
-                keep = keep / name
             try:
                 numbers = run(name, args.out, args.quick, args.throws, faces_of, keep)
             except ValueError as error:  # a bad value or a folder not this run's
