@@ -243,7 +243,6 @@ def _pair(scene: Scene, dice: tuple[Die, ...], contact: DieContact,
         float(contact.tangential * contact.damping), float(dt / reduced))
 
 
-
 def _dice(dice: Sequence[Die]) -> tuple[Die, ...]:
     """``dice`` as a tuple of 1 to :data:`MAX_DICE` dice."""
     if not isinstance(dice, Sequence) or not all(isinstance(d, Die) for d in dice):
@@ -308,12 +307,9 @@ def _padded(rows: list[np.ndarray], fill: float | None = None) -> np.ndarray:
 
 
 def _distinct_axes(normals: np.ndarray, tol: float = 1e-9) -> np.ndarray:
-    """The faces whose normals are distinct axes: each but one of two opposite faces."""
-    kept: list[int] = []
-    for f, normal in enumerate(normals):
-        if not any(np.abs(normals[k] + normal).max() <= tol for k in kept):
-            kept.append(f)
-    return np.array(kept, np.int64)
+    """The faces whose normals are distinct axes: the first of two opposite faces."""
+    opposite = np.abs(normals[:, None] + normals[None]).max(axis=-1) <= tol
+    return np.flatnonzero(~np.tril(opposite, -1).any(axis=1))
 
 
 def _edge_classes(vertices: np.ndarray, edges: np.ndarray,
@@ -321,17 +317,10 @@ def _edge_classes(vertices: np.ndarray, edges: np.ndarray,
     """The edges by direction: their order, each class's start in it (then the end), its axis."""
     directions = vertices[edges[:, 1]] - vertices[edges[:, 0]]
     directions /= np.linalg.norm(directions, axis=1, keepdims=True)
-    classes: list[list[int]] = []
-    for k, d in enumerate(directions):
-        for members in classes:
-            if np.linalg.norm(np.cross(directions[members[0]], d)) <= tol:
-                members.append(k)
-                break
-        else:
-            classes.append([k])
-    return (np.array([k for members in classes for k in members], np.int64),
-            np.cumsum([0] + [len(members) for members in classes]),
-            np.array([directions[members[0]] for members in classes]))
+    parallel = np.linalg.norm(np.cross(directions[:, None], directions[None]), axis=-1) <= tol
+    firsts, cls = np.unique(parallel.argmax(axis=0), return_inverse=True)  # by first member
+    return (np.argsort(cls, kind="stable"), np.concatenate([[0], np.cumsum(np.bincount(cls))]),
+            directions[firsts])
 
 
 def _check_apart(dice: tuple[Die, ...], state: GroupState) -> None:

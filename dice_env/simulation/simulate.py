@@ -34,10 +34,9 @@ from dice_env.simulation.compile_notice import announce, ready
 class DiceArrays:
     """The five state arrays of dice, with :attr:`LEAD` leading axes (B for :class:`State`).
 
-    ``position`` centre of mass; ``velocity`` its velocity; ``angular_momentum`` about it;
-    ``orientation`` body-to-world rotations (lead, 3, 3); ``angular_velocity`` the ω used for
-    corner velocities. Checked when built: float64 arrays of shape (lead, 3) (or (lead, 3, 3))
-    sharing one lead shape, at least one die, finite, rotations to :data:`ROTATION_TOL`.
+    ``orientation``: body-to-world rotations (lead, 3, 3); ``angular_velocity``: the ω of the
+    corner velocities. Checked: finite float64, one lead shape, at least one die, rotations to
+    :data:`ROTATION_TOL`.
     """
 
     LEAD: ClassVar[tuple[str, ...]] = ("B",)
@@ -82,8 +81,7 @@ class DiceArrays:
         return type(self)(*(np.array(a, order="C") for a in self._arrays()))
 
     def _arrays(self) -> tuple[np.ndarray, ...]:
-        return (self.position, self.velocity, self.angular_momentum, self.orientation,
-                self.angular_velocity)
+        return tuple(getattr(self, f.name) for f in fields(self))
 
 
 @dataclass
@@ -181,21 +179,17 @@ def simulate(scene: Scene, state: State, *, t_max: float | None = None, until: s
 
     ``t_max`` overrides the scene's time limit. ``until`` (:data:`ENDINGS`) ends a die's run
     before it: ``"rest"`` after the hold ``scene.rest.hold``; ``"early_rest"`` as soon as its
-    energy proves rest (fair die, horizontal table; same face, rest time and impacts, the
-    final state still vibrating); ``"decided"`` as soon as its energy is below
-    :func:`lock_energy` of its face (``docs/performance.md``; not ``settled``, the final state
-    that moment's); ``"t_max"``: the time limit alone.
+    energy proves rest (fair die, horizontal table; the final state still vibrating);
+    ``"decided"`` once its energy is below :func:`lock_energy` of its face (not ``settled``);
+    ``"t_max"``: the time limit alone. ``record_every`` > 0 stores the centre of mass every that
+    many steps, plus what ``record`` names among :data:`RECORDS`. ``num_threads``: 1 to
+    ``NUMBA_NUM_THREADS`` (default all). ``free_flight`` takes the contact-free steps in
+    analytic jumps. ``device``: ``"cpu"`` or ``"cuda"`` (:mod:`dice_env.physics.cuda_kernel`;
+    no records).
 
-    ``record_every`` > 0 stores the centre of mass every that many steps, plus what ``record``
-    names among :data:`RECORDS`. ``num_threads``: 1 to ``NUMBA_NUM_THREADS`` (default all); see
-    :func:`run_kernel` for the runs kept on the calling thread. ``free_flight`` takes the
-    contact-free steps in analytic jumps. ``device``: ``"cpu"`` or ``"cuda"`` (one die per GPU
-    thread, :mod:`dice_env.physics.cuda_kernel`, the extra ``dice_env[cuda]``; no records).
-
-    Refused before any work (naming the argument): more than
+    Refused before any work, naming the argument: more than
     :data:`dice_env.model.scene.MAX_STEPS` steps, records above :data:`MAX_RECORD_BYTES`, a
-    state deeper in a plane than the scene's sink limit. Ctrl-C raises ``KeyboardInterrupt``
-    within milliseconds.
+    state deeper in a plane than the scene's sink limit. Ctrl-C raises ``KeyboardInterrupt``.
     """
     threads = check_run(scene, state, State, record_every, num_threads,
                         free_flight=free_flight)
@@ -307,10 +301,7 @@ def _records(record: tuple[str, ...], record_every: int, b: int, n_steps: int,
 
 def check_run(scene: Scene, state: object, kind: type, record_every: object,
               num_threads: int | None, **flags: object) -> int:
-    """Check the keywords :func:`simulate` and ``simulate_group`` share; the thread count.
-
-    ``state`` must be a ``kind``, ``record_every`` an int >= 0, each of ``flags`` a bool.
-    """
+    """Check the arguments :func:`simulate` and ``simulate_group`` share; the thread count."""
     check_type("scene", scene, Scene)
     check_type("state", state, kind)
     check_int("record_every", record_every, 0)
@@ -344,10 +335,9 @@ def recorded(record_every: int, records: kernel.Records | group_kernel.GroupReco
 
 
 def blank_outcome(scene: Scene, sink: np.ndarray, size: float) -> dict[str, np.ndarray]:
-    """The outcome arrays every kernel starts from, for dice ``sink`` (m) deep at the start.
+    """The kernels' blank outcome for dice ``sink`` (m, (B,) or (B, N)) deep at the start.
 
-    ``sink`` (B,) or (B, N) (:meth:`Scene.sink`) is refused beyond the scene's sink limit of
-    ``size``, the (smallest) die's size.
+    Refused beyond the scene's sink limit of ``size``, the (smallest) die's size.
     """
     if sink.max() > scene.sink_limit * size:
         at = np.unravel_index(int(sink.argmax()), sink.shape)
@@ -364,10 +354,7 @@ def blank_outcome(scene: Scene, sink: np.ndarray, size: float) -> dict[str, np.n
 
 def outcome_fields(scene: Scene, outcome: kernel.Outcome | group_kernel.GroupOutcome,
                    size: float) -> dict[str, np.ndarray]:
-    """The :class:`RunResult` fields of a kernel's ``outcome`` but ``face`` and ``final``.
-
-    ``size``: the (smallest) die's size, for ``sunk``.
-    """
+    """The :class:`RunResult` fields but ``face`` and ``final``; ``size``: the smallest die's."""
     energy_rise = outcome.energy_rise / scene.energy_tol
     return {"settled": outcome.status == kernel.SETTLED,
             "decided": outcome.status == kernel.DECIDED, "rest_time": outcome.rest_time,
@@ -382,15 +369,13 @@ RECORDS = ("energy", "orientations", "nodes")
 RELEASE_SINK = 1e-3  # deepest corner of a release, as a fraction of the die's size
 MAX_RECORD_BYTES = 4 * 2**30  # records larger than this are refused before any work
 ROTATION_TOL = 1e-6  # State.orientation's allowed orthonormality error (a long run drifts)
-# The CPU kernel of each kind of run, its loop on numba's threads and its serial loop: a
-# single die, the paper's scene (dice_env.physics.vector_kernel.covers), several dice together.
+# Each kind of run's CPU kernel: its loop on numba's threads and its serial loop.
 BACKENDS: dict[str, tuple[Callable, Callable]] = {
     "die": (kernel.simulate_batch, kernel.simulate_serial),
     "paper": (vector_kernel.simulate_batch, vector_kernel.simulate_serial),
     "dice": (group_kernel.simulate_groups, group_kernel.simulate_groups_serial),
 }
-# Each CPU kernel loop: its name for a user and its cold compile time on two cores (s, about;
-# benchmarks/cold_start.py), said on stderr before it compiles (simulation.compile_notice).
+# Each CPU kernel loop's name and cold compile time on two cores (s; benchmarks/cold_start.py).
 COMPILES = {
     kernel.simulate_serial: ("the die's kernel", 8.0),
     kernel.simulate_batch: ("the die's kernel on threads", 11.0),
@@ -399,8 +384,8 @@ COMPILES = {
     group_kernel.simulate_groups_serial: ("the kernel of several dice", 20.0),
     group_kernel.simulate_groups: ("the kernel of several dice on threads", 27.0),
 }
-SERIAL_FIRST = 256  # throws: a batch up to this size runs serially while its parallel loop
-# is not compiled (on a cold cache, a first small batch does not wait for that compile)
+SERIAL_FIRST = 256  # throws: a batch up to this size runs serially until its parallel loop
+# is compiled (a first small batch does not wait for that compile)
 _LONG_RUN = 2_000_000  # die-steps (about 0.1 s) from which a run goes on a worker thread
 _after_fork = False  # set in a child forked after the parent's kernel started threads
 
@@ -459,9 +444,8 @@ def run_kernel(kind: str, inputs: tuple, outcome: tuple, *, batch: int, threads:
                work: int) -> None:
     """Run the CPU kernel of ``kind`` (:data:`BACKENDS`) on ``inputs`` into ``outcome``.
 
-    Serially for a batch of one, one thread, a batch of at most :data:`SERIAL_FIRST` while
-    the parallel loop is not compiled, or after a fork (:func:`_forked`). A compile is
-    announced (:data:`COMPILES`); ``work`` (die-steps) decides if Ctrl-C is watched for.
+    Serially for one die or thread, after a fork, or up to :data:`SERIAL_FIRST` dice while the
+    parallel loop is not compiled. ``work`` (die-steps) decides if Ctrl-C is watched for.
     """
     parallel, serial = BACKENDS[kind]
     args = (*inputs, outcome)
@@ -474,11 +458,7 @@ def run_kernel(kind: str, inputs: tuple, outcome: tuple, *, batch: int, threads:
 
 def _run_interruptibly(run: Callable, args: tuple, abort: np.ndarray, threads: int, *,
                        long: bool) -> None:
-    """Call the kernel ``run(*args)`` on ``threads`` threads, ending early on Ctrl-C.
-
-    A ``long`` run goes on a worker thread (the kernel releases the GIL) so that this one can
-    take the signal and set the kernel's ``abort`` flag; a short one is called directly.
-    """
+    """``run(*args)`` on ``threads`` threads; a ``long`` one on a worker, Ctrl-C sets ``abort``."""
     failure: list[BaseException] = []
 
     def call() -> None:
