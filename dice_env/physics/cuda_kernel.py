@@ -1,13 +1,8 @@
 """The one-die kernel on an NVIDIA GPU: one die per CUDA thread (numba-cuda).
 
-The physics is :func:`dice_env.physics.kernel.advance`, compiled again by numba-cuda as device
-functions, its scratch in each thread's local memory (up to :data:`GPU_MAX_VERTICES` vertices
-and :data:`MAX_PLANES` planes). Not bit for bit the CPU's: the GPU fuses multiplies and adds
-(FMA) and takes ``sin`` from libdevice, round-off that chaotic throws amplify
-(``tests/test_cuda_kernel.py`` bounds it on short runs). No records; a run cannot be
-interrupted; the kernel compiles at its first run in each process (no disk cache: see
-:func:`simulate_cuda`). Without a GPU, numba's simulator runs it (``NUMBA_ENABLE_CUDASIM=1``
-with ``NUMBA_DISABLE_JIT=1``).
+:func:`dice_env.physics.kernel.advance` as device functions, its scratch in local memory. Not
+bit for bit the CPU's (FMA, libdevice's ``sin``); no records, no interrupt, compiled at the first
+run in each process. Without a GPU: ``NUMBA_ENABLE_CUDASIM=1`` with ``NUMBA_DISABLE_JIT=1``.
 """
 
 from __future__ import annotations
@@ -53,10 +48,9 @@ def simulate_cuda(dice: Dice, body: Body, contact: Contact, options: Options, st
 
 def run(dice: Dice, body: Body, contact: Contact, options: Options, stops: Stops,
         records: Records, out: Outcome) -> None:
-    """Advance a batch of dice on the GPU, in place in the host arrays of ``dice`` and ``out``.
+    """:func:`dice_env.physics.kernel.simulate_batch` on the GPU, in the host arrays.
 
-    Arguments as :func:`dice_env.physics.kernel.simulate_batch`'s. ``ValueError`` for records, a die
-    of more than :data:`GPU_MAX_VERTICES` vertices, or more than :data:`MAX_PLANES` planes.
+    ``ValueError`` for records, more than :data:`GPU_MAX_VERTICES` vertices or :data:`MAX_PLANES`.
     """
     if records.x.shape[1] > 0:
         raise ValueError("record_every must be 0 with device='cuda': records are kept on the "

@@ -1,11 +1,8 @@
 """Several dice in one throw: die–die contact and the group's step (numba only).
 
-The model is ``docs/model.md``, "Several dice in one throw"; what keeps the pair test cheap,
-``docs/performance.md``, "Several dice". :func:`least_overlap` finds a touching pair's normal,
-:func:`pair_contacts` its contact points and their equal and opposite forces;
-:func:`advance_group` steps one throw, each die on the planes as the single die's
-(:func:`dice_env.physics.kernel.die_on_planes`). This module imports nothing from the package but
-:mod:`dice_env.physics.kernel`.
+The model is ``docs/model.md``'s, the speed ``docs/performance.md``'s ("Several dice").
+:func:`least_overlap` finds a touching pair's normal, :func:`pair_contacts` its contacts and
+forces; :func:`advance_group` steps one throw, each die on the planes as the single die's.
 """
 
 from __future__ import annotations
@@ -57,15 +54,11 @@ LATERAL = 1e-3
 
 
 class Bodies(NamedTuple):
-    """The N dice of a throw (the same for every throw), body frames about the centre of mass.
+    """The N dice of a throw: :class:`dice_env.physics.kernel.Body`'s fields per die, and more.
 
-    Arrays over the dice, padded to the largest die: ``vertices`` (N, V, 3) and ``n_vertices``;
-    ``faces`` (N, F, 3) outward unit normals in label order and ``n_faces``; ``mass``,
-    ``inv_inertia`` (N, 3, 3), ``inv_iso`` (``1/I`` for an isotropic die, else 0),
-    ``inv_i_min`` (the inverse of the smallest principal moment), ``r_max`` (the farthest
-    vertex), ``reads_down`` (the d4); ``lock`` (N, F): the energy below which a die alone
-    keeps the face it reads (``-inf``: no decision rule); ``floor`` (N,): a lower bound of
-    each die's energy (potential and spring energy on the floor at rest).
+    Padded to the largest die: ``vertices`` (N, V, 3) and ``n_vertices``, ``faces`` (N, F, 3)
+    and ``n_faces``; ``lock`` (N, F): the energy below which a die alone keeps the face it reads
+    (``-inf``: no rule); ``floor`` (N,): a lower bound of each die's energy.
     """
 
     vertices: np.ndarray
@@ -86,11 +79,9 @@ class Hulls(NamedTuple):
     """The N dice's shapes as die–die contact sees them, body frames, padded by repetition.
 
     ``axes`` (N, A, 3): one of each pair of opposite face normals; ``directions`` (N, C, 3): one
-    unit direction per class of parallel edges; ``edges`` (N, E, 2): vertex pairs, class by class;
-    ``classes`` (N, C + 1): where each class starts in ``edges`` (and the last ends); ``planes``
-    (N, F, 4): the faces' planes ``n . r = offset``, ``n_planes`` (N,) how many are the die's own;
-    ``n_vertices`` and ``r_max`` as :class:`Bodies`'. A smaller set repeats its first entry (a
-    padded class is empty), which changes no extent, overlap or inside test.
+    per class of parallel edges; ``edges`` (N, E, 2): class by class; ``classes`` (N, C + 1):
+    where each class starts in ``edges``; ``planes`` (N, F, 4): ``n . r = offset``, ``n_planes``
+    of them the die's own. Padding repeats the first entry: it changes no extent or test.
     """
 
     axes: np.ndarray
@@ -106,11 +97,9 @@ class Hulls(NamedTuple):
 class Pair(NamedTuple):
     """The die–die contact's law (``docs/model.md``, "Several dice in one throw").
 
-    ``stiffness`` S, ``damping`` D, ``friction`` mu; with ``stick``, a corner inside another die
-    feels stick-slip friction (spring ``kt``, damper ``ct``, ``dt_m`` the step over the pair's
-    reduced mass); edge contacts, and all without ``stick``, the regularised Coulomb friction at
-    ``vmin``, capped at ``grip |vt|`` (``grip``, N s/m: :data:`GRIP` of the pair's smallest
-    effective mass over the step, so that the explicit step cannot overshoot a sticking slip).
+    With ``stick``, a corner inside another die feels stick-slip friction (``kt``, ``ct``,
+    ``dt_m`` the step over the reduced mass); the rest, regularised Coulomb friction at ``vmin``
+    capped at ``grip |vt|`` (:data:`GRIP` of the reduced mass over the step).
     """
 
     stiffness: float
@@ -125,12 +114,10 @@ class Pair(NamedTuple):
 
 
 class GroupStops(NamedTuple):
-    """When a throw ends.
+    """When a throw ends: as :class:`dice_env.physics.kernel.Stops`, for every die.
 
-    After ``n_steps``; with ``at_rest`` when every die has been quiet for ``hold_steps``
-    (three contacts with the planes or one with another die, every corner slower than
-    ``v_rest``); with ``decide`` when no die's face can change. ``energy_scale`` is added to
-    the start's kinetic and potential energy to measure a gain in.
+    Quiet: three contacts with the planes or one with another die; ``decide``: when no die's
+    face can change.
     """
 
     n_steps: int
@@ -160,16 +147,10 @@ class GroupRecords(NamedTuple):
 
 
 class GroupOutcome(NamedTuple):
-    """What each throw gives, and the abort flag.
+    """What each throw gives, as :class:`dice_env.simulation.group.GroupResult`, and ``abort``.
 
-    Per throw (G,) ``status``, ``unstable``, ``rest_time``, ``energy_rise``, ``steps``, ``overlap``
-    (the deepest die–die overlap); per die (G, N) ``impacts``, ``max_pen`` (deepest sink into a
-    plane), ``contacts`` (vertices on the planes at the end), ``touching`` (touches another die at
-    the end), ``die_impacts`` (contacts begun with another die whose centre moves faster than the
-    rest speed relative to this one's); ``touched`` (G, N, P): a corner was ever in plane P. The
-    throw's first die–die contact: ``meet_dice`` (G, 2) the pair (-1: none), ``meet_steps`` (G, 2)
-    the steps done when it starts and ends (-1: not ended), ``meet`` (G, 2, N, 6) every die's
-    velocity and angular velocity then (before its first force, after its last). ``abort`` (1,).
+    Per die (G, N) besides: ``contacts`` (vertices on the planes at the end), ``touching``
+    (touches another die at the end); ``meet`` (G, 2, N, 6): ``meet_velocity`` and ``meet_spin``.
     """
 
     status: np.ndarray
@@ -192,11 +173,7 @@ class GroupOutcome(NamedTuple):
 
 @njit(cache=True, inline="always")
 def contact_force(depth: float, n: tuple, v: tuple, pair: Pair) -> tuple:
-    """Force on the die the normal ``n`` points into, at a contact ``depth`` deep.
-
-    ``v``: that die's velocity at the point relative to the other's. Returns the force (3)
-    and the spring's energy ``S d^2 / 2``.
-    """
+    """Force (3) on the die ``n`` points into, ``depth`` deep at relative velocity ``v``; energy."""
     n0, n1, n2 = n
     v0, v1, v2 = v
     vn = n0 * v0 + n1 * v1 + n2 * v2
@@ -263,9 +240,8 @@ def _push_tied(a: int, b: int, first: int, k: int, point: tuple, depth: float, n
                ties: np.ndarray, fresh: bool, force: np.ndarray, torque: np.ndarray) -> tuple:
     """:func:`_push` for corner ``k`` of die ``first`` (``a`` or ``b``) with stick-slip friction.
 
-    ``ties`` (N, V, N, 4): the point of the other die it is tied to, in that die's body frame
-    (0–2), and 1 while tied (3); ``fresh``: the pair did not touch at the last step. Returns the
-    normal and the tangential spring's energy.
+    ``ties`` (N, V, N, 4): the tie point on the other die (its body frame), and 1 while tied;
+    ``fresh``: the pair did not touch at the last step. Returns the two springs' energy.
     """
     other = b if first == a else a
     v, ra, rb = _relative_velocity(a, b, point, x, cu, cw)
@@ -338,10 +314,7 @@ def _axis_overlap(a: int, b: int, n: tuple, world: np.ndarray, x: np.ndarray) ->
 @njit(cache=True, inline="always")
 def _candidate_overlap(c: int, a: int, b: int, world: np.ndarray, x: np.ndarray,
                        q: np.ndarray, axes: np.ndarray, directions: np.ndarray) -> tuple:
-    """The overlap along candidate axis ``c``, numbered as :func:`least_overlap` visits them.
-
-    Returns it, the axis pointing from ``b`` toward ``a``, and False for parallel edges.
-    """
+    """Overlap along :func:`least_overlap`'s axis ``c``, the axis (``b`` to ``a``), if real."""
     n_a, n_c = axes.shape[1], directions.shape[1]
     if c < 2 * n_a:
         die, s = (a, c) if c < n_a else (b, c - n_a)
@@ -362,10 +335,9 @@ def least_overlap(a: int, b: int, world: np.ndarray, x: np.ndarray, q: np.ndarra
                   axes: np.ndarray, directions: np.ndarray, first: int) -> tuple:
     """The axis along which dice ``a`` and ``b`` overlap least (separating axes).
 
-    The candidates are :class:`Hulls`' face ``axes`` of both dice and the cross products of their
-    edge ``directions``; ``first`` (-1: none) is tried first. Returns ``(overlap, n, c)``:
-    ``overlap <= 0`` when axis ``c`` separates them (else ``c`` is -1), ``n`` the unit axis from
-    ``b`` toward ``a``. A face axis wins unless an edge axis is less by :data:`FACE_BIAS`.
+    Face ``axes`` of both, then crosses of edge ``directions``; ``first`` (-1: none) first.
+    Returns ``(overlap, n, c)``: ``c`` the separating axis if ``overlap <= 0`` (else -1), ``n``
+    from ``b`` toward ``a``. A face axis wins unless an edge axis is less by :data:`FACE_BIAS`.
     """
     if first >= 0:
         overlap, axis, real = _candidate_overlap(first, a, b, world, x, q, axes, directions)
@@ -429,9 +401,8 @@ def _crossings(a: int, b: int, first: int, other: int, n: tuple, high_b: float,
                gap2: float, force: np.ndarray, torque: np.ndarray) -> tuple:
     """Push every point where an edge of die ``first`` passes through a face of ``other``.
 
-    Points inside ``other`` and beyond its extent along ``n`` (``high_b`` of ``b``, ``low_a`` of
-    ``a``), unless within ``sqrt(gap2)`` across the axis of one of the ``n_seen`` in ``seen``.
-    Returns the springs' energy and the new count in ``seen``.
+    Unless within ``sqrt(gap2)`` across the axis of a point in ``seen``. Returns the springs'
+    energy and the new count in ``seen``.
     """
     n0, n1, n2 = n
     planes, edges = hulls.planes, hulls.edges
@@ -485,11 +456,8 @@ def pair_contacts(a: int, b: int, n: tuple, world: np.ndarray, x: np.ndarray, q:
                   fresh: bool, seen: np.ndarray, force: np.ndarray, torque: np.ndarray) -> tuple:
     """Every contact of the overlapping dice ``a`` and ``b``, their forces applied.
 
-    ``n``: the axis of least overlap (:func:`least_overlap`). The contacts are the corners of one
-    die inside the other and the points of :func:`_crossings` (``docs/model.md``); with
-    ``pair.stick`` the corners' friction is :func:`_push_tied`'s (``ties``, ``fresh`` as there).
-    ``seen`` (M, 3): room for the contact points across the axis. Returns the normal and the
-    tangential springs' energy, and whether a contact bears.
+    ``n``: :func:`least_overlap`'s axis. Corners inside the other die (:func:`_push_tied` with
+    ``pair.stick``), then :func:`_crossings`. Returns the two springs' energy, whether one bears.
     """
     n_vertices = hulls.n_vertices
     n0, n1, n2 = n
@@ -554,7 +522,7 @@ def advance_group(g: int, dice: GroupDice, bodies: Bodies, hulls: Hulls, pair: P
     die_ties = np.zeros((n_dice, n_v, n_dice, 4) if pair.stick else (0, 0, 0, 4))
     seen = np.empty((2 * n_v + 2 * hulls.edges.shape[1] * hulls.planes.shape[1], 3))
     force, torque = np.empty((n_dice, 3)), np.empty((n_dice, 3))
-    kinetic, own = np.empty(n_dice), np.empty(n_dice)
+    kinetic = np.empty(n_dice)
     qa, inv_a = np.empty((3, 3)), np.empty((3, 3))
     touched, max_pen = out.touched, out.max_pen
     touching = np.zeros(n_dice, np.int64)
@@ -616,7 +584,6 @@ def advance_group(g: int, dice: GroupDice, bodies: Bodies, hulls: Hulls, pair: P
             placed[a] = False
             force[a, 0], force[a, 1], force[a, 2] = f0, f1, f2
             torque[a, 0], torque[a, 1], torque[a, 2] = t0, t1, t2
-            own[a] = kinetic[a] + m * g_acc * x2 + spring + spring_t
             checked += kinetic[a] + m * g_acc * x2 + spring
             tangential += spring_t
         # die against die
@@ -763,9 +730,7 @@ def _group_jump(planes: np.ndarray, lowest: np.ndarray, touching: np.ndarray, x:
                 rotation: bool, dt: float, limit: int) -> int:
     """Flight steps the whole group takes at once (at least 1), each die's as :func:`flight_jump`.
 
-    Called when every pair's bounding spheres are apart: both dice of a pair feel gravity alone, so
-    their distance shrinks by at most ``dt |u_a - u_b|`` a step. One die alone jumps as
-    :func:`dice_env.physics.kernel.simulate_one` does.
+    With every pair apart, under gravity alone a pair's distance shrinks by ``dt |u_a - u_b|``.
     """
     n_dice = x.shape[0]
     jump = limit
@@ -837,11 +802,7 @@ def _put(target: np.ndarray, values: np.ndarray) -> None:
 def simulate_groups(dice: GroupDice, bodies: Bodies, hulls: Hulls, pair: Pair,
                     contact: Contact, options: Options, stops: GroupStops,
                     records: GroupRecords, out: GroupOutcome) -> None:
-    """Advance G throws of N dice in place, in parallel over throws.
-
-    Throws are independent: the results do not depend on the batch or the threads. The kernel
-    releases the GIL, so another thread can set ``out.abort``.
-    """
+    """Advance G throws of N dice in place, in parallel over throws (the GIL released)."""
     for g in prange(dice.x.shape[0]):  # prange's index is unsigned: one signature for both
         advance_group(np.int64(g), dice, bodies, hulls, pair, contact, options, stops, records,
                       out)

@@ -1,12 +1,9 @@
 """The compiled single-die integrator: the paper's step, written once, run over a batch of dice.
 
-The step, the contact laws and the default scene's stick-slip friction and midpoint forces are
-``docs/model.md``'s; the contact-free jump, what a scene skips, determinism and why the hot loop
-hands its pieces numbers rather than arrays, ``docs/performance.md``'s. :func:`advance` steps
-one die in scratch arrays its caller gives: :func:`simulate_one` on the CPU,
-:mod:`dice_env.physics.cuda_kernel` on a GPU. The groups (:class:`Body`, :class:`Contact`, ...)
-are built by :func:`dice_env.simulation.simulate.pack_scene` and
-:func:`dice_env.simulation.simulate.pack_run`. This module imports nothing else from the package.
+The physics is ``docs/model.md``'s, the speed ``docs/performance.md``'s. :func:`advance` steps
+one die in its caller's scratch arrays (:func:`simulate_one` on the CPU,
+:mod:`dice_env.physics.cuda_kernel` on a GPU). The groups are built by
+:func:`dice_env.simulation.simulate.pack_scene` and ``pack_run``.
 """
 
 from __future__ import annotations
@@ -27,10 +24,9 @@ UP = (0.0, 0.0, 1.0)  # faces are read against gravity
 class Body(NamedTuple):
     """The die, body frame about its centre of mass.
 
-    ``vertices`` (N, 3): the contact nodes; ``inv_inertia`` (3, 3): the inverse body inertia;
-    ``inv_iso``: ``1/I`` when the inertia is ``I`` times the identity, else 0; ``inv_i_min``: the
+    ``vertices`` (N, 3); ``inv_iso``: ``1/I`` for an isotropic die, else 0; ``inv_i_min``: the
     inverse of the smallest principal moment; ``r_max``: the farthest vertex's distance; ``faces``
-    (F, 3): outward unit normals, in ``Stops.lock``'s order; ``reads_down``: read by the face down.
+    (F, 3): outward unit normals, in ``Stops.lock``'s order.
     """
 
     vertices: np.ndarray
@@ -52,10 +48,8 @@ GATED, PAPER = 0, 1
 class Contact(NamedTuple):
     """The planes the die stays on, ``n . X >= offset``, and the contact laws.
 
-    ``planes`` (P, 9): per plane the columns ``NX`` ... ``CT`` (unit normal into the free side,
-    offset, S, D, mu, stick-slip spring ``kt`` and damper ``ct``); plane 0 is the floor (the energy
-    scale's start height). ``law``: ``GATED`` or ``PAPER``; ``stick``: stick-slip friction, else the
-    listing's ``-mu fn Ut/(|Ut| + vmin)``.
+    ``planes`` (P, 9): the columns ``NX`` ... ``CT`` per plane, plane 0 the floor; ``law``:
+    ``GATED`` or ``PAPER``; ``stick``: stick-slip friction, else ``-mu fn Ut/(|Ut| + vmin)``.
     """
 
     planes: np.ndarray
@@ -75,12 +69,11 @@ class Options(NamedTuple):
 
 
 class Stops(NamedTuple):
-    """When a die ends.
+    """When a die ends: after ``n_steps``; with ``at_rest``, quiet for ``hold_steps``.
 
-    After ``n_steps``; with ``at_rest``, after ``hold_steps`` quiet steps (three contacts, every
-    vertex slower than ``v_rest``) or at a quiet step whose total energy is below ``rest_energy +
-    rest_excess``; whatever ``at_rest``, when its total energy falls below ``lock`` (F,) of the face
-    it reads (``-inf``: never). ``energy_scale``: added to the start's energy to measure a gain in.
+    Quiet: three contacts, every vertex slower than ``v_rest``; a quiet step below ``rest_energy +
+    rest_excess`` ends it too; so does an energy below ``lock`` (F,) of the face read (``-inf``:
+    never). ``energy_scale``: added to the start's energy to measure a gain in.
     """
 
     n_steps: int
@@ -94,11 +87,7 @@ class Stops(NamedTuple):
 
 
 class Records(NamedTuple):
-    """What is recorded every ``stride`` steps.
-
-    ``x`` (B, n, 3) centre of mass, ``energy`` (B, n or 0) the listing's energy,
-    ``orientation`` (B, n or 0, 3, 3), ``nodes`` (B, n or 0, N, 3).
-    """
+    """Every ``stride`` steps: ``x`` (B, n, 3), ``energy``, ``orientation``, ``nodes`` (or none)."""
 
     stride: int
     x: np.ndarray
@@ -108,11 +97,7 @@ class Records(NamedTuple):
 
 
 class Dice(NamedTuple):
-    """The state of B dice, updated in place.
-
-    ``x`` (B, 3) centre of mass, ``u`` (B, 3) its velocity, ``ang`` (B, 3) angular momentum about
-    it, ``q`` (B, 3, 3) body-to-world rotation, ``w`` (B, 3) the angular velocity of the vertices.
-    """
+    """B dice in place: the five arrays of :class:`dice_env.simulation.simulate.State`, in order."""
 
     x: np.ndarray
     u: np.ndarray
@@ -122,12 +107,10 @@ class Dice(NamedTuple):
 
 
 class Outcome(NamedTuple):
-    """What each die's run gives (arrays (B,)), and the abort flag.
+    """What each die's run gives (arrays (B,), as :class:`dice_env.Result`'s), and the abort flag.
 
-    ``status``, ``unstable`` (a non-finite state), ``rest_time``, ``impacts``, ``max_pen`` the
-    deepest sink, ``energy_rise`` the largest gain over the energy scale, ``steps``; ``abort`` (1,):
-    set non-zero from another thread, every running die ends ``ABORTED`` within ``ABORT_EVERY``
-    loop passes.
+    ``abort`` (1,): set non-zero from another thread, every running die ends ``ABORTED`` within
+    ``ABORT_EVERY`` loop passes.
     """
 
     status: np.ndarray
@@ -143,10 +126,9 @@ class Outcome(NamedTuple):
 class PlaneContacts(NamedTuple):
     """The vertices against the planes, kept from step to step (:func:`die_on_planes`).
 
-    Larger arrays are fine; their contents on entry do not matter. Per vertex row (V: a group's dice
-    one after another) and plane (P): ``offsets`` (V, 3) from the die's centre, ``heights`` (P, V)
-    entering the last step, ``anchors`` (P, V, 3) and ``tied`` (P, V) the stick-slip ties;
-    ``lowest`` (D, P) each die's lowest vertex height over each plane.
+    Per vertex row (V: a group's dice one after another) and plane (P): ``offsets`` (V, 3) from
+    the die's centre, ``heights`` (P, V) entering the last step, ``anchors`` (P, V, 3) and
+    ``tied`` (P, V) the stick-slip ties; ``lowest`` (D, P) each die's lowest height on each plane.
     """
 
     offsets: np.ndarray
@@ -233,11 +215,9 @@ def body_frame(q: tuple, v0: float, v1: float, v2: float) -> tuple[float, float,
 
 @njit(cache=True, forceinline=True, _nrt=False)
 def face_up(faces: np.ndarray | tuple, reads_down: bool, up: tuple) -> int:
-    """Index of the face read, given ``up`` in the body frame.
+    """Index of the face most along ``up`` (body frame; against it if ``reads_down``).
 
-    ``faces``: F outward normals, an (F, 3) array or a tuple of F triples (a tuple keeps
-    :mod:`dice_env.physics.vector_kernel` vectorised). The face most along ``up``, or against it
-    when ``reads_down``; the first of equals.
+    ``faces``: F outward normals, (F, 3) or a tuple of triples; the first of equals.
     """
     sign = -1.0 if reads_down else 1.0
     best, index = -np.inf, 0
@@ -263,9 +243,8 @@ def free_steps(lowest: float, un: float, spin: float, r_max: float, dvn: float, 
                limit: int) -> int:
     """Number of steps from now (1 to ``limit``) surely free of contact with one plane.
 
-    ``lowest >= 0``: the lowest vertex's height above the plane entering this step; ``un`` the
-    centre's normal velocity, ``dvn`` its change per step, ``spin r_max`` a bound on a vertex's
-    speed about the centre (``docs/performance.md``, "Analytic free flight").
+    ``lowest``: the lowest vertex's height; ``un``, ``dvn``: the centre's normal velocity and its
+    change per step (``docs/performance.md``, "Analytic free flight").
     """
     b = dt * (un - spin * r_max)
     a = -0.5 * dt * dvn  # >= 0 when gravity pulls toward the plane
@@ -301,11 +280,9 @@ def vertex_on_plane(plane: tuple, stick: bool, vmin: float, height: float, befor
                     dt_m: float, anchor: tuple, tied: bool) -> tuple:
     """The force of a plane on one vertex, and the step's books.
 
-    ``plane``: its row of ``Contact.planes`` as numbers; ``height`` above it now and ``before``
-    (entering the last step); ``velocity`` entering the step and ``middle`` at the middle of the
-    kick (for damping and friction when ``midpoint``); ``anchor``, ``tied``: the stick-slip tie.
-    Returns the force (3), the normal and the tangential spring's energy, whether the vertex is
-    below the plane, its sink, its approach speed, and the tie point (3) and tie after the step.
+    ``before``: the height entering the last step; ``middle``: the velocity mid-kick (with
+    ``midpoint``). Returns the force (3), the normal and tangential springs' energy, whether below
+    the plane, the sink, the approach speed, and the tie point (3) and tie after the step.
     """
     n0, n1, n2, _, stiff, damp, mu, _, _ = plane
     uk0, uk1, uk2 = velocity
@@ -348,11 +325,7 @@ def vertex_on_plane(plane: tuple, stick: bool, vmin: float, height: float, befor
 @njit(cache=True, inline="always")
 def stick_slip(plane: tuple, height: float, before: float, position: tuple, ut: tuple,
                 cap: float, dt: float, dt_m: float, anchor: tuple, tied: bool) -> tuple:
-    """Stick-slip friction (``docs/model.md``, "Friction and the step of the default scene").
-
-    Returns the tangential force (3), its spring's energy and the tie point (3) after the step
-    (tied now, where it crossed the plane during the last step if it was not).
-    """
+    """Stick-slip friction (``docs/model.md``): tangential force (3), energy, tie point after."""
     n0, n1, n2, _, _, _, _, kt, ct = plane
     p0, p1, p2 = position
     ut0, ut1, ut2 = ut
@@ -387,14 +360,11 @@ def die_on_planes(die: int, first: int, count: int, vertices: np.ndarray, planes
                   near_rest: bool) -> tuple:
     """One die's step on the planes: their forces and torques on it, and the step's books.
 
-    The die's ``count`` vertices are the rows from ``first`` on of ``vertices`` (body frame) and of
-    ``contacts``' per-vertex arrays; its lowest heights go to row ``die`` of ``contacts.lowest``.
-    ``law``: ``(contact law, stick, vmin, midpoint, rotation, dt, dt_m, weight)``; ``q``: its
-    rotation, nine numbers row by row; ``motion``: ``(x, u, w, cu, cw)``, its centre, velocity and
-    angular velocity, and the last two at the midpoint forces' time. Returns the force (3, with
-    ``-weight``), the torque (3), the normal and the tangential springs' energy, how many vertices
-    are below a plane, their fastest approach, the largest squared vertex speed (``near_rest``
-    only, else 0) and the deepest sink. Compiled without reference counts (``_nrt=False``).
+    The die's vertices: rows ``first`` to ``first + count`` of ``vertices`` and ``contacts``;
+    ``q``: nine numbers row by row; ``motion``: ``(x, u, w, cu, cw)``, ``cu``, ``cw`` at the
+    midpoint forces' time. Returns the force (3, weight included), the torque (3), the normal and
+    tangential springs' energy, the vertices below a plane, their fastest approach, the largest
+    squared vertex speed (``near_rest`` only) and the deepest sink.
     """
     contact_law, stick, vmin, midpoint, rotation, dt, dt_m, weight = law
     q00, q01, q02, q10, q11, q12, q20, q21, q22 = q
@@ -472,10 +442,7 @@ def next_pass(passes: int, abort: np.ndarray) -> tuple[int, int]:
 
 @njit(cache=True, forceinline=True, _nrt=False)
 def rest_test(quiet_now: bool, quiet: int, hold_steps: int, proven: bool) -> tuple[int, int]:
-    """The quiet steps in a row after this one, and ``SETTLED`` or ``RUNNING``.
-
-    Settled: quiet for more than ``hold_steps`` steps, or quiet now and ``proven`` to stay at rest.
-    """
+    """Quiet steps in a row, and ``SETTLED`` (beyond ``hold_steps``, or ``proven``) or not."""
     if not quiet_now:
         return 0, RUNNING
     quiet += 1
@@ -484,11 +451,7 @@ def rest_test(quiet_now: bool, quiet: int, hold_steps: int, proven: bool) -> tup
 
 @njit(cache=True, forceinline=True, _nrt=False)
 def stopped_at(end: int, step: int, quiet: int) -> tuple[int, int]:
-    """The steps a loop kept and the step its rest began, by how it ended.
-
-    A stop (decided, settled, non-finite) is found within a step that is not kept; a settled
-    die's rest began ``quiet`` steps before; otherwise the rest time is the run's end.
-    """
+    """The steps a loop kept (not the one a stop was found in) and the step its rest began."""
     if end == DECIDED or end == SETTLED or end == NONFINITE:
         return step - 1, step - quiet if end == SETTLED else step - 1
     return step, step
@@ -525,15 +488,11 @@ def simulate_one(i: int, dice: Dice, body: Body, contact: Contact, options: Opti
 @njit(cache=True)
 def advance(i: int, dice: Dice, body: Body, contact: Contact, options: Options, stops: Stops,
             records: Records, out: Outcome, scratch: Scratch) -> None:
-    """:func:`simulate_one` in the :class:`Scratch` arrays given by the caller, for any target.
-
-    Nothing here allocates or calls an array method, so the same source compiles as a CUDA
-    device function (:mod:`dice_env.physics.cuda_kernel`).
-    """
+    """:func:`simulate_one` in the caller's :class:`Scratch`; allocation-free, so CUDA too."""
     qi, qj, contacts = scratch
     heights, anchors, tied, lowest = contacts.heights, contacts.anchors, contacts.tied, \
         contacts.lowest
-    # the groups' arrays taken out once: each taking costs a reference count
+    # taken out once: each taking costs a reference count
     vertices, planes, faces, lock = body.vertices, contact.planes, body.faces, stops.lock
     abort = out.abort
     inv_body, inv_iso, reads_down = body.inv_inertia, body.inv_iso, body.reads_down
@@ -685,12 +644,10 @@ def euler_steps(x: tuple, u: tuple, dv: tuple, dt: float, n: int) -> tuple:
 def die_move(x: tuple, u: tuple, ang: tuple, w: tuple, dv: tuple, torque: tuple,
              q: np.ndarray, inv_body: np.ndarray, inv_iso: float, dt: float, n: int,
              rotation: bool) -> tuple:
-    """One die moved ``n`` steps by the kick ``dv`` and the ``torque``.
+    """One die moved ``n`` steps by the kick ``dv`` and the ``torque``, ``q`` in place.
 
-    ``u`` then ``x`` (:func:`euler_steps`), ``L``, then the rotation of ``q`` in place
-    (:func:`torque_free`; ``rotation`` off keeps ``L`` and ``w``). Returns whether the moved state
-    is finite, then its ``x``, ``u``, ``L`` and ``w``; a non-finite state is not moved (nor ``q``).
-    Compiled without reference counts, as :func:`die_on_planes`.
+    Returns whether the moved state is finite, then its ``x``, ``u``, ``L`` and ``w``; a
+    non-finite state is not moved (nor ``q``).
     """
     nx, (nu0, nu1, nu2) = euler_steps(x, u, dv, dt, n)
     nl0, nl1, nl2 = ang
@@ -775,11 +732,7 @@ def _record(records: Records, j: int, i: int, x: tuple, u: tuple, ang: tuple, q:
 @njit(cache=True, parallel=True, nogil=True)
 def simulate_batch(dice: Dice, body: Body, contact: Contact, options: Options, stops: Stops,
                    records: Records, out: Outcome) -> None:
-    """Advance a batch of dice in place, in parallel over dice.
-
-    The results do not depend on the batch or the threads. It releases the GIL, so another thread
-    can set ``out.abort``.
-    """
+    """Advance a batch of dice in place, in parallel over dice (the GIL released)."""
     for i in prange(dice.x.shape[0]):  # prange's index is unsigned: one signature for both
         simulate_one(np.int64(i), dice, body, contact, options, stops, records, out)
 

@@ -1,11 +1,8 @@
 """The listing's own scene, stepped across dice at once (SIMD): the paper scene at full speed.
 
-Under the paper's law every corner does the same work at every step, so one pass over a tile of
-``TILE`` dice steps them all, branch-free, and LLVM vectorises it. The arithmetic is
-:func:`dice_env.physics.kernel.simulate_one`'s in the same order (no fast-math), so the results
-are bit-identical to it (``tests/test_vector_kernel.py``); a die that ends keeps its state and
-its lane idles. It serves the runs :func:`covers` accepts; ``docs/performance.md``, "The paper
-scene, vectorised across dice", says more.
+One branch-free pass over a tile of ``TILE`` dice steps them all; the arithmetic is
+:func:`dice_env.physics.kernel.simulate_one`'s in the same order, so the results are
+bit-identical. It serves the runs :func:`covers` accepts (``docs/performance.md``).
 """
 
 from __future__ import annotations
@@ -71,11 +68,8 @@ def disabled() -> Iterator[None]:
 def covers(scene: object, batch: int, flight: bool, records: bool) -> bool:
     """Whether a run of ``batch`` dice in ``scene`` takes this kernel (else the scalar one).
 
-    The paper's contact law and friction with the listing's step, an isotropic die with eight
-    corners and six faces that rotates, one plane, no free-flight jumps and no records; and at
-    least a tile of dice (a tile costs the same for fewer); not inside :func:`disabled`.
-    (``scene`` is a :class:`dice_env.model.scene.Scene`, read by its fields' names: the kernels
-    import nothing above them.)
+    The paper's law, friction and step, an isotropic rotating hexahedron, no free-flight jumps
+    or records, a tile of dice at least; not inside :func:`disabled`.
     """
     return (_enabled and scene.ground.contact_law.name == "PAPER"
             and scene.friction_law.name == "REGULARIZED" and scene.scheme.name == "PAPER"
@@ -84,11 +78,7 @@ def covers(scene: object, batch: int, flight: bool, records: bool) -> bool:
 
 
 def stop_tests(stops: Stops) -> bool | None:
-    """The kernel's ``tests`` argument for a run with ``stops``: True, or None to the time limit.
-
-    Its type, not its value, matters: numba compiles the loop for None without the rest and
-    decided-face tests.
-    """
+    """The kernel's ``tests``: True, or None (a loop compiled without stop tests) to the limit."""
     return True if stops.at_rest or stops.lock.max() > -np.inf else None
 
 
@@ -109,11 +99,7 @@ def _pick(values: tuple, index: int) -> float:
 
 @njit(cache=True, inline="always")
 def _corner(q, x, w, u, b0, b1, b2, ground):
-    """One corner's force and torque under the paper's law, without branches.
-
-    Returns whether it pushes, the force and torque it adds (zero unless it pushes), its spring
-    energy, whether it is below the plane, its approach speed, its sink and its squared speed.
-    """
+    """One corner's force and torque under the paper's law, without branches (its books too)."""
     q00, q01, q02, q10, q11, q12, q20, q21, q22 = q
     x0, x1, x2 = x
     w0, w1, w2 = w
@@ -174,11 +160,7 @@ def _add(acc, corner):
 @njit(cache=True, error_model="numpy")
 def _tile_step(t: np.ndarray, body: Body, contact: Contact, options: Options, stops: Stops,
                tests: bool | None) -> None:
-    """One step of every die of the tile ``t`` (rows of ``TILE`` lanes), in place.
-
-    ``tests``: :func:`stop_tests`'s. Leaves in row ``TURN`` the squared turn of each die that the
-    series could not take (else 0).
-    """
+    """One step of every die of the tile ``t``; row ``TURN``: a turn too large for the series."""
     planes = contact.planes
     normal = (planes[0, NX], planes[0, NY], planes[0, NZ])
     stiff, damp, mu = planes[0, STIFF], planes[0, DAMP], planes[0, MU]
@@ -375,10 +357,7 @@ def _run_tile(first: int, last: int, dice: Dice, body: Body, contact: Contact, o
 @njit(cache=True, parallel=True, nogil=True)
 def simulate_batch(dice: Dice, body: Body, contact: Contact, options: Options, stops: Stops,
                    tests: bool | None, out: Outcome) -> None:
-    """:func:`dice_env.physics.kernel.simulate_batch` for a scene :func:`covers`, tiles in parallel.
-
-    Its arguments, with :func:`stop_tests` instead of the records.
-    """
+    """:func:`dice_env.physics.kernel.simulate_batch` for :func:`covers`, :func:`stop_tests`'s."""
     n = dice.x.shape[0]
     for tile in prange((n + TILE - 1) // TILE):
         _run_tile(tile * TILE, min(n, (tile + 1) * TILE), dice, body, contact, options, stops,
