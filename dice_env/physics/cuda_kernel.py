@@ -60,10 +60,8 @@ def run(dice: Dice, body: Body, contact: Contact, options: Options, stops: Stops
         raise ValueError(f"scene must have a die of at most {GPU_MAX_VERTICES} vertices and at "
                          f"most {MAX_PLANES} planes with device='cuda', got {n_vertices} vertices "
                          f"and {n_planes} planes")
-    on_device = [_to_device(group) for group in (dice, body, contact, options, stops, records,
-                                                  out)]
-    batch = dice.x.shape[0]
-    simulate_cuda[math.ceil(batch / BLOCK), BLOCK](*on_device)
+    on_device = [_to_device(group) for group in (dice, body, contact, options, stops, records, out)]
+    simulate_cuda[math.ceil(dice.x.shape[0] / BLOCK), BLOCK](*on_device)
     for host, device in ((dice, on_device[0]), (out, on_device[-1])):
         for host_array, device_array in zip(host, device, strict=True):
             if isinstance(host_array, np.ndarray):

@@ -38,10 +38,8 @@ def table_scene(*, edge: float = DIE_EDGE, mass: float = DIE_MASS,
 def measured_restitution(scene: Scene, speed: float = 1.0) -> float:
     """Restitution the simulator produces for a flat, spin-free landing at ``speed`` (m/s).
 
-    The die lands on the face where it rests lowest (:attr:`Die.resting_heights`), from up to
-    1 mm above a horizontal plane (a contact onset exactly on a step would add an error of its
-    own); the result is the upward speed when it crosses its resting height again (gravity
-    undone) over ``speed``.
+    The die falls from up to 1 mm onto its lowest resting face on a horizontal plane; the result
+    is its upward speed back at its resting height (gravity undone) over ``speed``.
     """
     check_positive("speed", speed)
     if scene.ground.normal != (0.0, 0.0, 1.0):

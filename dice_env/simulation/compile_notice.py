@@ -11,17 +11,14 @@ import pickle
 import sys
 
 QUIET = "DICE_ENV_QUIET_COMPILE"
-# Per (kernel, its arguments' classes): numba's types of the arguments (a quarter of a
-# millisecond to work out, so once per variant)
+# numba's types of the arguments per (kernel, their classes): 0.25 ms to work out
 _types: dict[tuple[object, tuple[type, ...]], tuple] = {}
 
 
 def announce(dispatcher: object, args: tuple, what: str, seconds: float) -> None:
-    """Say on stderr that the kernel ``what`` compiles, unless ``dispatcher`` runs ``args`` now.
+    """Say on stderr that the kernel ``what`` compiles (about ``seconds``), unless :func:`ready`.
 
-    ``dispatcher``: the kernel's ``@njit(cache=True)`` loop; ``seconds``: its cold compile time
-    on two cores (``benchmarks/cold_start.py``). Quiet when :func:`ready`, or when
-    :data:`QUIET` is set to anything but ``""`` or ``"0"``.
+    Quiet too when :data:`QUIET` is set to anything but ``""`` or ``"0"``.
     """
     if os.environ.get(QUIET, "") not in ("", "0") or ready(dispatcher, args):
         return

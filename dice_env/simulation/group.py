@@ -54,10 +54,9 @@ TOUCH = 1e-3  # dice released closer than this fraction of the smaller's size to
 class DieContact:
     """The die–die material: stiffness, damping and friction of a contact.
 
-    ``stiffness`` S (N/m per contact), ``damping`` D (N s/m; default: the restitution
-    :data:`DIE_RESTITUTION` for the default die), ``friction`` mu, its ``friction_law``
-    (:class:`dice_env.model.scene.FrictionLaw`, ``docs/model.md``) and ``tangential``, the
-    stick-slip spring and damper as a fraction of S and D.
+    ``stiffness`` (N/m per contact), ``damping`` (N s/m; default: :data:`DIE_RESTITUTION` for the
+    default die), ``friction_law`` (:class:`dice_env.model.scene.FrictionLaw`), ``tangential``:
+    the stick-slip spring and damper as a fraction of them.
     """
 
     stiffness: float = STIFFNESS
@@ -145,11 +144,7 @@ def pair_mass(scene: Scene, dice: Sequence[Die]) -> float:
 
 
 def group_step(scene: Scene, dice: Sequence[Die], contact: DieContact = DieContact()) -> float:
-    """The step of a throw of ``dice``: :meth:`Scene.step_within` the least critical step.
-
-    Of every die on every plane and every pair (on :func:`pair_mass`); a pair's step that
-    underflows to 0 is refused.
-    """
+    """The throw's step: :meth:`Scene.step_within` the least critical step, pairs' included."""
     critical = min(scene.with_(die=die).critical_dt for die in _dice(dice))
     if len(dice) > 1:
         reduced = pair_mass(scene, dice)
@@ -169,10 +164,9 @@ def simulate_group(scene: Scene, dice: Sequence[Die], state: GroupState, *,
                    orientations: bool = False, num_threads: int | None = None) -> GroupResult:
     """Run B throws of the N ``dice`` together; ``state`` is not modified.
 
-    Keywords as :func:`dice_env.simulate`; ``until`` in :data:`GROUP_UNTIL` (``"decided"``:
-    when no energy left can change any die's face); ``record_every`` > 0 records the centres
-    (and the ``orientations``). Refused besides: dice that overlap at the start, more than
-    :data:`MAX_DICE` dice, a die-die step that underflows (:func:`group_step`), with
+    Keywords as :func:`dice_env.simulate`; ``until`` in :data:`GROUP_UNTIL`; ``record_every``
+    > 0 records the centres (and the ``orientations``). Refused besides: dice that overlap at
+    the start, more than :data:`MAX_DICE` dice, a die-die step that underflows, with
     ``until="decided"`` a gravity whose energies overflow.
     """
     dice = _dice(dice)

@@ -50,10 +50,7 @@ def real_throw_cube(L0: np.ndarray | None = None, *, seed: int | None = None, D:
 
 def ground_cube(*, D: float = 0.2, mu: float = 0.075, clockmax: int = 10000,
                 **listing: object) -> PaperRun:
-    """Run ``ground_cube.m``: the same cube translating only (no rotation).
-
-    ``listing``: as :func:`real_throw_cube`'s.
-    """
+    """Run ``ground_cube.m``: the cube translating; ``listing`` as :func:`real_throw_cube`'s."""
     return _run(np.zeros(3), False, D=D, mu=mu, clockmax=clockmax, **listing)
 
 
@@ -61,11 +58,7 @@ def paper_scene(*, r: float = 1.0, total_mass: float = 1.0,
                 normal: tuple[float, float, float] = (0, 0, 1), S: float = 1e4, D: float = 0.1,
                 mu: float = 0.1, dt: float | None = 1e-4, g: float = 9.8,
                 umin: float | None = None, rotation: bool = True) -> Scene:
-    """The paper's scene (real throw defaults: its listing's values, 10 s) as a :class:`Scene`.
-
-    Change the rest with :meth:`Scene.with_` (a step above the critical one together with
-    ``allow_unstable=True``).
-    """
+    """The paper's scene (real throw defaults: its listing's values, 10 s) as a :class:`Scene`."""
     return Scene(die=Die.paper(r, total_mass),
                  ground=Ground(stiffness=S, damping=D, friction=mu, normal=normal,
                                contact_law=ContactLaw.PAPER),
