@@ -224,9 +224,8 @@ def _apply(a: int, b: int, f: tuple, ra: tuple, rb: tuple, force: np.ndarray,
 
 
 @njit(cache=True, inline="always")
-def _push(a: int, b: int, point: tuple, depth: float, n: tuple, x: np.ndarray,
-          cu: np.ndarray, cw: np.ndarray, pair: Pair, force: np.ndarray,
-          torque: np.ndarray) -> float:
+def _push(a: int, b: int, point: tuple, depth: float, n: tuple, x: np.ndarray, cu: np.ndarray,
+          cw: np.ndarray, pair: Pair, force: np.ndarray, torque: np.ndarray) -> float:
     """A contact pushing die ``a`` along ``n``, ``b`` against it; returns the spring's energy."""
     v, ra, rb = _relative_velocity(a, b, point, x, cu, cw)
     f0, f1, f2, spring = contact_force(depth, n, v, pair)
@@ -757,8 +756,7 @@ def _group_jump(planes: np.ndarray, lowest: np.ndarray, touching: np.ndarray, x:
 
 
 @njit(cache=True)
-def _decided(bodies: Bodies, q: np.ndarray, energy: float, floor_total: float,
-             up: tuple) -> bool:
+def _decided(bodies: Bodies, q: np.ndarray, energy: float, floor_total: float, up: tuple) -> bool:
     """Whether no die can reach its lock: ``energy`` less the other dice's floors is below it."""
     for a in range(q.shape[0]):
         most = energy - (floor_total - bodies.floor[a])
@@ -773,8 +771,7 @@ def _decided(bodies: Bodies, q: np.ndarray, energy: float, floor_total: float,
 
 
 @njit(cache=True)
-def _meeting(out: GroupOutcome, g: int, end: int, done: int, u: np.ndarray,
-             w: np.ndarray) -> None:
+def _meeting(out: GroupOutcome, g: int, end: int, done: int, u: np.ndarray, w: np.ndarray) -> None:
     """Store the first die–die contact's start (``end`` 0) or end (1), after ``done`` steps."""
     out.meet_steps[g, end] = done
     for a in range(u.shape[0]):

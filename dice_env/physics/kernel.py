@@ -641,9 +641,8 @@ def euler_steps(x: tuple, u: tuple, dv: tuple, dt: float, n: int) -> tuple:
 
 
 @njit(cache=True, forceinline=True, _nrt=False)
-def die_move(x: tuple, u: tuple, ang: tuple, w: tuple, dv: tuple, torque: tuple,
-             q: np.ndarray, inv_body: np.ndarray, inv_iso: float, dt: float, n: int,
-             rotation: bool) -> tuple:
+def die_move(x: tuple, u: tuple, ang: tuple, w: tuple, dv: tuple, torque: tuple, q: np.ndarray,
+             inv_body: np.ndarray, inv_iso: float, dt: float, n: int, rotation: bool) -> tuple:
     """One die moved ``n`` steps by the kick ``dv`` and the ``torque``, ``q`` in place.
 
     Returns whether the moved state is finite, then its ``x``, ``u``, ``L`` and ``w``; a
@@ -680,9 +679,8 @@ def flight_jump(planes: np.ndarray, lowest: np.ndarray, die: int, u: tuple, spin
 
 
 @njit(cache=True)
-def _record_jump(records: Records, i: int, step: int, jump: int, x: tuple, u: tuple,
-                 ang: tuple, dv: tuple, qi: np.ndarray, qj: np.ndarray, body: Body,
-                 options: Options) -> None:
+def _record_jump(records: Records, i: int, step: int, jump: int, x: tuple, u: tuple, ang: tuple,
+                 dv: tuple, qi: np.ndarray, qj: np.ndarray, body: Body, options: Options) -> None:
     """Record the states inside a jump of ``jump`` flight steps from ``step`` (its closed form)."""
     stride, n_rec, dt = records.stride, records.x.shape[1], options.dt
     l0, l1, l2 = ang

@@ -36,10 +36,7 @@ def to_data(value: Any) -> Any:
 
 
 def from_data(data: Any) -> Any:
-    """The object that :func:`to_data` wrote as ``data``; lists come back as tuples.
-
-    Raises ``ValueError`` for an unknown type or fields, and what the type's checks raise.
-    """
+    """The object :func:`to_data` wrote as ``data``, lists as tuples; ``ValueError`` if unknown."""
     if isinstance(data, dict):
         fields = dict(data)
         name = fields.pop("type", None)

@@ -225,8 +225,7 @@ def simulate_group(scene: Scene, dice: Sequence[Die], state: GroupState, *,
                    {"orientations": records.orientation} if orientations else {}))
 
 
-def _pair(scene: Scene, dice: tuple[Die, ...], contact: DieContact,
-          dt: float) -> group_kernel.Pair:
+def _pair(scene: Scene, dice: tuple[Die, ...], contact: DieContact, dt: float) -> group_kernel.Pair:
     """The kernel's die–die contact for ``dice`` at the step ``dt``."""
     reduced = pair_mass(scene, dice)
     return group_kernel.Pair(

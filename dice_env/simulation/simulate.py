@@ -34,9 +34,8 @@ from dice_env.simulation.compile_notice import announce, ready
 class DiceArrays:
     """The five state arrays of dice, with :attr:`LEAD` leading axes (B for :class:`State`).
 
-    ``orientation``: body-to-world rotations (lead, 3, 3); ``angular_velocity``: the ω of the
-    corner velocities. Checked: finite float64, one lead shape, at least one die, rotations to
-    :data:`ROTATION_TOL`.
+    ``orientation``: body-to-world rotations; ``angular_velocity``: the ω of the corner
+    velocities. Checked: finite, one lead shape, a die at least, rotations to :data:`ROTATION_TOL`.
     """
 
     LEAD: ClassVar[tuple[str, ...]] = ("B",)
@@ -523,10 +522,9 @@ LOCK_MARGIN = 0.25  # the energy's rise after a decision: <= 0.04 of the barrier
 def lock_energy(scene: Scene, margin: float = LOCK_MARGIN) -> np.ndarray:
     """Total energy (J) below which each face read can no longer change, (F,) in label order.
 
-    ``m g h_tip - (m g)^2 / (2 S)`` (:attr:`~dice_env.model.die.Die.tipping_heights`)
-    lowered by ``margin`` (in [0, 1]) of the barrier ``m g (h_tip - h_rest)``
-    (``docs/performance.md``); ``-inf`` unless the table is horizontal, with gravity and
-    rotation.
+    ``m g h_tip - (m g)^2 / (2 S)`` lowered by ``margin`` (in [0, 1]) of the barrier
+    ``m g (h_tip - h_rest)`` (``docs/performance.md``); ``-inf`` unless the table is horizontal,
+    with gravity and rotation.
     """
     check_range("margin", margin, 0.0, 1.0)
     die, ground = scene.die, scene.ground
