@@ -36,17 +36,6 @@ def action_space(task: ThrowTask | None = None) -> spaces.Box:
     return spaces.Box(-1.0, 1.0, (ACTION_DIM if task is None else task.action_dim,), np.float32)
 
 
-def check_frame_memory(render_mode: str | None, t_max: float, width: int, height: int) -> None:
-    """Refuse an "rgb_array_list" env whose throw could keep more than 1 GiB of frames."""
-    frames = math.ceil(t_max * RENDER_FPS) + 2  # in the hand, the throw, at rest
-    size = frames * width * height * 3
-    if render_mode == "rgb_array_list" and size > MAX_FRAME_BYTES:
-        raise ValueError(
-            f"t_max must be at most {MAX_FRAME_BYTES / (width * height * 3 * RENDER_FPS):.4g} s "
-            f"with render_mode='rgb_array_list' at {width}x{height} (at most 1 GiB of frames), "
-            f"got t_max={t_max:g} s ({size / 2**30:.3g} GiB); lower t_max or the render size")
-
-
 def configure(env: Any, modes: tuple[str, ...], render_mode: str | None = None, *,
               target_face: Any = None, target_sum: int | None = None,
               orientation_mode: str = "uniform", render_width: int = 320,
@@ -57,7 +46,14 @@ def configure(env: Any, modes: tuple[str, ...], render_mode: str | None = None, 
     check_int("render_width", render_width, 16, 4096)
     check_int("render_height", render_height, 16, 4096)
     task = make_task(**task_keywords)
-    check_frame_memory(render_mode, task.scene.t_max, render_width, render_height)
+    t_max, frame = task.scene.t_max, render_width * render_height * 3
+    size = (math.ceil(t_max * RENDER_FPS) + 2) * frame  # in the hand, the throw, at rest
+    if render_mode == "rgb_array_list" and size > MAX_FRAME_BYTES:
+        raise ValueError(
+            f"t_max must be at most {MAX_FRAME_BYTES / (frame * RENDER_FPS):.4g} s with "
+            f"render_mode='rgb_array_list' at {render_width}x{render_height} (at most 1 GiB of "
+            f"frames), got t_max={t_max:g} s ({size / 2**30:.3g} GiB); lower t_max or the "
+            "render size")
     task.fixed_target(target_face, target_sum)
     check_choice("orientation_mode", orientation_mode, ORIENTATION_MODES)
     env.target_face, env.target_sum, env.render_mode = target_face, target_sum, render_mode

@@ -586,12 +586,6 @@ FIGURES = {  # a d20 seen close, a d6 in the whole tray, a pair's throw
     "pair": _figure_pair}
 
 
-def has_display() -> bool:
-    """True when a window can be opened (a display on Linux; always on macOS and Windows)."""
-    return sys.platform.startswith(("darwin", "win")) or bool(
-        os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
-
-
 class Viewer:
     """A matplotlib window showing frames at ``fps``; does nothing where there is no display."""
 
@@ -600,7 +594,8 @@ class Viewer:
 
     def show(self, frame: np.ndarray) -> None:
         """Show ``frame`` (H, W, 3) uint8 and wait one frame interval."""
-        if not has_display():
+        if not (sys.platform.startswith(("darwin", "win")) or os.environ.get("DISPLAY")
+                or os.environ.get("WAYLAND_DISPLAY")):  # no window can open
             return
         import matplotlib.pyplot as plt
 

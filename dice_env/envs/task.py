@@ -327,10 +327,14 @@ class ThrowTask:
         """Releases for ``actions`` (n, :attr:`action_dim`), ``hands`` (n, [N,] 3, 3), ``noise``.
 
         ``noise``: (n, :attr:`noise_dim`) standard normals, or one generator per throw (drawn
-        once the actions pass :func:`check_actions`). Returns the State or GroupState, and which
-        actions were clipped to [-1, 1] (n,).
+        once the actions are checked: finite, of ``action_shape`` if given). Returns the State or
+        GroupState, and which actions were clipped to [-1, 1] (n,).
         """
-        actions = check_actions(actions, self.action_dim, action_shape)
+        actions = as_floats("action", actions)
+        if action_shape is not None and actions.shape != action_shape:
+            raise ValueError(f"action{'s' if len(action_shape) > 1 else ''} must have shape "
+                             f"{action_shape}, got {actions.shape}")
+        actions = as_batch("action", actions, (self.action_dim,))
         clipped = np.any(np.abs(actions) > 1.0, axis=1)
         actions = np.clip(actions, -1.0, 1.0)
         if len(noise) and isinstance(noise[0], np.random.Generator):
@@ -377,8 +381,9 @@ class ThrowTask:
             hit = np.all(faces == per_die, axis=1)
             normal = np.asarray(self.scene.ground.normal)
             final = result.final.orientation.reshape(n, -1, 3, 3)
-            alignment = np.mean([target_alignment(final[:, i], die, per_die[:, i], normal)
-                                 for i, die in enumerate(self.dice)], axis=0)
+            alignment = np.mean([  # n_target . n_table: 1 with the target up, -1 down
+                np.einsum("bij,bj,i->b", final[:, i], die.reading[per_die[:, i] - 1], normal)
+                for i, die in enumerate(self.dice)], axis=0)
         else:
             hit = (faces.sum(axis=1) == targets) == (self.target == "sum")
             alignment = np.zeros(n)
@@ -436,22 +441,6 @@ def void_reasons(fair: np.ndarray, unstable: np.ndarray, sunk: np.ndarray, ended
     """Why each throw does not count, (n,) strings, ``""`` where it counts (the first reason)."""
     return np.select([~fair, unstable, sunk, ~ended, leaning],
                      ["foul", "unstable", "sunk", UNTIL[until], "leaning"], "")
-
-
-def target_alignment(orientation: np.ndarray, die: Die, targets: np.ndarray,
-                     normal: np.ndarray) -> np.ndarray:
-    """``n_target . n_table`` (n,) of the die's final ``orientation``: 1 target up, -1 down."""
-    return np.einsum("bij,bj,i->b", orientation, die.reading[np.asarray(targets) - 1], normal)
-
-
-def check_actions(actions: np.ndarray, dim: int = ACTION_DIM,
-                  shape: tuple[int, ...] | None = None) -> np.ndarray:
-    """Actions as float64 (n, dim); ``ValueError`` for NaN/inf or a shape other than ``shape``."""
-    array = as_floats("action", actions)
-    if shape is not None and array.shape != shape:
-        raise ValueError(f"action{'s' if len(shape) > 1 else ''} must have shape {shape}, "
-                         f"got {array.shape}")
-    return as_batch("action", array, (dim,))
 
 
 def check_rotation(name: str, value: object, shape: tuple[int, ...] = ()) -> np.ndarray:

@@ -20,7 +20,7 @@ import numpy as np
 from dice_env.model.checks import check_choice
 from dice_env.model.die import Die
 from dice_env.model.scene import Scene
-from dice_env.viewer.recording import Recording, as_data
+from dice_env.viewer.recording import Recording
 from dice_env.viewer.textures import face_atlas, png_bytes
 
 LAYOUTS = ("sequence", "side")  # several throws one after another, or side by side on a grid
@@ -53,8 +53,8 @@ def write_html(recordings: Recording | Sequence[Recording], path: str | Path, *,
     if title is None:
         title = items[0].title if len(items) == 1 and items[0].title else "dice_env throws"
     shapes: dict[Die, int] = {}
-    throws = [_throw_view(r, shapes) for r in items]
-    data = {"title": title, "layout": layout, "recordings": as_data(items), "throws": throws,
+    data = {"title": title, "layout": layout, "recordings": [r.to_data() for r in items],
+            "throws": [_throw_view(r, shapes) for r in items],  # fills shapes
             "shapes": [_shape(die) for die in shapes]}
     try:
         text = json.dumps(data, separators=(",", ":"), allow_nan=False)
