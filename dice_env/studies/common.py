@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import subprocess
 from collections.abc import Iterator
+from dataclasses import fields
 from pathlib import Path
 
 import matplotlib
@@ -43,6 +44,13 @@ def batches(state: DiceArrays, size: int, bar: tqdm | None = None) -> Iterator[D
         yield batch
         if bar is not None:
             bar.update(batch.batch_size)
+
+
+def join(parts: list) -> object:
+    """``parts`` (states, or results without records) as one: their arrays concatenated."""
+    values = {f.name: [getattr(p, f.name) for p in parts] for f in fields(parts[0])}
+    return type(parts[0])(**{k: join(v) if isinstance(v[0], DiceArrays) else np.concatenate(v)
+                             for k, v in values.items() if v[0] is not None})
 
 
 def checked_int(name: str, value: object, least: int) -> int:

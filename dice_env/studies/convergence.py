@@ -188,18 +188,9 @@ def binned(height: np.ndarray, agree: np.ndarray) -> tuple[np.ndarray, np.ndarra
         return fraction, np.sqrt(fraction * (1 - fraction) / count), count
 
 
-@dataclass(frozen=True)
-class Sizes:
-    """How many throws each part of the study uses."""
-
-    trajectory: int
-    outcomes: int
-    agreement: int
-    gentle: int
-
-
-FULL = Sizes(trajectory=200, outcomes=10_000, agreement=3000, gentle=2000)
-QUICK = Sizes(trajectory=12, outcomes=300, agreement=120, gentle=100)
+# Throws of each part of the full and quick runs.
+FULL = {"trajectory": 200, "outcomes": 10_000, "agreement": 3000, "gentle": 2000}
+QUICK = {"trajectory": 12, "outcomes": 300, "agreement": 120, "gentle": 100}
 SAFETIES = (0.6, 0.3, 0.15, 0.075, 0.0375, 0.01875, 0.009375)  # fractions of the critical step
 # Horizon (s) of the trajectory error: releases 6–10 cm up land at about 0.1 s and hit the
 # table two or three times by then.
@@ -237,7 +228,7 @@ def run(out: Path, quick: bool = False) -> dict[str, float]:
     numbers: dict[str, object] = {"scene": scene, "sizes": sizes}
 
     # 1. trajectory error against step and CPU time
-    start = trajectory_start(scene, sizes.trajectory, rng)
+    start = trajectory_start(scene, sizes["trajectory"], rng)
     curves = numbers["curves"] = {}
     references: dict[tuple[FrictionLaw, float], Result] = {}
     for name, (variant, flight) in variants().items():
@@ -255,11 +246,11 @@ def run(out: Path, quick: bool = False) -> dict[str, float]:
     for label, variant in compared.items():
         for release in RELEASES:
             bar.set_postfix_str(f"{release.name}, {label}")
-            outcomes[label][release.name] = outcome_test(variant, release, sizes.outcomes, rng)
+            outcomes[label][release.name] = outcome_test(variant, release, sizes["outcomes"], rng)
             bar.update()
 
     # 3. per-throw agreement, binned by energy, and the gentle release
-    spread = spread_throws(scene, sizes.agreement, rng)
+    spread = spread_throws(scene, sizes["agreement"], rng)
     numbers["height"] = drop_height(scene, spread)
     numbers["agreement"] = {}
     for label, variant in compared.items():
@@ -267,7 +258,7 @@ def run(out: Path, quick: bool = False) -> dict[str, float]:
         numbers["agreement"][label] = face_agreement(variant, spread)
         bar.update()
     bar.set_postfix_str("gentle")
-    gentle = RELEASES[0].sample(scene, sizes.gentle, rng)
+    gentle = RELEASES[0].sample(scene, sizes["gentle"], rng)
     numbers["gentle"] = {name: face_agreement(variant, gentle)
                          for name, (variant, _) in list(variants().items())[1:]}
     bar.update()

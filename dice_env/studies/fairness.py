@@ -6,7 +6,7 @@ in units of ``m g a`` (mass, gravity, edge) above rest on a face.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, fields
+from dataclasses import dataclass
 from pathlib import Path
 
 import matplotlib.pyplot as plt
@@ -17,8 +17,8 @@ from scipy.spatial.transform import Rotation
 from dice_env.intervals import wilson
 from dice_env.model.die import Die
 from dice_env.model.scene import Scene
-from dice_env.simulation.simulate import Result, RunResult, State, simulate
-from dice_env.studies.common import DOCS, SEED, batches, error_bars, progress, save_figure
+from dice_env.simulation.simulate import Result, State, simulate
+from dice_env.studies.common import DOCS, SEED, batches, error_bars, join, progress, save_figure
 from dice_env.studies.markdown import bracket, estimate, markdown_table
 from dice_env.studies.numbers import study_page
 
@@ -126,12 +126,8 @@ def face_down(die: Die, orientation: np.ndarray, normal: np.ndarray) -> np.ndarr
 
 
 def throw_batches(scene: Scene, state: State, bar, batch: int = BATCH) -> Result:
-    """Simulate ``state`` in batches of ``batch`` dice; concatenated face/settled/energy."""
-    parts = [simulate(scene, chunk, t_max=T_MAX) for chunk in batches(state, batch, bar)]
-    names = [f.name for f in fields(RunResult) if f.name != "final"]
-    joined = {f: np.concatenate([getattr(p, f) for p in parts]) for f in names}
-    final = State(*map(np.concatenate, zip(*(p.final._arrays() for p in parts), strict=True)))
-    return Result(final=final, **joined)
+    """Simulate ``state`` in batches of ``batch`` dice, the results joined."""
+    return join([simulate(scene, chunk, t_max=T_MAX) for chunk in batches(state, batch, bar)])
 
 
 @dataclass
@@ -148,10 +144,7 @@ class FaceCounts:
 
     @classmethod
     def of(cls, result: Result) -> FaceCounts:
-        """Count faces 1–6 among the settled throws and test them for uniformity.
-
-        ``p_without_unstable``: the same test leaving out the throws flagged unstable.
-        """
+        """Faces 1–6 of the settled throws tested for uniformity, also without the unstable."""
         counts = np.bincount(result.face[result.settled], minlength=7)[1:]
         chi2, p = stats.chisquare(counts)
         clean = np.bincount(result.face[result.settled & ~result.unstable], minlength=7)[1:]

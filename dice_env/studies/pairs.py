@@ -28,7 +28,7 @@ from dice_env.simulation.group import (
 )
 from dice_env.simulation.simulate import State
 from dice_env.studies.chunks import kept_chunks, prepare
-from dice_env.studies.common import DOCS, SEED, batches, checked_throws, progress, save_figure
+from dice_env.studies.common import DOCS, SEED, batches, checked_throws, join, progress, save_figure
 from dice_env.studies.fairness import random_directions, random_orientations, toward_table
 from dice_env.studies.markdown import bracket, markdown_table
 from dice_env.studies.numbers import study_page
@@ -171,13 +171,8 @@ class Pairs:
 def simulate_in_batches(scene: Scene, dice: tuple[Die, ...], state: GroupState,
                         bar: object = None, batch: int = BATCH, **keywords: object) -> GroupResult:
     """:func:`simulate_group` (no recording; ``keywords`` go to it) in batches, joined."""
-    parts = [simulate_group(scene, dice, chunk, **keywords)
-             for chunk in batches(state, batch, bar)]
-    skip = ("final", "t", "x_cm", "orientations")
-    joined = {f.name: np.concatenate([getattr(p, f.name) for p in parts])
-              for f in fields(GroupResult) if f.name not in skip}
-    final = GroupState(*map(np.concatenate, zip(*(p.final._arrays() for p in parts), strict=True)))
-    return GroupResult(**joined, final=final)
+    return join([simulate_group(scene, dice, chunk, **keywords)
+                   for chunk in batches(state, batch, bar)])
 
 
 def throw_pairs(scene: Scene, dice: tuple[Die, ...], state: GroupState, bar: object = None,

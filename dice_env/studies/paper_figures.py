@@ -83,13 +83,10 @@ def energy_rises(stiffness: float, clockmaxes: np.ndarray,
     cube ended below the plane (huge steps can carry it through between energy checks).
     """
     tol = paper_scene(S=stiffness, rotation=False, dt=None).energy_tol
-    out = np.empty(len(clockmaxes))
-    for j, clockmax in enumerate(clockmaxes):
-        run_ = ground_cube(S=stiffness, clockmax=int(clockmax), contact_law=contact_law,
-                           allow_unstable=True)
-        lost = not np.isfinite(run_.x_cm).all() or run_.x_cm[-1, 2] <= 0
-        out[j] = np.inf if lost else run_.result.energy_rise[0] * tol
-    return out
+    runs = (ground_cube(S=stiffness, clockmax=int(c), contact_law=contact_law,
+                        allow_unstable=True) for c in clockmaxes)
+    return np.array([np.inf if not np.isfinite(r.x_cm).all() or r.x_cm[-1, 2] <= 0
+                     else r.result.energy_rise[0] * tol for r in runs], dtype=float)
 
 
 def steps_needed(clockmaxes: np.ndarray, rises: np.ndarray, limit: float) -> int:
@@ -113,8 +110,7 @@ def theory_steps(stiffness: np.ndarray, node_mass: bool, tmax: float = 10.0,
                  D: float = 0.2) -> np.ndarray:
     """``tmax / critical_dt`` of the scheme for the paper's ground_cube die.
 
-    ``node_mass=False``: ``Scene.critical_dt`` (effective mass m/4, the four bottom corners
-    moving together); ``True``: the same formula with one node's mass m/8.
+    Mass m/4 (``Scene.critical_dt``: the bottom corners together), or with ``node_mass`` m/8.
     """
     out = []
     for s in np.atleast_1d(stiffness):

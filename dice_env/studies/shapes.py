@@ -143,12 +143,8 @@ def free_flight(die: Die, n: int = 8, seed: int = 0, step_by_step: bool = False,
                 t: float = FLIGHT_TIME, safety: float = 0.15) -> dict[str, float]:
     """Largest relative errors of ``n`` random throws of ``die`` flying ``t`` s with no contact.
 
-    Released :data:`FLIGHT_HEIGHT` up with up to 1 m/s and 100 rad/s. ``velocity``:
-    ``|u - u0 - g t| / (|u0| + g t)``; ``momentum``: ``|L - L0| / |L0|``; ``energy``
-    (kinetic plus ``m g z`` plus the step's exact defect ``m g^2 dt t / 2``, every recorded
-    step): ``|E - E0| / KE0``, ``rotation`` its rotational part; ``height``: against the
-    parabola, over the drop ``g t^2 / 2``. ``step_by_step`` turns the analytic contact-free
-    jumps off; ``safety`` is the scene's.
+    The errors (``velocity``, ``momentum``, ``energy``, ``rotation``, ``height``) are defined on
+    docs/shapes.md; ``step_by_step`` turns the analytic contact-free jumps off.
     """
     scene = Scene(die=die, safety=safety)
     rng = np.random.default_rng(seed)

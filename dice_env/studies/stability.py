@@ -1,9 +1,7 @@
 """Stiff and extreme cases: a stability map over stiffness and step, and a table of extremes.
 
-``run(out, quick)`` writes ``out/stability.md`` and ``out/figures/stability_*.png``. A map cell
-is *stable* when no throw is flagged (``Result.unstable``), *drifting* when the worst energy
-rise stays below :data:`DRIFT_LIMIT` times the tolerance's scale with a finite state, and
-*blowing up* otherwise.
+``run(out, quick)`` writes ``out/stability.md`` and ``out/figures/stability_*.png``; that page
+defines a map cell's classes (:data:`STABLE`, :data:`DRIFTING`, :data:`BLOWUP`).
 """
 
 from __future__ import annotations
@@ -32,7 +30,7 @@ MAP_T_MAX = 5.0  # simulated time of each map cell (s): the paper throw lands at
 
 
 def classify(result: Result, energy_tol: float) -> int:
-    """Worst class over a batch: STABLE, DRIFTING or BLOWUP (see the module docstring)."""
+    """Worst class over a batch: STABLE, DRIFTING or BLOWUP (docs/stability.md)."""
     finite = all(np.isfinite(a).all() for a in (result.final.position, result.final.velocity,
                                                   result.final.angular_momentum))
     rise = float(result.energy_rise.max()) * energy_tol

@@ -48,8 +48,7 @@ def within(value: float, low: float, high: float) -> str:
 def sliding_friction(scene: Scene, speed: float = SLIDE_SPEED) -> float:
     """Friction coefficient the simulator produces: a die sliding flat, deceleration / g.
 
-    The die starts at ``speed`` (m/s) along x; the deceleration is fitted to its speed while
-    that is between 20% and 80% of ``speed``.
+    It starts at ``speed`` (m/s) along x; the fit takes its speeds between 20% and 80% of that.
     """
     die = scene.die
     face = int(np.argmin(die.resting_heights))
@@ -63,16 +62,14 @@ def sliding_friction(scene: Scene, speed: float = SLIDE_SPEED) -> float:
     sliding = (v > 0.2 * speed) & (v < 0.8 * speed)
     if sliding.sum() < 3:
         raise ValueError(f"the die did not slide from {speed} m/s to 20% of it within 1 s")
-    slope = np.polyfit(t[sliding], v[sliding], 1)[0]
-    return -slope / scene.gravity
+    return -np.polyfit(t[sliding], v[sliding], 1)[0] / scene.gravity
 
 
 def initial_face_memory(n: int, rng: np.random.Generator, scene: Scene | None = None) -> dict:
     """P(rests on the face down at release) in energy terciles: the fairness study's throws.
 
-    ``n`` throws of :func:`dice_env.studies.fairness.energy_throws` over :data:`ENERGY_RANGE`;
-    per tercile its energy range, throws, and hits on the release-down and release-up faces.
-    ``scene``'s die must be a d6.
+    ``n`` throws of :func:`dice_env.studies.fairness.energy_throws` over :data:`ENERGY_RANGE`
+    on ``scene`` (a d6); per tercile its energy range, throws, and hits on either face.
     """
     scene = Scene() if scene is None else scene
     if scene.die.name != "d6":
