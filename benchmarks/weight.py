@@ -12,15 +12,16 @@ module. Writes ``benchmarks/results/weight.json``.
 
 from __future__ import annotations
 
-import argparse
 import fnmatch
-import json
 import subprocess
 from collections import Counter
 from pathlib import Path
 
+from harness import benchmark_parser, command_line, write_json
+
+from dice_env.studies.common import code_version
+
 ROOT = Path(__file__).resolve().parent.parent
-OUT = ROOT / "benchmarks" / "results" / "weight.json"
 
 
 def _git(*args: str) -> str:
@@ -45,13 +46,14 @@ def _layer(path: str) -> str:
 
 def main(argv: list[str] | None = None) -> None:
     """Print the table and write the JSON."""
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = benchmark_parser(__doc__, "weight")
     parser.add_argument("--against", metavar="REV", help="a git revision to compare with")
     parser.add_argument("--features", nargs="*", default=[], metavar="GLOB",
                         help="modules added by features since REV, counted apart")
     args = parser.parse_args(argv)
     now = lines()
-    result: dict[str, object] = {"total": sum(now.values()),
+    result: dict[str, object] = {"command": command_line(), "commit": code_version(ROOT),
+                                 "total": sum(now.values()),
                                  "layers": dict(sorted(_by_layer(now).items()))}
     print(f"{'layer':<14}{'lines':>8}")
     for layer, n in result["layers"].items():
@@ -69,7 +71,7 @@ def main(argv: list[str] | None = None) -> None:
         if added:
             print(f"{'  without the features':<28}{rest:>8} {rest / base - 1:+.1%}")
             print(f"{'  features (' + str(len(added)) + ' modules)':<28}{sum(added.values()):>8}")
-    OUT.write_text(json.dumps(result, indent=2) + "\n")
+    write_json(args.out, result)
 
 
 def _by_layer(counts: dict[str, int]) -> Counter:
