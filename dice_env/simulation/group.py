@@ -136,18 +136,19 @@ class GroupResult(RunResult):
     orientations: np.ndarray | None = None
 
 
-def pair_mass(scene: Scene, dice: Sequence[Die]) -> float:
-    """The smallest reduced :attr:`Scene.effective_mass` of a pair of ``dice`` (kg; inf for one)."""
-    masses = [scene.with_(die=die).effective_mass for die in _dice(dice)]
-    return min((m_i * m_j / (m_i + m_j) for m_i, m_j in combinations(masses, 2)),
-               default=math.inf)
-
-
 def group_step(scene: Scene, dice: Sequence[Die], contact: DieContact = DieContact()) -> float:
     """The throw's step: :meth:`Scene.step_within` the least critical step, pairs' included."""
-    critical = min(scene.with_(die=die).critical_dt for die in _dice(dice))
+    return _step(scene, _dice(dice), contact)[0]
+
+
+def _step(scene: Scene, dice: tuple[Die, ...], contact: DieContact) -> tuple[float, float]:
+    """:func:`group_step`, and the least reduced effective mass of a pair (kg; inf for one)."""
+    alone = [scene.with_(die=die) for die in dice]
+    critical = min(s.critical_dt for s in alone)
+    masses = [s.effective_mass for s in alone]
+    reduced = min((m_i * m_j / (m_i + m_j) for m_i, m_j in combinations(masses, 2)),
+                  default=math.inf)
     if len(dice) > 1:
-        reduced = pair_mass(scene, dice)
         pair = critical_step(contact.stiffness, contact.damping, reduced, scene.scheme)
         if not scene.safety * pair > 0:
             raise ValueError(f"the step of die against die comes out as {pair:g} s from the "
@@ -155,7 +156,7 @@ def group_step(scene: Scene, dice: Sequence[Die], contact: DieContact = DieConta
                              f"{contact.damping:g} N s/m (DieContact) on the dice's reduced "
                              f"mass {reduced:.3g} kg: bring them nearer the defaults")
         critical = min(critical, pair)
-    return scene.step_within(critical, "the dice on the planes and against each other")
+    return scene.step_within(critical, "the dice on the planes and against each other"), reduced
 
 
 def simulate_group(scene: Scene, dice: Sequence[Die], state: GroupState, *,
@@ -176,7 +177,7 @@ def simulate_group(scene: Scene, dice: Sequence[Die], state: GroupState, *,
     check_type("contact", contact, DieContact)
     if state.n_dice != len(dice):
         raise ValueError(f"state holds {state.n_dice} dice per throw, dice {len(dice)}")
-    dt = group_step(scene, dice, contact)
+    dt, reduced = _step(scene, dice, contact)
     n_steps = scene.steps_for(t_max, dt)
     out = state.copy()
     b, n = out.batch_size, out.n_dice
@@ -205,7 +206,7 @@ def simulate_group(scene: Scene, dice: Sequence[Die], state: GroupState, *,
         stride=stride, x=np.zeros((b, n_rec, n, 3)),
         orientation=np.zeros((b, n_rec if orientations else 0, n, 3, 3)))
     inputs = (group_kernel.GroupDice(*out._arrays()), bodies, _hulls(scenes, bodies),
-              _pair(scene, dice, contact, dt), contact_planes, options, stops, records)
+              _pair(scene, contact, dt, reduced), contact_planes, options, stops, records)
     run_kernel("dice", inputs, outcome, batch=b, threads=threads, work=b * n * n_steps)
     fields = outcome_fields(scene, outcome, size)
     # The kernel checks the centres, velocities and momenta; a rotation that overflows in the
@@ -225,9 +226,8 @@ def simulate_group(scene: Scene, dice: Sequence[Die], state: GroupState, *,
                    {"orientations": records.orientation} if orientations else {}))
 
 
-def _pair(scene: Scene, dice: tuple[Die, ...], contact: DieContact, dt: float) -> group_kernel.Pair:
-    """The kernel's die–die contact for ``dice`` at the step ``dt``."""
-    reduced = pair_mass(scene, dice)
+def _pair(scene: Scene, contact: DieContact, dt: float, reduced: float) -> group_kernel.Pair:
+    """The kernel's die–die contact at the step ``dt`` for the pair's ``reduced`` mass (kg)."""
     return group_kernel.Pair(
         float(contact.stiffness), float(contact.damping), float(contact.friction),
         float(scene.friction_vmin), float(group_kernel.GRIP * reduced / dt),

@@ -80,13 +80,13 @@ def _run(L0: object, rotation: bool, *, clockmax: int, tmax: float = 10.0,
         dt=tmax / clockmax, t_max=tmax, allow_unstable=allow_unstable,
         ground=listing_scene.ground.with_(contact_law=contact_law))
     L0 = _vector("L0", L0)
-    position = _vector("x0", x0)
-    sink = float(scene.sink(position, np.eye(3)[None])[0])
+    position, upright = _vector("x0", x0), np.eye(3)[None]
+    sink = float(scene.sink(position, upright)[0])
     if sink > 0.0:
         raise ValueError(f"x0 must hold every corner above the ground, got {x0} with a corner "
                          f"{sink:.4g} below it")
-    state = State(position=position, velocity=_vector("u0", u0), angular_momentum=L0.copy(),
-                  orientation=np.eye(3)[None].copy(), angular_velocity=np.zeros((1, 3)))
+    state = State(position=position, velocity=_vector("u0", u0), angular_momentum=L0,
+                  orientation=upright, angular_velocity=np.zeros((1, 3)))
     record = ("energy", "nodes") if record_nodes else ("energy",)
     result = simulate(scene, state, until="t_max", record_every=1, record=record)
     return PaperRun(t=result.t, x_cm=result.x_cm[0], energy=result.energy[0],
