@@ -299,18 +299,17 @@ def _padded(rows: list[np.ndarray], fill: float | None = None) -> np.ndarray:
     return np.stack([np.concatenate([r, pad]) for r, pad in zip(rows, pads, strict=True)])
 
 
-def _distinct_axes(normals: np.ndarray, tol: float = 1e-9) -> np.ndarray:
+def _distinct_axes(normals: np.ndarray) -> np.ndarray:
     """The faces whose normals are distinct axes: the first of two opposite faces."""
-    opposite = np.abs(normals[:, None] + normals[None]).max(axis=-1) <= tol
+    opposite = np.abs(normals[:, None] + normals[None]).max(axis=-1) <= 1e-9
     return np.flatnonzero(~np.tril(opposite, -1).any(axis=1))
 
 
-def _edge_classes(vertices: np.ndarray, edges: np.ndarray,
-                  tol: float = 1e-9) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _edge_classes(vertices: np.ndarray, edges: np.ndarray) -> tuple[np.ndarray, ...]:
     """The edges by direction: their order, each class's start in it (then the end), its axis."""
     directions = vertices[edges[:, 1]] - vertices[edges[:, 0]]
     directions /= np.linalg.norm(directions, axis=1, keepdims=True)
-    parallel = np.linalg.norm(np.cross(directions[:, None], directions[None]), axis=-1) <= tol
+    parallel = np.linalg.norm(np.cross(directions[:, None], directions[None]), axis=-1) <= 1e-9
     firsts, cls = np.unique(parallel.argmax(axis=0), return_inverse=True)  # by first member
     return (np.argsort(cls, kind="stable"), np.concatenate([[0], np.cumsum(np.bincount(cls))]),
             directions[firsts])
