@@ -205,7 +205,7 @@ def simulate_group(scene: Scene, dice: Sequence[Die], state: GroupState, *,
     records = group_kernel.GroupRecords(
         stride=stride, x=np.zeros((b, n_rec, n, 3)),
         orientation=np.zeros((b, n_rec if orientations else 0, n, 3, 3)))
-    inputs = (group_kernel.GroupDice(*out._arrays()), bodies, _hulls(scenes, bodies),
+    inputs = (group_kernel.GroupDice(*out._arrays()), bodies, _hulls(dice, bodies),
               _pair(scene, contact, dt, reduced), contact_planes, options, stops, records)
     run_kernel("dice", inputs, outcome, batch=b, threads=threads, work=b * n * n_steps)
     fields = outcome_fields(scene, outcome, size)
@@ -273,9 +273,8 @@ def _bodies(scenes: list[Scene], decide: bool) -> group_kernel.Bodies:
         **per_die)
 
 
-def _hulls(scenes: list[Scene], bodies: group_kernel.Bodies) -> group_kernel.Hulls:
-    """The kernel's :class:`~dice_env.physics.group_kernel.Hulls`, one scene per die."""
-    dice = [s.die for s in scenes]
+def _hulls(dice: tuple[Die, ...], bodies: group_kernel.Bodies) -> group_kernel.Hulls:
+    """The kernel's :class:`~dice_env.physics.group_kernel.Hulls` of ``dice``."""
     vertices = [bodies.vertices[i, :len(d.vertices)] for i, d in enumerate(dice)]
     classes = [_edge_classes(v, d.edges) for v, d in zip(vertices, dice, strict=True)]
     planes = [np.column_stack([d.face_normals, [v[face[0]] @ normal for face, normal in zip(
