@@ -136,11 +136,6 @@ def mcnemar(a: np.ndarray, b: np.ndarray) -> float:
     return float(stats.binomtest(only_a, only_a + only_b, 0.5).pvalue)
 
 
-def faces_changed(a: GroupResult, b: GroupResult) -> np.ndarray:
-    """(B,) die 1's face differs between the runs ``a`` and ``b`` of the same throws."""
-    return a.face[:, 0] != b.face[:, 0]
-
-
 @dataclass
 class Collisions:
     """The study's throws.
@@ -268,7 +263,7 @@ def _numbers(study: Collisions, seconds: float, cpu: float,
         "change_either": _rate(changed["together"].any(axis=1)),
         "change_die2": _rate(changed["together"][:, 1]),
         "change_apart": _rate(changed["apart"][:, 0]),
-        "change_quiet": _rate(faces_changed(together, study.nudged)[quiet]),
+        "change_quiet": _rate((together.face[:, 0] != study.nudged.face[:, 0])[quiet]),
         "quiet": float(quiet.sum()),
         "mcnemar_p": mcnemar(changed["together"][:, 0], changed["apart"][:, 0]),
     }

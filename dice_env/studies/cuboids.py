@@ -23,7 +23,7 @@ from dice_env.studies.common import DOCS, SEED, checked_throws, progress, save_f
 from dice_env.studies.fairness import VIGOROUS, Vigour
 from dice_env.studies.markdown import estimate, markdown_table
 from dice_env.studies.numbers import study_page
-from dice_env.studies.shapes import Faces, hand_throws, throw_faces
+from dice_env.studies.shapes import hand_throws, throw_faces
 
 # x/y of the shapes thrown (1 is the cube).
 RATIOS = (0.45, 0.55, 0.65, 0.8, 0.9, 1.0, 1.1, 1.25, 1.5, 1.8, 2.2, 2.7)
@@ -59,12 +59,6 @@ def solid_angle_share(ratio: float) -> float:
     return 2.0 * omega / (4.0 * math.pi)
 
 
-def square_share(faces: Faces) -> tuple[float, np.ndarray]:
-    """Share of the counted throws that land on a square face, and its 95% Wilson interval."""
-    hits = int(sum(faces.counts[f - 1] for f in SQUARE_FACES))
-    return hits / faces.ended, wilson(hits, faces.ended)
-
-
 def run(out: Path = DOCS, quick: bool = False, seed: int = SEED,
         throws: int | None = None) -> dict[str, float]:
     """Regenerate ``cuboids.md`` and ``figures/cuboids.png`` under ``out``; the headline numbers.
@@ -80,7 +74,8 @@ def run(out: Path = DOCS, quick: bool = False, seed: int = SEED,
         for ratio in ratios:
             scene = Scene(die=square_cuboid(ratio), ground=ground)
             faces = throw_faces(scene, hand_throws(scene, n, rng, vigour), bar)
-            table[label, ratio] = (faces, *square_share(faces))
+            hits = int(sum(faces.counts[f - 1] for f in SQUARE_FACES))  # on a square face
+            table[label, ratio] = (faces, hits / faces.ended, wilson(hits, faces.ended))
     bar.close()
     _plot(table, ratios, n, out / "figures" / "cuboids.png")
     (out / "cuboids.md").write_text(_markdown(table, ratios, n, seed, quick, throws))

@@ -65,15 +65,12 @@ def sliding_friction(scene: Scene, speed: float = SLIDE_SPEED) -> float:
     return -np.polyfit(t[sliding], v[sliding], 1)[0] / scene.gravity
 
 
-def initial_face_memory(n: int, rng: np.random.Generator, scene: Scene | None = None) -> dict:
+def initial_face_memory(n: int, rng: np.random.Generator, scene: Scene) -> dict:
     """P(rests on the face down at release) in energy terciles: the fairness study's throws.
 
     ``n`` throws of :func:`dice_env.studies.fairness.energy_throws` over :data:`ENERGY_RANGE`
     on ``scene`` (a d6); per tercile its energy range, throws, and hits on either face.
     """
-    scene = Scene() if scene is None else scene
-    if scene.die.name != "d6":
-        raise ValueError(f"scene.die must be a d6, got {scene.die.name!r}")
     excess = 10 ** rng.uniform(*np.log10(ENERGY_RANGE), n)
     state = energy_throws(scene, excess, rng)
     result = simulate(scene, state, until="decided")

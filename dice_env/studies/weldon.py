@@ -296,11 +296,6 @@ class Together:
         return np.bincount(self.successes, minlength=DICE + 1)
 
 
-def successes_of(faces: np.ndarray) -> np.ndarray:
-    """Dice showing a 5 or a 6 in each row of ``faces`` (T, N)."""
-    return np.isin(faces, SUCCESS).sum(axis=1)
-
-
 def throw_together(scene: Scene, cups: list[State], bar: object = None,
                    batch: int = BATCH_TOGETHER) -> Together:
     """Throw each cup's twelve dice together (``until="decided"``) on ``scene``'s table."""
@@ -321,8 +316,9 @@ def throw_together(scene: Scene, cups: list[State], bar: object = None,
         if bar is not None:
             bar.update(group.batch_size * len(dice))
     faces = np.concatenate(kept) if kept else np.zeros((0, len(dice)), np.int64)
-    return Together(successes_of(faces), np.bincount(faces.ravel(), minlength=7)[1:], n,
-                    leaning, undecided, time.perf_counter() - start_time)
+    return Together(np.isin(faces, SUCCESS).sum(axis=1),
+                    np.bincount(faces.ravel(), minlength=7)[1:], n, leaning, undecided,
+                    time.perf_counter() - start_time)
 
 
 def chunked_together(scene: Scene, throws: int, seed: int, keep: Path | None = None,
@@ -372,11 +368,6 @@ def offset_for_weldon(slope: float, se: float) -> tuple[float, float, float]:
     """The offset (µm) whose excess the slope puts at Weldon's, its 95% low and high (or inf)."""
     return tuple(EFFECT / s if s > 0 else math.inf
                  for s in (slope, slope + Z95 * se, slope - Z95 * se))
-
-
-def success_estimate(faces: Faces) -> Estimate:
-    """P(5 or 6) of single throws."""
-    return Estimate.binomial(int(sum(faces.counts[f - 1] for f in SUCCESS)), faces.ended)
 
 
 # (key, label, the die's pips); the first is the die thrown together.
@@ -469,7 +460,7 @@ def summarise(together: Together, alone: dict[str, Faces]) -> dict:
     out["alone"] = {}
     for key, label, pips in VARIANTS:
         faces = alone[key]
-        est = success_estimate(faces)
+        est = Estimate.binomial(int(sum(faces.counts[f - 1] for f in SUCCESS)), faces.ended)
         die = variant_die(pips)
         out["alone"][key] = {
             "label": label, **asdict(est), "interval": est.interval,
