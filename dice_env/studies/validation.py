@@ -75,7 +75,7 @@ def initial_face_memory(n: int, rng: np.random.Generator, scene: Scene) -> dict:
     state = energy_throws(scene, excess, rng)
     result = simulate(scene, state, until="decided")
     ok = (result.decided | result.settled) & ~result.unstable & ~result.sunk
-    down0 = face_down(scene.die, state.orientation, np.asarray(UP))
+    down0 = face_down(scene.die, state.orientation, UP)
     final_down = 7 - result.face  # the d6's opposite face: the face it rests on
     energy = throw_energy(scene, state)
     edges = np.quantile(energy[ok], [0, 1 / 3, 2 / 3, 1])

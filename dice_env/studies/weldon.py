@@ -129,7 +129,6 @@ def binomial_probabilities(p: float, dice: int = DICE) -> np.ndarray:
 
 def pooled_cells(expected: np.ndarray, minimum: float = MIN_EXPECTED) -> list[range]:
     """Groups of neighbouring cells with at least ``minimum`` expected each (tails pool first)."""
-    expected = np.asarray(expected, dtype=np.float64)
     groups = [range(k, k + 1) for k in range(expected.size)]
     while len(groups) > 1:
         sums = [expected[g.start:g.stop].sum() for g in groups]
