@@ -10,7 +10,6 @@ import numpy as np
 from gymnasium import spaces
 
 from dice_env.envs.task import (
-    ACTION_DIM,
     ORIENTATION_DIM,
     ORIENTATION_MODES,
     ThrowTask,
@@ -31,9 +30,9 @@ def observation_space(task: ThrowTask) -> spaces.Box:
     return spaces.Box(low, np.ones(task.obs_dim, np.float32), dtype=np.float32)
 
 
-def action_space(task: ThrowTask | None = None) -> spaces.Box:
-    """Actions in [-1, 1]: velocity and spin, and with ``set_dice`` 3 per die (None: one die)."""
-    return spaces.Box(-1.0, 1.0, (ACTION_DIM if task is None else task.action_dim,), np.float32)
+def action_space(task: ThrowTask) -> spaces.Box:
+    """Actions in [-1, 1]: velocity and spin, and with ``set_dice`` 3 per die."""
+    return spaces.Box(-1.0, 1.0, (task.action_dim,), np.float32)
 
 
 def configure(env: Any, modes: tuple[str, ...], render_mode: str | None = None, *,

@@ -180,29 +180,17 @@ def check_scene(scene: Scene, release_height: float) -> None:
 
 
 def _check_steps(scene: Scene) -> None:
-    """A throw may take at most :data:`ENV_MAX_STEPS` steps of a computable step."""
-    with np.errstate(all="ignore"):
-        try:
-            step = scene.step
-        except (ArithmeticError, np.linalg.LinAlgError):
-            step = math.nan
-    if not math.isfinite(step) or step <= 0:
-        raise ValueError(f"the step comes out as {step:g} s for {_step_origin(scene)}, "
-                         f"size={scene.die.size:g}: bring them nearer the defaults")
+    """A throw may take at most :data:`ENV_MAX_STEPS` steps (the Scene checked the step)."""
+    step = scene.step
     for name, value in (("t_max", scene.t_max), ("rest_hold", scene.rest.hold)):
         if value / step > ENV_MAX_STEPS:
+            origin = (f"dt={scene.dt:g}" if scene.dt is not None else
+                      f"safety={scene.safety:g} times the critical step of "
+                      f"{scene.stiffest_plane()}, mass={scene.die.mass:g}")
             raise ValueError(
                 f"{name} must be at most {ENV_MAX_STEPS:.0e} steps: {name}={value:g} s over a step "
-                f"of {step:.3g} s is {value / step:.3g} steps ({_step_origin(scene)}); lower "
-                f"{name}, or make the step longer")
-
-
-def _step_origin(scene: Scene) -> str:
-    """Where the scene's step comes from, naming the keywords that set it."""
-    if scene.dt is not None:
-        return f"dt={scene.dt:g}"
-    return (f"safety={scene.safety:g} times the critical step of {scene.stiffest_plane()}, "
-            f"mass={scene.die.mass:g}")
+                f"of {step:.3g} s is {value / step:.3g} steps ({origin}); lower {name}, or make "
+                "the step longer")
 
 
 def _base_die(base: Die, die: str | Die | None) -> Die:

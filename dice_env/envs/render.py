@@ -61,7 +61,7 @@ UPSIDE_DOWN = {"0": "0", "1": "1", "6": "9", "8": "8", "9": "6"}
 
 
 def _arc(cx: float, cy: float, rx: float, ry: float, start: float, stop: float,
-         n: int = 12) -> np.ndarray:
+         n: int) -> np.ndarray:
     """Points (n, 2) on an elliptic arc from ``start`` to ``stop`` degrees."""
     angle = np.radians(np.linspace(start, stop, n))
     return np.stack([cx + rx * np.cos(angle), cy + ry * np.sin(angle)], axis=1)
@@ -224,8 +224,7 @@ class _Lines:
     dx: np.ndarray
     dy: np.ndarray
 
-    def at(self, vector: np.ndarray, xs: np.ndarray, ys: np.ndarray,
-           constant: float = 0.0) -> np.ndarray:
+    def at(self, vector: np.ndarray, xs: np.ndarray, ys: np.ndarray, constant: float) -> np.ndarray:
         """``vector . (base + x dx + y dy) - constant`` on the grid (len(ys), len(xs))."""
         row = xs * (vector @ self.dx) + (vector @ self.base - constant)
         return (ys * (vector @ self.dy))[:, None] + row[None, :]

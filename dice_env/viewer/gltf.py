@@ -30,8 +30,7 @@ WALL_HEIGHT = 0.05  # m: a wall's quad above the floor
 Z_UP = [-math.sqrt(0.5), 0.0, 0.0, math.sqrt(0.5)]  # root rotation (x, y, z, w): z up to y up
 EXTRAS = "recordings"  # asset.extras[EXTRAS]: the recordings' data, JSON text of a list
 ANIMATION = "throw"
-_COMPONENTS = {np.dtype(np.float32): gl.FLOAT, np.dtype(np.uint16): gl.UNSIGNED_SHORT,
-               np.dtype(np.uint32): gl.UNSIGNED_INT}
+_COMPONENTS = {np.dtype(np.float32): gl.FLOAT, np.dtype(np.uint16): gl.UNSIGNED_SHORT}
 _TYPES = {1: gl.SCALAR, 2: gl.VEC2, 3: gl.VEC3, 4: gl.VEC4}
 
 
@@ -115,8 +114,8 @@ class _Blob:
             NORMAL=self.accessor(normals.astype(np.float32), gl.ARRAY_BUFFER),
             TEXCOORD_0=None if uv is None else self.accessor(uv.astype(np.float32),
                                                              gl.ARRAY_BUFFER))
-        index = np.uint16 if len(positions) < 2**16 - 1 else np.uint32
-        indices = self.accessor(triangles.astype(index).ravel(), gl.ELEMENT_ARRAY_BUFFER)
+        # A die's face corners (of at most polyhedra.MAX_VERTICES corners) fit 16-bit indices.
+        indices = self.accessor(triangles.astype(np.uint16).ravel(), gl.ELEMENT_ARRAY_BUFFER)
         self.gltf.meshes.append(gl.Mesh(name=name, primitives=[gl.Primitive(
             attributes=attributes, indices=indices, material=material)]))
         return len(self.gltf.meshes) - 1

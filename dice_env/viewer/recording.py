@@ -30,6 +30,11 @@ MAX_FRAMES = 100_000  # frames of one throw (all dice), against a page or an exp
 STATE_FIELDS = ("position", "velocity", "angular_momentum", "orientation", "angular_velocity")
 
 
+def library_version() -> str:
+    """The installed dice_env's version."""
+    return importlib.metadata.version("dice_env")
+
+
 @dataclass(frozen=True)
 class Recording:
     """One throw of one or more dice, as recorded.
@@ -52,7 +57,7 @@ class Recording:
     orientation: np.ndarray
     outcome: dict[str, Any]
     title: str = ""
-    version: str = field(default_factory=lambda: library_version())
+    version: str = field(default_factory=library_version)
 
     @property
     def n_dice(self) -> int:
@@ -87,11 +92,6 @@ class Recording:
                    orientation=quaternion_to_matrix(np.array(data["quaternion"])),
                    outcome=dict(data["outcome"]), title=str(data["title"]),
                    version=str(data["version"]))
-
-
-def library_version() -> str:
-    """The installed dice_env's version."""
-    return importlib.metadata.version("dice_env")
 
 
 def record(scene: Scene, dice: Die | Sequence[Die], state: State | GroupState, *,
