@@ -557,8 +557,8 @@ def _figure_resting(scene: Scene, label: int, turn: float, at: tuple[float, floa
     return render_die(scene, *resting(scene.die, label, at, turn), **view)
 
 
-def _figure_pair(frames: int = 6) -> np.ndarray:
-    """Two d6 thrown together into the tray, ``frames`` frames of a seeded throw side by side."""
+def _figure_pair() -> np.ndarray:
+    """Two d6 thrown together into the tray, six frames of a seeded throw side by side."""
     scene = Scene(walls=walls("tray"), t_max=3.0)
     dice = (Die(), Die())
     rng = np.random.default_rng(11)
@@ -569,7 +569,7 @@ def _figure_pair(frames: int = 6) -> np.ndarray:
     result = simulate_group(scene, dice, GroupState.of(hands), until="decided",
                             record_every=every, orientations=True)
     last = max(1, int(result.steps[0]) // every - 1)
-    shown = np.linspace(0, last, frames).round().astype(int)
+    shown = np.linspace(0, last, 6).round().astype(int)
     images = [render_dice(scene, dice, result.x_cm[0, j], result.orientations[0, j],
                           size=(240, 240), elevation=60.0, view_edges=6.0) for j in shown]
     gap = np.full((240, 6, 3), 255, np.uint8)

@@ -64,8 +64,7 @@ def main(argv: list[str] | None = None) -> int:
                                ("screenshot", args.screenshot, ".png")):
         if path is not None and path.suffix.lower() != suffix:
             parser.error(f"argument --{name}: must end in {suffix}, got {path.name!r}")
-    task = make_task(die=args.die, walls=args.walls,
-                     num_dice=args.num_dice if args.num_dice > 1 else None)
+    task = make_task(die=args.die, walls=args.walls, num_dice=args.num_dice)
     recordings = random_throws(task, args.throws, args.seed, fps=args.fps)
     for k, rec in enumerate(recordings):
         print(f"throw {k}: faces {rec.outcome['faces']} after {rec.outcome['time']:.2f} s "
