@@ -23,7 +23,7 @@ ENV_MAX_STEPS = 10**7
 MAX_SINK = 0.1  # the weight's sink of a flat die's corners into the table, in die sizes
 
 
-def check_face(name: str, value: object, n_faces: int = 6) -> int:
+def check_face(name: str, value: object, n_faces: int) -> int:
     """``value`` as a face label 1 … ``n_faces``, or ``ValueError`` naming ``name``."""
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
         raise ValueError(f"{name} must be an int in [1, {n_faces}], got {value!r}")
