@@ -122,8 +122,10 @@ class Recording:
         release = GroupState(*(_floats(f"release {name}", data["release"][name])[None]
                                for name in STATE_FIELDS))
         quaternion = _floats("quaternion", data["quaternion"])
-        if quaternion.shape[-1:] != (4,) or not np.all(np.isfinite(quaternion)) \
-                or np.max(np.abs(np.linalg.norm(quaternion, axis=-1) - 1), initial=0) > 1e-9:
+        with np.errstate(over="ignore"):  # beyond 1e154, |q| is inf: refused below
+            norm = np.linalg.norm(quaternion, axis=-1) if quaternion.ndim else np.nan
+        if quaternion.shape[-1:] != (4,) or np.max(np.abs(norm - 1), initial=0) > 1e-9 \
+                or not np.all(np.isfinite(norm)):
             raise ValueError("quaternion must hold finite unit quaternions (..., 4), got shape "
                              f"{quaternion.shape}")
         return cls(scene=from_data(data["scene"]), dice=from_data(data["dice"]),
