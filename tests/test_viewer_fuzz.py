@@ -4,15 +4,19 @@ Seeded: a few hundred files made from a page of one die, a ``.glb`` of two dice 
 of both: cut short, bytes overwritten, a value of the recordings replaced (wrong types, sizes,
 NaN, infinities, extremes, deep nesting) or deleted, and files crafted whole. Each is replayed
 in this process through the command line's own ``main``, within :data:`BOUND_S` seconds:
-exit 0 (faces as recorded), 1 (a face differs) or 2 with a one-line reason, never a traceback.
+exit 0 (faces as recorded), 1 (a face differs) or 2 with a one-line reason, never a traceback;
+the first file of each status is replayed from a shell too.
 """
 
 from __future__ import annotations
 
 import json
 import math
+import os
 import re
 import struct
+import subprocess
+import sys
 import time
 from collections import Counter
 from pathlib import Path
@@ -55,7 +59,7 @@ def originals(tmp_path_factory: pytest.TempPathFactory) -> dict[str, bytes]:
 
 def test_every_tampered_file_ends_in_0_1_or_2_with_a_reason(originals, tmp_path, capsys):
     rng = np.random.default_rng(SEED)
-    statuses, slowest = Counter(), 0.0
+    statuses, slowest, first = Counter(), 0.0, {}
     for k in range(CASES):
         suffix, content, how = _tampered(rng, originals)
         path = tmp_path / f"case{k}{suffix}"
@@ -73,9 +77,15 @@ def test_every_tampered_file_ends_in_0_1_or_2_with_a_reason(originals, tmp_path,
             assert error.splitlines()[-1].startswith(USAGE), f"{what}: {error}"
         statuses[status] += 1
         slowest = max(slowest, took)
-        path.unlink()
+        first.setdefault(status, path)
+        if first[status] != path:
+            path.unlink()
     print(f"{CASES} files: exit statuses {dict(statuses)}, slowest {slowest:.2f} s")
     assert statuses[2] > CASES // 2 and statuses[0] + statuses[1] > 10  # both reached
+    for status, path in first.items():  # the same status from a shell
+        run = subprocess.run([sys.executable, "-m", "dice_env.viewer", "--replay", str(path)],
+                             capture_output=True, text=True, timeout=120, env=os.environ)
+        assert run.returncode == status and "Traceback" not in run.stderr, run.stderr
 
 
 def _replay(path: Path) -> int:

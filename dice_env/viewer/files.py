@@ -10,14 +10,14 @@ from __future__ import annotations
 import dataclasses
 import json
 import math
-import os
-import threading
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
 from dice_env.envs.keywords import ENV_MAX_STEPS
 from dice_env.envs.task import UNTIL
+from dice_env.viewer.disk import parse_json, write_atomically
+from dice_env.viewer.html import read_html
 from dice_env.viewer.recording import Recording, as_data, record, run_plan
 
 # Void reasons a replay makes itself (the rest, e.g. a task's "foul", are carried over).
@@ -96,29 +96,6 @@ def replay(source: Recording | Sequence[Recording] | str | Path) -> list[Recordi
     return again
 
 
-def write_atomically(path: Path, data: bytes) -> None:
-    """Write ``data`` to ``path`` whole or not at all.
-
-    To a name unique to this process and thread in the same folder, then renamed into place.
-    """
-    partial = path.with_name(f".{path.name}.{os.getpid()}-{threading.get_ident()}.partial")
-    try:
-        partial.write_bytes(data)
-        os.replace(partial, path)
-    finally:
-        partial.unlink(missing_ok=True)
-
-
-def parse_json(text: str | bytes) -> Any:
-    """JSON ``text`` parsed, or ``ValueError`` saying it is not whole JSON."""
-    try:
-        return json.loads(text)
-    except json.JSONDecodeError as error:
-        raise ValueError(f"not whole JSON (truncated or edited?): {error}") from None
-    except RecursionError:
-        raise ValueError("JSON nested too deeply to be a recording") from None
-
-
 def _read(path: Path, suffix: str) -> Any:
     """The JSON data of the recordings in the file at ``path``."""
     if suffix == ".glb":
@@ -127,8 +104,6 @@ def _read(path: Path, suffix: str) -> Any:
         return read_glb(path)
     if suffix == ".json":
         return parse_json(path.read_text(encoding="utf-8"))
-    from dice_env.viewer.html import read_html
-
     return read_html(path)
 
 
