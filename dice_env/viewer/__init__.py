@@ -17,7 +17,7 @@ from dice_env.viewer.recording import FPS, Recording, record
 
 
 def write_glb(recording: Recording, path: str | Path) -> Path:
-    """:func:`dice_env.viewer.gltf.write_glb` (needs pygltflib: the ``viewer`` extra)."""
+    """:func:`dice_env.viewer.gltf.write_glb` (needs pygltflib: the ``gltf`` extra)."""
     from dice_env.viewer.gltf import write_glb as write
 
     return write(recording, path)
