@@ -148,7 +148,7 @@ def test_replay_of_a_file_it_cannot_use_exits_2_with_the_reason(tmp_path, capsys
     assert exit_info.value.code == 2 and message in error and "Traceback" not in error
 
 
-@pytest.mark.parametrize("edit", ["missing", "dice", "below", "until", "fps", "frames"])
+@pytest.mark.parametrize("edit", ["missing", "dice", "below", "until", "fps", "frames", "nested"])
 def test_replay_of_a_recording_it_cannot_use_exits_2_with_the_reason(tmp_path, capsys, recorded,
                                                                      edit):
     _, data = recorded
@@ -163,6 +163,9 @@ def test_replay_of_a_recording_it_cannot_use_exits_2_with_the_reason(tmp_path, c
         item["run"]["until"] = "never"
     elif edit == "fps":
         item["fps"] = 5e-324
+    elif edit == "nested":
+        for _ in range(900):
+            item["dice"] = [item["dice"]]
     else:
         item["t"] = item["t"][::-1]
     path = _written(tmp_path, "edited.json", [item])
@@ -171,6 +174,8 @@ def test_replay_of_a_recording_it_cannot_use_exits_2_with_the_reason(tmp_path, c
     error = capsys.readouterr().err.splitlines()
     assert exit_info.value.code == 2 and error[-1].startswith(
         "python -m dice_env.viewer: error: argument --replay: ")
+    assert edit != "nested" or error[-1].endswith("recording 0: data nested too deeply to be a "
+                                                  "recording")
 
 
 def test_replay_exit_status_in_a_shell(tmp_path, recorded):

@@ -127,5 +127,6 @@ def _throw_again(old: Recording) -> Recording:
 
 def _line(error: object) -> str:
     """An error's message on one line."""
-    text = str(error) or type(error).__name__
-    return " ".join(text.split())
+    if isinstance(error, RecursionError):
+        return "data nested too deeply to be a recording"
+    return " ".join((str(error) or type(error).__name__).split())
