@@ -60,6 +60,8 @@ class Recording:
     ``orientation`` (n, N, 3, 3) body to world. ``outcome``: ``faces``, ``read`` (False: a die
     leaning on another), ``settled``, ``decided``, ``unstable``, ``sunk``, ``time`` (s) and
     ``void`` (``""`` where the throw counts, else why not, as the env's ``void_reason``).
+    Built only of consistent parts: frames one a time (time from 0, strictly increasing), one
+    position and rotation a die, finite numbers, ``fps`` in :data:`FPS_RANGE`.
     """
 
     scene: Scene
@@ -197,7 +199,8 @@ def record(scene: Scene, dice: Die | Sequence[Die], state: State | GroupState, *
     ``dice``: one die (``state`` a :class:`State`; it replaces the scene's die) or several
     (``state`` a :class:`GroupState`, run by :func:`dice_env.simulation.group.simulate_group`
     with ``contact``). ``titles`` and ``voids`` (one per throw): captions and void reasons that
-    override the simulation's (``""`` keeps it). Returns one recording a throw.
+    override the simulation's (``""`` keeps it). ``fps``: in :data:`FPS_RANGE`, and at least
+    one frame by the time limit. Returns one recording a throw.
     """
     single = isinstance(dice, Die)
     dice = (dice,) if single else tuple(dice)
