@@ -83,6 +83,17 @@ def test_a_screenshot_without_chromium_is_refused_before_any_work(tmp_path, caps
     assert not list(tmp_path.iterdir())
 
 
+def test_an_export_without_pygltflib_is_refused_before_any_work(tmp_path, capsys, monkeypatch):
+    monkeypatch.setattr("importlib.util.find_spec", lambda name, *args: None)
+    monkeypatch.setattr("dice_env.viewer.__main__.random_throws", _no_work)
+    with pytest.raises(SystemExit) as exit_info:
+        main(["--out", str(tmp_path / "a.html"), "--glb", str(tmp_path / "a.glb")])
+    assert exit_info.value.code == 2
+    assert "argument --glb: needs pygltflib (pip install 'dice_env[gltf]')" in \
+        capsys.readouterr().err
+    assert not list(tmp_path.iterdir())
+
+
 def test_a_file_that_exists_is_overwritten_only_with_force(tmp_path, capsys, monkeypatch):
     monkeypatch.chdir(tmp_path)
     assert main(["--seed", "1"]) == 0  # the default --out, throw.html

@@ -16,6 +16,7 @@ when they are, 1 when one is not, 2 (with the reason) for a file it cannot use.
 from __future__ import annotations
 
 import argparse
+import importlib.util
 import sys
 from pathlib import Path
 
@@ -101,6 +102,8 @@ def _check(parser: argparse.ArgumentParser, args: argparse.Namespace) -> ThrowTa
                                ("screenshot", args.screenshot, ".png")):
         if path is not None:
             _check_output(parser, name, path, suffix, args.force)
+    if args.glb is not None and importlib.util.find_spec("pygltflib") is None:
+        parser.error("argument --glb: needs pygltflib (pip install 'dice_env[gltf]')")
     if args.screenshot is not None:
         from dice_env.viewer.browser import missing
 
