@@ -158,3 +158,28 @@ def test_the_readme_starts_run(monkeypatch):
     exec(compile(code, "README.md", "exec"), scope)
     assert scope["result"].face.shape == (100,) and scope["both"].face.shape == (100, 2)
     assert scope["model"].num_timesteps > 0
+
+
+def refused_examples() -> list[tuple[str, str]]:
+    """docs/environment.md's refusals: (keywords, the message fragment the page gives)."""
+    page = (ROOT / "docs/environment.md").read_text()
+    table = page[page.index("| limit | why | refused, e.g. |"):]
+    table = table[:table.index("\n\n")]
+    rows = re.findall(r"^\|[^|]*\|[^|]*\| (.*?) \| `(.*?)` \|$", table, re.M)
+    return [(example, message) for examples, message in rows
+            for example in re.findall(r"`(.*?)`", examples)]
+
+
+@pytest.mark.parametrize(("keywords", "message"), refused_examples())
+def test_each_documented_refusal_gives_its_documented_message(keywords, message):
+    import gymnasium as gym
+
+    kwargs = eval(f"dict({keywords})")  # the page's own keyword set
+    make = gym.make_vec if "num_envs" in kwargs else gym.make
+    with pytest.raises(ValueError) as refused:
+        make("DiceThrow-v0", **kwargs)
+    assert message in str(refused.value)
+
+
+def test_every_refusal_row_is_checked():
+    assert len(refused_examples()) >= 20
