@@ -148,17 +148,65 @@ def test_the_readme_fits_a_front_door():
     assert "bash .ci/setup && .venv/bin/python -m pytest" in head
 
 
-def test_the_readme_starts_run(monkeypatch):
-    """The README's three examples, as written (PPO for one rollout instead of its budget)."""
-    blocks = re.findall(r"```python\n(.*?)```", (ROOT / "README.md").read_text(), re.S)
-    assert len(blocks) == 3
-    code = "\n".join(blocks).replace('model.learn(hp["n_timesteps"])', 'model.learn(1)')
-    monkeypatch.setattr("builtins.print", lambda *a, **k: None)
-    scope: dict = {}
-    exec(compile(code, "README.md", "exec"), scope)
-    assert scope["result"].face.shape == (100,) and scope["both"].face.shape == (100, 2)
-    assert scope["model"].num_timesteps > 0
+EXAMPLE = re.compile(r"(?:<!-- example not run: (?P<why>[^>]*?) -->\n)?```python\n(?P<code>.*?)```",
+                     re.S)
+# Budgets cut in the default suite (the slow test runs the pages as written).
+SHORTER = {'model.learn(hp["n_timesteps"])': "model.learn(1)"}  # PPO for one rollout
+# Pages written from docs/templates by the studies are left out: their examples are the studies'.
+EXAMPLE_PAGES = [page for page in PAGES if page.parent / "templates" / page.name
+                 not in TEMPLATES and "```python" in page.read_text()]
 
+
+def run_examples(page: Path, shorter: dict[str, str]) -> dict:
+    """Run ``page``'s python blocks in order in one namespace (the last block's names)."""
+    text, scope = page.read_text(), {}
+    for match in EXAMPLE.finditer(text):
+        if match["why"] is None:
+            code = match["code"]
+            for long, short in shorter.items():
+                code = code.replace(long, short)
+            line = text.count("\n", 0, match.start("code"))
+            exec(compile("\n" * line + code, str(page.relative_to(ROOT)), "exec"), scope)
+    return scope
+
+
+@pytest.mark.parametrize("page", [p for p in EXAMPLE_PAGES if p.name != "README.md"],
+                         ids=lambda p: p.name)
+def test_every_example_runs(page, tmp_path, monkeypatch):
+    """Each page's examples as written, budgets cut (``SHORTER``), in a temporary folder (the
+    README's: the next test)."""
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setattr("builtins.print", lambda *a, **k: None)
+    run_examples(page, SHORTER)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("page", [p for p in EXAMPLE_PAGES
+                                  if any(long in p.read_text() for long in SHORTER)],
+                         ids=lambda p: p.name)
+def test_every_example_runs_at_its_budget(page, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    run_examples(page, {})
+
+
+def test_an_example_left_out_says_why():
+    for page in EXAMPLE_PAGES:
+        text = page.read_text()
+        whys = [m["why"] for m in EXAMPLE.finditer(text) if m["why"] is not None]
+        assert len(whys) == text.count("<!-- example not run"), page.name  # each before a block
+        assert all(why.strip() for why in whys), page.name
+    assert {"README.md", "guide.md", "environment.md", "viewer.md"} <= {
+        p.name for p in EXAMPLE_PAGES}
+
+
+def test_the_readme_starts_run(tmp_path, monkeypatch):
+    """The README's three examples, as written (PPO for one rollout instead of its budget)."""
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setattr("builtins.print", lambda *a, **k: None)
+    scope = run_examples(ROOT / "README.md", SHORTER)
+    assert len(EXAMPLE.findall((ROOT / "README.md").read_text())) == 3
+    assert scope["result"].face.shape == (100,) and scope["both"].face.shape == (100, 2)
+    assert scope["model"].num_timesteps > 0 and scope["model"].env is scope["env"]
 
 def refused_examples() -> list[tuple[str, str]]:
     """docs/environment.md's refusals: (keywords, the message fragment the page gives)."""
