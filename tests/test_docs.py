@@ -118,7 +118,17 @@ def test_every_cited_json_is_in_the_repository(page):
 def test_every_result_json_records_its_command_and_commit(path):
     report = json.loads(path.read_text())
     assert report.get("command", "").startswith("python "), path.name
+    assert not re.search(r"(^|\s)(/|~)", report["command"]), f"{path.name}: a local path"
     assert report.get("commit") not in (None, "", "unknown"), path.name
+
+
+def test_a_benchmark_command_writes_a_local_tree_as_its_placeholder(tmp_path, monkeypatch):
+    monkeypatch.syspath_prepend(str(ROOT / "benchmarks"))
+    import harness
+
+    monkeypatch.setattr(sys, "argv", ["benchmarks/kernel_ab.py", f"{tmp_path}/", "--rounds", "9"])
+    assert harness.command_line({tmp_path: "BASE"}) == \
+        "python benchmarks/kernel_ab.py BASE --rounds 9"
 
 
 def test_every_docstring_reference_names_something():
