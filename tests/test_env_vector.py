@@ -69,14 +69,24 @@ def test_disabled_mode_and_a_reset_mask():
     with pytest.raises(RuntimeError, match="reset"):
         venv.step(ACTIONS[0])
     venv.reset(seed=SEED)
-    venv.step(ACTIONS[0])
+    at_rest = venv.step(ACTIONS[0])[0]
     with pytest.raises(RuntimeError, match=r"envs \[0, 1, 2\] ended .* DISABLED"):
         venv.step(ACTIONS[1])
-    venv.reset(options={"reset_mask": np.array([True, False, True])})
+    obs, _ = venv.reset(options={"reset_mask": np.array([True, False, True])})
+    assert np.array_equal(obs[1], at_rest[1]) and not np.array_equal(obs[0], at_rest[0])
     with pytest.raises(RuntimeError, match=r"envs \[1\] ended"):
         venv.step(ACTIONS[1])
     venv.reset(options={"reset_mask": np.array([False, True, False])})
     assert venv.step(ACTIONS[1])[2].all()
+
+
+def test_next_step_mode_refuses_a_step_after_a_partial_reset():
+    venv = make(AutoresetMode.NEXT_STEP)
+    venv.reset(seed=SEED)
+    venv.step(ACTIONS[0])
+    venv.reset(options={"reset_mask": np.array([True, True, False])})
+    with pytest.raises(RuntimeError, match=r"envs \[2\] ended .* reset them all, or none"):
+        venv.step(ACTIONS[1])
 
 
 @pytest.mark.parametrize(("value", "options", "match"), [

@@ -75,6 +75,7 @@ class DiceThrowVectorEnv(VectorEnv):
         self.task: ThrowTask = configure(self, ("rgb_array",), render_mode, **keywords)
         self.num_envs = int(num_envs)
         self._ended = np.zeros(self.num_envs, np.bool_)  # thrown, not started again
+        self._at_rest: np.ndarray | None = None  # their observations, the dice at rest
         self.single_observation_space = observation_space(self.task)
         self.single_action_space = action_space(self.task)
         self.observation_space = batch_space(self.single_observation_space, self.num_envs)
@@ -103,7 +104,8 @@ class DiceThrowVectorEnv(VectorEnv):
         """Reset env ``i`` with ``seeds[i]`` and ``options[i]``, as a single env's ``reset``.
 
         A ``None`` seed keeps env ``i``'s generator (a fresh one on the first reset); ``mask``
-        (None: all) picks the envs to reset, once every env has been reset.
+        (None: all) picks the envs to reset, once every env has been reset; an env thrown and
+        not reset keeps its observation at rest.
         """
         for name, values in (("seed", seeds), ("options", options)):
             if len(values) != self.num_envs:
@@ -116,8 +118,11 @@ class DiceThrowVectorEnv(VectorEnv):
                       else self._rngs[i] for i, seed in enumerate(seeds)]
         for i in np.flatnonzero(mask):
             self._targets[i], self._hands[i] = episode_hand(self, self._rngs[i], options[i])
+        obs = self.task.observe(self._targets, self._hands)
         self._ended &= ~mask
-        return self.task.observe(self._targets, self._hands)
+        if self._ended.any():  # thrown and not reset: still at rest
+            obs[self._ended] = self._at_rest[self._ended]
+        return obs
 
     def step(self, actions: np.ndarray,
              ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
@@ -136,7 +141,7 @@ class DiceThrowVectorEnv(VectorEnv):
                 for k, v in ((key, value), ("_" + key, mask))}
         done = (throw.reward.copy(), mask.copy(), np.zeros(self.num_envs, np.bool_))
         if self.autoreset_mode is not AutoresetMode.SAME_STEP:
-            self._ended[:] = True
+            self._ended[:], self._at_rest = True, throw.observation
             return throw.observation, *done, info
         info = {"final_obs": throw.observation, "_final_obs": mask,
                 "final_info": info, "_final_info": mask}
