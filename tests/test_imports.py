@@ -75,11 +75,15 @@ LAYERS = {
     "dice_env.model": set(),
     "dice_env.physics": set(),
     "dice_env.intervals": set(),
+    "dice_env.markdown": set(),
+    "dice_env.provenance": set(),
     "dice_env.simulation": {"dice_env.model", "dice_env.physics"},
+    "dice_env.throws": {"dice_env.model", "dice_env.simulation", "dice_env.intervals"},
     "dice_env.envs": {"dice_env.model", "dice_env.simulation"},
     "dice_env.viewer": {"dice_env", "dice_env.model", "dice_env.simulation", "dice_env.envs"},
     "dice_env.studies": {"dice_env", "dice_env.model", "dice_env.physics", "dice_env.simulation",
-                         "dice_env.envs", "dice_env.intervals"},
+                         "dice_env.envs", "dice_env.intervals", "dice_env.markdown",
+                         "dice_env.provenance", "dice_env.throws"},
 }
 
 

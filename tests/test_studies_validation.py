@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from dice_env import Scene
+from dice_env import Scene, throws
 from dice_env.studies import cuboids as cb
 from dice_env.studies import validation as va
 from dice_env.studies import weldon as wd
@@ -137,7 +137,7 @@ def test_memory_verdict_on_constructed_counts():
 
 def test_cup_releases_twelve_dice_apart_above_the_table():
     scene = Scene(die=wd.variant_die("drilled16"))
-    cups = wd.cup_throws(scene, 5, np.random.default_rng(0))
+    cups = throws.cup_throws(scene, 5, np.random.default_rng(0))
     assert len(cups) == wd.DICE and all(s.batch_size == 5 for s in cups)
     centres = np.stack([s.position for s in cups], axis=1)  # (5, 12, 3)
     gaps = np.linalg.norm(centres[:, :, None] - centres[:, None], axis=-1)

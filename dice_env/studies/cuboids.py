@@ -16,14 +16,13 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from dice_env.intervals import wilson
+from dice_env.markdown import estimate, markdown_table
 from dice_env.model.die import Die
 from dice_env.model.scene import Ground, Scene
 from dice_env.model.table import DIE_EDGE, DIE_MASS, RESTITUTION, damping_for_restitution
 from dice_env.studies.common import DOCS, SEED, checked_throws, progress, save_figure
-from dice_env.studies.fairness import VIGOROUS, Vigour
-from dice_env.studies.markdown import estimate, markdown_table
 from dice_env.studies.numbers import study_page
-from dice_env.studies.shapes import hand_throws, throw_faces
+from dice_env.throws import VIGOROUS, Vigour, hand_throws, throw_faces
 
 # x/y of the shapes thrown (1 is the cube).
 RATIOS = (0.45, 0.55, 0.65, 0.8, 0.9, 1.0, 1.1, 1.25, 1.5, 1.8, 2.2, 2.7)

@@ -10,10 +10,10 @@ from pathlib import Path
 
 import numpy as np
 
+from dice_env.markdown import markdown_table
 from dice_env.model.die import Die
 from dice_env.model.pips import DRILLINGS, SOURCES, Pips, cap_properties
 from dice_env.studies.common import DOCS
-from dice_env.studies.markdown import markdown_table
 from dice_env.studies.numbers import study_page
 
 
