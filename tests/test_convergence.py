@@ -5,7 +5,7 @@ import pytest
 
 from dice_env import Scene, State, throws
 from dice_env.model.scene import FrictionLaw, Scheme
-from dice_env.studies import convergence as cv
+from studies import convergence as cv
 
 
 def test_release_sampling_and_energy():
@@ -63,7 +63,7 @@ def test_outcome_test_counts_and_p_values():
 
 @pytest.mark.slow
 def test_report_written_by_the_cli(tmp_path):
-    from dice_env.studies.__main__ import main
+    from studies.__main__ import main
 
     main(["error", "--quick", "--out", str(tmp_path)])
     text = (tmp_path / "error-vs-runtime.md").read_text()

@@ -15,11 +15,11 @@ from dice_env import throws as hands
 from dice_env.model.die import Die
 from dice_env.model.scene import Scene
 from dice_env.studies import distributed as dist
-from dice_env.studies import run as run_study
-from dice_env.studies import shapes as sh
-from dice_env.studies.__main__ import main as studies_main
 from dice_env.studies.chunks import FolderError, kept_chunks, prepare
 from dice_env.studies.distributed import hand_faces
+from studies import run as run_study
+from studies import shapes as sh
+from studies.__main__ import main as studies_main
 
 THROWS, CHUNK, SEED = 120, 30, 7  # four chunks of default-d6 throws: about 0.3 s in all
 

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from dice_env import throws
-from dice_env.studies import collisions as co
+from studies import collisions as co
 
 
 def test_turn_is_the_angle_between_vectors():

@@ -7,7 +7,7 @@ from dice_env import Die, State, throws
 from dice_env.model.rotations import axis_angle
 from dice_env.simulation.group import GroupState, simulate_group
 from dice_env.simulation.simulate import UP
-from dice_env.studies import craps as cr
+from studies import craps as cr
 
 
 @pytest.mark.parametrize("angle", [0.0, 0.3, np.pi / 2, np.pi, 4.0, 3 * np.pi / 2])

@@ -5,7 +5,7 @@ import pytest
 
 from dice_env import Die, Scene, throws
 from dice_env.intervals import wilson
-from dice_env.studies import fairness as fz
+from studies import fairness as fz
 
 
 def test_wilson_interval_known_value():

@@ -9,10 +9,10 @@ import pytest
 from dice_env import Die, Scene, throws
 from dice_env.model.surroundings import tray
 from dice_env.simulation.group import DieContact, simulate_group
-from dice_env.studies import collisions as co
-from dice_env.studies import craps as cr
-from dice_env.studies import pairs as pr
-from dice_env.studies import run as run_study
+from studies import collisions as co
+from studies import craps as cr
+from studies import pairs as pr
+from studies import run as run_study
 
 
 def pairs_of(table):

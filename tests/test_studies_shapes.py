@@ -6,10 +6,10 @@ import numpy as np
 import pytest
 
 from dice_env import Die, Scene, throws
-from dice_env.studies import cuboids as cb
-from dice_env.studies import run as run_study
-from dice_env.studies import shapes as sh
-from dice_env.studies.__main__ import main as studies_main
+from studies import cuboids as cb
+from studies import run as run_study
+from studies import shapes as sh
+from studies.__main__ import main as studies_main
 
 FLIGHT = sh.flight_dice()
 

@@ -15,7 +15,7 @@ import re
 from pathlib import Path
 
 ROLE = re.compile(r":(?:func|class|mod|meth|attr|data|obj|exc):`~?([A-Za-z_][\w.]*)(?:\(\))?`")
-PACKAGES = ("dice_env", "agents")
+PACKAGES = ("dice_env", "agents", "studies")
 
 
 def _resolve(name: str, module: object) -> bool:

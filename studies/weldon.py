@@ -28,9 +28,9 @@ from dice_env.model.scene import Scene
 from dice_env.simulation.group import DieContact, GroupState, simulate_group
 from dice_env.simulation.simulate import State
 from dice_env.studies.chunks import kept_chunks, prepare
-from dice_env.studies.common import DOCS, SEED, checked_throws, progress, save_figure
-from dice_env.studies.numbers import study_page
 from dice_env.throws import CUP, CUP_BLOCK, Faces, cup_throws, throw_faces
+from studies.common import DOCS, SEED, checked_throws, progress, save_figure
+from studies.templates import study_page
 
 # Weldon's throws of twelve dice with 0..12 showing a 5 or a 6 (Pearson 1900, Kemp & Kemp 1991)
 WELDON_COUNTS = (185, 1149, 3265, 5475, 6114, 5194, 3067, 1331, 403, 105, 14, 4, 0)
@@ -356,7 +356,7 @@ def run(out: Path = DOCS, quick: bool = False, seed: int = SEED,
     sizes = dict(QUICK if quick else FULL)
     if checked_throws(throws, 2) is not None:
         sizes["together"] = int(throws)
-    command = "python -m dice_env.studies weldon" + (" --quick" if quick else "") + (
+    command = "python -m studies weldon" + (" --quick" if quick else "") + (
         f" --throws {throws}" if throws is not None else "")
     rng = np.random.default_rng(seed)
     total = DICE * (sizes["together"] + sizes["alone"] + (len(VARIANTS) - 1) * sizes["variant"])

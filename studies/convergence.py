@@ -1,4 +1,4 @@
-"""Error against run time: ``python -m dice_env.studies error`` writes docs/error-vs-runtime.md.
+"""Error against run time: ``python -m studies error`` writes docs/error-vs-runtime.md.
 
 :func:`trajectory_errors` against step and CPU time, :func:`outcome_test` (``dt`` against
 ``dt/4``) and :func:`face_agreement` beside the chaos floor; the page explains each.
@@ -21,14 +21,14 @@ from dice_env.model.scene import FrictionLaw, Scene, Scheme
 from dice_env.model.table import DAMPING, FRICTION, RESTITUTION, STIFFNESS
 from dice_env.simulation.calibration import measured_restitution
 from dice_env.simulation.simulate import Result, State, simulate
-from dice_env.studies.common import SEED, progress
-from dice_env.studies.numbers import study_page
 from dice_env.throws import (
     RELEASES,
     T_THROW,
     Release,
     face_agreement,
 )
+from studies.common import SEED, progress
+from studies.templates import study_page
 
 ENERGY_BINS = (0.0, 0.06, 0.12, 0.2, 0.3, np.inf)  # drop heights E / (m g) (m) of the bins
 

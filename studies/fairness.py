@@ -18,8 +18,6 @@ from dice_env.markdown import bracket, estimate, markdown_table
 from dice_env.model.die import Die
 from dice_env.model.scene import Scene
 from dice_env.simulation.simulate import Result, State, simulate
-from dice_env.studies.common import DOCS, SEED, error_bars, join, progress, save_figure
-from dice_env.studies.numbers import study_page
 from dice_env.throws import (
     BATCH,
     VIGOROUS,
@@ -27,6 +25,8 @@ from dice_env.throws import (
     energy_throws,
     vigorous_throws,
 )
+from studies.common import DOCS, SEED, error_bars, join, progress, save_figure
+from studies.templates import study_page
 
 # Throws of the full and quick runs: fair, loaded, and the memory-against-energy throws.
 FULL = {"fair": 100_000, "loaded": 20_000, "memory": 40_000}

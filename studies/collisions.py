@@ -29,10 +29,10 @@ from dice_env.simulation.group import (
     group_step,
     simulate_group,
 )
-from dice_env.studies.common import DOCS, SEED, checked_throws, progress, save_figure
-from dice_env.studies.numbers import study_page
-from dice_env.studies.pairs import not_void, simulate_in_batches, void_reasons
 from dice_env.throws import HAND, T_TRAY, group_throws, tray_scene
+from studies.common import DOCS, SEED, checked_throws, progress, save_figure
+from studies.pairs import not_void, simulate_in_batches, void_reasons
+from studies.templates import study_page
 
 # Every run takes each step (no flight jumps: a group's jumps depend on all its dice), so that
 # a die thrown apart moves bit for bit as in the pair until the dice first touch.
@@ -337,7 +337,7 @@ def _markdown(n: dict, seed: int) -> str:
           _share(n[f"{case}_entropy2"]), f"{n[f'{case}_uniform2']:.3g}",
           _share(n[f"{case}_joint"])) for case in ("together", "apart")))
     quick_note = "" if thrown >= FULL else (
-        f" (fewer than the default {FULL}: `python -m dice_env.studies collisions`)")
+        f" (fewer than the default {FULL}: `python -m studies collisions`)")
     verdict = ("more often" if n["change_together"][0] > n["change_apart"][0] else "less often") \
         if n["mcnemar_p"] < 0.01 else "not detectably differently"
     return study_page("collisions", globals(), DieContact=DieContact, HAND=HAND, TRAY=TRAY,

@@ -14,8 +14,9 @@ from tqdm import tqdm
 
 from dice_env.model.checks import check_int
 from dice_env.simulation.simulate import DiceArrays
+from studies import ROOT
 
-DOCS = Path(__file__).resolve().parents[2] / "docs"  # where the full studies write their pages
+DOCS = ROOT / "docs"  # where the full studies write their pages
 SEED = 2026  # the studies' default seed
 
 

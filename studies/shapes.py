@@ -17,8 +17,6 @@ from dice_env.model.die import STANDARD_SIZES, Die
 from dice_env.model.scene import Scene
 from dice_env.model.table import DIE_EDGE
 from dice_env.simulation.simulate import UP, State, simulate
-from dice_env.studies.common import DOCS, SEED, checked_throws, progress, save_figure
-from dice_env.studies.numbers import study_page
 from dice_env.throws import (
     VIGOROUS,
     Faces,
@@ -27,6 +25,8 @@ from dice_env.throws import (
     random_orientations,
     throw_faces,
 )
+from studies.common import DOCS, SEED, checked_throws, progress, save_figure
+from studies.templates import study_page
 
 DICE = tuple(STANDARD_SIZES)
 # Throws per die, fair and loaded, in the full and the quick run.
@@ -216,7 +216,7 @@ def _load_verdict(loaded: dict[str, Loaded]) -> str:
 
 def _markdown(fair: dict[str, Faces], loaded: dict[str, Loaded], flight: dict,
               sizes: dict, seed: int, quick: bool, throws: int | None, chunked: bool) -> str:
-    command = "python -m dice_env.studies shapes" + (" --quick" if quick else "") + (
+    command = "python -m studies shapes" + (" --quick" if quick else "") + (
         f" --throws {throws}" if throws is not None else "") + (
         " --chunks DIR" if chunked else "")
     fairness = markdown_table(

@@ -28,8 +28,6 @@ from dice_env.simulation.group import (
     simulate_group,
 )
 from dice_env.studies.chunks import kept_chunks, prepare
-from dice_env.studies.common import DOCS, SEED, checked_throws, join, progress, save_figure
-from dice_env.studies.numbers import study_page
 from dice_env.throws import (
     HAND,
     T_TRAY,
@@ -37,6 +35,8 @@ from dice_env.throws import (
     group_throws,
     tray_scene,
 )
+from studies.common import DOCS, SEED, checked_throws, join, progress, save_figure
+from studies.templates import study_page
 
 # Throws of the pair in the full and the quick run, per kernel call, per seeded chunk.
 FULL, QUICK, BATCH, CHUNK = 100_000, 60, 500, 2_000

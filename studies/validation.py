@@ -19,13 +19,13 @@ from dice_env.model.rotations import up_rotation
 from dice_env.model.scene import Scene
 from dice_env.simulation.calibration import measured_restitution
 from dice_env.simulation.simulate import UP, State, simulate
-from dice_env.studies import cuboids, weldon
-from dice_env.studies.common import DOCS, SEED
-from dice_env.studies.fairness import face_down, throw_energy
-from dice_env.studies.numbers import study_page
 from dice_env.throws import energy_throws
+from studies import cuboids, weldon
+from studies.common import DOCS, SEED
+from studies.fairness import face_down, throw_energy
+from studies.templates import study_page
 
-COMMAND = "python -m dice_env.studies validation"
+COMMAND = "python -m studies validation"
 MEMORY_THROWS = {False: 4000, True: 300}  # throws of the initially-down face, by ``quick``
 ENERGY_RANGE = (0.01, 100.0)  # throw energy above a gentle release (m g a), log-uniform
 Z_ONE_SIDED = 1.644854  # 5% one-sided

@@ -22,21 +22,21 @@ from dice_env.model import materials
 from dice_env.model.scene import Scene
 from dice_env.model.surroundings import CRAPS, craps
 from dice_env.simulation.group import GroupResult
-from dice_env.studies.common import DOCS, SEED, checked_throws, error_bars, progress, save_figure
-from dice_env.studies.numbers import study_page
-from dice_env.studies.pairs import (
-    TOTALS,
-    not_void,
-    simulate_in_batches,
-    triangle,
-    void_reasons,
-)
 from dice_env.throws import (
     SET_THROW,
     T_TRAY,
     random_orientations,
     sevens_set,
 )
+from studies.common import DOCS, SEED, checked_throws, error_bars, progress, save_figure
+from studies.pairs import (
+    TOTALS,
+    not_void,
+    simulate_in_batches,
+    triangle,
+    void_reasons,
+)
+from studies.templates import study_page
 
 # Throws per cell in the full and the quick run; the fewest a run takes per cell.
 FULL, QUICK, MIN_THROWS = 300, 8, 10
@@ -75,7 +75,7 @@ def throw_cell(noise: float, speed: float, set_hand: bool, n: int, rng: np.rando
 
 
 def reasons(result: GroupResult) -> dict[str, np.ndarray]:
-    """:func:`~dice_env.studies.pairs.void_reasons`, and a die that missed the back wall."""
+    """:func:`~studies.pairs.void_reasons`, and a die that missed the back wall."""
     return {"a die did not touch the back wall": ~result.touched[:, :, BACK_WALL].all(axis=1),
             **void_reasons(result)}
 
@@ -167,7 +167,7 @@ def _markdown(cells: dict, noises: tuple, speeds: tuple, n: int, seconds: float,
     random_off = [k for k, c in detected if k[2] == "random"]
     lost = [noise for noise in noises
             if all(cells[(noise, s, "set")]["binom_p"] >= SIGNIFICANT for s in speeds)]
-    command = "python -m dice_env.studies craps" + ("" if n == FULL else f" --throws {n}")
+    command = "python -m studies craps" + ("" if n == FULL else f" --throws {n}")
     return study_page("craps", globals(), CRAPS=CRAPS, cells=cells, command=command,
                       controlled=controlled, cpu=cpu, lost=lost, n=n, noises=noises, numba=numba,
                       random_off=random_off, rows=rows, scene=craps_scene(), seconds=seconds,
