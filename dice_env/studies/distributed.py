@@ -26,7 +26,6 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-from tqdm import tqdm
 
 from dice_env.markdown import bracket, markdown_table
 from dice_env.model.checks import check_int
@@ -238,6 +237,8 @@ def run_throws(scene: Scene | str, throws: int, *, chunk: int = CHUNK, seed: int
     folder = None if out is None else prepare(Path(out), spec.record(), "out")
     tallies = {} if folder is None else _saved_tallies(folder, spec)
     todo = [i for i in range(spec.n_chunks) if i not in tallies]
+    from tqdm import tqdm  # imported here: importing the runner needs no progress bar
+
     bar = tqdm(total=spec.throws, initial=sum(t.throws for t in tallies.values()),
                unit="throw", unit_scale=True, desc="throws", disable=not progress,
                dynamic_ncols=True)
