@@ -269,7 +269,7 @@ def _rotation(vector: np.ndarray) -> np.ndarray:
 
 @dataclass(frozen=True)
 class SetThrow:
-    """The craps set throw (docs/craps.md): two d6 held set, thrown by the env's hand.
+    """The craps set throw (docs/craps.md): two d6 held in a set, thrown by the env's hand.
 
     The hand moves at ``speed`` (m/s) along x and ``lift`` up, with ``backspin`` (rad/s) about
     -y, released ``height`` (m) up; an action component of 1 is ``max_speed`` (m/s) or
