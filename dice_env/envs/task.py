@@ -455,7 +455,7 @@ def judge(scene: Scene, dice: Sequence[Die], result: Result | GroupResult, until
     :func:`decided_reads` does not read.
     """
     if until == "early_rest":
-        result = held_within_t_max(result, scene, t_max)
+        result = _held_within_t_max(result, scene, t_max)
     n = len(result.unstable)
     fair = np.ones(n, np.bool_) if fair is None else fair
     sunk = result.sunk.reshape(n, -1).any(axis=1)
@@ -545,7 +545,7 @@ def check_task_keywords(keywords: dict[str, object]) -> dict[str, object]:
     return keywords
 
 
-def held_within_t_max(result: Result, scene: Scene, t_max: float | None = None) -> Result:
+def _held_within_t_max(result: Result, scene: Scene, t_max: float | None = None) -> Result:
     """``result`` of an early-rest run, ``settled`` as if the rest hold had been waited out.
 
     A die whose hold (``ceil(hold / dt)`` quiet steps) ends after ``t_max`` (default the
