@@ -1,8 +1,8 @@
 """Tampered, truncated and crafted chunk files: a clean tally or the runner's own refusal."""
 
 import io
-import json
 import shutil
+import time
 import zipfile
 
 import numpy as np
@@ -80,12 +80,13 @@ def _tamper(rng, data):
 def test_every_tampered_chunk_gives_a_tally_or_the_runners_refusal(tmp_path, capsys):
     run = tmp_path / "run"
     dist.main([*ARGV, "--out", str(run)])
-    summary = capsys.readouterr().out.splitlines()[2:]
+    capsys.readouterr()
     chunk = run / "chunk_000001.npz"
-    data, rng, outcomes = chunk.read_bytes(), np.random.default_rng(47), {}
+    data, rng, outcomes = chunk.read_bytes(), np.random.default_rng(47), {"refused": 0, "read": 0}
     for case in range(CASES):
         folder = shutil.copytree(run, tmp_path / f"case{case}")
         (folder / chunk.name).write_bytes(_tamper(rng, data))
+        start = time.perf_counter()
         try:
             dist.main([*ARGV, "--out", str(folder)])
         except SystemExit as exit_:
@@ -94,13 +95,12 @@ def test_every_tampered_chunk_gives_a_tally_or_the_runners_refusal(tmp_path, cap
             assert err[-1].startswith("python -m dice_env.studies.distributed: error: "
                                       "argument --out: "), err
             assert "delete it" in err[-1] and chunk.name in err[-1], err
-            outcomes["refused"] = outcomes.get("refused", 0) + 1
+            outcomes["refused"] += 1
         else:  # the tampering changed nothing a run checks: a sane tally
             out = capsys.readouterr().out
             assert "nan" not in out and "Counted" in out, out
-            outcomes["read"] = outcomes.get("read", 0) + 1
-            if out.splitlines()[2:] == summary:
-                outcomes["same"] = outcomes.get("same", 0) + 1
+            outcomes["read"] += 1
+        assert time.perf_counter() - start < 10.0, case  # read, never thrown again
         shutil.rmtree(folder)
     assert outcomes["refused"] > CASES // 2, outcomes
 
@@ -110,8 +110,7 @@ def test_a_chunk_record_of_any_kind_is_refused_by_name(tmp_path, capsys, record)
     run = tmp_path / "run"
     dist.main([*ARGV, "--out", str(run)])
     chunk = run / "chunk_000000.npz"
-    arrays = _arrays(chunk.read_bytes())
-    chunk.write_bytes(_npz(arrays | {"chunk": np.array(record)}))
-    with pytest.raises(SystemExit):
+    chunk.write_bytes(_npz(_arrays(chunk.read_bytes()) | {"chunk": np.array(record)}))
+    with pytest.raises(SystemExit) as exit_:
         dist.main([*ARGV, "--out", str(run)])
-    assert json.dumps(chunk.name)[1:-1] in capsys.readouterr().err
+    assert exit_.value.code == 2 and chunk.name in capsys.readouterr().err.splitlines()[-1]
