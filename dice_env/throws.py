@@ -5,8 +5,8 @@ benchmarks share: one die from a :class:`Vigour` (:func:`vigorous_throws`, :func
 :func:`energy_throws`), several dice from one :class:`Hand` (:func:`group_throws`) or a
 :class:`Cup` (:func:`cup_throws`), the nominal :data:`RELEASES` with their hand noise, and the
 craps :class:`SetThrow`; then the faces they show (:func:`throw_faces`, :class:`Faces`). The
-uniform orientations and the chi-square use scipy, imported when called (the ``plots`` extra
-brings it).
+uniform orientations and the chi-square use scipy, imported when called (the ``studies``
+extra brings it).
 """
 
 from __future__ import annotations
@@ -50,7 +50,7 @@ VIGOROUS = Vigour()
 
 def random_orientations(rng: np.random.Generator, n: int) -> np.ndarray:
     """``n`` rotation matrices uniform over SO(3), shape (n, 3, 3)."""
-    from scipy.spatial.transform import Rotation  # scipy: the plots extra
+    from scipy.spatial.transform import Rotation  # scipy: the studies extra
 
     return Rotation.random(n, random_state=rng).as_matrix()
 
@@ -337,7 +337,7 @@ class Faces:
     @classmethod
     def of(cls, counts: np.ndarray, throws: int) -> Faces:
         """The faces ``counts`` (F,) counted among ``throws`` throws, with their chi-square."""
-        from scipy import stats  # scipy: the plots extra
+        from scipy import stats  # scipy: the studies extra
 
         ended = int(counts.sum())
         chi2, p = stats.chisquare(counts) if ended else (np.nan, np.nan)

@@ -9,11 +9,13 @@ from __future__ import annotations
 from collections.abc import Callable
 from pathlib import Path
 
+import gymnasium as gym
 import llvmlite.binding
 import numba
 import numpy as np
 
 from dice_env import Die, Scene, simulate
+from dice_env.envs import TASKS
 from dice_env.model.surroundings import tray
 from dice_env.simulation.group import simulate_group
 from dice_env.simulation.paper import paper_scene
@@ -54,6 +56,18 @@ def _group(n: int) -> Callable[[], dict[str, np.ndarray]]:
     return case
 
 
+def _env(task_id: str) -> Callable[[], dict[str, np.ndarray]]:
+    def case() -> dict[str, np.ndarray]:
+        envs = gym.make_vec(task_id, num_envs=16, num_threads=1)
+        first, _ = envs.reset(seed=5)
+        actions = np.random.default_rng(13).uniform(-1, 1, (16, *envs.single_action_space.shape))
+        then, reward, _, _, info = envs.step(actions)
+        info = info.get("final_info", info)  # where the vector env resets in the same step
+        return {"observation": np.concatenate([first, then]), "reward": reward,
+                "face": info["face"], "void": info["void_reason"].astype("U")}
+    return case
+
+
 CASES: dict[str, Callable[[], dict[str, np.ndarray]]] = {
     "default_rest": _single(Scene()),
     "default_decided": _single(Scene(), until="decided"),
@@ -63,6 +77,7 @@ CASES: dict[str, Callable[[], dict[str, np.ndarray]]] = {
     "drilled": _single(Scene(die=Die.standard("d6", pips="drilled16"))),
     "two_d6": _group(2),
     "twelve_d6": _group(12),
+    **{f"env_{task.id}": _env(task.id) for task in TASKS},
 }
 
 

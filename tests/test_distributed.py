@@ -5,6 +5,7 @@ import json
 import os
 import re
 import shutil
+import subprocess
 import sys
 from dataclasses import dataclass
 
@@ -15,7 +16,7 @@ from dice_env import throws as hands
 from dice_env.model.die import Die
 from dice_env.model.scene import Scene
 from dice_env.studies import distributed as dist
-from dice_env.studies.chunks import FolderError, kept_chunks, prepare
+from dice_env.studies.chunks import FolderError, kept_chunks, prepare, write_atomically
 from dice_env.studies.distributed import hand_faces
 from studies import run as run_study
 from studies import shapes as sh
@@ -246,6 +247,80 @@ def test_a_corrupt_chunk_is_refused_by_name(folder, spoil):
     with pytest.raises(FolderError, match=r"chunk_000001.npz' is corrupt") as error:
         throws(out=folder)
     assert error.value.__cause__ is not None
+
+
+def respoil(path, name, change):
+    """The chunk at ``path`` saved again with its outcome ``name`` replaced by ``change(it)``."""
+    with np.load(path) as saved:
+        arrays = {k: saved[k] for k in saved.files}
+    np.savez(path, **arrays | {name: change(arrays[name])})
+
+
+def _set(value, dtype=None):
+    def change(values):
+        values = values.astype(dtype or values.dtype)
+        values[0] = value
+        return values
+    return change
+
+
+@pytest.mark.parametrize(("name", "change", "match"), [
+    ("counted", lambda c: c.astype(np.int64), r"counted is int64, not bool"),
+    ("time", _set(np.nan), r"time nan outside \[0.0, "),
+    ("steps", _set(-5), r"steps -5 outside \[0, "),
+    ("impacts", _set(-1), r"impacts -1 outside \[0, inf\]"),
+    ("face", _set(7), r"face 7 outside \[1, 6\]"),
+    ("face", _set(0), r"face 0 outside \[1, 6\]"),
+    ("face", _set(2.5, np.float64), r"face is float64, not int16"),
+    ("counted", lambda c: ~c, r"counted disagrees with decided, settled, unstable and sunk")])
+def test_a_chunk_outcome_of_the_wrong_kind_or_range_is_refused(folder, capsys, name, change,
+                                                              match):
+    respoil(folder / "chunk_000001.npz", name, change)
+    with pytest.raises(FolderError, match=r"chunk_000001.npz' is corrupt \(" + match):
+        throws(out=folder)
+    with pytest.raises(SystemExit) as exit_:  # the command line: one line, exit 2
+        dist.main(["--throws", str(THROWS), "--chunk", str(CHUNK), "--seed", str(SEED),
+                   "--out", str(folder)])
+    last = capsys.readouterr().err.splitlines()[-1]
+    assert exit_.value.code == 2 and "delete it to throw it again" in last
+
+
+def test_writers_of_one_file_never_rename_each_others_temporary_files(tmp_path):
+    path = tmp_path / "x.bin"
+
+    def outer(f):
+        f.write(b"outer ")
+        write_atomically(path, lambda g: g.write(b"inner"))  # another writer, meanwhile
+        f.write(b"done")
+
+    write_atomically(path, outer)
+    assert path.read_bytes() == b"outer done"
+    assert [p.name for p in tmp_path.iterdir()] == ["x.bin"]
+    with pytest.raises(ZeroDivisionError):
+        write_atomically(path, lambda f: 1 / 0)
+    assert [p.name for p in tmp_path.iterdir()] == ["x.bin"]
+
+
+# A runner that starts when the file argv[1] appears: imported first, so both start at once.
+AT_ONCE = ("import pathlib, sys, time\nfrom dice_env.studies import distributed\n"
+           "print('ready', flush=True)\nwhile not pathlib.Path(sys.argv[1]).exists():\n"
+           "    time.sleep(0.001)\ndistributed.main(sys.argv[2:])")
+
+
+def test_two_processes_on_one_folder_both_finish_with_the_same_tally(tmp_path):
+    go, out = tmp_path / "go", tmp_path / "run"
+    argv = [sys.executable, "-c", AT_ONCE, str(go), "--throws", "100", "--chunk", "2", "--seed",
+            "2", "--out", str(out)]
+    env = os.environ | {"DICE_ENV_QUIET_COMPILE": "1"}
+    runs = [subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                             env=env) for _ in range(2)]
+    assert [run.stdout.readline() for run in runs] == ["ready\n"] * 2
+    go.touch()  # both write spec.json, then the same chunks, at the same moments
+    outs = [run.communicate(timeout=300) for run in runs]
+    assert [run.returncode for run in runs] == [0, 0], [err[-600:] for _, err in outs]
+    counts = [re.search(r"Counted .*", text)[0] for text, _ in outs]
+    assert counts[0] == counts[1] and len(list(out.glob("chunk_*.npz"))) == 50
+    assert not list(out.glob("*.partial"))
 
 
 @pytest.mark.parametrize("text", [b"{not json", b"\xff\xfe\x00", b"[1, 2]"])

@@ -1,4 +1,4 @@
-"""Faces and final states on fixed seeds equal the stored reference (tests/reference_results.py).
+"""Faces, final states and env steps on fixed seeds equal the stored reference.
 
 Bit-equal results are promised on one machine, not across CPUs (BLAS kernels and the code numba
 emits depend on the CPU, and a bouncing die amplifies the last bit): on another host the test

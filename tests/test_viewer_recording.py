@@ -1,4 +1,7 @@
+import dataclasses
 import json
+import time
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -10,7 +13,8 @@ from dice_env.model.scene import FrictionLaw, Ground
 from dice_env.model.surroundings import walls
 from dice_env.simulation.codec import from_data, to_data
 from dice_env.simulation.group import DieContact, GroupState
-from dice_env.viewer import Recording, ReplayError, load, record, replay, save
+from dice_env.viewer import Recording, ReplayError, files, load, record, replay, save
+from dice_env.viewer.files import RecordingError
 from dice_env.viewer.throws import random_throws
 
 
@@ -136,3 +140,113 @@ def test_bad_arguments_name_the_parameter(tmp_path):
         Recording.from_data({"format": "other"})
     with pytest.raises(ValueError, match="count"):
         random_throws(make_task(), 0, seed=0)
+
+
+def test_a_frame_rate_below_one_frame_by_t_max_is_refused_by_name():
+    scene = Scene()
+    for fps in (0.1, 1e-3, 5e-324, 1001.0, float("nan")):
+        with pytest.raises(ValueError, match=r"fps must be in \[1, 1000\]"):
+            record(scene, scene.die, _release(scene), fps=fps)
+    with pytest.raises(ValueError, match=r"fps must be in \[2\.5, 1000\].*t_max = 0\.4 s"):
+        record(scene, scene.die, _release(scene), fps=2.0, t_max=0.4)
+    rec, = record(scene, scene.die, _release(scene), fps=2.5, t_max=0.4)  # one frame
+    assert len(rec.t) == 2 and rec.outcome["time"] <= 0.4
+
+
+def _tampered(rec, **changes):
+    data = rec.to_data()
+    data.update(changes)
+    return data
+
+
+@pytest.fixture(scope="module")
+def two_dice():
+    scene = Scene(walls=walls("tray"))
+    state = GroupState.of([_release(scene), _release(scene, y=0.03, spin=(-10.0, 5.0, 3.0))])
+    return record(scene, (Die(), Die()), state, fps=30.0)[0]
+
+
+def test_load_refuses_frames_no_throw_has(two_dice, tmp_path):
+    data = two_dice.to_data()
+    n = len(data["t"])
+    backwards = data["t"][:]
+    backwards[2], backwards[3] = backwards[3], backwards[2]
+    three = [[*frame, frame[0]] for frame in data["position"]]
+    unit = [[[2 * q for q in die] for die in frame] for frame in data["quaternion"]]
+    nan = [[[float("nan")] * 3] * 2, *data["position"][1:]]
+    for changes, message in (
+            ({"t": data["t"][:-1]}, rf"position must have shape \({n - 1}, 2, 3\).*got \({n}, "),
+            ({"position": data["position"][:-1]}, r"position must have shape"),
+            ({"quaternion": data["quaternion"][1:]}, r"orientation must have shape"),
+            ({"t": backwards}, "t must start at 0 and increase strictly"),
+            ({"position": three}, rf"position must have shape \({n}, 2, 3\)"),
+            ({"position": nan}, "position must be finite"),
+            ({"quaternion": unit}, "quaternion must hold finite unit quaternions"),
+            ({"fps": 1e-3}, r"fps must be in \[1, 1000\]"),
+            ({"outcome": {"faces": [1], "void": ""}}, "outcome.s faces must be a list of 2 ints"),
+            ({"run": {"t_max": -1.0, "until": "rest"}}, "run's t_max must be None or a finite"),
+            ({"run": {"t_max": None, "until": "early_rest"}}, "run's until must be one of")):
+        path = tmp_path / "bad.json"
+        path.write_text(json.dumps([_tampered(two_dice, **changes)]))
+        with pytest.raises(RecordingError, match="recording 0: " + message):
+            load(path)
+    with pytest.raises(ValueError, match="position must be finite"):  # none to write either
+        dataclasses.replace(two_dice, position=two_dice.position * np.nan)
+
+
+def test_a_replay_simulates_no_further_than_its_frames_and_rest_hold(two_dice, monkeypatch):
+    limits = []
+
+    def spy(*args, **keywords):
+        limits.append(keywords["t_max"])
+        assert keywords["t_max"] is None or keywords["t_max"] < 10  # not the file's 6000 s
+        return record(*args, **keywords)
+
+    monkeypatch.setattr(files, "record", spy)
+    data = _tampered(two_dice, run={"t_max": 6e3, "until": "t_max"}, fps=1.0)
+    data["t"], data["position"], data["quaternion"] = (data[k][:2] for k in
+                                                       ("t", "position", "quaternion"))
+    data["t"][1] = 1.0
+    start = time.perf_counter()
+    again, = files.replay(Recording.from_data(data))  # at rest by then: the faces recorded
+    assert time.perf_counter() - start < 30 and len(limits) == 1
+    assert again.run == data["run"]
+    assert limits[0] == pytest.approx(3 * 1.0 + 0.1, rel=1e-3)  # 2 frames, 1 more, the hold
+    honest, = files.replay(two_dice)  # to its own end and hold, as recorded
+    assert limits[1] > two_dice.outcome["time"] + two_dice.scene.rest.hold
+    assert np.array_equal(honest.position, two_dice.position) and honest.run == two_dice.run
+
+
+def test_a_throw_that_cannot_be_thrown_again_is_named(two_dice):
+    overlapping = two_dice.to_data()
+    overlapping["release"]["position"][1] = overlapping["release"]["position"][0]
+    below = two_dice.to_data()
+    below["release"]["position"][0][2] = -0.1
+    for data in (overlapping, below):
+        with pytest.raises(RecordingError, match="throw 0 cannot be thrown again: "):
+            files.replay(Recording.from_data(data))
+
+
+def test_pages_and_recordings_are_written_whole_or_not_at_all(two_dice, tmp_path, monkeypatch):
+    pytest.importorskip("pygltflib")
+    from dice_env.viewer import write_glb, write_html
+
+    for name, write in (("a.json", save), ("a.html", write_html), ("a.glb", write_glb)):
+        path = tmp_path / name
+        write(two_dice, path)
+        whole = path.read_bytes()
+        with monkeypatch.context() as patch:
+            patch.setattr(Path, "write_bytes", _interrupted(Path.write_bytes))
+            patch.setattr(Path, "write_text", _interrupted(Path.write_text))
+            with pytest.raises(KeyboardInterrupt):
+                write(two_dice, path)
+        assert path.read_bytes() == whole
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a.glb", "a.html", "a.json"]
+
+
+def _interrupted(write):
+    """``write`` (Path.write_bytes or write_text) that writes half its data, then is stopped."""
+    def half(self, data, *args, **keywords):
+        write(self, data[:len(data) // 2], *args, **keywords)
+        raise KeyboardInterrupt
+    return half

@@ -596,8 +596,11 @@ class Viewer:
         if not (sys.platform.startswith(("darwin", "win")) or os.environ.get("DISPLAY")
                 or os.environ.get("WAYLAND_DISPLAY")):  # no window can open
             return
-        import matplotlib.pyplot as plt
-
+        try:
+            import matplotlib.pyplot as plt
+        except ImportError as error:
+            raise ImportError("render_mode='human' draws in a matplotlib window: pip install "
+                              "matplotlib, or use render_mode='rgb_array'") from error
         if self._figure is None:
             plt.ion()
             self._figure, axes = plt.subplots()
@@ -622,9 +625,9 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("name", choices=sorted(FIGURES))
     parser.add_argument("--out", required=True, help="PNG file to write")
     args = parser.parse_args(argv)
-    import matplotlib.pyplot as plt
+    from PIL import Image
 
-    plt.imsave(args.out, FIGURES[args.name]())
+    Image.fromarray(FIGURES[args.name]()).save(args.out, format="PNG")
 
 
 if __name__ == "__main__":

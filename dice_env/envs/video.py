@@ -13,10 +13,8 @@ from dice_env.envs.dice_throw import RENDER_FPS
 def save_video(frames: Sequence[np.ndarray], path: str | Path, fps: float = RENDER_FPS) -> Path:
     """Write ``frames`` (each H x W x 3 uint8) to ``path``; the suffix picks the format.
 
-    ".gif" needs only Pillow; ".mp4" needs the ``imageio-ffmpeg`` package.
+    ".gif" is written by Pillow; ".mp4" needs the ``video`` extra (imageio, imageio-ffmpeg).
     """
-    import imageio.v3 as iio
-
     path = Path(path)
     if not frames:
         raise ValueError("frames must hold at least one frame, got none")
@@ -26,12 +24,16 @@ def save_video(frames: Sequence[np.ndarray], path: str | Path, fps: float = REND
         raise ValueError(f"fps must be > 0, got {fps!r}")
     stack = np.stack([np.asarray(f, dtype=np.uint8) for f in frames])
     if path.suffix.lower() == ".gif":
-        iio.imwrite(path, stack, duration=1000.0 / fps, loop=0)
+        from PIL import Image
+
+        first, *rest = (Image.fromarray(frame) for frame in stack)
+        first.save(path, save_all=True, append_images=rest, duration=1000.0 / fps, loop=0)
     else:
         try:
+            import imageio.v3 as iio
             import imageio_ffmpeg  # noqa: F401
         except ImportError as error:
-            raise ImportError("saving .mp4 needs imageio-ffmpeg (pip install imageio-ffmpeg); "
-                              ".gif works without it") from error
+            raise ImportError("saving .mp4 needs the video extra: pip install "
+                              "'dice_env[video]'; .gif works without it") from error
         iio.imwrite(path, stack, fps=fps, codec="libx264")
     return path

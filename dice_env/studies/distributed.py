@@ -35,9 +35,10 @@ from dice_env.simulation.simulate import State, simulate
 from dice_env.studies.chunks import FolderError, identity, load, prepare, write_atomically
 from dice_env.throws import Faces, counted, hand_throws
 
-# Per-throw outcomes a chunk keeps.
-OUTCOMES = ("face", "counted", "decided", "settled", "unstable", "sunk", "steps", "time",
-            "impacts")
+# Per-throw outcomes a chunk keeps, with their dtypes.
+OUTCOMES = {"face": np.int16, "counted": np.bool_, "decided": np.bool_, "settled": np.bool_,
+            "unstable": np.bool_, "sunk": np.bool_, "steps": np.int64, "time": np.float64,
+            "impacts": np.int32}
 MOMENTS = ("steps", "time", "impacts")  # outcomes summarised by their sum and sum of squares
 # Histogram bins: time to the end over [0, t_max]; impacts 0, 1, ... (the last: that or more)
 TIME_BINS, IMPACT_BINS = 50, 32
@@ -347,9 +348,29 @@ def _read_chunk(path: Path, spec: Spec, index: int) -> dict[str, np.ndarray]:
                           "it to throw it again, or pass another folder")
     if sorted(saved) != sorted(OUTCOMES) or \
             any(saved[name].shape != (asked["throws"],) for name in OUTCOMES):
-        raise FolderError(f"{str(path)!r} is corrupt (its outcomes are not {OUTCOMES} of "
+        raise FolderError(f"{str(path)!r} is corrupt (its outcomes are not {tuple(OUTCOMES)} of "
                           f"{asked['throws']} throws each): delete it to throw it again")
+    wrong = _wrong_outcome(saved, spec.scene)
+    if wrong:
+        raise FolderError(f"{str(path)!r} is corrupt ({wrong}): delete it to throw it again")
     return saved
+
+
+def _wrong_outcome(saved: dict[str, np.ndarray], scene: Scene) -> str:
+    """What in a chunk's outcomes no run of ``scene`` gives (``""``: nothing): dtype, range."""
+    for name, dtype in OUTCOMES.items():
+        if saved[name].dtype != dtype:
+            return f"{name} is {saved[name].dtype}, not {np.dtype(dtype)}"
+    o, n_steps = saved, scene.steps_for()
+    ranges = {"face": (1, scene.die.n_faces), "steps": (0, n_steps),
+              "time": (0.0, n_steps * scene.step), "impacts": (0, np.inf)}
+    for name, (low, high) in ranges.items():
+        inside = (o[name] >= low) & (o[name] <= high)  # False for NaN
+        if not inside.all():
+            return f"{name} {o[name][~inside][0].item()!r} outside [{low}, {high}]"
+    if not np.array_equal(o["counted"], counted(types.SimpleNamespace(**o))):
+        return "counted disagrees with decided, settled, unstable and sunk"
+    return ""
 
 
 def _save_chunk(folder: Path, spec: Spec, index: int, outcomes: dict[str, np.ndarray]) -> None:

@@ -5,11 +5,14 @@ WebGL on ANGLE/SwiftShader (no GPU); needs Debian's ``chromium`` and the ``playw
 
 from __future__ import annotations
 
+import importlib.util
 import shutil
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
+
+from dice_env.viewer.disk import write_atomically
 
 # Headless, software WebGL, and no background connections (refused on a closed network).
 CHROMIUM_ARGS = ("--no-sandbox", "--disable-gpu", "--use-angle=swiftshader",
@@ -24,6 +27,15 @@ def chromium() -> str | None:
     return shutil.which("chromium") or shutil.which("chromium-browser")
 
 
+def missing() -> str | None:
+    """What is missing to open a page (Chromium or Playwright), or None."""
+    if chromium() is None:
+        return "no Chromium found (Debian: apt-get install chromium)"
+    if importlib.util.find_spec("playwright") is None:
+        return "no playwright (pip install playwright)"
+    return None
+
+
 @contextmanager
 def opened(page: str | Path, size: tuple[int, int] = (1000, 700),
            errors: list[str] | None = None) -> Iterator[Any]:
@@ -32,15 +44,13 @@ def opened(page: str | Path, size: tuple[int, int] = (1000, 700),
     ``size``: the viewport (width, height) in CSS pixels; ``errors`` collects console errors and
     uncaught exceptions. ``RuntimeError`` where Chromium or Playwright is missing.
     """
-    browser_path = chromium()
-    if browser_path is None:
-        raise RuntimeError("no Chromium found (Debian: apt-get install chromium)")
-    try:
-        from playwright.sync_api import sync_playwright
-    except ImportError as error:
-        raise RuntimeError("no playwright (pip install playwright)") from error
+    reason = missing()
+    if reason is not None:
+        raise RuntimeError(reason)
+    from playwright.sync_api import sync_playwright
+
     with sync_playwright() as playwright:
-        browser = playwright.chromium.launch(executable_path=browser_path,
+        browser = playwright.chromium.launch(executable_path=chromium(),
                                              args=list(CHROMIUM_ARGS), timeout=20_000)
         try:
             tab = browser.new_page(viewport={"width": size[0], "height": size[1]})
@@ -59,5 +69,5 @@ def screenshot(page: str | Path, path: str | Path, *, t: float | None = None,
     """A PNG of ``page`` at simulated time ``t`` (s; None: the end of the first throw)."""
     with opened(page, size) as tab:
         tab.evaluate("t => window.diceViewer.setTime(t)", 1e9 if t is None else float(t))
-        tab.screenshot(path=str(path))
+        write_atomically(Path(path), tab.screenshot())
     return Path(path)

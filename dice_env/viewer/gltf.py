@@ -13,6 +13,7 @@ import itertools
 import json
 import math
 import os
+import struct
 from pathlib import Path
 from typing import Any
 
@@ -22,6 +23,7 @@ import pygltflib as gl
 from dice_env.envs.render import TABLE_COLOUR, WALL_COLOUR, _plane_axes, _unit
 from dice_env.model.die import Die
 from dice_env.model.rotations import matrix_to_quaternion
+from dice_env.viewer.disk import parse_json, write_atomically
 from dice_env.viewer.recording import Recording, library_version
 from dice_env.viewer.textures import face_atlas, png_bytes
 
@@ -30,6 +32,7 @@ WALL_HEIGHT = 0.05  # m: a wall's quad above the floor
 Z_UP = [-math.sqrt(0.5), 0.0, 0.0, math.sqrt(0.5)]  # root rotation (x, y, z, w): z up to y up
 EXTRAS = "recordings"  # asset.extras[EXTRAS]: the recordings' data, JSON text of a list
 ANIMATION = "throw"
+GLB_MAGIC, GLB_VERSION, JSON_CHUNK = b"glTF", 2, b"JSON"  # a .glb's header and first chunk
 _COMPONENTS = {np.dtype(np.float32): gl.FLOAT, np.dtype(np.uint16): gl.UNSIGNED_SHORT}
 _TYPES = {1: gl.SCALAR, 2: gl.VEC2, 3: gl.VEC3, 4: gl.VEC4}
 
@@ -55,18 +58,30 @@ def write_glb(recording: Recording, path: str | os.PathLike[str]) -> Path:
     gltf.scene = 0
     gltf.buffers = [gl.Buffer(byteLength=len(blob.data))]
     gltf.set_binary_blob(bytes(blob.data))
-    gltf.save_binary(str(path))
+    write_atomically(path, b"".join(gltf.save_to_bytes()))
     return path
 
 
 def read_glb(path: str | os.PathLike[str]) -> list[dict[str, Any]]:
     """The recordings' data (a list of :meth:`Recording.to_data`) in a :func:`write_glb` file."""
     path = _glb_path(path)
-    extras = gl.GLTF2.load_binary(str(path)).asset.extras
+    data = path.read_bytes()
+    if len(data) < 20 or data[:4] != GLB_MAGIC:
+        raise ValueError(f"path {str(path)!r} is not a binary glTF (no {GLB_MAGIC!r} header)")
+    version, length, size = struct.unpack_from("<III", data, 4)
+    if version != GLB_VERSION or length != len(data):
+        raise ValueError(f"path {str(path)!r} is not a whole glTF {GLB_VERSION} file (its "
+                         f"header says version {version}, {length} bytes; it holds "
+                         f"{len(data)} bytes)")
+    if data[16:20] != JSON_CHUNK or 20 + size > length:
+        raise ValueError(f"path {str(path)!r} has no whole JSON chunk after its header")
+    gltf = parse_json(data[20:20 + size])
+    asset = gltf.get("asset") if isinstance(gltf, dict) else None
+    extras = asset.get("extras") if isinstance(asset, dict) else None
     if not isinstance(extras, dict) or not isinstance(extras.get(EXTRAS), str):
         raise ValueError(f"path {str(path)!r} holds no dice_env recording "
                          f"(asset.extras[{EXTRAS!r}])")
-    return json.loads(extras[EXTRAS])
+    return parse_json(extras[EXTRAS])
 
 
 def _glb_path(path: str | os.PathLike[str]) -> Path:

@@ -20,6 +20,7 @@ import numpy as np
 from dice_env.model.checks import check_choice
 from dice_env.model.die import Die
 from dice_env.model.scene import Scene
+from dice_env.viewer.disk import parse_json, write_atomically
 from dice_env.viewer.recording import Recording
 from dice_env.viewer.textures import face_atlas, png_bytes
 
@@ -62,12 +63,12 @@ def write_html(recordings: Recording | Sequence[Recording], path: str | Path, *,
         raise ValueError(f"recordings must hold finite numbers only: {error}") from None
     # JSON strings may hold "<" only as an escape: no "</script>" or "<!--" ends the script.
     text = text.replace("<", "\\u003c")
-    path.write_text(
+    write_atomically(path, (
         "<!doctype html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n"
         "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n"
         f"<title>{html.escape(title)}</title>\n</head>\n<body>\n"
         f"<script type=\"application/json\" id=\"{DATA_ID}\">{text}</script>\n"
-        f"<script>\n{_bundle()}\n</script>\n</body>\n</html>\n", encoding="utf-8")
+        f"<script>\n{_bundle()}\n</script>\n</body>\n</html>\n").encode())
     return path
 
 
@@ -76,9 +77,12 @@ def read_html(path: str | Path) -> list[dict[str, Any]]:
     path = Path(path)
     match = _DATA.search(path.read_text(encoding="utf-8"))
     if match is None:
-        raise ValueError(f"path {str(path)!r} is not a page of dice_env.viewer.write_html (no "
-                         f"script {DATA_ID!r})")
-    return json.loads(match.group(1))["recordings"]
+        raise ValueError(f"path {str(path)!r} is not a page of dice_env.viewer.write_html "
+                         f"(no whole script {DATA_ID!r})")
+    data = parse_json(match.group(1))
+    if not isinstance(data, dict) or "recordings" not in data:
+        raise ValueError(f"path {str(path)!r}: its script {DATA_ID!r} holds no 'recordings'")
+    return data["recordings"]
 
 
 def _bundle() -> str:

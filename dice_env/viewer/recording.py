@@ -10,9 +10,14 @@ from typing import Any
 
 import numpy as np
 
-from dice_env.envs.task import void_reasons
+from dice_env.envs.task import judge
+from dice_env.model.checks import check_choice, check_type
 from dice_env.model.die import Die
-from dice_env.model.rotations import matrix_to_quaternion, quaternion_to_matrix
+from dice_env.model.rotations import (
+    matrix_to_quaternion,
+    orthonormality_error,
+    quaternion_to_matrix,
+)
 from dice_env.model.scene import Scene
 from dice_env.simulation.codec import from_data, to_data
 from dice_env.simulation.group import (
@@ -22,12 +27,23 @@ from dice_env.simulation.group import (
     group_step,
     simulate_group,
 )
-from dice_env.simulation.simulate import ENDINGS, State, ending, simulate
+from dice_env.simulation.simulate import (
+    ENDINGS,
+    MAX_RECORD_BYTES,
+    ROTATION_TOL,
+    State,
+    ending,
+    simulate,
+)
 
 FORMAT = "dice_env.throw"  # what a file holding recordings says it holds
 FPS = 60.0  # frames per simulated second, by default
+FPS_RANGE = (1.0, 1000.0)  # frames per simulated second a recording may have
 MAX_FRAMES = 100_000  # frames of one throw (all dice), against a page or an export too large
 STATE_FIELDS = ("position", "velocity", "angular_momentum", "orientation", "angular_velocity")
+DATA_FIELDS = ("format", "version", "title", "scene", "dice", "contact", "run", "fps", "release",
+               "t", "position", "quaternion", "outcome")  # what Recording.to_data writes
+RECORD_FLOATS = 12  # floats recorded a die a frame: its centre (3) and orientation (9)
 
 
 def library_version() -> str:
@@ -44,6 +60,8 @@ class Recording:
     ``orientation`` (n, N, 3, 3) body to world. ``outcome``: ``faces``, ``read`` (False: a die
     leaning on another), ``settled``, ``decided``, ``unstable``, ``sunk``, ``time`` (s) and
     ``void`` (``""`` where the throw counts, else why not, as the env's ``void_reason``).
+    Built only of consistent parts: frames one a time (time from 0, strictly increasing), one
+    position and rotation a die, finite numbers, ``fps`` in :data:`FPS_RANGE`.
     """
 
     scene: Scene
@@ -58,6 +76,21 @@ class Recording:
     outcome: dict[str, Any]
     title: str = ""
     version: str = field(default_factory=library_version)
+
+    def __post_init__(self) -> None:
+        """Refuse (``ValueError``, ``TypeError``) what no throw records, naming what is wrong."""
+        check_type("scene", self.scene, Scene)
+        check_type("contact", self.contact, DieContact)
+        if (not isinstance(self.dice, tuple) or not self.dice
+                or not all(isinstance(die, Die) for die in self.dice)):
+            raise TypeError(f"dice must be a non-empty tuple of Die, got {self.dice!r:.80}")
+        for name in ("title", "version"):
+            check_type(name, getattr(self, name), str)
+        _check_run(self.run, self.n_dice)
+        check_fps(self.fps)
+        _check_release(self.release, self.n_dice)
+        check_frames(self.t, self.position, self.orientation, self.n_dice)
+        _check_outcome(self.outcome, self.n_dice)
 
     @property
     def n_dice(self) -> int:
@@ -78,20 +111,83 @@ class Recording:
 
     @classmethod
     def from_data(cls, data: dict[str, Any]) -> Recording:
-        """The recording :meth:`to_data` wrote (its orientations from the quaternions)."""
+        """The recording :meth:`to_data` wrote (its orientations from the quaternions).
+
+        Data that is no such recording is refused with a ``ValueError`` or ``TypeError`` naming
+        what is wrong, before anything is built of it.
+        """
         if not isinstance(data, dict) or data.get("format") != FORMAT:
             raise ValueError(f"data must be a recording ({{'format': {FORMAT!r}, ...}}), got "
                              f"{str(data)[:80]!r}")
-        release = GroupState(*(np.array(data["release"][name], dtype=np.float64)[None]
+        _check_keys("a recording", data, DATA_FIELDS)
+        _check_keys("a recording's release", data["release"], STATE_FIELDS)
+        release = GroupState(*(_floats(f"release {name}", data["release"][name])[None]
                                for name in STATE_FIELDS))
+        quaternion = _floats("quaternion", data["quaternion"])
+        with np.errstate(over="ignore"):  # beyond 1e154, |q| is inf: refused below
+            norm = np.linalg.norm(quaternion, axis=-1) if quaternion.ndim else np.nan
+        if quaternion.shape[-1:] != (4,) or np.max(np.abs(norm - 1), initial=0) > 1e-9 \
+                or not np.all(np.isfinite(norm)):
+            raise ValueError("quaternion must hold finite unit quaternions (..., 4), got shape "
+                             f"{quaternion.shape}")
         return cls(scene=from_data(data["scene"]), dice=from_data(data["dice"]),
                    contact=from_data(data["contact"]), release=release,
-                   run=_run_keywords(data["run"]),
-                   fps=float(data["fps"]), t=np.array(data["t"], dtype=np.float64),
-                   position=np.array(data["position"], dtype=np.float64),
-                   orientation=quaternion_to_matrix(np.array(data["quaternion"])),
-                   outcome=dict(data["outcome"]), title=str(data["title"]),
-                   version=str(data["version"]))
+                   run=_run_keywords(data["run"]), fps=_number("fps", data["fps"]),
+                   t=_floats("t", data["t"]), position=_floats("position", data["position"]),
+                   orientation=quaternion_to_matrix(quaternion),
+                   outcome=dict(data["outcome"]) if isinstance(data["outcome"], dict)
+                   else data["outcome"], title=data["title"], version=data["version"])
+
+
+def check_fps(fps: object, limit: float | None = None) -> float:
+    """``fps`` in :data:`FPS_RANGE` and, given a time ``limit`` (s), at least ``1 / limit``.
+
+    Returns it as a float; ``ValueError`` naming ``fps`` and its range otherwise.
+    """
+    low, high = FPS_RANGE
+    short = limit is not None and 1.0 / limit > low  # a time limit shorter than a frame
+    low = 1.0 / limit if short else low
+    if (not isinstance(fps, (int, float, np.integer, np.floating)) or isinstance(fps, bool)
+            or not low <= fps <= high):
+        also = f" (at least one frame by t_max = {limit:g} s)" if short else ""
+        raise ValueError(f"fps must be in [{low:g}, {high:g}] frames per simulated second"
+                         f"{also}, got {fps!r}")
+    return float(fps)
+
+
+def check_frames(t: np.ndarray, position: np.ndarray, orientation: np.ndarray,
+                 n_dice: int) -> None:
+    """Refuse (``ValueError``) frames that are no throw's, naming what is wrong.
+
+    ``t`` (n,) from 0, strictly increasing; every die's centre ``position`` (n, n_dice, 3) and
+    rotation ``orientation`` (n, n_dice, 3, 3); all finite float64.
+    """
+    arrays = {"t": t, "position": position, "orientation": orientation}
+    for name, array in arrays.items():
+        if not isinstance(array, np.ndarray) or array.dtype != np.float64:
+            raise TypeError(f"{name} must be a float64 array, got {type(array).__name__}")
+    if t.ndim != 1 or len(t) < 1:
+        raise ValueError(f"t must hold one time or more (shape (n,)), got shape {t.shape}")
+    for name, tail in (("position", (n_dice, 3)), ("orientation", (n_dice, 3, 3))):
+        if arrays[name].shape != (len(t), *tail):
+            raise ValueError(f"{name} must have shape {(len(t), *tail)} ({len(t)} times of t, "
+                             f"{n_dice} dice), got {arrays[name].shape}")
+    for name, array in arrays.items():
+        if not np.all(np.isfinite(array)):
+            raise ValueError(f"{name} must be finite (no NaN or inf)")
+    if t[0] != 0 or np.any(np.diff(t) <= 0):
+        raise ValueError("t must start at 0 and increase strictly, frame after frame")
+    worst = float(np.max(orthonormality_error(orientation)))
+    if worst > ROTATION_TOL:
+        raise ValueError(f"orientation must hold rotation matrices (R R^T = I, det R = +1, to "
+                         f"{ROTATION_TOL:g}), got an error of {worst:.3g}")
+
+
+def max_throws(scene: Scene, dice: Sequence[Die], *, fps: float = FPS,
+               contact: DieContact = DieContact(), t_max: float | None = None) -> int:
+    """The most throws :func:`record` records at once: their frames fit ``MAX_RECORD_BYTES``."""
+    _, stride, n_steps = run_plan(scene, dice, contact, fps, t_max)
+    return MAX_RECORD_BYTES // (8 * RECORD_FLOATS * len(dice) * max(1, n_steps // stride))
 
 
 def record(scene: Scene, dice: Die | Sequence[Die], state: State | GroupState, *,
@@ -103,23 +199,20 @@ def record(scene: Scene, dice: Die | Sequence[Die], state: State | GroupState, *
     ``dice``: one die (``state`` a :class:`State`; it replaces the scene's die) or several
     (``state`` a :class:`GroupState`, run by :func:`dice_env.simulation.group.simulate_group`
     with ``contact``). ``titles`` and ``voids`` (one per throw): captions and void reasons that
-    override the simulation's (``""`` keeps it). Returns one recording a throw.
+    override the simulation's (``""`` keeps it). ``fps``: in :data:`FPS_RANGE`, and at least
+    one frame by the time limit. Returns one recording a throw.
     """
     single = isinstance(dice, Die)
     dice = (dice,) if single else tuple(dice)
-    if not (isinstance(fps, (int, float)) and math.isfinite(fps) and fps > 0):
-        raise ValueError(f"fps must be a finite number > 0, got {fps!r}")
     if not isinstance(state, State if single else GroupState):
         raise TypeError("state must be a State for one die and a GroupState for several, got "
                         f"a {type(state).__name__} for {len(dice)} dice")
     ending(until, tuple(ENDINGS) if single else GROUP_UNTIL)
     release = GroupState.of([state]) if single else state.copy()
-    dt = group_step(scene, dice, contact)
-    stride = max(1, round(1.0 / (fps * dt)))
-    limit = scene.t_max if t_max is None else t_max
-    if limit / (stride * dt) * len(dice) > MAX_FRAMES:
-        raise ValueError(f"t_max={limit:g} s at fps={fps:g} records more than {MAX_FRAMES} "
-                         "die frames a throw: lower fps or t_max")
+    dt, stride, n_steps = run_plan(scene, dice, contact, fps, t_max)
+    if n_steps // stride * len(dice) > MAX_FRAMES:
+        raise ValueError(f"t_max={n_steps * dt:g} s at fps={fps:g} records more than "
+                         f"{MAX_FRAMES} die frames a throw: lower fps or t_max")
     run = {"t_max": t_max, "until": until}
     result, outcomes = _simulate(scene, dice, release, contact, stride, run)
     count = release.batch_size
@@ -153,10 +246,18 @@ def as_data(recordings: Recording | Sequence[Recording]) -> list[dict[str, Any]]
     return [r.to_data() for r in items]
 
 
+def run_plan(scene: Scene, dice: Sequence[Die], contact: DieContact, fps: object,
+             t_max: float | None) -> tuple[float, int, int]:
+    """The step (s), the steps a frame and the steps to the time limit of a recorded run."""
+    dt = group_step(scene, dice, contact)
+    limit = scene.t_max if t_max is None else t_max
+    fps = check_fps(fps, limit)
+    return dt, max(1, round(1.0 / (fps * dt))), scene.steps_for(limit, dt)
+
+
 def _simulate(scene: Scene, dice: tuple[Die, ...], release: GroupState, contact: DieContact,
               stride: int, run: dict[str, Any]) -> tuple[Any, list[dict[str, Any]]]:
     """The recorded run and each throw's outcome."""
-    decided = run["until"] == "decided"
     if len(dice) == 1:
         result = simulate(scene.with_(die=dice[0]), release.die(0), t_max=run["t_max"],
                           until=run["until"], record_every=stride, record=("orientations",))
@@ -166,9 +267,8 @@ def _simulate(scene: Scene, dice: tuple[Die, ...], release: GroupState, contact:
         result = simulate_group(scene, dice, release, contact=contact, t_max=run["t_max"],
                                 until=run["until"], record_every=stride, orientations=True)
         faces, read, sunk = result.face, result.read, result.sunk
-    voids = void_reasons(np.ones(len(faces), bool), result.unstable, sunk.any(axis=1),
-                         result.decided if decided else result.settled,
-                         "decided" if decided else "rest", ~read.all(axis=1))
+    own = scene.with_(die=dice[0]) if len(dice) == 1 else scene  # the scene the run had
+    result, voids = judge(own, dice, result, run["until"], t_max=run["t_max"])
     return result, [{
         "faces": faces[b].tolist(), "read": read[b].tolist(),
         "settled": bool(result.settled[b]), "decided": bool(result.decided[b]),
@@ -179,8 +279,72 @@ def _simulate(scene: Scene, dice: tuple[Die, ...], release: GroupState, contact:
 
 def _run_keywords(run: dict[str, Any]) -> dict[str, Any]:
     """A recording's run keywords, those of a file from before ``until`` converted to it."""
+    if not isinstance(run, dict):
+        raise TypeError(f"run must be a dict of keywords, got {type(run).__name__}")
     if "until" in run:
         return dict(run)
+    _check_keys("an old recording's run", run, ("t_max", "stop_when_decided", "early_rest"))
     until = ("decided" if run["stop_when_decided"] else
              "early_rest" if run["early_rest"] else "rest")
     return {"t_max": run["t_max"], "until": until}
+
+
+def _check_run(run: object, n_dice: int) -> None:
+    """``run``: ``{"t_max": None or a time (s) > 0, "until": one of the dice count's}``."""
+    if not isinstance(run, dict) or set(run) != {"t_max", "until"}:
+        raise ValueError(f"run must be {{'t_max': ..., 'until': ...}}, got {run!r:.80}")
+    t_max = run["t_max"]
+    if t_max is not None and (not isinstance(t_max, (int, float)) or isinstance(t_max, bool)
+                              or not 0 < t_max < math.inf):
+        raise ValueError(f"run's t_max must be None or a finite time > 0 (s), got {t_max!r}")
+    check_choice("run's until", run["until"], tuple(ENDINGS) if n_dice == 1 else GROUP_UNTIL)
+
+
+def _check_release(release: object, n_dice: int) -> None:
+    """``release``: one throw's finite :class:`GroupState` of ``n_dice`` dice."""
+    check_type("release", release, GroupState)
+    for name in STATE_FIELDS:
+        array = getattr(release, name)
+        tail = (3, 3) if name == "orientation" else (3,)
+        if array.shape != (1, n_dice, *tail) or not np.all(np.isfinite(array)):
+            raise ValueError(f"release {name} must be finite, shape {(1, n_dice, *tail)} for "
+                             f"{n_dice} dice, got shape {array.shape}")
+
+
+def _check_outcome(outcome: object, n_dice: int) -> None:
+    """``outcome``: a dict whose ``faces`` are ``n_dice`` ints and ``void`` a str."""
+    if not isinstance(outcome, dict):
+        raise TypeError(f"outcome must be a dict, got {type(outcome).__name__}")
+    faces, void = outcome.get("faces"), outcome.get("void")
+    if (not isinstance(faces, list) or len(faces) != n_dice
+            or not all(type(face) is int for face in faces)):
+        raise ValueError(f"outcome's faces must be a list of {n_dice} ints (one a die), got "
+                         f"{faces!r:.80}")
+    check_type("outcome's void", void, str)
+
+
+def _check_keys(what: str, data: object, keys: Sequence[str]) -> None:
+    """Refuse ``data`` unless it is a dict holding every one of ``keys``."""
+    if not isinstance(data, dict):
+        raise TypeError(f"{what} must be a dict, got {type(data).__name__}")
+    missing = [key for key in keys if key not in data]
+    if missing:
+        raise ValueError(f"{what} must hold {', '.join(keys)}; missing {', '.join(missing)}")
+
+
+def _floats(name: str, value: object) -> np.ndarray:
+    """``value`` as a float64 array, or ``ValueError`` naming ``name`` (without the value)."""
+    try:
+        return np.array(value, dtype=np.float64)
+    except (TypeError, ValueError, OverflowError) as error:
+        raise ValueError(f"{name} must be an array of numbers ({error})") from None
+
+
+def _number(name: str, value: object) -> float:
+    """``value`` as a float when it is a JSON number, else an error naming ``name``."""
+    if not isinstance(value, (int, float)) or isinstance(value, bool):
+        raise TypeError(f"{name} must be a number, got {type(value).__name__}")
+    try:
+        return float(value)
+    except OverflowError:
+        raise ValueError(f"{name} must be a finite number, got an int beyond floats") from None
