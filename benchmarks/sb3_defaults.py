@@ -20,7 +20,7 @@ from stable_baselines3 import PPO
 
 import dice_env  # noqa: F401  (registers DiceThrow-v0)
 from dice_env.intervals import wilson_bounds
-from dice_env.studies.common import code_version
+from dice_env.provenance import code_version
 
 ENV_ID = "DiceThrow-v0"
 EVAL_SEED = 12345

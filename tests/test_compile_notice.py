@@ -2,6 +2,7 @@
 
 import json
 import os
+import pickle
 import subprocess
 import sys
 import textwrap
@@ -9,8 +10,10 @@ from pathlib import Path
 
 import pytest
 
+from dice_env import Scene, State, simulate
 from dice_env.physics import group_kernel, kernel, vector_kernel
 from dice_env.simulation import precompile
+from dice_env.simulation import simulate as simulate_module
 from dice_env.simulation.compile_notice import QUIET
 from dice_env.simulation.simulate import COMPILES
 
@@ -93,3 +96,39 @@ def test_the_announced_times_are_the_measured_ones():
     for loop, seconds in first_calls.items():
         what, announced = COMPILES[loop]
         assert 0.5 * seconds <= announced <= 1.5 * seconds, (what, announced, seconds)
+
+
+CUT = textwrap.dedent("""
+    import sys
+    sys.path.insert(0, sys.argv[1])
+    from dice_env.simulation.compile_notice import cache_hint
+    from tiny_kernel import double
+    with cache_hint(double):
+        double(3)
+""")
+
+
+@pytest.mark.parametrize("suffix", [".nbc", ".nbi"])
+def test_a_cache_file_cut_short_names_the_folder_to_delete(tmp_path, suffix):
+    (tmp_path / "tiny_kernel.py").write_text(KERNEL)
+    first_calls(tmp_path, tmp_path / "cache")  # compiled into the cache
+    cached = sorted((tmp_path / "cache").rglob(f"*{suffix}"))[0]  # .1.nbc: the ints' code
+    cached.write_bytes(cached.read_bytes()[:len(cached.read_bytes()) // 2])
+    done = subprocess.run([sys.executable, "-c", CUT, str(tmp_path)], capture_output=True,
+                          text=True, env={**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "cache")})
+    last = done.stderr.splitlines()[-1]
+    assert done.returncode == 1 and last.startswith("RuntimeError: numba could not read its "
+                                                    "cached double (pickle data was truncated)")
+    assert f"delete the folder {cached.parent} " in last
+
+
+def test_simulate_names_the_cache_folder_of_a_kernel_it_cannot_load(monkeypatch):
+    def cut(*args, **kwargs):
+        raise pickle.UnpicklingError("pickle data was truncated")
+
+    monkeypatch.setattr(simulate_module, "_run_interruptibly", cut)
+    scene = Scene(t_max=0.01)
+    with pytest.raises(RuntimeError, match="numba could not read its cached simulate_serial") \
+            as error:
+        simulate(scene, State.release(scene, [0.0, 0.0, 0.05], [1.0, 0.0, 0.0]), num_threads=1)
+    assert f"delete the folder {kernel.simulate_serial._cache._cache_path} " in str(error.value)

@@ -5,20 +5,22 @@ import json
 import os
 import re
 import shutil
+import subprocess
 import sys
 from dataclasses import dataclass
 
 import numpy as np
 import pytest
 
+from dice_env import throws as hands
 from dice_env.model.die import Die
 from dice_env.model.scene import Scene
 from dice_env.studies import distributed as dist
-from dice_env.studies import run as run_study
-from dice_env.studies import shapes as sh
-from dice_env.studies.__main__ import main as studies_main
-from dice_env.studies.chunks import FolderError, kept_chunks, prepare
+from dice_env.studies.chunks import FolderError, kept_chunks, prepare, write_atomically
 from dice_env.studies.distributed import hand_faces
+from studies import run as run_study
+from studies import shapes as sh
+from studies.__main__ import main as studies_main
 
 THROWS, CHUNK, SEED = 120, 30, 7  # four chunks of default-d6 throws: about 0.3 s in all
 
@@ -96,7 +98,7 @@ def test_a_folder_of_another_spec_is_refused(tmp_path):
             (Scene(), 30, {"chunk": 15}, "chunk 30 there, 15 asked"),
             (Scene(), 30, {"seed": 1}, f"seed {SEED} there, 1 asked"),
             ("d20", 30, {}, "another scene"),
-            (Scene(), 30, {"draw": sh.vigorous_throws}, "draw")):
+            (Scene(), 30, {"draw": hands.vigorous_throws}, "draw")):
         options = {"chunk": 30, "seed": SEED} | kwargs
         with pytest.raises(ValueError, match=f"holds a run of another spec.*{what}"):
             dist.run_throws(scene, n, out=tmp_path, progress=False, **options)
@@ -132,7 +134,7 @@ def test_the_shapes_study_throws_through_faces_of(tmp_path, monkeypatch):
 
     def faces_of(scene, n, seed):
         calls.append(seed)
-        return sh.Faces.of(np.full(scene.die.n_faces, n // scene.die.n_faces), n)
+        return hands.Faces.of(np.full(scene.die.n_faces, n // scene.die.n_faces), n)
 
     monkeypatch.setattr(sh, "free_flight", lambda *a, **k: dict.fromkeys(sh.FLIGHT_COLUMNS, 0.0))
     monkeypatch.setattr(sh, "_plot", lambda *a: None)
@@ -247,6 +249,80 @@ def test_a_corrupt_chunk_is_refused_by_name(folder, spoil):
     assert error.value.__cause__ is not None
 
 
+def respoil(path, name, change):
+    """The chunk at ``path`` saved again with its outcome ``name`` replaced by ``change(it)``."""
+    with np.load(path) as saved:
+        arrays = {k: saved[k] for k in saved.files}
+    np.savez(path, **arrays | {name: change(arrays[name])})
+
+
+def _set(value, dtype=None):
+    def change(values):
+        values = values.astype(dtype or values.dtype)
+        values[0] = value
+        return values
+    return change
+
+
+@pytest.mark.parametrize(("name", "change", "match"), [
+    ("counted", lambda c: c.astype(np.int64), r"counted is int64, not bool"),
+    ("time", _set(np.nan), r"time nan outside \[0.0, "),
+    ("steps", _set(-5), r"steps -5 outside \[0, "),
+    ("impacts", _set(-1), r"impacts -1 outside \[0, inf\]"),
+    ("face", _set(7), r"face 7 outside \[1, 6\]"),
+    ("face", _set(0), r"face 0 outside \[1, 6\]"),
+    ("face", _set(2.5, np.float64), r"face is float64, not int16"),
+    ("counted", lambda c: ~c, r"counted disagrees with decided, settled, unstable and sunk")])
+def test_a_chunk_outcome_of_the_wrong_kind_or_range_is_refused(folder, capsys, name, change,
+                                                              match):
+    respoil(folder / "chunk_000001.npz", name, change)
+    with pytest.raises(FolderError, match=r"chunk_000001.npz' is corrupt \(" + match):
+        throws(out=folder)
+    with pytest.raises(SystemExit) as exit_:  # the command line: one line, exit 2
+        dist.main(["--throws", str(THROWS), "--chunk", str(CHUNK), "--seed", str(SEED),
+                   "--out", str(folder)])
+    last = capsys.readouterr().err.splitlines()[-1]
+    assert exit_.value.code == 2 and "delete it to throw it again" in last
+
+
+def test_writers_of_one_file_never_rename_each_others_temporary_files(tmp_path):
+    path = tmp_path / "x.bin"
+
+    def outer(f):
+        f.write(b"outer ")
+        write_atomically(path, lambda g: g.write(b"inner"))  # another writer, meanwhile
+        f.write(b"done")
+
+    write_atomically(path, outer)
+    assert path.read_bytes() == b"outer done"
+    assert [p.name for p in tmp_path.iterdir()] == ["x.bin"]
+    with pytest.raises(ZeroDivisionError):
+        write_atomically(path, lambda f: 1 / 0)
+    assert [p.name for p in tmp_path.iterdir()] == ["x.bin"]
+
+
+# A runner that starts when the file argv[1] appears: imported first, so both start at once.
+AT_ONCE = ("import pathlib, sys, time\nfrom dice_env.studies import distributed\n"
+           "print('ready', flush=True)\nwhile not pathlib.Path(sys.argv[1]).exists():\n"
+           "    time.sleep(0.001)\ndistributed.main(sys.argv[2:])")
+
+
+def test_two_processes_on_one_folder_both_finish_with_the_same_tally(tmp_path):
+    go, out = tmp_path / "go", tmp_path / "run"
+    argv = [sys.executable, "-c", AT_ONCE, str(go), "--throws", "100", "--chunk", "2", "--seed",
+            "2", "--out", str(out)]
+    env = os.environ | {"DICE_ENV_QUIET_COMPILE": "1"}
+    runs = [subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                             env=env) for _ in range(2)]
+    assert [run.stdout.readline() for run in runs] == ["ready\n"] * 2
+    go.touch()  # both write spec.json, then the same chunks, at the same moments
+    outs = [run.communicate(timeout=300) for run in runs]
+    assert [run.returncode for run in runs] == [0, 0], [err[-600:] for _, err in outs]
+    counts = [re.search(r"Counted .*", text)[0] for text, _ in outs]
+    assert counts[0] == counts[1] and len(list(out.glob("chunk_*.npz"))) == 50
+    assert not list(out.glob("*.partial"))
+
+
 @pytest.mark.parametrize("text", [b"{not json", b"\xff\xfe\x00", b"[1, 2]"])
 def test_a_corrupt_spec_is_refused_by_name(folder, text):
     (folder / "spec.json").write_bytes(text)
@@ -270,22 +346,22 @@ def test_kept_chunks_refuse_corrupt_and_orphaned_files(tmp_path):
 
 
 def local_draw(scene, n, rng):
-    return sh.hand_throws(scene, n, rng)
+    return hands.hand_throws(scene, n, rng)
 
 
 def test_draws_are_recorded_by_a_name_that_identifies_them(tmp_path, reference):
     def record(draw):
         return dist.Spec(Scene(), 10, 10, 0, draw).record()["draw"]
 
-    assert record(sh.hand_throws) == "dice_env.studies.shapes.hand_throws"
-    assert record(functools.partial(sh.hand_throws, unit=0.02)) \
-        == "functools.partial(dice_env.studies.shapes.hand_throws, unit=0.02)"
+    assert record(hands.hand_throws) == "dice_env.throws.hand_throws"
+    assert record(functools.partial(hands.hand_throws, unit=0.02)) \
+        == "functools.partial(dice_env.throws.hand_throws, unit=0.02)"
     assert record(DieOnce("m")) == "DieOnce(marker='m')"
 
     def local(scene, n, rng):
-        return sh.hand_throws(scene, n, rng)
+        return hands.hand_throws(scene, n, rng)
 
-    anonymous = lambda scene, n, rng: sh.hand_throws(scene, n, rng)  # noqa: E731
+    anonymous = lambda scene, n, rng: hands.hand_throws(scene, n, rng)  # noqa: E731
     for draw in (anonymous, local, functools.partial(local), object.__new__(Opaque)):
         with pytest.raises(ValueError, match=r"draw=.* cannot be recorded in a run folder.*"
                            "pass a module-level function or a functools.partial of one"):
@@ -298,7 +374,7 @@ class Opaque:
     """A draw whose repr shows only its address."""
 
     def __call__(self, scene, n, rng):
-        return sh.hand_throws(scene, n, rng)
+        return hands.hand_throws(scene, n, rng)
 
 
 @pytest.mark.parametrize(("argv", "match"), [
@@ -347,7 +423,7 @@ class DieOnce:
         try:
             fd = os.open(self.marker, os.O_CREAT | os.O_EXCL | os.O_WRONLY)
         except FileExistsError:
-            return sh.hand_throws(scene, n, rng)
+            return hands.hand_throws(scene, n, rng)
         os.write(fd, str(os.getpid()).encode())
         os.close(fd)
         os._exit(1)

@@ -33,7 +33,15 @@ from dice_env.model.rotations import (
 )
 from dice_env.model.scene import Scene
 from dice_env.simulation.group import GroupResult, GroupState, group_step, simulate_group
-from dice_env.simulation.simulate import Result, State, lock_energy, simulate, thread_count
+from dice_env.simulation.simulate import (
+    LOCK_MARGIN,
+    UP,
+    Result,
+    State,
+    lock_energy,
+    simulate,
+    thread_count,
+)
 
 ORIENTATION_DIM = 9  # the observation's orientation, row-major 3x3, after the target's one-hot
 ACTION_DIM = 6  # release velocity (3) + angular velocity (3), world frame, in [-1, 1]
@@ -366,14 +374,12 @@ class ThrowTask:
         state, clipped = self.release(actions, hands, noise, action_shape=action_shape)
         n, by_face = len(clipped), self.target == "faces"
         targets = np.array(targets, dtype=np.int64).reshape(n, *self.target_shape)
-        result = self._simulate(state, record_every)
-        leaning = (~result.read if isinstance(result, GroupResult) else np.zeros((n, 1), np.bool_))
         speed = np.linalg.norm(state.velocity, axis=-1).reshape(n, -1)
         spin = np.linalg.norm(state.angular_velocity, axis=-1).reshape(n, -1)
         fair = np.all((speed >= self.min_speed) & (spin >= self.min_spin), axis=1)
+        result, void = judge(self.scene, self.dice, self._simulate(state, record_every),
+                             self.run_until, fair=fair)
         sunk = result.sunk.reshape(n, -1).any(axis=1)
-        ended = result.decided if self.until == "decided" else result.settled
-        void = void_reasons(fair, result.unstable, sunk, ended, self.until, leaning.any(axis=1))
         counts = void == ""
         faces = result.face.reshape(n, -1)
         if by_face:
@@ -390,7 +396,7 @@ class ThrowTask:
         success = counts & hit
         reward_success = success.astype(np.float64)
         shaping = np.where(counts, self.shaping * alignment, 0.0)
-        several = {"total": faces.sum(axis=1), "leaning": leaning} if self.n_dice > 1 else {}
+        several = {"total": faces.sum(axis=1), "leaning": ~result.read} if self.n_dice > 1 else {}
         info = {"is_success": success, "target_face" if by_face else "target_sum": targets,
                 "face": result.face, **several, "settled": result.settled,
                 "unstable": result.unstable, "sunk": sunk,
@@ -416,10 +422,9 @@ class ThrowTask:
             return simulate_group(self.scene, self.dice, state, until=self.run_until,
                                   record_every=record_every, orientations=bool(record_every),
                                   num_threads=self.num_threads)
-        result = simulate(self.scene, state, until=self.run_until, record_every=record_every,
-                          record=("orientations",) if record_every else ("energy",),
-                          num_threads=self.num_threads)
-        return result if self.until == "decided" else _held_within_t_max(result, self.scene)
+        return simulate(self.scene, state, until=self.run_until, record_every=record_every,
+                        record=("orientations",) if record_every else ("energy",),
+                        num_threads=self.num_threads)
 
 
 @dataclass
@@ -436,11 +441,51 @@ class Throw:
 TASK_KEYWORDS = tuple(f.name for f in fields(ThrowTask) if f.name not in ("scene", "dice"))
 
 
-def void_reasons(fair: np.ndarray, unstable: np.ndarray, sunk: np.ndarray, ended: np.ndarray,
-                 until: str, leaning: np.ndarray) -> np.ndarray:
-    """Why each throw does not count, (n,) strings, ``""`` where it counts (the first reason)."""
-    return np.select([~fair, unstable, sunk, ~ended, leaning],
-                     ["foul", "unstable", "sunk", UNTIL[until], "leaning"], "")
+def judge(scene: Scene, dice: Sequence[Die], result: Result | GroupResult, until: str, *,
+          fair: np.ndarray | None = None, t_max: float | None = None,
+          ) -> tuple[Result | GroupResult, np.ndarray]:
+    """Whether each throw counts, as the env, the recordings and their replays all count it.
+
+    ``result``: a run of ``dice`` in ``scene`` to ``until`` (a kernel ending of
+    :data:`~dice_env.simulation.simulate.ENDINGS`; ``t_max`` overrides the scene's), ``fair``
+    (n,): releases within the task's speed and spin (default all). Returns ``result`` (an early
+    rest's ``settled`` as if the hold were waited out) and why each throw does not count, (n,)
+    strings, ``""`` where it counts; the first of "foul", "unstable", "sunk", "not_settled"
+    (``"not_decided"`` for ``until="decided"``), "leaning", and "not_decided" for a face that
+    :func:`decided_reads` does not read.
+    """
+    if until == "early_rest":
+        result = _held_within_t_max(result, scene, t_max)
+    n = len(result.unstable)
+    fair = np.ones(n, np.bool_) if fair is None else fair
+    sunk = result.sunk.reshape(n, -1).any(axis=1)
+    ended = result.decided if until == "decided" else result.settled
+    leaning = ~result.read.all(axis=1) if isinstance(result, GroupResult) else np.zeros(n, bool)
+    read = decided_reads(dice, result.final.orientation.reshape(n, len(dice), 3, 3))
+    return result, np.select(
+        [~fair, result.unstable, sunk, ~ended, leaning, ~read.all(axis=1)],
+        ["foul", "unstable", "sunk", UNTIL["decided" if until == "decided" else "rest"],
+         "leaning", UNTIL["decided"]], "")
+
+
+def decided_reads(dice: Sequence[Die], orientation: np.ndarray) -> np.ndarray:
+    """Whether each die's face is read beyond doubt in ``orientation`` (n, N, 3, 3): (n, N).
+
+    Its reading direction must beat every other face's along up (against gravity, as faces are
+    read) by :data:`~dice_env.simulation.simulate.LOCK_MARGIN` of what it beats its nearest
+    neighbour's by when read straight up: the share of the way to a tie that the decided-face
+    rule keeps. A die resting on a steep table or cocked against a wall may fall short.
+    """
+    decided = np.empty(orientation.shape[:2], np.bool_)
+    for i, die in enumerate(dice):
+        reading = die.reading
+        closeness = reading @ reading.T
+        np.fill_diagonal(closeness, -np.inf)
+        margin = LOCK_MARGIN * (1.0 - closeness.max(axis=1))  # (F,)
+        up = np.einsum("bij,fj,i->bf", orientation[:, i], reading, UP)
+        top = np.sort(up, axis=1)
+        decided[:, i] = top[:, -1] - top[:, -2] >= margin[np.argmax(up, axis=1)]
+    return decided
 
 
 def check_rotation(name: str, value: object, shape: tuple[int, ...] = ()) -> np.ndarray:
@@ -500,14 +545,15 @@ def check_task_keywords(keywords: dict[str, object]) -> dict[str, object]:
     return keywords
 
 
-def _held_within_t_max(result: Result, scene: Scene) -> Result:
+def _held_within_t_max(result: Result, scene: Scene, t_max: float | None = None) -> Result:
     """``result`` of an early-rest run, ``settled`` as if the rest hold had been waited out.
 
-    A die whose hold (``ceil(hold / dt)`` quiet steps) ends after ``t_max`` is not settled.
+    A die whose hold (``ceil(hold / dt)`` quiet steps) ends after ``t_max`` (default the
+    scene's) is not settled.
     """
     dt = scene.step
     hold_steps = math.ceil(scene.rest.hold / dt)
-    n_steps = max(1, round(scene.t_max / dt))
+    n_steps = max(1, round((scene.t_max if t_max is None else t_max) / dt))
     late = result.settled & (np.rint(result.rest_time / dt) + 1 + hold_steps > n_steps)
     if not late.any():
         return result

@@ -1,14 +1,17 @@
 """One line on stderr before a kernel compiles: what is compiling and about how long it takes.
 
 numba caches each kernel's machine code on disk (``NUMBA_CACHE_DIR``, else ``__pycache__``),
-so only a process that finds the cache empty or stale for a signature waits.
+so only a process that finds the cache empty or stale for a signature waits. A cache file
+numba cannot read is named with the folder to delete (:func:`cache_hint`).
 """
 
 from __future__ import annotations
 
+import contextlib
 import os
 import pickle
 import sys
+from collections.abc import Iterator
 
 QUIET = "DICE_ENV_QUIET_COMPILE"
 # numba's types of the arguments per (kernel, their classes): 0.25 ms to work out
@@ -46,3 +49,23 @@ def _cached(dispatcher: object, types: tuple) -> bool:
         return any(key[0] == types for key in index._load_index())
     except (OSError, EOFError, pickle.UnpicklingError):  # numba recompiles: the notice is right
         return False
+
+
+@contextlib.contextmanager
+def cache_hint(dispatcher: object) -> Iterator[None]:
+    """Run the block; ``RuntimeError`` naming the folder to delete if ``dispatcher``'s cache is cut.
+
+    numba fails on a cache file it cannot unpickle (cut short, say) at every call until it goes.
+    """
+    try:
+        yield
+    except (pickle.UnpicklingError, EOFError) as error:
+        folder = getattr(getattr(dispatcher, "_cache", None), "_cache_path", "numba's cache")
+        raise RuntimeError(f"numba could not read its cached {_name(dispatcher)} ({error}): a "
+                           f"cache file is cut short or damaged; delete the folder {folder} "
+                           "(or its files for this kernel) and run again to compile it "
+                           "afresh") from error
+
+
+def _name(dispatcher: object) -> str:
+    return getattr(getattr(dispatcher, "py_func", None), "__qualname__", "kernel")

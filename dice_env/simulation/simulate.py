@@ -27,7 +27,7 @@ from dice_env.model.checks import (
 from dice_env.model.rotations import orthonormality_error
 from dice_env.model.scene import ContactLaw, FrictionLaw, Scene, Scheme
 from dice_env.physics import group_kernel, kernel, vector_kernel
-from dice_env.simulation.compile_notice import announce, ready
+from dice_env.simulation.compile_notice import announce, cache_hint, ready
 
 
 @dataclass
@@ -452,7 +452,8 @@ def run_kernel(kind: str, inputs: tuple, outcome: tuple, *, batch: int, threads:
                   or (batch <= SERIAL_FIRST and not ready(parallel, args)))
     run = serial if serial_run else parallel
     announce(run, args, *COMPILES[run])
-    _run_interruptibly(run, args, outcome.abort, threads, long=work > _LONG_RUN)
+    with cache_hint(run):
+        _run_interruptibly(run, args, outcome.abort, threads, long=work > _LONG_RUN)
 
 
 def _run_interruptibly(run: Callable, args: tuple, abort: np.ndarray, threads: int, *,

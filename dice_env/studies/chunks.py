@@ -10,7 +10,9 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+import secrets
 import zipfile
+import zlib
 from collections.abc import Callable
 from pathlib import Path
 
@@ -67,11 +69,19 @@ def prepare(folder: Path, record: dict, name: str = "keep") -> Path:
 
 
 def write_atomically(path: Path, write: Callable) -> None:
-    """``write(file)`` to a temporary file renamed to ``path``: never a half-written file."""
-    partial = path.with_name(path.name + ".partial")
-    with open(partial, "wb") as f:
-        write(f)
-    os.replace(partial, path)
+    """``write(file)`` to a temporary file renamed to ``path``: never a half-written file.
+
+    The temporary name is this process's alone (``<name>.<pid>-<random>.partial``, created
+    exclusively), so that processes writing the same folder never rename each other's files;
+    it is removed if ``write`` fails.
+    """
+    partial = path.with_name(f"{path.name}.{os.getpid()}-{secrets.token_hex(4)}.partial")
+    try:
+        with open(partial, "xb") as f:
+            write(f)
+        os.replace(partial, path)
+    finally:
+        partial.unlink(missing_ok=True)
 
 
 def load(path: Path) -> Arrays:
@@ -82,7 +92,8 @@ def load(path: Path) -> Arrays:
             raise ValueError("an array, not an .npz archive")
         with saved:
             return {name: saved[name] for name in saved.files}
-    except (OSError, EOFError, ValueError, zipfile.BadZipFile) as error:
+    except (OSError, EOFError, ValueError, KeyError, NotImplementedError, MemoryError,
+            zipfile.BadZipFile, zlib.error) as error:  # what zipfile and numpy raise on bad data
         raise FolderError(f"{str(path)!r} is corrupt (not a readable .npz archive): delete it "
                           "to throw its chunk again") from error
 

@@ -26,19 +26,19 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-from tqdm import tqdm
 
+from dice_env.markdown import bracket, markdown_table
+from dice_env.model.checks import check_int
 from dice_env.model.die import STANDARD_SIZES, Die
 from dice_env.model.scene import Scene
 from dice_env.simulation.simulate import State, simulate
 from dice_env.studies.chunks import FolderError, identity, load, prepare, write_atomically
-from dice_env.studies.common import checked_int
-from dice_env.studies.markdown import bracket, markdown_table
-from dice_env.studies.shapes import Faces, counted, hand_throws
+from dice_env.throws import Faces, counted, hand_throws
 
-# Per-throw outcomes a chunk keeps.
-OUTCOMES = ("face", "counted", "decided", "settled", "unstable", "sunk", "steps", "time",
-            "impacts")
+# Per-throw outcomes a chunk keeps, with their dtypes.
+OUTCOMES = {"face": np.int16, "counted": np.bool_, "decided": np.bool_, "settled": np.bool_,
+            "unstable": np.bool_, "sunk": np.bool_, "steps": np.int64, "time": np.float64,
+            "impacts": np.int32}
 MOMENTS = ("steps", "time", "impacts")  # outcomes summarised by their sum and sum of squares
 # Histogram bins: time to the end over [0, t_max]; impacts 0, 1, ... (the last: that or more)
 TIME_BINS, IMPACT_BINS = 50, 32
@@ -67,7 +67,7 @@ class Spec:
             raise TypeError(f"scene must be a Scene or a standard die's name "
                             f"{tuple(STANDARD_SIZES)}, got {type(self.scene).__name__}")
         for name, low in (("throws", 1), ("chunk", 1), ("seed", 0)):
-            object.__setattr__(self, name, checked_int(name, getattr(self, name), low))
+            object.__setattr__(self, name, check_int(name, getattr(self, name), low))
         if not callable(self.draw):
             raise TypeError(f"draw must be callable (scene, n, rng) -> State, got {self.draw!r}")
 
@@ -132,7 +132,7 @@ def _named(value: object) -> str:
 class Tally:
     """Counts and sums over a set of throws; :meth:`merge` adds tallies exactly.
 
-    ``counts`` (F,): faces of the throws that count (:func:`~dice_env.studies.shapes.counted`);
+    ``counts`` (F,): faces of the throws that count (:func:`~dice_env.throws.counted`);
     ``unfinished``: no face by the time limit; ``sums`` (3, 2): sum and sum of squares of each
     of :data:`MOMENTS`; ``time_hist``, ``impacts_hist``: :data:`TIME_BINS`, :data:`IMPACT_BINS`.
     """
@@ -234,10 +234,12 @@ def run_throws(scene: Scene | str, throws: int, *, chunk: int = CHUNK, seed: int
     if workers is not None and (not isinstance(workers, int) or isinstance(workers, bool)
                                 or workers < 1):
         raise ValueError(f"workers must be None or an int >= 1, got {workers!r}")
-    checked_int("max_retries", max_retries, 0)
+    check_int("max_retries", max_retries, 0)
     folder = None if out is None else prepare(Path(out), spec.record(), "out")
     tallies = {} if folder is None else _saved_tallies(folder, spec)
     todo = [i for i in range(spec.n_chunks) if i not in tallies]
+    from tqdm import tqdm  # imported here: importing the runner needs no progress bar
+
     bar = tqdm(total=spec.throws, initial=sum(t.throws for t in tallies.values()),
                unit="throw", unit_scale=True, desc="throws", disable=not progress,
                dynamic_ncols=True)
@@ -346,9 +348,29 @@ def _read_chunk(path: Path, spec: Spec, index: int) -> dict[str, np.ndarray]:
                           "it to throw it again, or pass another folder")
     if sorted(saved) != sorted(OUTCOMES) or \
             any(saved[name].shape != (asked["throws"],) for name in OUTCOMES):
-        raise FolderError(f"{str(path)!r} is corrupt (its outcomes are not {OUTCOMES} of "
+        raise FolderError(f"{str(path)!r} is corrupt (its outcomes are not {tuple(OUTCOMES)} of "
                           f"{asked['throws']} throws each): delete it to throw it again")
+    wrong = _wrong_outcome(saved, spec.scene)
+    if wrong:
+        raise FolderError(f"{str(path)!r} is corrupt ({wrong}): delete it to throw it again")
     return saved
+
+
+def _wrong_outcome(saved: dict[str, np.ndarray], scene: Scene) -> str:
+    """What in a chunk's outcomes no run of ``scene`` gives (``""``: nothing): dtype, range."""
+    for name, dtype in OUTCOMES.items():
+        if saved[name].dtype != dtype:
+            return f"{name} is {saved[name].dtype}, not {np.dtype(dtype)}"
+    o, n_steps = saved, scene.steps_for()
+    ranges = {"face": (1, scene.die.n_faces), "steps": (0, n_steps),
+              "time": (0.0, n_steps * scene.step), "impacts": (0, np.inf)}
+    for name, (low, high) in ranges.items():
+        inside = (o[name] >= low) & (o[name] <= high)  # False for NaN
+        if not inside.all():
+            return f"{name} {o[name][~inside][0].item()!r} outside [{low}, {high}]"
+    if not np.array_equal(o["counted"], counted(types.SimpleNamespace(**o))):
+        return "counted disagrees with decided, settled, unstable and sunk"
+    return ""
 
 
 def _save_chunk(folder: Path, spec: Spec, index: int, outcomes: dict[str, np.ndarray]) -> None:

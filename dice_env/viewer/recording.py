@@ -10,7 +10,7 @@ from typing import Any
 
 import numpy as np
 
-from dice_env.envs.task import void_reasons
+from dice_env.envs.task import judge
 from dice_env.model.checks import check_choice, check_type
 from dice_env.model.die import Die
 from dice_env.model.rotations import (
@@ -258,7 +258,6 @@ def run_plan(scene: Scene, dice: Sequence[Die], contact: DieContact, fps: object
 def _simulate(scene: Scene, dice: tuple[Die, ...], release: GroupState, contact: DieContact,
               stride: int, run: dict[str, Any]) -> tuple[Any, list[dict[str, Any]]]:
     """The recorded run and each throw's outcome."""
-    decided = run["until"] == "decided"
     if len(dice) == 1:
         result = simulate(scene.with_(die=dice[0]), release.die(0), t_max=run["t_max"],
                           until=run["until"], record_every=stride, record=("orientations",))
@@ -268,9 +267,8 @@ def _simulate(scene: Scene, dice: tuple[Die, ...], release: GroupState, contact:
         result = simulate_group(scene, dice, release, contact=contact, t_max=run["t_max"],
                                 until=run["until"], record_every=stride, orientations=True)
         faces, read, sunk = result.face, result.read, result.sunk
-    voids = void_reasons(np.ones(len(faces), bool), result.unstable, sunk.any(axis=1),
-                         result.decided if decided else result.settled,
-                         "decided" if decided else "rest", ~read.all(axis=1))
+    own = scene.with_(die=dice[0]) if len(dice) == 1 else scene  # the scene the run had
+    result, voids = judge(own, dice, result, run["until"], t_max=run["t_max"])
     return result, [{
         "faces": faces[b].tolist(), "read": read[b].tolist(),
         "settled": bool(result.settled[b]), "decided": bool(result.decided[b]),
