@@ -13,7 +13,7 @@ from typing import Protocol
 
 import numpy as np
 
-from dice_env.envs.task import ACTION_DIM, ORIENTATION_DIM, SET_ANGLE, ThrowTask
+from dice_env.envs.throw_task import ACTION_DIM, ORIENTATION_DIM, SET_ANGLE, ThrowTask
 from dice_env.model.rotations import matrix_to_rotation_vector
 from dice_env.studies import craps
 

@@ -14,7 +14,7 @@ import numpy as np
 
 from agents.baselines import Thrower
 from agents.config import Config
-from dice_env.envs.task import ThrowTask, make_task
+from dice_env.envs.throw_task import ThrowTask, make_task
 
 EPISODE_KEYWORDS = ("target_face", "target_sum", "orientation_mode")
 CHUNK = 256  # throws per kernel call when the evaluation shows its progress

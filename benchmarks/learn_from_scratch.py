@@ -38,7 +38,7 @@ from stable_baselines3.common.utils import LinearSchedule
 from agents.baselines import HandThrower
 from agents.hyperparams import NON_PPO_KEYS, PPO_HYPERPARAMS, ppo_kwargs
 from dice_env.envs.sb3 import make_sb3_env
-from dice_env.envs.task import ThrowTask, make_task
+from dice_env.envs.throw_task import ThrowTask, make_task
 from dice_env.intervals import wilson_bounds
 from dice_env.studies.common import code_version
 

@@ -15,7 +15,7 @@ from dice_env import Die, Scene
 from dice_env.envs import DiceThrowEnv
 from dice_env.envs.dice_throw import RENDER_FPS
 from dice_env.envs.render import render_die
-from dice_env.envs.task import face_up_rotation, make_task
+from dice_env.envs.throw_task import face_up_rotation, make_task
 from dice_env.envs.video import save_video
 
 FAST = {"t_max": 2.0}  # gentle throws settle in under 2 s

@@ -13,7 +13,7 @@ from agents.episodes import Batch
 from agents.policy import TargetNormal
 from dice_env import Die, Scene
 from dice_env.envs import DiceThrowVectorEnv
-from dice_env.envs.task import face_up_rotation, make_task
+from dice_env.envs.throw_task import face_up_rotation, make_task
 from dice_env.model.rotations import uniform_rotations
 from dice_env.model.surroundings import tray
 

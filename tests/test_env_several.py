@@ -6,9 +6,9 @@ import pytest
 
 import dice_env  # noqa: F401  (registers DiceThrow-v0)
 from dice_env import Die, Wall
-from dice_env.envs import task as task_module
+from dice_env.envs import throw_task as task_module
 from dice_env.envs.sb3 import DiceThrowSB3VecEnv
-from dice_env.envs.task import (
+from dice_env.envs.throw_task import (
     HAND_GAP,
     ThrowTask,
     make_task,

@@ -5,7 +5,7 @@ import pytest
 from agents.baselines import HandThrower
 from agents.config import Config
 from agents.replay import main
-from dice_env.envs.task import make_task
+from dice_env.envs.throw_task import make_task
 from dice_env.viewer import load
 
 RUNS = {"one die": [], "2d6": ["num_dice=2"], "2d6 sum 5": ["num_dice=2", "target_sum=5"],

@@ -9,7 +9,7 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from dice_env.envs.task import (
+from dice_env.envs.throw_task import (
     ORIENTATION_DIM,
     ORIENTATION_MODES,
     ThrowTask,

@@ -17,7 +17,7 @@ from dice_env.envs.dice_throw import (
     episode_hand,
     observation_space,
 )
-from dice_env.envs.task import ThrowTask
+from dice_env.envs.throw_task import ThrowTask
 from dice_env.model.checks import check_int
 
 MAX_NUM_ENVS = 2**20  # about 1 kB per env in the kernel's and the env's arrays
