@@ -43,14 +43,13 @@ def controllability(
     """
     names = ["hand-written", "oracle"] + (["PPO"] if ppo is not None else [])
     maps = {name: np.zeros((len(heights), len(noises), 3)) for name in names}
-    threads = {} if num_threads is None else {"num_threads": num_threads}
     for i, height in enumerate(heights):
         for j, noise in enumerate(noises):
             start = time.perf_counter()
             task = make_task(die=die, release_height=height, hand_noise=noise,
-                             orientation_noise=noise, **threads)
+                             orientation_noise=noise)
             rng = np.random.default_rng(seed)
-            batch = Batch.sample(task, throws, rng)
+            batch = Batch.sample(task, throws, rng, num_threads)
             throwers: dict[str, Thrower] = {"hand-written": HandThrower(task)}
             if ppo is not None:
                 throwers["PPO"] = ppo

@@ -17,7 +17,6 @@ from dice_env.envs.dice_throw import (
     episode_hand,
     observation_space,
 )
-from dice_env.envs.throw_task import ThrowTask
 from dice_env.model.checks import check_int
 
 MAX_NUM_ENVS = 2**20  # about 1 kB per env in the kernel's and the env's arrays
@@ -40,7 +39,8 @@ class DiceThrowVectorEnv(VectorEnv):
     def __init__(self, num_envs: int = 1, render_mode: str | None = None,
                  **keywords: Any) -> None:
         check_int("num_envs", num_envs, 1, MAX_NUM_ENVS)
-        self.task: ThrowTask = configure(self, ("rgb_array",), render_mode, **keywords)
+        self.task, self.settings = configure(("rgb_array",), render_mode, **keywords)
+        self.render_mode = self.settings.render_mode
         self.num_envs = int(num_envs)
         self.single_observation_space = observation_space(self.task)
         self.single_action_space = action_space(self.task)
@@ -73,7 +73,8 @@ class DiceThrowVectorEnv(VectorEnv):
         self._rngs = [seeding.np_random(seed)[0] if seed is not None or not self._rngs
                       else self._rngs[i] for i, seed in enumerate(seeds)]
         for i, rng in enumerate(self._rngs):
-            self._targets[i], self._hands[i] = episode_hand(self, rng, options[i])
+            self._targets[i], self._hands[i] = episode_hand(self.task, self.settings, rng,
+                                                              options[i])
         return self.task.observe(self._targets, self._hands)
 
     def step(self, actions: np.ndarray,
@@ -82,15 +83,17 @@ class DiceThrowVectorEnv(VectorEnv):
         if not self._rngs:
             raise RuntimeError("call reset() before step()")
         throw = self.task.throw(actions, self._targets, self._hands, self._rngs,
-                                action_shape=self.action_space.shape)
+                                action_shape=self.action_space.shape,
+                                num_threads=self.settings.num_threads)
         mask = np.ones(self.num_envs, np.bool_)
         final_info = {k: v for key, value in throw.info.items()
                       for k, v in ((key, value), ("_" + key, mask))}
         info = {"final_obs": throw.observation, "_final_obs": mask,
                 "final_info": final_info, "_final_info": mask}
         self._targets, self._hands = self.task.sample_hands(
-            self._rngs, self.task.fixed_target(self.target_face, self.target_sum),
-            self.orientation_mode)
+            self._rngs, self.task.fixed_target(self.settings.target_face,
+                                               self.settings.target_sum),
+            self.settings.orientation_mode)
         return (self.task.observe(self._targets, self._hands), throw.reward.copy(),
                 mask.copy(), np.zeros(self.num_envs, np.bool_), info)
 
@@ -101,5 +104,5 @@ class DiceThrowVectorEnv(VectorEnv):
         from dice_env.envs.render import render_task
 
         task = self.task
-        return tuple(render_task(task, task.hand_position, self._hands[i], size=self.render_size)
-                     for i in range(self.num_envs))
+        return tuple(render_task(task, task.hand_position, self._hands[i],
+                                 size=self.settings.render_size) for i in range(self.num_envs))
