@@ -49,7 +49,7 @@ def controllability(
             task = make_task(die=die, release_height=height, hand_noise=noise,
                              orientation_noise=noise)
             rng = np.random.default_rng(seed)
-            batch = Batch.sample(task, throws, rng, num_threads)
+            batch = Batch.sample(task, throws, rng, num_threads=num_threads)
             throwers: dict[str, Thrower] = {"hand-written": HandThrower(task)}
             if ppo is not None:
                 throwers["PPO"] = ppo
