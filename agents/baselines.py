@@ -16,7 +16,7 @@ import numpy as np
 from dice_env.envs.hand import ACTION_DIM, SET_ANGLE
 from dice_env.envs.throw_task import ORIENTATION_DIM, ThrowTask
 from dice_env.model.rotations import matrix_to_rotation_vector
-from dice_env.studies import craps
+from dice_env.throws import SET_THROW, crossed_set, sevens_set
 
 ROTATION_DIM = ORIENTATION_DIM  # the hand's orientation, a row-major 3x3 matrix, after the one-hot
 
@@ -122,10 +122,10 @@ class HandThrower:
 class SetThrower:
     """The craps study's throw with the dice set (two d6, ``set_dice``).
 
-    Each die's setting turns its drawn orientation into the set's: :func:`craps.sevens_set`
-    where the task rewards its total, :func:`craps.crossed_set` where it rewards avoiding it
-    (``target="avoid_sum"``). The hand moves as :func:`craps.action` at the study's first
-    speed, scaled to the task's maxima.
+    Each die's setting turns its drawn orientation into the set's: :func:`sevens_set` where
+    the task rewards its total, :func:`crossed_set` where it rewards avoiding it
+    (``target="avoid_sum"``). The hand moves as :data:`SET_THROW`
+    (:class:`~dice_env.throws.SetThrow`), scaled to the task's maxima.
     """
 
     task: ThrowTask
@@ -133,12 +133,12 @@ class SetThrower:
     def __call__(self, observations: np.ndarray) -> np.ndarray:
         """Actions (n, 12): the throw, then each die's setting as a rotation vector / pi."""
         _, hands = self.task.decode(observations)
-        chosen = craps.crossed_set() if self.task.target == "avoid_sum" else craps.sevens_set()
+        chosen = crossed_set() if self.task.target == "avoid_sum" else sevens_set()
         turns = chosen @ np.swapaxes(hands, -1, -2)
         setting = (matrix_to_rotation_vector(turns) / SET_ANGLE).reshape(len(hands), -1)
-        scale = np.r_[[craps.MAX_SPEED / self.task.max_speed] * 3,
-                      [craps.MAX_SPIN / self.task.max_spin] * 3]
-        throw = craps.action(craps.SPEEDS[0]) * scale
+        scale = np.r_[[SET_THROW.max_speed / self.task.max_speed] * 3,
+                      [SET_THROW.max_spin / self.task.max_spin] * 3]
+        throw = SET_THROW.action() * scale
         return np.hstack([np.tile(throw, (len(hands), 1)), setting])
 
 

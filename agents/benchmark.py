@@ -140,7 +140,7 @@ def train(run: Run, log: Any = print) -> dict[str, Any]:
     from stable_baselines3.common.callbacks import BaseCallback
 
     from dice_env.envs.sb3 import make_sb3_env
-    from dice_env.studies.common import code_version
+    from dice_env.provenance import code_version
 
     params = run.params
     state = run.state()
@@ -217,7 +217,7 @@ def table(out: Path) -> dict[str, Any]:
                           _mean_curve(runs)],
             }
         rows.append(row)
-    from dice_env.studies.common import code_version
+    from dice_env.provenance import code_version
 
     return {"rows": rows, "algos": list(ALGOS),
             "command": "python -m agents.benchmark", "final_throws": FINAL_THROWS,

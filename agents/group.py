@@ -63,7 +63,7 @@ def write_group_report(group: Path) -> Path:
     the summary keeps each seed's rates, the config and the code version in a small JSON.
     """
     from agents import plots
-    from dice_env.studies.common import code_version
+    from dice_env.provenance import code_version
 
     config = Config.load(group / "config.json")
     results = _member_results(config)

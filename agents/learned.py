@@ -152,7 +152,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     other tasks' are kept.
     """
     from dice_env.envs.tasks import TASKS
-    from dice_env.studies.common import code_version
+    from dice_env.provenance import code_version
 
     parser = argparse.ArgumentParser(prog="python -m agents.learned",
                                      description=__doc__.split("\n")[0])

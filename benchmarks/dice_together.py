@@ -4,7 +4,7 @@
     python benchmarks/dice_together.py --dice 1 2 --throws 256 --repeats 3
     python benchmarks/dice_together.py --throws 240 --mujoco 2 12 --die-friction regularized
 
-Each group is thrown from the pairs study's hand (``dice_env.studies.pairs.hand_throws``: the
+Each group is thrown from the pairs study's hand (``dice_env.throws.group_throws``: the
 dice side by side 3 cm apart in rows of four, one hand velocity plus each die's noise) into
 the tray (``Scene(walls=tray())``), seeded, each throw until every face is decided
 (``simulate_group(..., until="decided")``, 10 s at most). Timed on one thread as this
@@ -41,20 +41,20 @@ import numpy as np
 from harness import benchmark_parser, timed, write_json
 
 from dice_env import Scene, simulate
+from dice_env.markdown import markdown_table
 from dice_env.model.die import Die
 from dice_env.model.table import RESTITUTION, damping_ratio
+from dice_env.provenance import code_version
 from dice_env.simulation.group import DieContact, GroupState, group_step, simulate_group
 from dice_env.simulation.simulate import UP, lock_energy
-from dice_env.studies.common import code_version
-from dice_env.studies.markdown import markdown_table
-from dice_env.studies.pairs import hand_throws, tray_scene
+from dice_env.throws import group_throws, tray_scene
 
 
 def ours_in_tray(n_dice: int, throws: int, repeats: int, seed: int, contact: DieContact) -> tuple:
     """The tray, ``n_dice`` d6, their seeded throws, our least CPU time and the result."""
     scene = tray_scene()
     dice = (Die(),) * n_dice
-    state = hand_throws(scene, dice, throws, np.random.default_rng(seed))
+    state = group_throws(scene, dice, throws, np.random.default_rng(seed))
     seconds, res = timed(lambda: simulate_group(scene, dice, state, until="decided",
                                                    contact=contact, num_threads=1), repeats)
     return scene, dice, state, seconds, res

@@ -23,7 +23,7 @@ from harness import benchmark_parser, command_line, write_json
 
 import dice_env  # noqa: F401  (registers DiceThrow-v0)
 from dice_env import State, simulate
-from dice_env.studies.common import code_version
+from dice_env.provenance import code_version
 
 
 def measure(until: str, n: int, repeats: int, n_single: int,

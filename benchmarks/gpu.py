@@ -27,8 +27,8 @@ from harness import benchmark_parser, command_line, write_json
 from physics import hand_throws, paper_throws
 
 from dice_env import Scene, State, simulate
+from dice_env.provenance import code_version
 from dice_env.simulation.paper import paper_scene
-from dice_env.studies.common import code_version
 
 PAPER_T = 0.5  # s of the paper throw
 FIGURES = {"paper": "paper scene (die-steps/s)", "decided": "default scene to a decided face "

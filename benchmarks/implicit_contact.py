@@ -46,10 +46,10 @@ from numba import njit
 from dice_env.model.scene import Scene
 from dice_env.model.table import rebound
 from dice_env.physics.kernel import rotate
+from dice_env.provenance import code_version
 from dice_env.simulation.calibration import measured_restitution
 from dice_env.simulation.simulate import State, simulate
-from dice_env.studies.common import code_version
-from dice_env.studies.convergence import RELEASES, T_THROW
+from dice_env.throws import RELEASES, T_THROW
 
 FACTORS = (0.15, 0.3, 0.6, 1.2, 2.4, 4.8)
 # (theta, onset): backward Euler and trapezoid as briefed, then each with the onset impulse

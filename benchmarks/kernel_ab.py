@@ -33,7 +33,7 @@ from pathlib import Path
 import numpy as np
 from harness import RESULTS, command_line, write_json
 
-from dice_env.studies.common import code_version
+from dice_env.provenance import code_version
 
 ROOT = Path(__file__).resolve().parents[1]
 CHILD = r"""
@@ -95,7 +95,11 @@ import numpy as np
 from dice_env import Die, Scene
 from pathlib import Path
 import dice_env
-from dice_env.studies import pairs, weldon
+try:  # the hands in the library
+    from dice_env.throws import cup_throws, group_throws
+except ImportError:  # a base tree from before dice_env.throws
+    from dice_env.studies.pairs import hand_throws as group_throws
+    from dice_env.studies.weldon import cup_throws
 if (Path(dice_env.__file__).parent / "physics").is_dir():
     from dice_env.simulation.group import GroupState, simulate_group
     from dice_env.model.surroundings import tray
@@ -120,15 +124,15 @@ def digest(res):
     return h.hexdigest()[:12]
 
 out = {}
-table = Scene(die=weldon.variant_die("drilled16"))
-cups = GroupState.of(weldon.cup_throws(table, 8, np.random.default_rng(3)))
+table = Scene(die=Die.standard("d6", pips="drilled16"))
+cups = GroupState.of(cup_throws(table, 8, np.random.default_rng(3)))
 seconds, res = cpu(lambda: simulate_group(table, (table.die,) * 12, cups, t_max=2.0,
                                           **DECIDED, num_threads=1))
 out["twelve"], out["twelve_hash"] = 8 / seconds, digest(res)
 scene = Scene(walls=tray())
 for key, dice in (("two", (scene.die,) * 2),
                   ("mixed", (Die.standard("d20"), Die.standard("d8"), scene.die))):
-    state = pairs.hand_throws(scene, dice, 64, np.random.default_rng(4))
+    state = group_throws(scene, dice, 64, np.random.default_rng(4))
     seconds, res = cpu(lambda: simulate_group(scene, dice, state, t_max=3.0,
                                               **DECIDED, num_threads=1))
     out[key], out[key + "_hash"] = 64 / seconds, digest(res)

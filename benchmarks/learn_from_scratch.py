@@ -40,7 +40,7 @@ from agents.hyperparams import NON_PPO_KEYS, PPO_HYPERPARAMS, ppo_kwargs
 from dice_env.envs.sb3 import make_sb3_env
 from dice_env.envs.throw_task import ThrowTask, make_task
 from dice_env.intervals import wilson_bounds
-from dice_env.studies.common import code_version
+from dice_env.provenance import code_version
 
 ENV_ID = "DiceThrow-v0"
 EVAL_SEED = 12345

@@ -53,11 +53,11 @@ from dice_env import Scene, State, simulate
 from dice_env.model.die import STANDARD_SIZES, Die
 from dice_env.model.rotations import quaternion_to_matrix, random_rotations
 from dice_env.physics import vector_kernel
+from dice_env.provenance import code_version
 from dice_env.simulation.calibration import table_scene
 from dice_env.simulation.paper import paper_scene
 from dice_env.simulation.simulate import lock_energy
-from dice_env.studies.common import code_version
-from dice_env.studies.fairness import random_directions
+from dice_env.throws import random_directions
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))

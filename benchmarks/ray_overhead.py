@@ -26,10 +26,10 @@ import numpy as np
 import ray
 from harness import RESULTS, write_json
 
+from dice_env.markdown import markdown_table
 from dice_env.model.scene import Scene
-from dice_env.studies.common import code_version
+from dice_env.provenance import code_version
 from dice_env.studies.distributed import Spec, Tally, run_throws, throw_chunk
-from dice_env.studies.markdown import markdown_table
 
 
 def timed(fn: object) -> tuple[float, Tally]:

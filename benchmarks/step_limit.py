@@ -30,9 +30,9 @@ from physics import hand_throws, mujoco_model, mujoco_to_rest
 
 from dice_env import Scene, State, simulate
 from dice_env.model.table import RESTITUTION, damping_ratio, rebound
+from dice_env.provenance import code_version
 from dice_env.simulation.calibration import measured_restitution
-from dice_env.studies.common import code_version
-from dice_env.studies.convergence import RELEASES, face_agreement
+from dice_env.throws import RELEASES, face_agreement
 
 SAFETIES = (0.15, 0.3, 0.45, 0.6, 0.9)
 DROP_SPEEDS = (0.3, 1.0)

@@ -6,7 +6,7 @@
 For each id of :data:`dice_env.envs.tasks.TASKS`, made with ``gym.make``, every thrower faces
 the same seeded throws (targets, hands, hand noise: ``agents.evaluate.compare``): uniform random
 actions and a rule (the hand-written thrower for one die; for the set dice of the craps task the
-craps study's throw, ``dice_env.studies.craps``: the crossed set, against the seven, 2 m/s at
+craps study's throw, ``dice_env.throws.SET_THROW``: the crossed set, against the seven, 2 m/s at
 the back wall with backspin) on ``throws`` throws each, Wilson 95 % intervals; the oracle
 (``agents.oracle``, started from their actions) on the first of those observations, each scored
 on 16 fresh noise draws, its interval Wilson's divided by the observations' design effect
@@ -30,7 +30,7 @@ from agents.evaluate import ORACLE_SCORE_SAMPLES, compare
 from agents.oracle import CEM, task_budget
 from dice_env.envs.tasks import TASKS, NamedTask
 from dice_env.envs.throw_task import ThrowTask
-from dice_env.studies.common import code_version
+from dice_env.provenance import code_version
 
 SEED = 0
 THROWS = 400  # evaluation throws per thrower and task

@@ -19,7 +19,7 @@ from pathlib import Path
 
 from harness import benchmark_parser, command_line, write_json
 
-from dice_env.studies.common import code_version
+from dice_env.provenance import code_version
 
 ROOT = Path(__file__).resolve().parent.parent
 

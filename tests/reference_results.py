@@ -19,8 +19,7 @@ from dice_env.envs import TASKS
 from dice_env.model.surroundings import tray
 from dice_env.simulation.group import simulate_group
 from dice_env.simulation.paper import paper_scene
-from dice_env.studies.fairness import vigorous_throws
-from dice_env.studies.pairs import hand_throws
+from dice_env.throws import group_throws, vigorous_throws
 
 PATH = Path(__file__).with_name("data") / "reference_results.npz"
 THROWS = 16
@@ -47,7 +46,7 @@ def _single(scene: Scene, **run: object) -> Callable[[], dict[str, np.ndarray]]:
 def _group(n: int) -> Callable[[], dict[str, np.ndarray]]:
     def case() -> dict[str, np.ndarray]:
         scene, dice = Scene(walls=tray(), t_max=3.0), (Die(),) * n
-        state = hand_throws(scene, dice, 4, np.random.default_rng(11))
+        state = group_throws(scene, dice, 4, np.random.default_rng(11))
         result = simulate_group(scene, dice, state, until="decided", num_threads=1)
         final = result.final
         return {"face": result.face, "steps": result.steps,

@@ -3,15 +3,15 @@
 import numpy as np
 import pytest
 
-from dice_env import Scene, State
+from dice_env import Scene, State, throws
 from dice_env.model.scene import FrictionLaw, Scheme
-from dice_env.studies import convergence as cv
+from studies import convergence as cv
 
 
 def test_release_sampling_and_energy():
     scene = Scene()
     rng = np.random.default_rng(0)
-    gentle = cv.RELEASES[0]
+    gentle = throws.RELEASES[0]
     start = gentle.sample(scene, 4000, rng)
     assert start.batch_size == 4000
     assert np.std(start.position[:, 2]) == pytest.approx(gentle.sigma_position, rel=0.05)
@@ -54,7 +54,7 @@ def test_midpoint_scheme_is_second_order_with_smooth_friction():
 
 
 def test_outcome_test_counts_and_p_values():
-    result = cv.outcome_test(Scene(), cv.RELEASES[2], 100, np.random.default_rng(3))
+    result = cv.outcome_test(Scene(), throws.RELEASES[2], 100, np.random.default_rng(3))
     assert result["counts"].shape == (2, 6)
     assert (result["counts"].sum(1) == 100).all()
     assert 0.0 <= result["p_faces"] <= 1.0 and 0.0 <= result["p_success"] <= 1.0
@@ -63,7 +63,7 @@ def test_outcome_test_counts_and_p_values():
 
 @pytest.mark.slow
 def test_report_written_by_the_cli(tmp_path):
-    from dice_env.studies.__main__ import main
+    from studies.__main__ import main
 
     main(["error", "--quick", "--out", str(tmp_path)])
     text = (tmp_path / "error-vs-runtime.md").read_text()
@@ -83,7 +83,7 @@ def test_default_is_ten_times_cheaper_than_stepping_at_the_same_error():
 
 @pytest.mark.slow
 def test_vigorous_outcome_statistics_agree_between_dt_and_dt_over_4():
-    result = cv.outcome_test(Scene(), cv.RELEASES[2], 3000, np.random.default_rng(5))
+    result = cv.outcome_test(Scene(), throws.RELEASES[2], 3000, np.random.default_rng(5))
     assert result["p_faces"] > 0.001 and result["p_success"] > 0.001
     assert np.abs(np.diff(result["counts"], axis=0)).max() / 3000 < 0.04
 
@@ -92,10 +92,10 @@ def test_vigorous_outcome_statistics_agree_between_dt_and_dt_over_4():
 def test_gentle_faces_converge_at_the_default_step():
     # the criterion is >= 98 % (2000 throws in the study: 98.2 %); 600 throws here
     scene = Scene()
-    start = cv.RELEASES[0].sample(scene, 600, np.random.default_rng(6))
-    agreement = cv.face_agreement(scene, start)
+    start = throws.RELEASES[0].sample(scene, 600, np.random.default_rng(6))
+    agreement = throws.face_agreement(scene, start)
     assert agreement["settled"].all()
     assert agreement["step"].mean() >= 0.97
     # the listing's friction and step on the same throws: far from it
     listing = scene.with_(friction_law=FrictionLaw.REGULARIZED, scheme=Scheme.PAPER)
-    assert cv.face_agreement(listing, start)["step"].mean() < 0.8
+    assert throws.face_agreement(listing, start)["step"].mean() < 0.8

@@ -12,14 +12,15 @@ from dataclasses import dataclass
 import numpy as np
 import pytest
 
+from dice_env import throws as hands
 from dice_env.model.die import Die
 from dice_env.model.scene import Scene
 from dice_env.studies import distributed as dist
-from dice_env.studies import run as run_study
-from dice_env.studies import shapes as sh
-from dice_env.studies.__main__ import main as studies_main
 from dice_env.studies.chunks import FolderError, kept_chunks, prepare, write_atomically
 from dice_env.studies.distributed import hand_faces
+from studies import run as run_study
+from studies import shapes as sh
+from studies.__main__ import main as studies_main
 
 THROWS, CHUNK, SEED = 120, 30, 7  # four chunks of default-d6 throws: about 0.3 s in all
 
@@ -97,7 +98,7 @@ def test_a_folder_of_another_spec_is_refused(tmp_path):
             (Scene(), 30, {"chunk": 15}, "chunk 30 there, 15 asked"),
             (Scene(), 30, {"seed": 1}, f"seed {SEED} there, 1 asked"),
             ("d20", 30, {}, "another scene"),
-            (Scene(), 30, {"draw": sh.vigorous_throws}, "draw")):
+            (Scene(), 30, {"draw": hands.vigorous_throws}, "draw")):
         options = {"chunk": 30, "seed": SEED} | kwargs
         with pytest.raises(ValueError, match=f"holds a run of another spec.*{what}"):
             dist.run_throws(scene, n, out=tmp_path, progress=False, **options)
@@ -133,7 +134,7 @@ def test_the_shapes_study_throws_through_faces_of(tmp_path, monkeypatch):
 
     def faces_of(scene, n, seed):
         calls.append(seed)
-        return sh.Faces.of(np.full(scene.die.n_faces, n // scene.die.n_faces), n)
+        return hands.Faces.of(np.full(scene.die.n_faces, n // scene.die.n_faces), n)
 
     monkeypatch.setattr(sh, "free_flight", lambda *a, **k: dict.fromkeys(sh.FLIGHT_COLUMNS, 0.0))
     monkeypatch.setattr(sh, "_plot", lambda *a: None)
@@ -345,22 +346,22 @@ def test_kept_chunks_refuse_corrupt_and_orphaned_files(tmp_path):
 
 
 def local_draw(scene, n, rng):
-    return sh.hand_throws(scene, n, rng)
+    return hands.hand_throws(scene, n, rng)
 
 
 def test_draws_are_recorded_by_a_name_that_identifies_them(tmp_path, reference):
     def record(draw):
         return dist.Spec(Scene(), 10, 10, 0, draw).record()["draw"]
 
-    assert record(sh.hand_throws) == "dice_env.studies.shapes.hand_throws"
-    assert record(functools.partial(sh.hand_throws, unit=0.02)) \
-        == "functools.partial(dice_env.studies.shapes.hand_throws, unit=0.02)"
+    assert record(hands.hand_throws) == "dice_env.throws.hand_throws"
+    assert record(functools.partial(hands.hand_throws, unit=0.02)) \
+        == "functools.partial(dice_env.throws.hand_throws, unit=0.02)"
     assert record(DieOnce("m")) == "DieOnce(marker='m')"
 
     def local(scene, n, rng):
-        return sh.hand_throws(scene, n, rng)
+        return hands.hand_throws(scene, n, rng)
 
-    anonymous = lambda scene, n, rng: sh.hand_throws(scene, n, rng)  # noqa: E731
+    anonymous = lambda scene, n, rng: hands.hand_throws(scene, n, rng)  # noqa: E731
     for draw in (anonymous, local, functools.partial(local), object.__new__(Opaque)):
         with pytest.raises(ValueError, match=r"draw=.* cannot be recorded in a run folder.*"
                            "pass a module-level function or a functools.partial of one"):
@@ -373,7 +374,7 @@ class Opaque:
     """A draw whose repr shows only its address."""
 
     def __call__(self, scene, n, rng):
-        return sh.hand_throws(scene, n, rng)
+        return hands.hand_throws(scene, n, rng)
 
 
 @pytest.mark.parametrize(("argv", "match"), [
@@ -422,7 +423,7 @@ class DieOnce:
         try:
             fd = os.open(self.marker, os.O_CREAT | os.O_EXCL | os.O_WRONLY)
         except FileExistsError:
-            return sh.hand_throws(scene, n, rng)
+            return hands.hand_throws(scene, n, rng)
         os.write(fd, str(os.getpid()).encode())
         os.close(fd)
         os._exit(1)

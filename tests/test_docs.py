@@ -15,12 +15,12 @@ from dice_env.envs.dice_throw import configure
 from dice_env.envs.throw_task import ThrowTask, make_task, task_keywords
 from dice_env.model.die import Die
 from dice_env.model.surroundings import walls
-from dice_env.studies import numbers
+from studies import templates
 
 ROOT = Path(__file__).resolve().parents[1]
 PAGES = [ROOT / "README.md", *sorted(p for p in (ROOT / "docs").glob("**/*.md")
-                                     if not p.is_relative_to(numbers.TEMPLATES))]
-TEMPLATES = sorted(numbers.TEMPLATES.glob("*.md"))
+                                     if not p.is_relative_to(templates.TEMPLATES))]
+TEMPLATES = sorted(templates.TEMPLATES.glob("*.md"))
 HISTORY = re.compile(
     r"\b(reverted|the issue|issue's|used to|formerly|previously|an earlier (run|version)|"
     r"earlier figures|now (sticks|flagged|gives|runs|takes|costs|passes|fails|rests|reads)|"
@@ -35,37 +35,37 @@ TEXT<!-- /numbers -->
 
 
 def test_every_filled_block_is_what_its_json_gives():
-    assert numbers.stale() == []
-    assert sum(len(numbers.blocks(page)) for page in PAGES) >= 4
+    assert templates.stale() == []
+    assert sum(len(templates.blocks(page)) for page in PAGES) >= 4
 
 
 def test_a_number_changed_by_hand_or_a_missing_json_is_found(tmp_path, monkeypatch):
     page = tmp_path / "page.md"
     page.write_text(BLOCK.replace("TEXT", ""))
-    assert numbers.fill(page)
-    (block,) = numbers.blocks(page)
+    assert templates.fill(page)
+    (block,) = templates.blocks(page)
     assert block.text.startswith("batch 256, ") and block.render() == block.text
     page.write_text(page.read_text().replace("batch 256", "batch 512"))
-    (block,) = numbers.blocks(page)
+    (block,) = templates.blocks(page)
     assert block.render() != block.text
-    monkeypatch.setattr(numbers, "pages", lambda: [page])
-    assert numbers.main(["--check"]) == 1
+    monkeypatch.setattr(templates, "pages", lambda: [page])
+    assert templates.main(["--check"]) == 1
     page.write_text(BLOCK.replace("env.json", "gone.json"))
     with pytest.raises(FileNotFoundError, match=r"gone\.json is not in the repository"):
-        numbers.blocks(page)[0].render()
+        templates.blocks(page)[0].render()
 
 
 def test_a_study_page_fills_its_template_and_names_a_missing_value(tmp_path, monkeypatch):
-    monkeypatch.setattr(numbers, "TEMPLATES", tmp_path)
+    monkeypatch.setattr(templates, "TEMPLATES", tmp_path)
     (tmp_path / "study.md").write_text("p = {{ p | .3f }} over {{ len(faces) }} faces\n")
-    assert numbers.study_page("study", p=1 / 6, faces=range(6)) == "p = 0.167 over 6 faces\n"
+    assert templates.study_page("study", p=1 / 6, faces=range(6)) == "p = 0.167 over 6 faces\n"
     with pytest.raises(ValueError, match=r"study\.md: \{\{ p \| \.3f \}\}: NameError"):
-        numbers.study_page("study", faces=range(6))
+        templates.study_page("study", faces=range(6))
 
 
 @pytest.mark.parametrize("name", [p.stem for p in TEMPLATES])
 def test_every_study_template_is_filled_by_a_study(name):
-    studies = "".join(p.read_text() for p in (ROOT / "dice_env/studies").glob("*.py"))
+    studies = "".join(p.read_text() for p in (ROOT / "studies").glob("*.py"))
     assert re.search(rf'study_page\(\s*"{re.escape(name)}"', studies)
 
 

@@ -1,8 +1,8 @@
 """Functions stay readable: at most 120 lines and 10 parameters, the compiled loops excepted.
 
 The numba kernels (``@njit``, ``@cuda.jit``) take scalars rather than groups and run one loop
-each, on purpose (docs/performance.md); every other function of ``dice_env/`` and ``agents/``
-is held to the limits.
+each, on purpose (docs/performance.md); every other function of ``dice_env/``, ``agents/`` and
+``studies/`` is held to the limits.
 """
 
 import ast
@@ -22,9 +22,10 @@ def _compiled(node: ast.FunctionDef) -> bool:
 
 
 def _functions() -> list[tuple[str, ast.FunctionDef]]:
-    """(where, node) of every function in dice_env/ and agents/."""
+    """(where, node) of every function in dice_env/, agents/ and studies/."""
     found = []
-    for path in sorted([*ROOT.glob("dice_env/**/*.py"), *ROOT.glob("agents/**/*.py")]):
+    for path in sorted([*ROOT.glob("dice_env/**/*.py"), *ROOT.glob("agents/**/*.py"),
+                          *ROOT.glob("studies/*.py")]):
         for node in ast.walk(ast.parse(path.read_text())):
             if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
                 found.append((f"{path.relative_to(ROOT)}:{node.lineno} {node.name}", node))

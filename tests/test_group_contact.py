@@ -5,11 +5,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from dice_env import Die, Scene, State
+from dice_env import Die, Scene, State, throws
 from dice_env.model.rotations import axis_angle, random_rotations, up_rotation
 from dice_env.model.surroundings import tray
 from dice_env.simulation.group import GroupState, overlaps, simulate_group
-from dice_env.studies import pairs
 
 SCENE = Scene(t_max=2.0)
 YAWS = np.radians([0.0, 1.0, 10.0, 30.0, 45.0, 60.0, 89.0])
@@ -151,7 +150,7 @@ def test_the_pairs_study_s_unstable_throws_are_counted():
     data = np.load(Path(__file__).parent / "data" / "pairs_unstable.npz")
     state = GroupState(*(data[k] for k in ("position", "velocity", "angular_momentum",
                                            "orientation", "angular_velocity")))
-    scene = Scene(walls=tray(), t_max=pairs.T_MAX)
+    scene = Scene(walls=tray(), t_max=throws.T_TRAY)
     dice = (scene.die, scene.die)
     result = simulate_group(scene, dice, state, until="decided")
     assert not result.unstable.any(), result.energy_rise

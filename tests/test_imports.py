@@ -1,18 +1,23 @@
 """The import graph of the package and the agents points one way: no cycle, no edge upward.
 
-Every import counts: at the top, inside functions, and under ``if TYPE_CHECKING``.
+Every import counts: at the top, inside functions, and under ``if TYPE_CHECKING``. The library
+imports no study, agent or benchmark; agents and benchmarks import no study; importing the
+library loads none of the optional extras' heavy packages.
 """
 
 import ast
 import graphlib
+import os
+import subprocess
+import sys
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 
 
 def _modules() -> dict[str, Path]:
-    """Module name -> file, for agents/, benchmarks/ and dice_env/ (a package: its name)."""
-    files = [*ROOT.glob("agents/*.py"), *ROOT.glob("benchmarks/*.py"),
+    """Module name -> file, for agents/, benchmarks/, studies/ and dice_env/ (packages by name)."""
+    files = [*ROOT.glob("agents/*.py"), *ROOT.glob("benchmarks/*.py"), *ROOT.glob("studies/*.py"),
              *ROOT.glob("dice_env/**/*.py")]
     names = {}
     for path in files:
@@ -57,15 +62,50 @@ def test_the_table_is_the_bottom_layer():
         "dice_env.model.checks"}
 
 
-def test_the_core_imports_no_study_agent_or_benchmark():
-    # the model, the physics, the simulation and the envs sit below the studies and agents
+def _top(module: str) -> str:
+    return module.partition(".")[0]
+
+
+def test_the_library_imports_no_study_agent_or_benchmark():
+    modules = _modules()
+    assert any(_top(m) == "studies" for m in modules)  # the studies are among those read
+    for module, path in modules.items():
+        if _top(module) == "dice_env":
+            above = {m for m in _imports(path, module, modules)
+                     if _top(m) in ("studies", "agents", "benchmarks")}
+            assert not above, f"{module} imports {above}"
+
+
+def test_agents_and_benchmarks_import_no_study():
     modules = _modules()
     for module, path in modules.items():
-        if not module.startswith("dice_env") or module.startswith("dice_env.studies"):
-            continue
-        above = {m for m in _imports(path, module, modules)
-                 if m.startswith(("dice_env.studies", "agents", "benchmarks"))}
-        assert not above, f"{module} imports {above}"
+        if _top(module) in ("agents", "benchmarks"):
+            studies = {m for m in _imports(path, module, modules) if _top(m) == "studies"}
+            assert not studies, f"{module} imports {studies}"
+
+
+# Packages of the optional extras that importing the library must not load. The SB3 adapter,
+# dice_env.envs.sb3 (reached through dice_env.envs' lazy names), is Stable-Baselines3's by nature.
+HEAVY = ("matplotlib", "tqdm", "scipy", "torch", "stable_baselines3")
+ADAPTERS = ("dice_env.envs.sb3",)
+IMPORT_ALL = f"""
+import importlib, pkgutil, sys
+import gymnasium, numba, numpy  # the core dependencies: what they load themselves is theirs
+before = set(sys.modules)
+import dice_env
+for info in pkgutil.walk_packages(dice_env.__path__, prefix="dice_env."):
+    if not info.name.endswith("__main__") and info.name not in {ADAPTERS!r}:
+        importlib.import_module(info.name)
+loaded = {{m.partition(".")[0] for m in set(sys.modules) - before}}
+print(" ".join(sorted(loaded & set({HEAVY!r}))))
+"""
+
+
+def test_importing_the_library_loads_no_optional_heavy_package():
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    done = subprocess.run([sys.executable, "-c", IMPORT_ALL], cwd=ROOT, env=env,
+                          capture_output=True, text=True, timeout=600, check=True)
+    assert done.stdout.split() == []
 
 
 # The layers, bottom up: a module imports from its own layer and from those listed for it only
@@ -75,11 +115,14 @@ LAYERS = {
     "dice_env.model": set(),
     "dice_env.physics": set(),
     "dice_env.intervals": set(),
+    "dice_env.markdown": set(),
+    "dice_env.provenance": set(),
     "dice_env.simulation": {"dice_env.model", "dice_env.physics"},
+    "dice_env.throws": {"dice_env.model", "dice_env.simulation", "dice_env.intervals"},
     "dice_env.envs": {"dice_env.model", "dice_env.simulation"},
     "dice_env.viewer": {"dice_env", "dice_env.model", "dice_env.simulation", "dice_env.envs"},
-    "dice_env.studies": {"dice_env", "dice_env.model", "dice_env.physics", "dice_env.simulation",
-                         "dice_env.envs", "dice_env.intervals"},
+    "dice_env.studies": {"dice_env.model", "dice_env.simulation", "dice_env.markdown",
+                         "dice_env.throws"},
 }
 
 

@@ -6,9 +6,9 @@ import pytest
 from dice_env import Die, Ground, Scene, State
 from dice_env.model import materials, table
 from dice_env.simulation.calibration import measured_restitution
-from dice_env.studies import materials as study
-from dice_env.studies import run as run_study
-from dice_env.studies.__main__ import main as studies_main
+from studies import materials as study
+from studies import run as run_study
+from studies.__main__ import main as studies_main
 
 # The simulator's flat-landing restitution at 1 m/s is within this of each preset's target
 # (the step's error and gravity during the contact, larger on the softer grounds).
@@ -84,7 +84,7 @@ def test_study_sample_size_is_checked(tmp_path):
 
 
 def test_a_quick_run_never_replaces_a_full_page(tmp_path, monkeypatch, capsys):
-    from dice_env.studies.__main__ import DOCS, QUICK
+    from studies.__main__ import DOCS, QUICK
 
     with pytest.raises(SystemExit):
         studies_main(["materials", "--quick", "--out", str(DOCS)])

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from scipy.stats import qmc
 
-from dice_env import studies
+import studies
 from dice_env.model.die import Die
 from dice_env.model.pips import DRILLINGS, Pips, cap_properties, drill, layout
 
@@ -214,7 +214,7 @@ def test_bad_pips_fields_are_refused(kwargs, match):
 def test_page_is_written(tmp_path):
     numbers = studies.run("pips", tmp_path)
     text = (tmp_path / "pips.md").read_text()
-    assert "python -m dice_env.studies pips" in text
+    assert "python -m studies pips" in text
     assert 2e-3 < numbers["drilled16_com_over_edge"] < 4e-3
     for name in DRILLINGS:
         assert name in text

@@ -3,7 +3,8 @@
 import numpy as np
 import pytest
 
-from dice_env.studies import collisions as co
+from dice_env import throws
+from studies import collisions as co
 
 
 def test_turn_is_the_angle_between_vectors():
@@ -52,7 +53,7 @@ def test_mcnemar_sees_only_the_discordant_pairs():
 
 def test_alone_makes_each_die_its_own_throw():
     scene, dice = co.pair_scene()
-    state = co.hand_throws(scene, dice, 3, np.random.default_rng(0))
+    state = throws.group_throws(scene, dice, 3, np.random.default_rng(0))
     one = co.alone(state)
     assert one.batch_size == 6 and one.n_dice == 1
     np.testing.assert_array_equal(one.position[3:, 0], state.position[:, 1])

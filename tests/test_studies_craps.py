@@ -3,33 +3,35 @@
 import numpy as np
 import pytest
 
-from dice_env import Die, State
+from dice_env import Die, State, throws
 from dice_env.model.rotations import axis_angle
 from dice_env.simulation.group import GroupState, simulate_group
 from dice_env.simulation.simulate import UP
-from dice_env.studies import craps as cr
+from studies import craps as cr
 
 
 @pytest.mark.parametrize("angle", [0.0, 0.3, np.pi / 2, np.pi, 4.0, 3 * np.pi / 2])
 def test_the_sevens_set_shows_a_seven_while_both_dice_turn_alike_about_the_roll_axis(angle):
     die = Die()
-    turned = axis_angle([0.0, 1.0, 0.0], angle) @ cr.sevens_set()
+    turned = axis_angle([0.0, 1.0, 0.0], angle) @ throws.sevens_set()
     assert die.face_read(turned, UP).sum() == 7
 
 
 def test_the_crossed_set_shows_a_seven_in_2_of_16_common_rolls():
     die, roll = Die(), [0.0, 1.0, 0.0]
     sevens = [die.face_read(axis_angle(roll, a * np.pi / 2)
-                            @ np.stack([cr.crossed_set()[0],
-                                        axis_angle(roll, b * np.pi / 2) @ cr.crossed_set()[1]]),
+                            @ np.stack([throws.crossed_set()[0],
+                                        axis_angle(roll, b * np.pi / 2) @ throws.crossed_set()[1]]),
                             UP).sum() == 7 for a in range(4) for b in range(4)]
     assert sum(sevens) == 2
 
 
 def test_the_throw_goes_forward_with_backspin():
-    a = cr.action(2.0)
-    np.testing.assert_allclose(a[:3] * cr.MAX_SPEED, [2.0, 0.0, cr.LIFT])
-    assert a[4] * cr.MAX_SPIN == -cr.BACKSPIN and np.all(np.abs(a) <= 1.0)
+    hand = throws.SET_THROW
+    a = hand.action(2.0)
+    np.testing.assert_allclose(a[:3] * hand.max_speed, [2.0, 0.0, hand.lift])
+    assert a[4] * hand.max_spin == -hand.backspin and np.all(np.abs(a) <= 1.0)
+    np.testing.assert_array_equal(hand.action(), hand.action(hand.speed))
 
 
 def test_a_die_that_misses_the_back_wall_voids_the_throw():

@@ -3,9 +3,9 @@
 import numpy as np
 import pytest
 
-from dice_env import Die, Scene
+from dice_env import Die, Scene, throws
 from dice_env.intervals import wilson
-from dice_env.studies import fairness as fz
+from studies import fairness as fz
 
 
 def test_wilson_interval_known_value():
@@ -21,7 +21,7 @@ def test_wilson_interval_known_value():
 
 
 def test_face_down_is_opposite_the_face_read():
-    q = fz.random_orientations(np.random.default_rng(0), 500)
+    q = throws.random_orientations(np.random.default_rng(0), 500)
     normal = np.array([0.0, 0.0, 1.0])
     die = Die()
     np.testing.assert_array_equal(fz.face_down(die, q, normal), 7 - die.face_read(q, normal))
@@ -31,8 +31,8 @@ def test_energy_throws_carry_the_requested_energy():
     scene = Scene()
     rng = np.random.default_rng(1)
     excess = np.array([0.0, 0.1, 1.0, 10.0, 100.0])
-    state = fz.energy_throws(scene, excess, rng)
-    base = fz.touching_height(scene, state.orientation) - scene.die.size / 2
+    state = throws.energy_throws(scene, excess, rng)
+    base = throws.touching_height(scene, state.orientation) - scene.die.size / 2
     expected = excess + base / scene.die.size
     np.testing.assert_allclose(fz.throw_energy(scene, state), expected, rtol=1e-9, atol=1e-12)
     # lowest corner exactly on the plane for the gentle release
@@ -43,12 +43,12 @@ def test_energy_throws_carry_the_requested_energy():
 
 def test_vigorous_throws_respect_their_ranges():
     scene = Scene()
-    state = fz.vigorous_throws(scene, 400, np.random.default_rng(2))
+    state = throws.vigorous_throws(scene, 400, np.random.default_rng(2))
     a = scene.die.size
     speed = np.linalg.norm(state.velocity, axis=1) / a
     assert speed.min() >= 30 - 1e-9 and speed.max() <= 150 + 1e-9
     assert np.all(state.velocity[:, 2] <= 0)
-    clearance = (state.position[:, 2] - fz.touching_height(scene, state.orientation)) / a
+    clearance = (state.position[:, 2] - throws.touching_height(scene, state.orientation)) / a
     assert clearance.min() >= 5 - 1e-9 and clearance.max() <= 20 + 1e-9
     spin = np.linalg.norm(state.angular_velocity, axis=1)
     assert spin.min() >= 10 - 1e-9 and spin.max() <= 100 + 1e-9

@@ -6,13 +6,13 @@ from dataclasses import asdict
 import numpy as np
 import pytest
 
-from dice_env import Die, Scene
+from dice_env import Die, Scene, throws
 from dice_env.model.surroundings import tray
 from dice_env.simulation.group import DieContact, simulate_group
-from dice_env.studies import collisions as co
-from dice_env.studies import craps as cr
-from dice_env.studies import pairs as pr
-from dice_env.studies import run as run_study
+from studies import collisions as co
+from studies import craps as cr
+from studies import pairs as pr
+from studies import run as run_study
 
 
 def pairs_of(table):
@@ -70,27 +70,27 @@ def test_independence_leaves_out_empty_rows_and_refuses_a_single_row():
 
 
 def test_the_hand_holds_the_dice_in_rows_apart_with_one_velocity():
-    two = pr.layout(2)
+    two = throws.layout(2)
     np.testing.assert_allclose(two, [[0, -0.015, 0], [0, 0.015, 0]], atol=1e-15)
-    twelve = pr.layout(12)
+    twelve = throws.layout(12)
     assert np.unique(twelve[:, 0]).size == 3 and np.unique(twelve[:, 1]).size == 4
     np.testing.assert_allclose(twelve.mean(axis=0), 0.0, atol=1e-15)
     scene = Scene(walls=tray())
-    state = pr.hand_throws(scene, (scene.die,) * 2, 400, np.random.default_rng(1))
+    state = throws.group_throws(scene, (scene.die,) * 2, 400, np.random.default_rng(1))
     assert state.batch_size == 400 and state.n_dice == 2
     np.testing.assert_allclose(state.position[:, 1] - state.position[:, 0], [[0, 0.03, 0]] * 400,
                                atol=1e-12)
     spread = (state.velocity[:, 1] - state.velocity[:, 0]).std(axis=0)
-    np.testing.assert_allclose(spread, np.sqrt(2) * pr.HAND.noise, rtol=0.15)
+    np.testing.assert_allclose(spread, np.sqrt(2) * throws.HAND.noise, rtol=0.15)
     assert not np.allclose(state.orientation[:, 0], state.orientation[:, 1])
     with pytest.raises(ValueError, match="n_dice"):
-        pr.layout(0)
+        throws.layout(0)
 
 
 def test_a_mixed_set_of_twelve_dice_leaves_the_hand_apart():
     scene = Scene(walls=tray(), t_max=0.002)
     dice = (Die(),) * 11 + (Die.standard("d20"),)
-    state = pr.hand_throws(scene, dice, 3, np.random.default_rng(2))
+    state = throws.group_throws(scene, dice, 3, np.random.default_rng(2))
     simulate_group(scene, dice, state)  # refuses dice released overlapping
 
 
@@ -116,7 +116,7 @@ def test_a_bad_sample_size_is_refused_before_any_work(tmp_path, name, least, thr
 
 
 def test_chunks_kept_are_read_back_and_match_a_run_without_them(tmp_path):
-    scene = pr.tray_scene()
+    scene = throws.tray_scene()
     dice = (scene.die, scene.die)
     fresh, seconds, cpu = pr.chunked_pairs(scene, dice, 5, seed=5, chunk=3)
     assert seconds > 0 and cpu > 0 and len(fresh.counted) == 5

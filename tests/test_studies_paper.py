@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from dice_env.simulation.paper import ground_cube
-from dice_env.studies import paper_figures as pf
+from studies import paper_figures as pf
 
 
 def test_figure_6_no_friction_keeps_sliding():

@@ -5,12 +5,11 @@ import math
 import numpy as np
 import pytest
 
-from dice_env import Die, Scene
-from dice_env.studies import cuboids as cb
-from dice_env.studies import run as run_study
-from dice_env.studies import shapes as sh
-from dice_env.studies.__main__ import main as studies_main
-from dice_env.studies.fairness import touching_height
+from dice_env import Die, Scene, throws
+from studies import cuboids as cb
+from studies import run as run_study
+from studies import shapes as sh
+from studies.__main__ import main as studies_main
 
 FLIGHT = sh.flight_dice()
 
@@ -25,11 +24,11 @@ def test_favoured_face_is_the_face_read_with_the_weight_down(name, face, favoure
 def test_hand_throws_are_the_same_hand_for_every_die():
     for name in ("d4", "d20"):
         scene = Scene(die=Die.standard(name))
-        state = sh.hand_throws(scene, 300, np.random.default_rng(0))
+        state = throws.hand_throws(scene, 300, np.random.default_rng(0))
         unit = 0.016  # the default d6's edge: the ranges are in its units for every die
         speed = np.linalg.norm(state.velocity, axis=1) / unit
         assert speed.min() >= 30 - 1e-9 and speed.max() <= 150 + 1e-9
-        clearance = (state.position[:, 2] - touching_height(scene, state.orientation)) / unit
+        clearance = (state.position[:, 2] - throws.touching_height(scene, state.orientation)) / unit
         assert clearance.min() >= 5 - 1e-9 and clearance.max() <= 20 + 1e-9
         assert np.all(state.velocity[:, 2] <= 0)
 
@@ -55,20 +54,20 @@ def test_rotational_energy_drift_is_first_order_in_the_step():
 
 def test_faces_of_a_small_batch_are_counted():
     scene = Scene(die=Die.standard("d20"))
-    faces = sh.throw_faces(scene, sh.hand_throws(scene, 120, np.random.default_rng(1)),
+    faces = throws.throw_faces(scene, throws.hand_throws(scene, 120, np.random.default_rng(1)),
                            batch=50)
     assert faces.ended + faces.undecided == 120 and faces.undecided == 0
     assert faces.counts.shape == (20,) and faces.counts.sum() == faces.ended
     assert 0.0 <= faces.p_value <= 1.0
 
 
-@pytest.mark.parametrize(("name", "throws"), [
+@pytest.mark.parametrize(("name", "n"), [
     ("d6", 300), ("d12", 300),
     pytest.param("d4", 120, marks=pytest.mark.slow)])  # the light d4's tiny step: ~15 s
-def test_loaded_die_shows_the_predicted_face_more(name, throws):
+def test_loaded_die_shows_the_predicted_face_more(name, n):
     die = Die.standard(name).load(1, fraction=0.3, depth=0.9)
     scene = Scene(die=die)
-    faces = sh.throw_faces(scene, sh.hand_throws(scene, throws, np.random.default_rng(4)))
+    faces = throws.throw_faces(scene, throws.hand_throws(scene, n, np.random.default_rng(4)))
     favoured = sh.favoured_face(die, 1)
     assert faces.intervals[favoured - 1, 0] > 1 / die.n_faces
     assert int(np.argmax(faces.counts)) + 1 == favoured

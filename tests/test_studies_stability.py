@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from dice_env.model.scene import ContactLaw
-from dice_env.studies import stability as st
+from studies import stability as st
 
 
 @pytest.mark.parametrize("law", [ContactLaw.PAPER, ContactLaw.GATED])

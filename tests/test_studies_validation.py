@@ -8,11 +8,11 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from dice_env import Scene
-from dice_env.studies import cuboids as cb
-from dice_env.studies import validation as va
-from dice_env.studies import weldon as wd
-from dice_env.studies.__main__ import main as studies_main
+from dice_env import Scene, throws
+from studies import cuboids as cb
+from studies import validation as va
+from studies import weldon as wd
+from studies.__main__ import main as studies_main
 
 VERDICTS = {"agrees", "differs", "not resolvable at this sample"}
 
@@ -137,7 +137,7 @@ def test_memory_verdict_on_constructed_counts():
 
 def test_cup_releases_twelve_dice_apart_above_the_table():
     scene = Scene(die=wd.variant_die("drilled16"))
-    cups = wd.cup_throws(scene, 5, np.random.default_rng(0))
+    cups = throws.cup_throws(scene, 5, np.random.default_rng(0))
     assert len(cups) == wd.DICE and all(s.batch_size == 5 for s in cups)
     centres = np.stack([s.position for s in cups], axis=1)  # (5, 12, 3)
     gaps = np.linalg.norm(centres[:, :, None] - centres[:, None], axis=-1)
@@ -195,7 +195,7 @@ def test_weldon_throws_is_checked_where_given(tmp_path):
 def test_cuboid_page_is_read_back(tmp_path):
     numbers = cb.run(tmp_path, quick=True)
     page = cb.read_page(tmp_path / "cuboids.md")
-    assert page.command == "python -m dice_env.studies cuboids --quick"
+    assert page.command == "python -m studies cuboids --quick"
     assert page.throws == cb.QUICK and page.seed == 2026
     assert list(page.table) == [label for label, _, _ in cb.CONDITIONS]
     first = page.table[cb.CONDITIONS[0][0]]

@@ -9,7 +9,7 @@ from dice_env.model.die import STANDARD_SIZES, Die
 from dice_env.model.rotations import axis_angle
 from dice_env.model.scene import Scene
 from dice_env.simulation.simulate import simulate
-from dice_env.studies.shapes import counted, hand_throws
+from dice_env.throws import counted, hand_throws
 from dice_env.viewer import record, replay
 
 

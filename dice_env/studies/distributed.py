@@ -26,15 +26,14 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-from tqdm import tqdm
 
+from dice_env.markdown import bracket, markdown_table
+from dice_env.model.checks import check_int
 from dice_env.model.die import STANDARD_SIZES, Die
 from dice_env.model.scene import Scene
 from dice_env.simulation.simulate import State, simulate
 from dice_env.studies.chunks import FolderError, identity, load, prepare, write_atomically
-from dice_env.studies.common import checked_int
-from dice_env.studies.markdown import bracket, markdown_table
-from dice_env.studies.shapes import Faces, counted, hand_throws
+from dice_env.throws import Faces, counted, hand_throws
 
 # Per-throw outcomes a chunk keeps, with their dtypes.
 OUTCOMES = {"face": np.int16, "counted": np.bool_, "decided": np.bool_, "settled": np.bool_,
@@ -68,7 +67,7 @@ class Spec:
             raise TypeError(f"scene must be a Scene or a standard die's name "
                             f"{tuple(STANDARD_SIZES)}, got {type(self.scene).__name__}")
         for name, low in (("throws", 1), ("chunk", 1), ("seed", 0)):
-            object.__setattr__(self, name, checked_int(name, getattr(self, name), low))
+            object.__setattr__(self, name, check_int(name, getattr(self, name), low))
         if not callable(self.draw):
             raise TypeError(f"draw must be callable (scene, n, rng) -> State, got {self.draw!r}")
 
@@ -133,7 +132,7 @@ def _named(value: object) -> str:
 class Tally:
     """Counts and sums over a set of throws; :meth:`merge` adds tallies exactly.
 
-    ``counts`` (F,): faces of the throws that count (:func:`~dice_env.studies.shapes.counted`);
+    ``counts`` (F,): faces of the throws that count (:func:`~dice_env.throws.counted`);
     ``unfinished``: no face by the time limit; ``sums`` (3, 2): sum and sum of squares of each
     of :data:`MOMENTS`; ``time_hist``, ``impacts_hist``: :data:`TIME_BINS`, :data:`IMPACT_BINS`.
     """
@@ -235,10 +234,12 @@ def run_throws(scene: Scene | str, throws: int, *, chunk: int = CHUNK, seed: int
     if workers is not None and (not isinstance(workers, int) or isinstance(workers, bool)
                                 or workers < 1):
         raise ValueError(f"workers must be None or an int >= 1, got {workers!r}")
-    checked_int("max_retries", max_retries, 0)
+    check_int("max_retries", max_retries, 0)
     folder = None if out is None else prepare(Path(out), spec.record(), "out")
     tallies = {} if folder is None else _saved_tallies(folder, spec)
     todo = [i for i in range(spec.n_chunks) if i not in tallies]
+    from tqdm import tqdm  # imported here: importing the runner needs no progress bar
+
     bar = tqdm(total=spec.throws, initial=sum(t.throws for t in tallies.values()),
                unit="throw", unit_scale=True, desc="throws", disable=not progress,
                dynamic_ncols=True)

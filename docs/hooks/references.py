@@ -12,10 +12,11 @@ from __future__ import annotations
 import importlib
 import pkgutil
 import re
+import sys
 from pathlib import Path
 
 ROLE = re.compile(r":(?:func|class|mod|meth|attr|data|obj|exc):`~?([A-Za-z_][\w.]*)(?:\(\))?`")
-PACKAGES = ("dice_env", "agents")
+PACKAGES = ("dice_env", "agents", "studies")
 
 
 def _resolve(name: str, module: object) -> bool:
@@ -49,6 +50,8 @@ def _walk(target: object, parts: list[str]) -> bool:
 def unresolved(root: Path) -> list[str]:
     """``path:line: reference`` for every reference in ``PACKAGES`` that names nothing."""
     root, missing = root.resolve(), []
+    if str(root) not in sys.path:  # studies/ is not installed: it imports from the checkout
+        sys.path.insert(0, str(root))
     for package in PACKAGES:
         for info in pkgutil.walk_packages([str(root / package)], prefix=f"{package}."):
             if info.name.endswith("__main__"):

@@ -20,17 +20,17 @@ import numpy as np
 from scipy import optimize, stats
 
 from dice_env.intervals import Z95
+from dice_env.markdown import estimate, markdown_table
+from dice_env.model.checks import check_int
 from dice_env.model.die import Die
 from dice_env.model.pips import Pips
 from dice_env.model.scene import Scene
 from dice_env.simulation.group import DieContact, GroupState, simulate_group
 from dice_env.simulation.simulate import State
 from dice_env.studies.chunks import kept_chunks, prepare
-from dice_env.studies.common import DOCS, SEED, checked_int, checked_throws, progress, save_figure
-from dice_env.studies.fairness import random_directions, random_orientations
-from dice_env.studies.markdown import estimate, markdown_table
-from dice_env.studies.numbers import study_page
-from dice_env.studies.shapes import Faces, throw_faces
+from dice_env.throws import CUP, CUP_BLOCK, Faces, cup_throws, throw_faces
+from studies.common import DOCS, SEED, checked_throws, progress, save_figure
+from studies.templates import study_page
 
 # Weldon's throws of twelve dice with 0..12 showing a 5 or a 6 (Pearson 1900, Kemp & Kemp 1991)
 WELDON_COUNTS = (185, 1149, 3265, 5475, 6114, 5194, 3067, 1331, 403, 105, 14, 4, 0)
@@ -61,7 +61,7 @@ class Estimate:
     @classmethod
     def binomial(cls, successes: int, trials: int) -> Estimate:
         """``successes`` of ``trials`` independent trials: ``se = sqrt(p (1 - p) / n)``."""
-        trials = checked_int("trials", trials, 1)
+        trials = check_int("trials", trials, 1)
         if not 0 <= successes <= trials:
             raise ValueError(f"successes must be in [0, trials={trials}], got {successes!r}")
         p = successes / trials
@@ -232,47 +232,6 @@ def distribution_verdict(test: Chi2, power_against_fair: float) -> str:
 
 # ---- the throws ----------------------------------------------------------------------------
 
-@dataclass(frozen=True)
-class Cup:
-    """A cup of twelve dice tipped onto the table, in one layer (:data:`BLOCK`; see the page).
-
-    Lengths in die edges, speeds in edges/s, spins in rad/s; ranges drawn uniformly. ``spacing``
-    exceeds the cube's diagonal (sqrt 3), so the dice start apart in any orientation; dice in
-    layers would pile onto each other and many end leaning.
-    """
-
-    height: tuple[float, float] = (3.0, 6.0)
-    speed: tuple[float, float] = (10.0, 40.0)
-    scatter: float = 5.0
-    spin: tuple[float, float] = (5.0, 40.0)
-    spacing: float = 1.8
-    jitter: float = 0.03
-
-
-CUP = Cup()
-BLOCK = (4, 3, 1)
-
-
-def cup_throws(scene: Scene, n: int, rng: np.random.Generator, cup: Cup = CUP) -> list[State]:
-    """``n`` cups of twelve dice (the scene's die): one :class:`State` of ``n`` per die."""
-    a = scene.die.size
-    nx, ny, nz = BLOCK
-    slots = np.array([(i - (nx - 1) / 2, j - (ny - 1) / 2, k)
-                      for k in range(nz) for j in range(ny) for i in range(nx)])
-    lowest = math.sqrt(3) / 2 + rng.uniform(*cup.height, n)
-    heading = rng.uniform(0.0, 2 * math.pi, n)
-    carried = np.stack([np.cos(heading), np.sin(heading), np.zeros(n)], axis=1)
-    carried *= rng.uniform(*cup.speed, n)[:, None]
-    states = []
-    for slot in slots:
-        centre = slot * cup.spacing + rng.uniform(-cup.jitter, cup.jitter, (n, 3))
-        centre[:, 2] += lowest
-        velocity = carried + rng.normal(0.0, cup.scatter, (n, 3))
-        spin = random_directions(rng, n) * rng.uniform(*cup.spin, n)[:, None]
-        states.append(State.release(scene, centre * a, velocity * a, spin,
-                                    random_orientations(rng, n)))
-    return states
-
 
 @dataclass
 class Together:
@@ -397,7 +356,7 @@ def run(out: Path = DOCS, quick: bool = False, seed: int = SEED,
     sizes = dict(QUICK if quick else FULL)
     if checked_throws(throws, 2) is not None:
         sizes["together"] = int(throws)
-    command = "python -m dice_env.studies weldon" + (" --quick" if quick else "") + (
+    command = "python -m studies weldon" + (" --quick" if quick else "") + (
         f" --throws {throws}" if throws is not None else "")
     rng = np.random.default_rng(seed)
     total = DICE * (sizes["together"] + sizes["alone"] + (len(VARIANTS) - 1) * sizes["variant"])
@@ -506,9 +465,10 @@ def markdown(n: dict) -> str:
         ((v["label"], *(f"{c / sum(v['counts']):.4f}" for c in v["counts"]))
          for key, v in n["alone"].items() if key in ("drilled16", "casino19")))
     ref = n["alone"][VARIANTS[0][0]]
-    return study_page("weldon", globals(), cup=CUP, faces=faces, meta=n["meta"], n=n,
-                      r=math.hypot(*ref["com_um"]), ref=ref, s=sensitivity(n),
-                      sizes=n["meta"]["sizes"], successes=successes, t=t, variants=variants, w=w)
+    return study_page("weldon", globals(), block=CUP_BLOCK, cup=CUP, faces=faces,
+                      meta=n["meta"], n=n, r=math.hypot(*ref["com_um"]), ref=ref,
+                      s=sensitivity(n), sizes=n["meta"]["sizes"], successes=successes, t=t,
+                      variants=variants, w=w)
 
 
 def _together_reach(t: dict) -> str:

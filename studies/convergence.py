@@ -1,4 +1,4 @@
-"""Error against run time: ``python -m dice_env.studies error`` writes docs/error-vs-runtime.md.
+"""Error against run time: ``python -m studies error`` writes docs/error-vs-runtime.md.
 
 :func:`trajectory_errors` against step and CPU time, :func:`outcome_test` (``dt`` against
 ``dt/4``) and :func:`face_agreement` beside the chaos floor; the page explains each.
@@ -9,71 +9,28 @@ from __future__ import annotations
 import itertools
 import math
 import time
-from dataclasses import dataclass
 from pathlib import Path
 
 import matplotlib.pyplot as plt
 import numpy as np
 from scipy.stats import chi2_contingency, norm
 
-from dice_env.model.rotations import quaternion_to_matrix, random_rotations
+from dice_env.markdown import markdown_table
+from dice_env.model.rotations import random_rotations
 from dice_env.model.scene import FrictionLaw, Scene, Scheme
 from dice_env.model.table import DAMPING, FRICTION, RESTITUTION, STIFFNESS
 from dice_env.simulation.calibration import measured_restitution
 from dice_env.simulation.simulate import Result, State, simulate
-from dice_env.studies.common import SEED, progress
-from dice_env.studies.markdown import markdown_table
-from dice_env.studies.numbers import study_page
-
-T_THROW = 4.0  # s: the most a throw whose face is compared runs (all settle sooner)
-ENERGY_BINS = (0.0, 0.06, 0.12, 0.2, 0.3, np.inf)  # drop heights E / (m g) (m) of the bins
-
-
-@dataclass(frozen=True)
-class Release:
-    """A nominal release and the thrower's hand noise (SI units, angles in rad).
-
-    ``height`` of the centre, ``spin`` (angular velocity), ``tilt`` (rotation vector); normal
-    noise of the ``sigma_*`` per component; ``target``: the face that counts as success.
-    """
-
-    name: str
-    height: float
-    velocity: tuple[float, float, float]
-    spin: tuple[float, float, float]
-    tilt: tuple[float, float, float]
-    sigma_position: float
-    sigma_velocity: float
-    sigma_spin: float
-    sigma_angle: float
-    target: int = 1
-
-    def sample(self, scene: Scene, n: int, rng: np.random.Generator) -> State:
-        """``n`` noisy releases of this throw."""
-        position = np.array([0.0, 0.0, self.height]) + self.sigma_position * rng.normal(size=(n, 3))
-        velocity = np.array(self.velocity) + self.sigma_velocity * rng.normal(size=(n, 3))
-        spin = np.array(self.spin) + self.sigma_spin * rng.normal(size=(n, 3))
-        noise = self.sigma_angle * rng.normal(size=(n, 3))
-        orientation = _rotation(noise) @ _rotation(np.array(self.tilt))
-        return State.release(scene, position, velocity, spin, orientation)
-
-
-RELEASES = (
-    Release("gentle", 0.064, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), (0.44, 0.26, 0.0),
-            0.002, 0.02, 0.5, 0.05),
-    Release("tossed", 0.15, (0.5, 0.0, 0.0), (0.0, 10.0, 5.0), (0.3, 0.0, 0.0),
-            0.005, 0.1, 3.0, 0.1),
-    Release("vigorous", 0.25, (1.0, 0.2, -0.5), (25.0, -15.0, 10.0), (0.0, 0.0, 0.0),
-            0.01, 0.2, 5.0, 0.2),
+from dice_env.throws import (
+    RELEASES,
+    T_THROW,
+    Release,
+    face_agreement,
 )
+from studies.common import SEED, progress
+from studies.templates import study_page
 
-
-def _rotation(vector: np.ndarray) -> np.ndarray:
-    """Rotation matrices (..., 3, 3) of rotation vectors (..., 3)."""
-    angle = np.linalg.norm(vector, axis=-1, keepdims=True)
-    axis = np.divide(vector, angle, out=np.zeros_like(vector), where=angle > 0)
-    quat = np.concatenate([np.cos(angle / 2), np.sin(angle / 2) * axis], axis=-1)
-    return quaternion_to_matrix(quat)
+ENERGY_BINS = (0.0, 0.06, 0.12, 0.2, 0.3, np.inf)  # drop heights E / (m g) (m) of the bins
 
 
 def spread_throws(scene: Scene, n: int, rng: np.random.Generator) -> State:
@@ -160,22 +117,6 @@ def outcome_test(scene: Scene, release: Release, n: int, rng: np.random.Generato
     return {"counts": counts, "success": success, "se": se, "p_faces": p_faces,
             "p_success": p_success, "cpu": cpu, "cpu_fine": cpu_fine,
             "settled": float(min(coarse.settled.mean(), finer.settled.mean()))}
-
-
-def face_agreement(scene: Scene, start: State, factor: int = 4,
-                   perturbation: float = 1e-9) -> dict[str, np.ndarray]:
-    """Per throw: same face at ``dt`` and at ``dt/factor`` (``step``); and at ``dt`` again.
-
-    ``floor``: the same face after adding ``perturbation`` rad/s to every spin component.
-    """
-    scene = scene.with_(t_max=T_THROW)
-    base = simulate(scene, start)
-    fine = simulate(scene.with_(dt=scene.step / factor), start)
-    nudged = State.release(scene, start.position, start.velocity,
-                           start.angular_velocity + perturbation, start.orientation)
-    floor = simulate(scene, nudged)
-    return {"step": base.face == fine.face, "floor": base.face == floor.face,
-            "settled": base.settled & fine.settled, "penetration": base.max_penetration}
 
 
 def binned(height: np.ndarray, agree: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

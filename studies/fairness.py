@@ -12,103 +12,26 @@ from pathlib import Path
 import matplotlib.pyplot as plt
 import numpy as np
 from scipy import stats
-from scipy.spatial.transform import Rotation
 
 from dice_env.intervals import wilson
+from dice_env.markdown import bracket, estimate, markdown_table
 from dice_env.model.die import Die
 from dice_env.model.scene import Scene
 from dice_env.simulation.simulate import Result, State, simulate
-from dice_env.studies.common import DOCS, SEED, batches, error_bars, join, progress, save_figure
-from dice_env.studies.markdown import bracket, estimate, markdown_table
-from dice_env.studies.numbers import study_page
+from dice_env.throws import (
+    BATCH,
+    VIGOROUS,
+    batches,
+    energy_throws,
+    vigorous_throws,
+)
+from studies.common import DOCS, SEED, error_bars, join, progress, save_figure
+from studies.templates import study_page
 
-BATCH = 2048  # dice per kernel call
 # Throws of the full and quick runs: fair, loaded, and the memory-against-energy throws.
 FULL = {"fair": 100_000, "loaded": 20_000, "memory": 40_000}
 QUICK = {"fair": 1_200, "loaded": 600, "memory": 1_200}
 T_MAX = 20.0  # simulated time limit per throw (s); throws still moving count as not settled
-
-
-@dataclass(frozen=True)
-class Vigour:
-    """Ranges of a random throw, each drawn uniformly; orientation uniform over rotations.
-
-    ``clearance``: centre height above touching (edges); ``speed`` (edges/s) in a uniform
-    direction toward the table; ``spin`` (rad/s) about a uniform axis.
-    """
-
-    clearance: tuple[float, float] = (5.0, 20.0)
-    speed: tuple[float, float] = (30.0, 150.0)
-    spin: tuple[float, float] = (10.0, 100.0)
-
-
-# The fairness throws: dropped from 8–32 cm, 0.5–2.4 m/s, 10–100 rad/s for the 16 mm die.
-VIGOROUS = Vigour()
-
-
-def random_orientations(rng: np.random.Generator, n: int) -> np.ndarray:
-    """``n`` rotation matrices uniform over SO(3), shape (n, 3, 3)."""
-    return Rotation.random(n, random_state=rng).as_matrix()
-
-
-def random_directions(rng: np.random.Generator, n: int) -> np.ndarray:
-    """``n`` unit vectors uniform over the sphere, shape (n, 3)."""
-    v = rng.normal(size=(n, 3))
-    return v / np.linalg.norm(v, axis=1, keepdims=True)
-
-
-def toward_table(scene: Scene, directions: np.ndarray) -> np.ndarray:
-    """``directions`` (n, 3) with those pointing away from the table mirrored toward it."""
-    away = directions @ np.asarray(scene.ground.normal) > 0
-    return np.where(away[:, None], -directions, directions)
-
-
-def touching_height(scene: Scene, orientation: np.ndarray) -> np.ndarray:
-    """Height of the centre (along the normal) at which the lowest corner touches the plane."""
-    corners = np.einsum("bij,kj->bki", orientation, scene.die.vertices_body)
-    return -(corners @ np.asarray(scene.ground.normal)).min(axis=1)
-
-
-def release_state(scene: Scene, orientation: np.ndarray, clearance: np.ndarray,
-                  velocity: np.ndarray, spin: np.ndarray) -> State:
-    """Dice released ``clearance`` (m) above touching, above the origin along the normal."""
-    normal = np.asarray(scene.ground.normal)
-    height = touching_height(scene, orientation) + clearance
-    return State.release(scene, height[:, None] * normal, velocity, spin, orientation)
-
-
-def vigorous_throws(scene: Scene, n: int, rng: np.random.Generator,
-                    vigour: Vigour = VIGOROUS, unit: float | None = None) -> State:
-    """``n`` random throws from ``vigour``, lengths in ``unit`` (m; default the die's size)."""
-    a = scene.die.size if unit is None else unit
-    orientation = random_orientations(rng, n)
-    clearance = rng.uniform(*vigour.clearance, n) * a
-    direction = toward_table(scene, random_directions(rng, n))
-    velocity = direction * rng.uniform(*vigour.speed, n)[:, None] * a
-    spin = random_directions(rng, n) * rng.uniform(*vigour.spin, n)[:, None]
-    return release_state(scene, orientation, clearance, velocity, spin)
-
-
-def energy_throws(scene: Scene, excess: np.ndarray, rng: np.random.Generator) -> State:
-    """Throws whose energy exceeds a gentle touching release by ``excess`` (units m g a).
-
-    The excess is split at random (uniform on the simplex) between drop height, speed toward
-    the table's half-space and spin; ``excess = 0`` is a release at rest with a corner touching.
-    """
-    die, g = scene.die, scene.gravity
-    n = len(excess)
-    unit = die.mass * g * die.size
-    parts = rng.dirichlet(np.ones(3), n) * (excess * unit)[:, None]
-    orientation = random_orientations(rng, n)
-    normal = np.asarray(scene.ground.normal)
-    direction = toward_table(scene, random_directions(rng, n))
-    velocity = direction * np.sqrt(2 * parts[:, 1] / die.mass)[:, None]
-    axis = random_directions(rng, n)
-    body_axis = np.einsum("bji,bj->bi", orientation, axis)
-    inertia_along = np.einsum("bi,ij,bj->b", body_axis, die.inertia_body, body_axis)
-    spin = axis * np.sqrt(2 * parts[:, 2] / inertia_along)[:, None]
-    clearance = parts[:, 0] / (die.mass * g * normal[2])
-    return release_state(scene, orientation, clearance, velocity, spin)
 
 
 def throw_energy(scene: Scene, state: State) -> np.ndarray:

@@ -18,6 +18,7 @@ import numpy as np
 from scipy import stats
 
 from dice_env.intervals import wilson
+from dice_env.markdown import estimate, markdown_table
 from dice_env.model.die import Die
 from dice_env.model.scene import Scene
 from dice_env.model.surroundings import TRAY
@@ -28,18 +29,10 @@ from dice_env.simulation.group import (
     group_step,
     simulate_group,
 )
-from dice_env.studies.common import DOCS, SEED, checked_throws, progress, save_figure
-from dice_env.studies.markdown import estimate, markdown_table
-from dice_env.studies.numbers import study_page
-from dice_env.studies.pairs import (
-    HAND,
-    T_MAX,
-    hand_throws,
-    not_void,
-    simulate_in_batches,
-    tray_scene,
-    void_reasons,
-)
+from dice_env.throws import HAND, T_TRAY, group_throws, tray_scene
+from studies.common import DOCS, SEED, checked_throws, progress, save_figure
+from studies.pairs import not_void, simulate_in_batches, void_reasons
+from studies.templates import study_page
 
 # Every run takes each step (no flight jumps: a group's jumps depend on all its dice), so that
 # a die thrown apart moves bit for bit as in the pair until the dice first touch.
@@ -196,7 +189,7 @@ class Collisions:
 def throw(n: int, seed: int = SEED, bar: object = None) -> Collisions:
     """``n`` throws of the pair, each together and apart, at rest and perturbed."""
     scene, dice = pair_scene()
-    state = hand_throws(scene, dice, n, np.random.default_rng(seed))
+    state = group_throws(scene, dice, n, np.random.default_rng(seed))
     nudged = state.copy()
     nudged.velocity[:, 0, 0] += PERTURBATION
     together, twin = (simulate_in_batches(scene, dice, s, bar, until="decided", free_flight=FLIGHT)
@@ -344,10 +337,10 @@ def _markdown(n: dict, seed: int) -> str:
           _share(n[f"{case}_entropy2"]), f"{n[f'{case}_uniform2']:.3g}",
           _share(n[f"{case}_joint"])) for case in ("together", "apart")))
     quick_note = "" if thrown >= FULL else (
-        f" (fewer than the default {FULL}: `python -m dice_env.studies collisions`)")
+        f" (fewer than the default {FULL}: `python -m studies collisions`)")
     verdict = ("more often" if n["change_together"][0] > n["change_apart"][0] else "less often") \
         if n["mcnemar_p"] < 0.01 else "not detectably differently"
     return study_page("collisions", globals(), DieContact=DieContact, HAND=HAND, TRAY=TRAY,
-                      T_MAX=T_MAX, entropies=entropies, n=n, numba=numba, quick_note=quick_note,
+                      T_TRAY=T_TRAY, entropies=entropies, n=n, numba=numba, quick_note=quick_note,
                       scene=scene, seed=seed, spin=n["together_spin_change"], thrown=thrown,
                       turn_q=n["together_spin_turn"], verdict=verdict)

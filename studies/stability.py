@@ -15,14 +15,14 @@ import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.colors import ListedColormap
 
+from dice_env.markdown import markdown_table
 from dice_env.model.die import Die
 from dice_env.model.scene import MAX_STEPS, ContactLaw, Ground, Scene
 from dice_env.simulation.paper import paper_scene
 from dice_env.simulation.simulate import Result, State, simulate
-from dice_env.studies.common import DOCS, progress, save_figure
-from dice_env.studies.fairness import Vigour, vigorous_throws
-from dice_env.studies.markdown import markdown_table
-from dice_env.studies.numbers import study_page
+from dice_env.throws import Vigour, vigorous_throws
+from studies.common import DOCS, progress, save_figure
+from studies.templates import study_page
 
 STABLE, DRIFTING, BLOWUP = 0, 1, 2
 DRIFT_LIMIT = 10.0  # worst energy rise (fraction of KE0 + m g (h0 + edge)) still drifting

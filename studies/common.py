@@ -1,9 +1,7 @@
-"""What every study shares: docs folder, seed, figures, progress bar, throw count, code version."""
+"""What every study shares: docs folder, seed, figures, progress bar, throw count."""
 
 from __future__ import annotations
 
-import subprocess
-from collections.abc import Iterator
 from dataclasses import fields
 from pathlib import Path
 
@@ -14,9 +12,11 @@ import matplotlib.pyplot as plt
 import numpy as np
 from tqdm import tqdm
 
+from dice_env.model.checks import check_int
 from dice_env.simulation.simulate import DiceArrays
+from studies import ROOT
 
-DOCS = Path(__file__).resolve().parents[2] / "docs"  # where the full studies write their pages
+DOCS = ROOT / "docs"  # where the full studies write their pages
 SEED = 2026  # the studies' default seed
 
 
@@ -37,15 +37,6 @@ def progress(total: int, desc: str, unit: str = "run") -> tqdm:
     return tqdm(total=total, desc=desc, unit=unit, dynamic_ncols=True)
 
 
-def batches(state: DiceArrays, size: int, bar: tqdm | None = None) -> Iterator[DiceArrays]:
-    """``state``'s throws in consecutive batches of ``size``; ``bar`` advances by each when done."""
-    for start in range(0, state.batch_size, size):
-        batch = type(state)(*(a[start:start + size] for a in state._arrays()))
-        yield batch
-        if bar is not None:
-            bar.update(batch.batch_size)
-
-
 def join(parts: list) -> object:
     """``parts`` (states, or results without records) as one: their arrays concatenated."""
     values = {f.name: [getattr(p, f.name) for p in parts] for f in fields(parts[0])}
@@ -53,23 +44,6 @@ def join(parts: list) -> object:
                              for k, v in values.items() if v[0] is not None})
 
 
-def checked_int(name: str, value: object, least: int) -> int:
-    """``value`` as an int, checked: an int (not a bool) >= ``least``, else a ValueError."""
-    if not isinstance(value, (int, np.integer)) or isinstance(value, bool) or value < least:
-        raise ValueError(f"{name} must be an int >= {least}, got {value!r}")
-    return int(value)
-
-
 def checked_throws(throws: object, least: int, default: int | None = None) -> int | None:
     """A study's ``throws`` checked: an int >= ``least``, or ``default`` (its own size) for None."""
-    return default if throws is None else checked_int("throws", throws, least)
-
-
-def code_version(tree: Path = DOCS.parent) -> str:
-    """``git describe --always --dirty`` of the checkout at ``tree``, or ``"unknown"``."""
-    try:
-        done = subprocess.run(["git", "describe", "--always", "--dirty"], cwd=tree,
-                              capture_output=True, text=True, timeout=10)
-    except (OSError, subprocess.TimeoutExpired):
-        return "unknown"
-    return done.stdout.strip() or "unknown"
+    return default if throws is None else check_int("throws", throws, least)

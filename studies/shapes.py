@@ -11,93 +11,30 @@ from pathlib import Path
 
 import matplotlib.pyplot as plt
 import numpy as np
-from scipy import stats
 
-from dice_env.intervals import wilson
+from dice_env.markdown import estimate, markdown_table
 from dice_env.model.die import STANDARD_SIZES, Die
 from dice_env.model.scene import Scene
 from dice_env.model.table import DIE_EDGE
-from dice_env.simulation.simulate import UP, Result, State, simulate
-from dice_env.studies.common import DOCS, SEED, batches, checked_throws, progress, save_figure
-from dice_env.studies.fairness import (
+from dice_env.simulation.simulate import UP, State, simulate
+from dice_env.throws import (
     VIGOROUS,
-    Vigour,
+    Faces,
+    hand_throws,
     random_directions,
     random_orientations,
-    vigorous_throws,
+    throw_faces,
 )
-from dice_env.studies.markdown import estimate, markdown_table
-from dice_env.studies.numbers import study_page
+from studies.common import DOCS, SEED, checked_throws, progress, save_figure
+from studies.templates import study_page
 
 DICE = tuple(STANDARD_SIZES)
 # Throws per die, fair and loaded, in the full and the quick run.
 FULL = {"fair": 100_000, "loaded": 20_000}
 QUICK = {"fair": 600, "loaded": 600}
-BATCH = 2048  # dice per kernel call
 LOAD = {"face": 1, "fraction": 0.1, "depth": 0.8}  # the loaded dice (Die.load's arguments)
 FLIGHT_HEIGHT, FLIGHT_TIME = 1.0, 0.3  # free flight: released 1 m up, 0.3 s without contact
 FLIGHT_COLUMNS = ("velocity", "momentum", "energy", "rotation", "height")
-
-
-def hand_throws(scene: Scene, n: int, rng: np.random.Generator,
-                vigour: Vigour = VIGOROUS, unit: float = DIE_EDGE) -> State:
-    """``n`` random throws of ``scene``'s die drawn from ``vigour`` in units of ``unit`` (m).
-
-    The default unit, the default d6's edge, gives every die the same hand.
-    """
-    return vigorous_throws(scene, n, rng, vigour, unit)
-
-
-@dataclass
-class Faces:
-    """Faces of a set of throws: ``counts`` (F,) per label over the ``ended`` throws.
-
-    ``undecided``: the throws not counted (moving at the time limit, unstable or sunk);
-    ``chi2``, ``p_value``: the chi-square test of uniformity.
-    """
-
-    counts: np.ndarray
-    ended: int
-    undecided: int
-    chi2: float
-    p_value: float
-
-    @classmethod
-    def of(cls, counts: np.ndarray, throws: int) -> Faces:
-        """The faces ``counts`` (F,) counted among ``throws`` throws, with their chi-square."""
-        ended = int(counts.sum())
-        chi2, p = stats.chisquare(counts) if ended else (np.nan, np.nan)
-        return cls(counts, ended, throws - ended, float(chi2), float(p))
-
-    @property
-    def shares(self) -> np.ndarray:
-        """Each face's share of the counted throws."""
-        return self.counts / self.ended
-
-    @property
-    def intervals(self) -> np.ndarray:
-        """95% Wilson intervals of each face's probability, (F, 2)."""
-        return wilson(self.counts, self.ended)
-
-    @property
-    def max_deviation(self) -> float:
-        """Largest deviation of a face's share from ``1/F``."""
-        return float(np.abs(self.shares - 1 / len(self.counts)).max())
-
-
-def counted(result: Result) -> np.ndarray:
-    """The throws whose face counts: ended decided or at rest, neither unstable nor sunk."""
-    return (result.decided | result.settled) & ~result.unstable & ~result.sunk
-
-
-def throw_faces(scene: Scene, state: State, bar: object = None, batch: int = BATCH) -> Faces:
-    """Throw ``state`` in ``scene`` until each face is decided; count the faces."""
-    n_faces = scene.die.n_faces
-    counts = np.zeros(n_faces, np.int64)
-    for chunk in batches(state, batch, bar):
-        res = simulate(scene, chunk, until="decided")
-        counts += np.bincount(res.face[counted(res)], minlength=n_faces + 1)[1:]
-    return Faces.of(counts, state.batch_size)
 
 
 def favoured_face(die: Die, face: int) -> int:
@@ -279,7 +216,7 @@ def _load_verdict(loaded: dict[str, Loaded]) -> str:
 
 def _markdown(fair: dict[str, Faces], loaded: dict[str, Loaded], flight: dict,
               sizes: dict, seed: int, quick: bool, throws: int | None, chunked: bool) -> str:
-    command = "python -m dice_env.studies shapes" + (" --quick" if quick else "") + (
+    command = "python -m studies shapes" + (" --quick" if quick else "") + (
         f" --throws {throws}" if throws is not None else "") + (
         " --chunks DIR" if chunked else "")
     fairness = markdown_table(
@@ -310,6 +247,6 @@ def _markdown(fair: dict[str, Faces], loaded: dict[str, Loaded], flight: dict,
         "die from the study's seed; `--chunks DIR` keeps them, `--ray ADDRESS` runs them on Ray): "
         "the same numbers here or on any Ray cluster, not those of a run without chunks.\n"
         if chunked else "")
-    return study_page("shapes", globals(), command=command, fairness=fairness, flights=flights,
-                      g=Scene().ground, loaded=loaded, loads=loads, note=note, seed=seed,
-                      sizes=sizes, v=VIGOROUS)
+    return study_page("shapes", globals(), DIE_EDGE=DIE_EDGE, command=command,
+                      fairness=fairness, flights=flights, g=Scene().ground, loaded=loaded,
+                      loads=loads, note=note, seed=seed, sizes=sizes, v=VIGOROUS)

@@ -1,4 +1,4 @@
-"""What the studies' pages share: a markdown table and a share with its interval."""
+"""Markdown for reports: a table, and a share with its interval."""
 
 from __future__ import annotations
 

@@ -16,9 +16,10 @@ import numpy as np
 from scipy import stats
 
 from dice_env.intervals import wilson
+from dice_env.markdown import bracket, markdown_table
 from dice_env.model.die import Die
 from dice_env.model.scene import Scene
-from dice_env.model.surroundings import TRAY, tray
+from dice_env.model.surroundings import TRAY
 from dice_env.simulation.group import (
     DieContact,
     GroupResult,
@@ -26,73 +27,22 @@ from dice_env.simulation.group import (
     group_step,
     simulate_group,
 )
-from dice_env.simulation.simulate import State
 from dice_env.studies.chunks import kept_chunks, prepare
-from dice_env.studies.common import DOCS, SEED, batches, checked_throws, join, progress, save_figure
-from dice_env.studies.fairness import random_directions, random_orientations, toward_table
-from dice_env.studies.markdown import bracket, markdown_table
-from dice_env.studies.numbers import study_page
+from dice_env.throws import (
+    HAND,
+    T_TRAY,
+    batches,
+    group_throws,
+    tray_scene,
+)
+from studies.common import DOCS, SEED, checked_throws, join, progress, save_figure
+from studies.templates import study_page
 
 # Throws of the pair in the full and the quick run, per kernel call, per seeded chunk.
 FULL, QUICK, BATCH, CHUNK = 100_000, 60, 500, 2_000
 MIN_THROWS = 20  # the 6 x 6 table needs some in every row and column
-T_MAX = 10.0  # simulated time limit per throw (s): a throw not decided by then is voided
 SIGNIFICANT = 0.01  # p-value below which a test counts as a detected departure
 TOTALS = np.arange(2, 13)
-
-
-@dataclass(frozen=True)
-class Hand:
-    """A hand that throws several dice at once (docs/pairs.md); metres, m/s, rad/s.
-
-    Dice in rows of ``per_row`` along y, ``spacing`` apart, ``clearance`` above touching; one
-    velocity ``speed`` toward the table plus each die's normal ``noise``; each die its own
-    ``spin`` and orientation. Ranges are drawn uniformly per throw.
-    """
-
-    spacing: float = 0.03
-    per_row: int = 4
-    clearance: tuple[float, float] = (0.08, 0.32)
-    speed: tuple[float, float] = (0.48, 2.4)
-    noise: float = 0.1
-    spin: tuple[float, float] = (10.0, 100.0)
-
-
-HAND = Hand()  # the fairness study's vigorous throw, given to both dice at once
-
-
-def tray_scene() -> Scene:
-    """The 30 x 20 cm tray on the default table, each throw ending by :data:`T_MAX`."""
-    return Scene(walls=tray(), t_max=T_MAX)
-
-
-def layout(n_dice: int, hand: Hand = HAND) -> np.ndarray:
-    """Horizontal offsets (n_dice, 3) of the dice in the hand, centred on the origin."""
-    if not isinstance(n_dice, int) or isinstance(n_dice, bool) or n_dice < 1:
-        raise ValueError(f"n_dice must be an int >= 1, got {n_dice!r}")
-    row, column = divmod(np.arange(n_dice), hand.per_row)
-    rows, columns = row.max() + 1, min(n_dice, hand.per_row)
-    offsets = np.zeros((n_dice, 3))
-    offsets[:, 0] = (row - (rows - 1) / 2) * hand.spacing
-    offsets[:, 1] = (column - (columns - 1) / 2) * hand.spacing
-    return offsets
-
-
-def hand_throws(scene: Scene, dice: tuple[Die, ...], n: int, rng: np.random.Generator,
-                hand: Hand = HAND) -> GroupState:
-    """``n`` throws of ``dice`` from one ``hand`` (see :class:`Hand`) in ``scene``."""
-    reach = max(d.reach for d in dice)
-    height = rng.uniform(*hand.clearance, n) + reach
-    velocity = (toward_table(scene, random_directions(rng, n))
-                * rng.uniform(*hand.speed, n)[:, None])
-    states = []
-    for die, offset in zip(dice, layout(len(dice), hand), strict=True):
-        position = offset + height[:, None] * np.asarray(scene.ground.normal)
-        spin = random_directions(rng, n) * rng.uniform(*hand.spin, n)[:, None]
-        states.append(State.release(scene.with_(die=die), position,
-                                    velocity + rng.normal(0.0, hand.noise, (n, 3)), spin,
-                                    random_orientations(rng, n)))
-    return GroupState.of(states)
 
 
 def triangle() -> np.ndarray:
@@ -202,7 +152,7 @@ def chunked_pairs(scene: Scene, dice: tuple[Die, ...], throws: int, seed: int,
                        "contact": asdict(DieContact())})
 
     def throw(i: int, size: int) -> dict[str, np.ndarray]:
-        state = hand_throws(scene, dice, size, np.random.default_rng([seed, i]))
+        state = group_throws(scene, dice, size, np.random.default_rng([seed, i]))
         start, cpu = time.perf_counter(), time.process_time()
         pairs = throw_pairs(scene, dice, state)
         return pairs.arrays() | {"seconds": np.float64(time.perf_counter() - start),
@@ -320,6 +270,6 @@ def _markdown(pairs: Pairs, n: dict, scene: Scene, seed: int) -> str:
                                               for reason, count in pairs.voided.items()))
     shares = pairs.totals / pairs.n
     return study_page(
-        "pairs-markdown", globals(), TRAY=TRAY, ci=ci, faces=faces, h=HAND, n=n, numba=numba,
-        pairs=pairs, scene=scene, seed=seed, shares=shares, thrown=thrown, totals=totals,
-        voided=voided, worst=int(np.argmax(np.abs(shares - triangle()))))
+        "pairs-markdown", globals(), TRAY=TRAY, T_TRAY=T_TRAY, ci=ci, faces=faces, h=HAND, n=n,
+        numba=numba, pairs=pairs, scene=scene, seed=seed, shares=shares, thrown=thrown,
+        totals=totals, voided=voided, worst=int(np.argmax(np.abs(shares - triangle()))))

@@ -12,11 +12,11 @@ from pathlib import Path
 import matplotlib.pyplot as plt
 import numpy as np
 
+from dice_env.markdown import markdown_table
 from dice_env.model.scene import ContactLaw
 from dice_env.simulation.paper import PaperRun, ground_cube, paper_scene, real_throw_cube
-from dice_env.studies.common import DOCS, progress, save_figure
-from dice_env.studies.markdown import markdown_table
-from dice_env.studies.numbers import study_page
+from studies.common import DOCS, progress, save_figure
+from studies.templates import study_page
 
 THROW_SEED = 0  # seed of the real throw's initial angular momentum (the listing's rand(3,1))
 # Ground-cube variants of Figures 6–12: (figure label, keyword overrides of ground_cube).

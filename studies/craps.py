@@ -17,33 +17,33 @@ from scipy import stats
 
 from dice_env.envs.throw_task import ThrowTask, make_task
 from dice_env.intervals import wilson
+from dice_env.markdown import estimate, markdown_table
 from dice_env.model import materials
-from dice_env.model.rotations import axis_angle
 from dice_env.model.scene import Scene
 from dice_env.model.surroundings import CRAPS, craps
 from dice_env.simulation.group import GroupResult
-from dice_env.studies.common import DOCS, SEED, checked_throws, error_bars, progress, save_figure
-from dice_env.studies.fairness import random_orientations
-from dice_env.studies.markdown import estimate, markdown_table
-from dice_env.studies.numbers import study_page
-from dice_env.studies.pairs import (
-    T_MAX,
+from dice_env.throws import (
+    SET_THROW,
+    T_TRAY,
+    random_orientations,
+    sevens_set,
+)
+from studies.common import DOCS, SEED, checked_throws, error_bars, progress, save_figure
+from studies.pairs import (
     TOTALS,
     not_void,
     simulate_in_batches,
     triangle,
     void_reasons,
 )
+from studies.templates import study_page
 
 # Throws per cell in the full and the quick run; the fewest a run takes per cell.
 FULL, QUICK, MIN_THROWS = 300, 8, 10
 # Hand noise: each release component's standard deviation as a fraction of its maximum, and
 # each die's orientation error (rad per axis).
 NOISES, QUICK_NOISES = (1e-5, 1e-4, 1e-3, 1e-2), (1e-5, 1e-2)
-SPEEDS, QUICK_SPEEDS = (2.0, 2.8), (2.0,)  # forward release speeds (m/s)
-# Upward speed (m/s), backspin about -y (rad/s), release height (m).
-LIFT, BACKSPIN, RELEASE_HEIGHT = 1.5, 20.0, 0.12
-MAX_SPEED, MAX_SPIN = 4.0, 40.0  # an action component of 1 is this speed (m/s) or spin (rad/s)
+SPEEDS, QUICK_SPEEDS = (SET_THROW.speed, 2.8), (SET_THROW.speed,)  # forward release speeds (m/s)
 BACK_WALL = 1  # index in Scene.planes: the floor, then craps()'s walls, the back wall first
 SIGNIFICANT = 0.01
 HANDS = ("set", "random")
@@ -53,37 +53,14 @@ _HEADER = ("noise | speed (m/s) | dice | counted / thrown | sevens | P(seven) [9
 
 def craps_scene() -> Scene:
     """The craps layout with its back and side walls."""
-    return materials.scene("craps").with_(walls=craps(), t_max=T_MAX)
-
-
-def sevens_set() -> np.ndarray:
-    """The two dice's orientations in the hand (2, 3, 3): the "all-sevens" set.
-
-    Die 2 is die 1 turned half a turn about y (the roll axis): while both turn alike about y,
-    the faces up add to 7.
-    """
-    return np.stack([np.eye(3), axis_angle([0.0, 1.0, 0.0], np.pi)])
-
-
-def crossed_set() -> np.ndarray:
-    """The two dice's orientations in the hand (2, 3, 3): a set against the seven.
-
-    Die 2 is die 1 turned a quarter turn about x: 2 of the 16 pairings of the faces rolled
-    through about y add to seven (4 for dice set alike or in :func:`sevens_set`).
-    """
-    return np.stack([np.eye(3), axis_angle([1.0, 0.0, 0.0], np.pi / 2)])
+    return materials.scene("craps").with_(walls=craps(), t_max=T_TRAY)
 
 
 def hand(noise: float) -> ThrowTask:
     """The env's two-dice hand on the craps scene with hand and orientation noise ``noise``."""
-    return make_task(num_dice=2, scene=craps_scene(), release_height=RELEASE_HEIGHT,
-                     max_speed=MAX_SPEED, max_spin=MAX_SPIN, hand_noise=noise,
+    return make_task(num_dice=2, scene=craps_scene(), release_height=SET_THROW.height,
+                     max_speed=SET_THROW.max_speed, max_spin=SET_THROW.max_spin, hand_noise=noise,
                      orientation_noise=noise, until="decided")
-
-
-def action(speed: float) -> np.ndarray:
-    """The throw (6,): ``speed`` forward along x, :data:`LIFT` up, :data:`BACKSPIN` about -y."""
-    return np.array([speed / MAX_SPEED, 0.0, LIFT / MAX_SPEED, 0.0, -BACKSPIN / MAX_SPIN, 0.0])
 
 
 def throw_cell(noise: float, speed: float, set_hand: bool, n: int, rng: np.random.Generator,
@@ -92,13 +69,13 @@ def throw_cell(noise: float, speed: float, set_hand: bool, n: int, rng: np.rando
     task = hand(noise)
     hands = (np.broadcast_to(sevens_set(), (n, 2, 3, 3)) if set_hand
              else random_orientations(rng, 2 * n).reshape(n, 2, 3, 3))
-    state, _ = task.release(np.tile(action(speed), (n, 1)), hands,
+    state, _ = task.release(np.tile(SET_THROW.action(speed), (n, 1)), hands,
                             rng.standard_normal((n, task.noise_dim)))
     return simulate_in_batches(task.scene, task.dice, state, bar, until="decided")
 
 
 def reasons(result: GroupResult) -> dict[str, np.ndarray]:
-    """:func:`~dice_env.studies.pairs.void_reasons`, and a die that missed the back wall."""
+    """:func:`~studies.pairs.void_reasons`, and a die that missed the back wall."""
     return {"a die did not touch the back wall": ~result.touched[:, :, BACK_WALL].all(axis=1),
             **void_reasons(result)}
 
@@ -190,7 +167,7 @@ def _markdown(cells: dict, noises: tuple, speeds: tuple, n: int, seconds: float,
     random_off = [k for k, c in detected if k[2] == "random"]
     lost = [noise for noise in noises
             if all(cells[(noise, s, "set")]["binom_p"] >= SIGNIFICANT for s in speeds)]
-    command = "python -m dice_env.studies craps" + ("" if n == FULL else f" --throws {n}")
+    command = "python -m studies craps" + ("" if n == FULL else f" --throws {n}")
     return study_page("craps", globals(), CRAPS=CRAPS, cells=cells, command=command,
                       controlled=controlled, cpu=cpu, lost=lost, n=n, noises=noises, numba=numba,
                       random_off=random_off, rows=rows, scene=craps_scene(), seconds=seconds,

@@ -13,18 +13,19 @@ from pathlib import Path
 import numpy as np
 
 from dice_env.intervals import wilson
+from dice_env.markdown import estimate, markdown_table
 from dice_env.model import table
 from dice_env.model.rotations import up_rotation
 from dice_env.model.scene import Scene
 from dice_env.simulation.calibration import measured_restitution
 from dice_env.simulation.simulate import UP, State, simulate
-from dice_env.studies import cuboids, weldon
-from dice_env.studies.common import DOCS, SEED
-from dice_env.studies.fairness import energy_throws, face_down, throw_energy
-from dice_env.studies.markdown import estimate, markdown_table
-from dice_env.studies.numbers import study_page
+from dice_env.throws import energy_throws
+from studies import cuboids, weldon
+from studies.common import DOCS, SEED
+from studies.fairness import face_down, throw_energy
+from studies.templates import study_page
 
-COMMAND = "python -m dice_env.studies validation"
+COMMAND = "python -m studies validation"
 MEMORY_THROWS = {False: 4000, True: 300}  # throws of the initially-down face, by ``quick``
 ENERGY_RANGE = (0.01, 100.0)  # throw energy above a gentle release (m g a), log-uniform
 Z_ONE_SIDED = 1.644854  # 5% one-sided
@@ -68,7 +69,7 @@ def sliding_friction(scene: Scene, speed: float = SLIDE_SPEED) -> float:
 def initial_face_memory(n: int, rng: np.random.Generator, scene: Scene) -> dict:
     """P(rests on the face down at release) in energy terciles: the fairness study's throws.
 
-    ``n`` throws of :func:`dice_env.studies.fairness.energy_throws` over :data:`ENERGY_RANGE`
+    ``n`` throws of :func:`dice_env.throws.energy_throws` over :data:`ENERGY_RANGE`
     on ``scene`` (a d6); per tercile its energy range, throws, and hits on either face.
     """
     excess = 10 ** rng.uniform(*np.log10(ENERGY_RANGE), n)

@@ -1,4 +1,4 @@
-r"""Numbers in hand-written pages, filled from the result JSONs they come from.
+r"""Pages from templates: the numbers in hand-written pages filled from their result JSONs.
 
 A hand-written page (the README, ``docs/*.md``) quotes a measured figure only inside a block::
 
@@ -12,7 +12,7 @@ Each ``{{ expression | format }}`` of the hidden template is a Python expression
 JSONs (keys by ``.name`` or ``["key"]``, the builtins of :data:`HELPERS`), written with the
 format spec. A source may name a part of its JSON, keys joined by ``/``:
 ``rest=benchmarks/results/physics.json#throws_to_rest/Scene()``.
-``python -m dice_env.studies.numbers`` rewrites every block from its JSONs; ``--check`` lists
+``python -m studies.templates`` rewrites every block from its JSONs; ``--check`` lists
 the stale blocks instead (``tests/test_docs.py`` runs it). :func:`study_page` fills a study's
 page, ``docs/templates/NAME.md``, the same way from the study's Python objects.
 """
@@ -26,7 +26,8 @@ import sys
 from dataclasses import dataclass
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[2]
+from studies import ROOT
+
 TEMPLATES = ROOT / "docs" / "templates"  # the studies' pages, filled by :func:`study_page`
 BLOCK = re.compile(r"<!-- numbers (?P<sources>[^\n]*)\n(?P<template>.*?)-->\n(?P<text>.*?)"
                    r"<!-- /numbers -->", re.S)
@@ -160,7 +161,7 @@ def fill(page: Path) -> bool:
 
 def main(argv: list[str] | None = None) -> int:
     """Fill every page's blocks, or with ``--check`` list the stale ones (exit 1 if any)."""
-    parser = argparse.ArgumentParser(prog="python -m dice_env.studies.numbers",
+    parser = argparse.ArgumentParser(prog="python -m studies.templates",
                                      description=__doc__.split("\n\n")[0])
     parser.add_argument("--check", action="store_true",
                         help="change nothing; list the blocks that differ from their JSONs")
@@ -168,7 +169,7 @@ def main(argv: list[str] | None = None) -> int:
     if args.check:
         differ = stale()
         for where in differ:
-            print(f"{where}: differs from its JSONs (python -m dice_env.studies.numbers)")
+            print(f"{where}: differs from its JSONs (python -m studies.templates)")
         return 1 if differ else 0
     for page in pages():
         if fill(page):

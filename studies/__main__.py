@@ -1,9 +1,10 @@
 """The studies' command line.
 
-``python -m dice_env.studies {all,<study>} [--quick] [--throws N] [--ray ADDR] [--chunks DIR]
+``python -m studies {all,<study>} [--quick] [--throws N] [--ray ADDR] [--chunks DIR]
 [--out DIR]``. A full run writes its page into the repository's docs/; a ``--quick`` run writes
 into ./studies-quick unless ``--out`` is given, and never into docs/, so that a reduced run
-cannot replace a full page.
+cannot replace a full page. The studies are not installed with ``dice_env``: they run from a
+checkout, from its root folder (``docs/`` is the checkout's).
 """
 
 from __future__ import annotations
@@ -13,16 +14,16 @@ import contextlib
 import functools
 from pathlib import Path
 
-from dice_env.studies import CHUNKED, KEPT, SIZED, STUDIES, run
-from dice_env.studies.common import DOCS
 from dice_env.studies.distributed import at_least, connected, hand_faces, ray_address
+from studies import CHUNKED, KEPT, SIZED, STUDIES, run
+from studies.common import DOCS
 
 QUICK = Path("studies-quick")
 
 
 def main(argv: list[str] | None = None) -> None:
     """Parse the command line and run the chosen studies."""
-    parser = argparse.ArgumentParser(prog="python -m dice_env.studies", description=__doc__)
+    parser = argparse.ArgumentParser(prog="python -m studies", description=__doc__)
     parser.add_argument("study", choices=[*STUDIES, "all"])
     parser.add_argument("--quick", action="store_true",
                         help=f"reduced sizes (for the tests), written to ./{QUICK} by default "

@@ -1,6 +1,6 @@
 """The pips page: the drilled-pip model, its presets and their mass properties.
 
-``python -m dice_env.studies pips`` writes ``docs/pips.md`` (closed form, instant).
+``python -m studies pips`` writes ``docs/pips.md`` (closed form, instant).
 """
 
 from __future__ import annotations
@@ -10,11 +10,11 @@ from pathlib import Path
 
 import numpy as np
 
+from dice_env.markdown import markdown_table
 from dice_env.model.die import Die
 from dice_env.model.pips import DRILLINGS, SOURCES, Pips, cap_properties
-from dice_env.studies.common import DOCS
-from dice_env.studies.markdown import markdown_table
-from dice_env.studies.numbers import study_page
+from studies.common import DOCS
+from studies.templates import study_page
 
 
 def run(out: Path = DOCS, quick: bool = False) -> dict[str, float]:

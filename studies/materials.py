@@ -16,15 +16,15 @@ import numpy as np
 from scipy import stats
 
 from dice_env.intervals import wilson
+from dice_env.markdown import estimate, markdown_table
 from dice_env.model import materials
 from dice_env.simulation.calibration import measured_restitution
 from dice_env.simulation.simulate import UP, State, simulate
-from dice_env.studies.common import DOCS, SEED, batches, checked_throws, progress, save_figure
-from dice_env.studies.cuboids import GENTLE
-from dice_env.studies.fairness import T_MAX, VIGOROUS, Vigour, throw_energy, vigorous_throws
-from dice_env.studies.markdown import estimate, markdown_table
-from dice_env.studies.numbers import study_page
-from dice_env.studies.shapes import BATCH, Faces, counted
+from dice_env.throws import BATCH, VIGOROUS, Faces, Vigour, batches, counted, vigorous_throws
+from studies.common import DOCS, SEED, checked_throws, progress, save_figure
+from studies.cuboids import GENTLE
+from studies.fairness import T_MAX, throw_energy
+from studies.templates import study_page
 
 FULL, QUICK = (10_000, 5_000), (60, 40)  # throws per material: (vigorous, gentle)
 KINDS = (("vigorous", VIGOROUS), ("gentle", GENTLE))  # (label, hand) of the two kinds of throw
