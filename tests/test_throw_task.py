@@ -9,7 +9,7 @@ import pytest
 
 import dice_env  # noqa: F401  (registers DiceThrow-v0)
 from dice_env.envs import throw_task
-from dice_env.envs.targets import TARGETS, AvoidSum, Faces, Sum
+from dice_env.envs.targets import TARGETS, AvoidSumTarget, FaceTarget, SumTarget
 from dice_env.envs.throw_task import ThrowTask, make_task
 
 FAST = {"until": "decided", "t_max": 1.5}
@@ -29,9 +29,9 @@ def test_each_target_kind_is_one_object_that_encodes_and_decodes(kind):
 def test_a_sum_hits_its_total_and_avoid_sum_every_other():
     faces = np.array([[1, 6], [3, 3], [2, 2]])
     totals = np.array([7, 7, 7])
-    np.testing.assert_array_equal(Sum((6, 6)).hit(faces, totals), [True, False, False])
-    np.testing.assert_array_equal(AvoidSum((6, 6)).hit(faces, totals), [False, True, True])
-    np.testing.assert_array_equal(Faces((6, 6)).hit(faces, np.array([[1, 6], [3, 4], [2, 2]])),
+    np.testing.assert_array_equal(SumTarget((6, 6)).hit(faces, totals), [True, False, False])
+    np.testing.assert_array_equal(AvoidSumTarget((6, 6)).hit(faces, totals), [False, True, True])
+    np.testing.assert_array_equal(FaceTarget((6, 6)).hit(faces, np.array([[1, 6], [3, 4], [2, 2]])),
                                   [True, False, True])
 
 

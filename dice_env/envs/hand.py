@@ -41,11 +41,12 @@ def default_release_height(dice: Sequence[Die]) -> float:
 
 
 @dataclass(frozen=True)
-class Hand:
+class TaskHand:
     """The dice in the hand and how an action (:attr:`action_dim`) releases them.
 
     ``scenes``: the scene with each die (the first is the task's scene). The fields are the
-    ``gym.make`` keywords of the same names (``docs/environment.md``).
+    ``gym.make`` keywords of the same names (``docs/environment.md``). An agent's actions
+    drive it; :class:`dice_env.throws.Hand` draws the studies' throws at random.
     """
 
     scenes: tuple[Scene, ...]
@@ -202,7 +203,7 @@ def _rotation_matrices(vectors: np.ndarray) -> np.ndarray:
 
 
 def _orientations(mode: str, draws: np.ndarray, die: Die) -> np.ndarray:
-    """Hand orientations (n, 3, 3) of ``die`` from :meth:`Hand.draw`'s draws (n, 3)."""
+    """Hand orientations (n, 3, 3) of ``die`` from :meth:`TaskHand.draw`'s draws (n, 3)."""
     if mode == "uniform":
         return uniform_rotations(draws.T)
     if mode == "flat":

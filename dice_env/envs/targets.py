@@ -69,7 +69,7 @@ class Target(ABC):
 
 
 @dataclass(frozen=True)
-class Faces(Target):
+class FaceTarget(Target):
     """A face per die up: one one-hot per die in the observation."""
 
     kind: ClassVar[str] = "faces"
@@ -130,7 +130,7 @@ class Faces(Target):
 
 
 @dataclass(frozen=True)
-class Sum(Target):
+class SumTarget(Target):
     """A total of the faces: one one-hot over :attr:`totals`; hit when the faces add up to it."""
 
     kind: ClassVar[str] = "sum"
@@ -179,12 +179,13 @@ class Sum(Target):
 
 
 @dataclass(frozen=True)
-class AvoidSum(Sum):
+class AvoidSumTarget(SumTarget):
     """Any total but the target: hit when the faces do not add up to it."""
 
     kind: ClassVar[str] = "avoid_sum"
     wanted: ClassVar[bool] = False
 
 
-TARGETS: dict[str, type[Target]] = {kind.kind: kind for kind in (Faces, Sum, AvoidSum)}
+TARGETS: dict[str, type[Target]] = {kind.kind: kind
+                                    for kind in (FaceTarget, SumTarget, AvoidSumTarget)}
 """Each ``target`` keyword's kind."""

@@ -1,6 +1,6 @@
 """The DiceThrow task over a batch: a hand, a target, a judged landing, a reward.
 
-As dm_control's tasks: the :class:`~dice_env.envs.hand.Hand` turns actions into releases, the
+As dm_control's tasks: the :class:`~dice_env.envs.hand.TaskHand` turns actions into releases, the
 kernel runs them, :func:`judge` says which throws count, the task's
 :class:`~dice_env.envs.targets.Target` scores the landing (:meth:`ThrowTask.reward`) and
 :meth:`ThrowTask.info` reports it. The single env, the vector env, the SB3 adapter and the oracle
@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from dice_env.envs.hand import ORIENTATION_MODES, Hand, default_release_height
+from dice_env.envs.hand import ORIENTATION_MODES, TaskHand, default_release_height
 from dice_env.envs.keywords import ENV_MAX_STEPS, SceneKeywords, check_scene
 from dice_env.envs.targets import TARGETS, Target
 from dice_env.model.checks import as_floats, check_choice, check_int, check_nonnegative
@@ -113,9 +113,9 @@ class ThrowTask:
             raise ValueError(f"set_dice needs num_dice >= 2, got set_dice={self.set_dice!r}")
 
     @cached_property
-    def hand(self) -> Hand:
+    def hand(self) -> TaskHand:
         """The hand: actions to releases, from the task's hand fields."""
-        return Hand(self.die_scenes, self.release_height, self.max_speed, self.max_spin,
+        return TaskHand(self.die_scenes, self.release_height, self.max_speed, self.max_spin,
                     self.hand_noise, self.orientation_noise, self.set_dice)
 
     @cached_property
@@ -187,7 +187,7 @@ class ThrowTask:
 
     @property
     def release_position(self) -> np.ndarray:
-        """The hand's centre at release (3,): :attr:`Hand.centre <.hand.Hand.centre>`."""
+        """The hand's centre at release (3,): ``release_height`` along the table normal."""
         return self.hand.centre
 
     @property
@@ -272,7 +272,7 @@ class ThrowTask:
                 noise: np.ndarray | Sequence[np.random.Generator], *,
                 action_shape: tuple[int, ...] | None = None,
                 ) -> tuple[State | GroupState, np.ndarray]:
-        """The hand's releases: :meth:`Hand.release <dice_env.envs.hand.Hand.release>`."""
+        """The hand's releases: :meth:`TaskHand.release <dice_env.envs.hand.TaskHand.release>`."""
         return self.hand.release(actions, hands, noise, action_shape=action_shape)
 
     def fair(self, state: State | GroupState) -> np.ndarray:
