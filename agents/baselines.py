@@ -13,7 +13,8 @@ from typing import Protocol
 
 import numpy as np
 
-from dice_env.envs.task import ACTION_DIM, ORIENTATION_DIM, SET_ANGLE, ThrowTask
+from dice_env.envs.hand import ACTION_DIM, SET_ANGLE
+from dice_env.envs.throw_task import ORIENTATION_DIM, ThrowTask
 from dice_env.model.rotations import matrix_to_rotation_vector
 from dice_env.throws import SET_THROW, crossed_set, sevens_set
 

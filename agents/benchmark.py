@@ -73,7 +73,8 @@ def evaluation(task_id: str, throws: int, seed: int, **keywords: Any) -> tuple[A
     from agents.episodes import Batch
 
     task = gym.make(task_id, **{"num_threads": 1, **keywords}).unwrapped.task
-    return task, Batch.sample(task, throws, np.random.default_rng(seed), **episode(task_id))
+    return task, Batch.sample(task, throws, np.random.default_rng(seed), num_threads=1,
+                              **episode(task_id))
 
 
 def success(model: Any, task: Any, batch: Any) -> dict[str, Any]:

@@ -6,7 +6,7 @@ For the hand-written thrower, the oracle and (optionally) a trained PPO policy:
 
 Writes ``controllability.md`` and ``controllability.png`` into ``--out``. The noise level sets
 both ``hand_noise`` (fraction of each action range) and ``orientation_noise`` (rad). Release
-heights below the die's lowest (its default, :class:`dice_env.envs.task.ThrowTask`) are raised
+heights below the die's lowest (its default, :class:`dice_env.envs.throw_task.ThrowTask`) are raised
 to it.
 """
 
@@ -23,7 +23,7 @@ from agents.baselines import HandThrower, Thrower
 from agents.episodes import Batch, PolicyThrower
 from agents.evaluate import clustered
 from agents.oracle import CEM, score, score_noise, search
-from dice_env.envs.task import ThrowTask, make_task
+from dice_env.envs.throw_task import ThrowTask, make_task
 from dice_env.intervals import wilson_bounds
 
 HEIGHTS = (0.015, 0.02, 0.03, 0.05, 0.15)  # release height of the die's centre (m)
@@ -43,14 +43,13 @@ def controllability(
     """
     names = ["hand-written", "oracle"] + (["PPO"] if ppo is not None else [])
     maps = {name: np.zeros((len(heights), len(noises), 3)) for name in names}
-    threads = {} if num_threads is None else {"num_threads": num_threads}
     for i, height in enumerate(heights):
         for j, noise in enumerate(noises):
             start = time.perf_counter()
             task = make_task(die=die, release_height=height, hand_noise=noise,
-                             orientation_noise=noise, **threads)
+                             orientation_noise=noise)
             rng = np.random.default_rng(seed)
-            batch = Batch.sample(task, throws, rng)
+            batch = Batch.sample(task, throws, rng, num_threads=num_threads)
             throwers: dict[str, Thrower] = {"hand-written": HandThrower(task)}
             if ppo is not None:
                 throwers["PPO"] = ppo

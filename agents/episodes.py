@@ -14,7 +14,7 @@ import numpy as np
 
 from agents.baselines import Thrower
 from agents.config import Config
-from dice_env.envs.task import ThrowTask, make_task
+from dice_env.envs.throw_task import ThrowTask, make_task
 
 EPISODE_KEYWORDS = ("target_face", "target_sum", "orientation_mode")
 CHUNK = 256  # throws per kernel call when the evaluation shows its progress
@@ -36,24 +36,26 @@ class Batch:
     """``n`` episodes: targets, hands, observations (n, size), noise (n, d).
 
     One die: targets (n,), hands (n, 3, 3); N dice: targets (n, N) faces or (n,) totals,
-    hands (n, N, 3, 3).
+    hands (n, N, 3, 3). ``num_threads``: the kernel's threads for the throws (None: all).
     """
 
     targets: np.ndarray
     hands: np.ndarray
     observations: np.ndarray
     noise: np.ndarray
+    num_threads: int | None = None
 
     @classmethod
     def sample(cls, task: ThrowTask, n: int, rng: np.random.Generator,
-               **episode: Any) -> Batch:
+               num_threads: int | None = None, **episode: Any) -> Batch:
         """Draw ``n`` episodes as the env does (:data:`EPISODE_KEYWORDS`)."""
         fixed = task.fixed_target(episode.get("target_face"), episode.get("target_sum"))
         pairs = [task.sample_hand(rng, fixed, episode.get("orientation_mode", "uniform"))
                  for _ in range(n)]
         targets = np.array([t for t, _ in pairs])
         hands = np.stack([h for _, h in pairs])
-        return cls(targets, hands, task.observe(targets, hands), task.sample_noise(rng, n))
+        return cls(targets, hands, task.observe(targets, hands), task.sample_noise(rng, n),
+                   num_threads)
 
     def throw(self, task: ThrowTask, thrower: Thrower,
               progress: Callable[[int], None] | None = None) -> dict[str, np.ndarray]:
@@ -64,7 +66,7 @@ class Batch:
         for i in range(0, len(actions), step):
             part = slice(i, i + step)
             parts.append(task.throw(actions[part], self.targets[part], self.hands[part],
-                                    self.noise[part]).info)
+                                    self.noise[part], num_threads=self.num_threads).info)
             if progress is not None:
                 progress(len(actions[part]))
         info = {key: np.concatenate([p[key] for p in parts]) for key in parts[0]}
@@ -72,9 +74,9 @@ class Batch:
 
 
 def make_eval_task(config: Config, **overrides: Any) -> tuple[ThrowTask, dict[str, Any]]:
-    """The run's evaluation task (its ``--env`` keywords, no training shaping) and episode keys."""
+    """The run's evaluation task (its ``--env`` keywords, no shaping) and Batch.sample's keys."""
     kwargs = {**config.env_kwargs(), **config.num_threads_kwargs(), **overrides}
-    episode = {k: kwargs.pop(k) for k in EPISODE_KEYWORDS if k in kwargs}
+    episode = {k: kwargs.pop(k) for k in (*EPISODE_KEYWORDS, "num_threads") if k in kwargs}
     for key in ("render_mode", "render_width", "render_height"):
         kwargs.pop(key, None)
     return make_task(**kwargs), episode

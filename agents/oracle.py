@@ -31,7 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from agents.baselines import HandThrower
-from dice_env.envs.task import ThrowTask
+from dice_env.envs.throw_task import ThrowTask
 
 SHAPING_TIE_BREAK = 0.1  # weight of the alignment term when ranking candidates (not in scores)
 

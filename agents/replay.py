@@ -22,7 +22,7 @@ import numpy as np
 from agents.baselines import HandThrower, RandomThrower
 from agents.config import Config
 from agents.episodes import Batch, PolicyThrower, make_eval_task
-from dice_env.envs.task import ThrowTask
+from dice_env.envs.throw_task import ThrowTask
 
 FPS = 30  # frames per second of the GIFs (the env's render_fps)
 HOLD = 0.6  # seconds the landed die is shown at the end

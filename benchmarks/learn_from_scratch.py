@@ -38,7 +38,7 @@ from stable_baselines3.common.utils import LinearSchedule
 from agents.baselines import HandThrower
 from agents.hyperparams import NON_PPO_KEYS, PPO_HYPERPARAMS, ppo_kwargs
 from dice_env.envs.sb3 import make_sb3_env
-from dice_env.envs.task import ThrowTask, make_task
+from dice_env.envs.throw_task import ThrowTask, make_task
 from dice_env.intervals import wilson_bounds
 from dice_env.provenance import code_version
 
@@ -49,12 +49,15 @@ PPO_KEYS = set(inspect.signature(PPO).parameters) - {"policy", "env", *NON_PPO_K
 
 
 class Throws:
-    """``n`` fixed throws of ``task``: targets, hands, observations and hand noise."""
+    """``n`` fixed throws of ``task``: targets, hands, observations and hand noise.
 
-    def __init__(self, task: ThrowTask, n: int, seed: int) -> None:
+    ``num_threads``: the kernel's threads (None: all).
+    """
+
+    def __init__(self, task: ThrowTask, n: int, seed: int, num_threads: int | None) -> None:
         rng = np.random.default_rng(seed)
         pairs = [task.sample_hand(rng) for _ in range(n)]
-        self.task = task
+        self.task, self.num_threads = task, num_threads
         self.targets = np.array([t for t, _ in pairs])
         self.hands = np.stack([h for _, h in pairs])
         self.observations = task.observe(self.targets, self.hands)
@@ -62,7 +65,8 @@ class Throws:
 
     def success(self, actions: np.ndarray) -> np.ndarray:
         """Whether each throw lands its target face up (n,) bool."""
-        return self.task.throw(actions, self.targets, self.hands, self.noise).info["is_success"]
+        return self.task.throw(actions, self.targets, self.hands, self.noise,
+                               num_threads=self.num_threads).info["is_success"]
 
 
 def mean_action(model: PPO, observations: np.ndarray) -> np.ndarray:
@@ -138,13 +142,13 @@ def run(seed: int, args: argparse.Namespace) -> dict[str, Any]:
     ppo, env_kwargs, n_envs = settings(args.set)
     threads = {"num_threads": args.num_threads} if args.num_threads else {}
     env = make_sb3_env(n_envs, seed=seed, **env_kwargs, **threads)
-    curve = Curve(Throws(make_task(until="decided", **threads), args.eval_throws, EVAL_SEED),
-                  args.every)
+    curve = Curve(Throws(make_task(until="decided"), args.eval_throws, EVAL_SEED,
+                         args.num_threads), args.every)
     model = PPO(PPO_HYPERPARAMS[ENV_ID]["policy"], env, seed=seed, device="cpu", **ppo)
     model.learn(args.throws, callback=curve)
     curve.record()
     train_s = time.perf_counter() - curve.start
-    final = Throws(make_task(**threads), args.final_throws, EVAL_SEED + 1)
+    final = Throws(make_task(), args.final_throws, EVAL_SEED + 1, args.num_threads)
     ppo_success = final.success(mean_action(model, final.observations))
     rule_success = final.success(HandThrower(final.task)(final.observations))
     result = {"seed": seed, "curve": curve.points, "seconds": round(train_s, 1),

@@ -28,8 +28,8 @@ from agents.baselines import rule_throwers
 from agents.episodes import EPISODE_KEYWORDS
 from agents.evaluate import ORACLE_SCORE_SAMPLES, compare
 from agents.oracle import CEM, task_budget
-from dice_env.envs.task import ThrowTask
 from dice_env.envs.tasks import TASKS, NamedTask
+from dice_env.envs.throw_task import ThrowTask
 from dice_env.provenance import code_version
 
 SEED = 0

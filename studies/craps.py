@@ -15,7 +15,7 @@ import numba
 import numpy as np
 from scipy import stats
 
-from dice_env.envs.task import ThrowTask, make_task
+from dice_env.envs.throw_task import ThrowTask, make_task
 from dice_env.intervals import wilson
 from dice_env.markdown import estimate, markdown_table
 from dice_env.model import materials

@@ -12,7 +12,7 @@ from pathlib import Path
 import pytest
 
 from dice_env.envs.dice_throw import configure
-from dice_env.envs.task import ThrowTask, make_task, task_keywords
+from dice_env.envs.throw_task import ThrowTask, make_task, task_keywords
 from dice_env.model.die import Die
 from dice_env.model.surroundings import walls
 from studies import templates

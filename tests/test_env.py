@@ -14,8 +14,9 @@ import dice_env  # noqa: F401
 from dice_env import Die, Scene
 from dice_env.envs import DiceThrowEnv
 from dice_env.envs.dice_throw import RENDER_FPS
+from dice_env.envs.hand import face_up_rotation
 from dice_env.envs.render import render_die
-from dice_env.envs.task import face_up_rotation, make_task
+from dice_env.envs.throw_task import make_task
 from dice_env.envs.video import save_video
 
 FAST = {"t_max": 2.0}  # gentle throws settle in under 2 s

@@ -8,7 +8,7 @@ import numpy as np
 
 from agents.baselines import HandThrower
 from dice_env import Scene
-from dice_env.envs.task import make_task
+from dice_env.envs.throw_task import make_task
 
 
 def landed_faces(safety: float, n: int = 600) -> tuple[np.ndarray, float]:

@@ -13,7 +13,8 @@ from agents.episodes import Batch
 from agents.policy import TargetNormal
 from dice_env import Die, Scene
 from dice_env.envs import DiceThrowVectorEnv
-from dice_env.envs.task import face_up_rotation, make_task
+from dice_env.envs.hand import face_up_rotation
+from dice_env.envs.throw_task import make_task
 from dice_env.model.rotations import uniform_rotations
 from dice_env.model.surroundings import tray
 
@@ -96,8 +97,8 @@ def test_flat_hands_and_face_up_rotations_read_their_face(name):
 
 @pytest.mark.parametrize("name", ["d4", "d8", "d20"])
 def test_hand_thrower_beats_chance_on_every_die(name):
-    task = make_task(die=name, until="decided", num_threads=1)
-    batch = Batch.sample(task, 300, np.random.default_rng(0))
+    task = make_task(die=name, until="decided")
+    batch = Batch.sample(task, 300, np.random.default_rng(0), num_threads=1)
     hand = batch.throw(task, HandThrower(task))["is_success"].mean()
     chance = batch.throw(task, RandomThrower(0))["is_success"].mean()
     assert hand > 2.0 / task.n_faces and hand > chance + 0.1, (hand, chance)

@@ -13,7 +13,7 @@ Only the re-scored success is reported, so the selection does not inflate it.
 import numpy as np
 import pytest
 
-from dice_env.envs.task import ThrowTask, make_task
+from dice_env.envs.throw_task import ThrowTask, make_task
 
 OBSERVATIONS = 12
 CANDIDATES = 192

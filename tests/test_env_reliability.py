@@ -11,7 +11,7 @@ import pytest
 import dice_env
 from dice_env import ContactLaw, Die, FrictionLaw, Ground, Rest, Scene, Scheme, simulate
 from dice_env.envs import make_task
-from dice_env.envs.task import task_keywords
+from dice_env.envs.throw_task import task_keywords
 
 FAST = {"t_max": 2.0}
 
@@ -113,7 +113,7 @@ def test_a_batch_of_actions_to_the_single_env_is_refused_before_simulating(monke
 
     env = make()
     env.reset(seed=0)
-    monkeypatch.setattr("dice_env.envs.task.simulate", fail)
+    monkeypatch.setattr("dice_env.envs.throw_task.simulate", fail)
     for bad in (np.zeros((2, 6)), np.zeros((1, 6)), [[0.0] * 6]):
         with pytest.raises(ValueError, match=r"action must have shape \(6,\)"):
             env.step(bad)
@@ -287,8 +287,8 @@ def fuzz(rng, budget_s=math.inf, iterations=None):
 
 def test_fuzz_keywords_and_actions():
     known = task_keywords() - {"scene"}
-    assert set(RANGES) | set(CHOICES) | set(INTEGERS) == known | {"target_face",
-                                                                   "orientation_mode"}
+    assert set(RANGES) | set(CHOICES) | set(INTEGERS) == known | {
+        "target_face", "orientation_mode", "num_threads"}  # the env's, not the task's
     for dice in (1, 2):  # compile the one-die and the group kernels outside the time budget
         env = gym.make("DiceThrow-v0", num_dice=dice, t_max=0.05)
         env.reset(seed=0)

@@ -139,3 +139,14 @@ def test_make_sb3_env_passes_keywords_and_trains_ppo():
 def test_make_sb3_env_refuses_bad_values(kwargs: dict, match: str):
     with pytest.raises(ValueError, match=match):
         make_sb3_env(**{"n_envs": 2, **kwargs})
+
+
+def test_set_attr_checks_a_setting_as_gym_make_does():
+    sb3 = adapter(2, num_threads=1)
+    assert sb3.get_attr("num_threads") == [1, 1]
+    with pytest.raises(ValueError, match=r"target_face must be in \[1, 6\], got 7"):
+        sb3.set_attr("target_face", 7)
+    assert sb3.get_attr("target_face") == [None, None]  # the refused value is not kept
+    sb3.set_attr("orientation_mode", "identity")
+    sb3.seed(0)
+    assert np.array_equal(sb3.reset()[:, 6:], np.tile(np.eye(3).ravel(), (2, 1)))

@@ -6,13 +6,10 @@ import pytest
 
 import dice_env  # noqa: F401  (registers DiceThrow-v0)
 from dice_env import Die, Wall
-from dice_env.envs import task as task_module
+from dice_env.envs import throw_task as task_module
+from dice_env.envs.hand import HAND_GAP
 from dice_env.envs.sb3 import DiceThrowSB3VecEnv
-from dice_env.envs.task import (
-    HAND_GAP,
-    ThrowTask,
-    make_task,
-)
+from dice_env.envs.throw_task import ThrowTask, make_task
 from dice_env.simulation.group import GroupResult
 
 FAST = {"until": "decided", "t_max": 1.5}  # group throws: ended when decided, short

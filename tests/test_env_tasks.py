@@ -11,8 +11,8 @@ from gymnasium.utils.env_checker import check_env
 
 from dice_env.envs import tasks
 from dice_env.envs.dice_throw import DiceThrowEnv
-from dice_env.envs.task import check_task_keywords
 from dice_env.envs.tasks import TASKS
+from dice_env.envs.throw_task import check_task_keywords
 
 ROOT = Path(__file__).resolve().parents[1]
 IDS = [task.id for task in TASKS]

@@ -19,7 +19,7 @@ import pytest
 
 import dice_env  # noqa: F401  (registers DiceThrow-v0)
 from dice_env import Die, Ground, Scene, State, Wall
-from dice_env.envs.task import face_up_rotation
+from dice_env.envs.hand import face_up_rotation
 from dice_env.model.rotations import random_rotations
 from dice_env.model.scene import MAX_STEPS, Rest
 from dice_env.model.surroundings import craps, tray

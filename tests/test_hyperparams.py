@@ -6,7 +6,7 @@ from stable_baselines3 import PPO
 
 from agents.hyperparams import NON_PPO_KEYS, PPO_HYPERPARAMS, ppo_kwargs
 from dice_env.envs.sb3 import make_sb3_env
-from dice_env.envs.task import make_task
+from dice_env.envs.throw_task import make_task
 
 HP = PPO_HYPERPARAMS["DiceThrow-v0"]
 

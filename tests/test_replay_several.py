@@ -5,7 +5,7 @@ import pytest
 from agents.baselines import HandThrower
 from agents.config import Config
 from agents.replay import main
-from dice_env.envs.task import make_task
+from dice_env.envs.throw_task import make_task
 from dice_env.viewer import load
 
 RUNS = {"one die": [], "2d6": ["num_dice=2"], "2d6 sum 5": ["num_dice=2", "target_sum=5"],
@@ -31,7 +31,7 @@ def test_hand_written_is_refused_for_several_dice(tmp_path, capsys, name):
 
 def test_hand_thrower_refuses_a_task_of_several_dice():
     with pytest.raises(ValueError, match="one-die rule; this task throws 3 dice"):
-        HandThrower(make_task(num_dice=3, num_threads=1))
+        HandThrower(make_task(num_dice=3))
 
 
 @pytest.mark.parametrize(("name", "thrower"), [("set_dice", "random"),

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from dice_env import Die, Scene, State, simulate
-from dice_env.envs.task import make_task
+from dice_env.envs.throw_task import make_task
 from dice_env.model.rotations import matrix_to_quaternion, quaternion_to_matrix, random_rotations
 from dice_env.model.scene import FrictionLaw, Ground
 from dice_env.model.surroundings import walls

@@ -3,7 +3,8 @@
 import numpy as np
 import pytest
 
-from dice_env.envs.task import decided_reads, face_up_rotation, judge, make_task
+from dice_env.envs.hand import face_up_rotation
+from dice_env.envs.throw_task import decided_reads, judge, make_task
 from dice_env.model.die import STANDARD_SIZES, Die
 from dice_env.model.rotations import axis_angle
 from dice_env.model.scene import Scene

@@ -7,8 +7,8 @@ Importing :mod:`dice_env` registers ``DiceThrow-v0`` and the named tasks
 from gymnasium.envs.registration import register, registry
 
 from dice_env.envs.dice_throw import DiceThrowEnv
-from dice_env.envs.task import Throw, ThrowTask, make_task
 from dice_env.envs.tasks import TASKS, NamedTask
+from dice_env.envs.throw_task import Throw, ThrowTask, make_task
 from dice_env.envs.vector import DiceThrowVectorEnv
 
 ENV_ID = "DiceThrow-v0"

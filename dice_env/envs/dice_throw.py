@@ -3,20 +3,17 @@
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from typing import Any, ClassVar
 
 import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from dice_env.envs.task import (
-    ORIENTATION_DIM,
-    ORIENTATION_MODES,
-    ThrowTask,
-    check_rotation,
-    make_task,
-)
+from dice_env.envs.hand import ORIENTATION_MODES
+from dice_env.envs.throw_task import ORIENTATION_DIM, ThrowTask, check_rotation, make_task
 from dice_env.model.checks import check_choice, check_int
+from dice_env.simulation.simulate import thread_count
 
 RENDER_MODES = ("human", "rgb_array", "rgb_array_list")
 RENDER_FPS = 30
@@ -35,48 +32,83 @@ def action_space(task: ThrowTask) -> spaces.Box:
     return spaces.Box(-1.0, 1.0, (task.action_dim,), np.float32)
 
 
-def configure(env: Any, modes: tuple[str, ...], render_mode: str | None = None, *,
+@dataclass(frozen=True)
+class EnvSettings:
+    """The env's keywords beyond the task's: the episodes, the rendering, the execution.
+
+    ``target_face``/``target_sum``/``orientation_mode``: each episode's (``reset`` options
+    override one); ``render_*``: the frames; ``num_threads``: the kernel's threads (None: all).
+    Checked against a task by :meth:`check`; the meanings: ``docs/environment.md``.
+    """
+
+    render_mode: str | None = None
+    target_face: Any = None
+    target_sum: int | None = None
+    orientation_mode: str = "uniform"
+    render_width: int = 320
+    render_height: int = 240
+    num_threads: int | None = None
+
+    @property
+    def render_size(self) -> tuple[int, int]:
+        """The frames' (height, width) in pixels."""
+        return self.render_height, self.render_width
+
+    def check_rendering(self, modes: tuple[str, ...]) -> None:
+        """Refuse a render mode not in ``modes`` or a frame size out of 16 … 4096 pixels."""
+        if self.render_mode is not None and not (isinstance(self.render_mode, str)
+                                                 and self.render_mode in modes):
+            raise ValueError(f"render_mode must be None or one of {modes}, "
+                             f"got {self.render_mode!r}")
+        check_int("render_width", self.render_width, 16, 4096)
+        check_int("render_height", self.render_height, 16, 4096)
+
+    def check(self, task: ThrowTask, modes: tuple[str, ...]) -> EnvSettings:
+        """These settings, if an env of ``task`` with render modes ``modes`` takes them."""
+        self.check_rendering(modes)
+        t_max, frame = task.scene.t_max, self.render_width * self.render_height * 3
+        size = (math.ceil(t_max * RENDER_FPS) + 2) * frame  # in the hand, the throw, at rest
+        if self.render_mode == "rgb_array_list" and size > MAX_FRAME_BYTES:
+            raise ValueError(
+                f"t_max must be at most {MAX_FRAME_BYTES / (frame * RENDER_FPS):.4g} s with "
+                f"render_mode='rgb_array_list' at {self.render_width}x{self.render_height} (at "
+                f"most 1 GiB of frames), got t_max={t_max:g} s ({size / 2**30:.3g} GiB); lower "
+                "t_max or the render size")
+        task.fixed_target(self.target_face, self.target_sum)
+        check_choice("orientation_mode", self.orientation_mode, ORIENTATION_MODES)
+        thread_count(self.num_threads)  # refuses a count numba does not have
+        return self
+
+
+def configure(modes: tuple[str, ...], render_mode: str | None = None, *,
               target_face: Any = None, target_sum: int | None = None,
               orientation_mode: str = "uniform", render_width: int = 320,
-              render_height: int = 240, **task_keywords: Any) -> ThrowTask:
-    """Validate the single or vector env's keywords, set the episode's on ``env``; the task."""
-    if render_mode is not None and not (isinstance(render_mode, str) and render_mode in modes):
-        raise ValueError(f"render_mode must be None or one of {modes}, got {render_mode!r}")
-    check_int("render_width", render_width, 16, 4096)
-    check_int("render_height", render_height, 16, 4096)
+              render_height: int = 240, num_threads: int | None = None,
+              **task_keywords: Any) -> tuple[ThrowTask, EnvSettings]:
+    """The single or vector env's task and settings from its keywords, each validated."""
+    settings = EnvSettings(render_mode, target_face, target_sum, orientation_mode,
+                           render_width, render_height, num_threads)
+    settings.check_rendering(modes)
     task = make_task(**task_keywords)
-    t_max, frame = task.scene.t_max, render_width * render_height * 3
-    size = (math.ceil(t_max * RENDER_FPS) + 2) * frame  # in the hand, the throw, at rest
-    if render_mode == "rgb_array_list" and size > MAX_FRAME_BYTES:
-        raise ValueError(
-            f"t_max must be at most {MAX_FRAME_BYTES / (frame * RENDER_FPS):.4g} s with "
-            f"render_mode='rgb_array_list' at {render_width}x{render_height} (at most 1 GiB of "
-            f"frames), got t_max={t_max:g} s ({size / 2**30:.3g} GiB); lower t_max or the "
-            "render size")
-    task.fixed_target(target_face, target_sum)
-    check_choice("orientation_mode", orientation_mode, ORIENTATION_MODES)
-    env.target_face, env.target_sum, env.render_mode = target_face, target_sum, render_mode
-    env.orientation_mode, env.render_size = orientation_mode, (render_height, render_width)
-    return task
+    return task, settings.check(task, modes)
 
 
 RESET_OPTIONS = ("target_face", "target_sum", "orientation", "orientation_mode")
 
 
-def episode_hand(env: Any, rng: np.random.Generator,
+def episode_hand(task: ThrowTask, settings: EnvSettings, rng: np.random.Generator,
                  options: dict[str, Any] | None) -> tuple[Any, np.ndarray]:
-    """One episode's target and hand orientation(s) for ``env``, ``reset`` options applied."""
+    """One episode's target and hand orientation(s), ``reset`` options over ``settings``."""
     options = {} if options is None else options
     if not isinstance(options, dict) or set(options) - set(RESET_OPTIONS):
         raise ValueError(f"options must be None or a dict with keys among {RESET_OPTIONS}, "
                          f"got {options!r}")
-    fixed = env.task.fixed_target(options.get("target_face", env.target_face),
-                                  options.get("target_sum", env.target_sum))
-    target, hand = env.task.sample_hand(rng, fixed,
-                                        options.get("orientation_mode", env.orientation_mode))
+    fixed = task.fixed_target(options.get("target_face", settings.target_face),
+                              options.get("target_sum", settings.target_sum))
+    target, hand = task.sample_hand(rng, fixed,
+                                    options.get("orientation_mode", settings.orientation_mode))
     if "orientation" in options:
-        hand = check_rotation("options['orientation']", options["orientation"],
-                              env.task.die_shape)
+        hand = check_rotation("options['orientation']", options["orientation"], task.die_shape)
     return target, hand
 
 
@@ -92,7 +124,8 @@ class DiceThrowEnv(gym.Env):
                                           "render_fps": RENDER_FPS}
 
     def __init__(self, render_mode: str | None = None, **keywords: Any) -> None:
-        self.task: ThrowTask = configure(self, RENDER_MODES, render_mode, **keywords)
+        self.task, self.settings = configure(RENDER_MODES, render_mode, **keywords)
+        self.render_mode = self.settings.render_mode
         self.observation_space = observation_space(self.task)
         self.action_space = action_space(self.task)
         # Placeholders until reset: the dice in the hand, unturned.
@@ -106,7 +139,8 @@ class DiceThrowEnv(gym.Env):
               options: dict[str, Any] | None = None) -> tuple[np.ndarray, dict[str, Any]]:
         """Put the die in the hand and draw the target; options override one episode."""
         super().reset(seed=seed)
-        self._target, self._hand = episode_hand(self, self.np_random, options)
+        self._target, self._hand = episode_hand(self.task, self.settings, self.np_random,
+                                                options)
         self._pose = (self.task.hand_position, self._hand)
         self._frames = []
         self._draw([self._pose])
@@ -116,7 +150,8 @@ class DiceThrowEnv(gym.Env):
         """Throw once and simulate to rest."""
         throw = self.task.throw(action, [self._target], self._hand[None], [self.np_random],
                                 record_every=self._record_every(),
-                                action_shape=self.action_space.shape)
+                                action_shape=self.action_space.shape,
+                                num_threads=self.settings.num_threads)
         result = throw.result
         self._pose = (result.final.position[0], result.final.orientation[0])
         if result.orientations is not None:  # the frames until the die stopped, then at rest
@@ -151,7 +186,7 @@ class DiceThrowEnv(gym.Env):
     def _frame(self, position: np.ndarray, orientation: np.ndarray) -> np.ndarray:
         from dice_env.envs.render import render_task
 
-        return render_task(self.task, position, orientation, size=self.render_size)
+        return render_task(self.task, position, orientation, size=self.settings.render_size)
 
     def _draw(self, poses: list[tuple[np.ndarray, np.ndarray]]) -> None:
         """Keep ("rgb_array_list") or show ("human") the frames of these poses."""

@@ -17,7 +17,7 @@ from typing import Any
 
 import numpy as np
 
-from dice_env.envs.task import ThrowTask
+from dice_env.envs.throw_task import ThrowTask
 from dice_env.model.checks import as_shaped, check_int, check_positive, check_range
 from dice_env.model.die import Die
 from dice_env.model.rotations import axis_angle

@@ -7,6 +7,7 @@ Every step ends every episode (``dones`` all True); ``infos[i]`` holds the singl
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import fields, replace
 from typing import Any
 
 import gymnasium as gym
@@ -15,8 +16,11 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 from stable_baselines3.common.vec_env import VecEnv, VecMonitor
 from stable_baselines3.common.vec_env.base_vec_env import VecEnvIndices, VecEnvStepReturn
 
+from dice_env.envs.dice_throw import EnvSettings
 from dice_env.envs.vector import DiceThrowVectorEnv
 from dice_env.model.checks import check_int
+
+SETTINGS = frozenset(f.name for f in fields(EnvSettings))  # get_attr/set_attr reach the settings
 
 
 def make_sb3_env(n_envs: int = 256, seed: int | None = None, *, env_id: str = "DiceThrow-v0",
@@ -90,14 +94,20 @@ class DiceThrowSB3VecEnv(VecEnv):
         return [None] * self.num_envs if frames is None else list(frames)
 
     def get_attr(self, attr_name: str, indices: VecEnvIndices = None) -> list[Any]:
-        """The batch's attribute, once per index."""
-        value = getattr(self.venv, attr_name)
+        """The batch's attribute (or setting, :class:`EnvSettings`), once per index."""
+        owner = self.venv.settings if attr_name in SETTINGS else self.venv
+        value = getattr(owner, attr_name)
         return [value for _ in self._get_indices(indices)]
 
     def set_attr(self, attr_name: str, value: Any, indices: VecEnvIndices = None) -> None:
-        """Set an attribute of the whole batch (``indices`` must cover every env)."""
+        """Set an attribute or a checked setting of the whole batch (``indices``: every env)."""
         self._check_all(indices)
-        setattr(self.venv, attr_name, value)
+        if attr_name not in SETTINGS:
+            setattr(self.venv, attr_name, value)
+            return
+        self.venv.settings = replace(self.venv.settings, **{attr_name: value}).check(
+            self.venv.task, tuple(self.venv.metadata["render_modes"]))
+        self.venv.render_mode = self.venv.settings.render_mode
 
     def env_method(self, method_name: str, *method_args: Any, indices: VecEnvIndices = None,
                    **method_kwargs: Any) -> list[Any]:

@@ -17,7 +17,6 @@ from dice_env.envs.dice_throw import (
     episode_hand,
     observation_space,
 )
-from dice_env.envs.task import ThrowTask
 from dice_env.model.checks import check_choice, check_int
 
 MAX_NUM_ENVS = 2**20  # about 1 kB per env in the kernel's and the env's arrays
@@ -72,7 +71,8 @@ class DiceThrowVectorEnv(VectorEnv):
         check_int("num_envs", num_envs, 1, MAX_NUM_ENVS)
         self.autoreset_mode = as_autoreset_mode(autoreset_mode)
         self.metadata = {**self.metadata, "autoreset_mode": self.autoreset_mode}
-        self.task: ThrowTask = configure(self, ("rgb_array",), render_mode, **keywords)
+        self.task, self.settings = configure(("rgb_array",), render_mode, **keywords)
+        self.render_mode = self.settings.render_mode
         self.num_envs = int(num_envs)
         self._ended = np.zeros(self.num_envs, np.bool_)  # thrown, not started again
         self._at_rest: np.ndarray | None = None  # their observations, the dice at rest
@@ -117,7 +117,8 @@ class DiceThrowVectorEnv(VectorEnv):
         self._rngs = [seeding.np_random(seed)[0] if seed is not None or not self._rngs
                       else self._rngs[i] for i, seed in enumerate(seeds)]
         for i in np.flatnonzero(mask):
-            self._targets[i], self._hands[i] = episode_hand(self, self._rngs[i], options[i])
+            self._targets[i], self._hands[i] = episode_hand(self.task, self.settings,
+                                                            self._rngs[i], options[i])
         obs = self.task.observe(self._targets, self._hands)
         self._ended &= ~mask
         if self._ended.any():  # thrown and not reset: still at rest
@@ -135,7 +136,8 @@ class DiceThrowVectorEnv(VectorEnv):
         if self._ended.any():
             return self._start_next()
         throw = self.task.throw(actions, self._targets, self._hands, self._rngs,
-                                action_shape=self.action_space.shape)
+                                action_shape=self.action_space.shape,
+                                num_threads=self.settings.num_threads)
         mask = np.ones(self.num_envs, np.bool_)
         info = {k: v for key, value in throw.info.items()
                 for k, v in ((key, value), ("_" + key, mask))}
@@ -151,8 +153,9 @@ class DiceThrowVectorEnv(VectorEnv):
     def _next_hands(self) -> tuple[np.ndarray, np.ndarray]:
         """The next episodes' targets and hands, drawn from each env's generator."""
         return self.task.sample_hands(
-            self._rngs, self.task.fixed_target(self.target_face, self.target_sum),
-            self.orientation_mode)
+            self._rngs, self.task.fixed_target(self.settings.target_face,
+                                               self.settings.target_sum),
+            self.settings.orientation_mode)
 
     def _start_next(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict]:
         """NEXT_STEP's step after a throw: the next episodes, no throw; refused elsewhere."""
@@ -176,5 +179,5 @@ class DiceThrowVectorEnv(VectorEnv):
         from dice_env.envs.render import render_task
 
         task = self.task
-        return tuple(render_task(task, task.hand_position, self._hands[i], size=self.render_size)
-                     for i in range(self.num_envs))
+        return tuple(render_task(task, task.hand_position, self._hands[i],
+                                 size=self.settings.render_size) for i in range(self.num_envs))

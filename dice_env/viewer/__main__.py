@@ -20,7 +20,7 @@ import importlib.util
 import sys
 from pathlib import Path
 
-from dice_env.envs.task import MAX_NUM_DICE, ThrowTask, make_task
+from dice_env.envs.throw_task import MAX_NUM_DICE, ThrowTask, make_task
 from dice_env.model.die import STANDARD_SIZES
 from dice_env.model.surroundings import WALLS
 from dice_env.viewer.files import RecordingError, ReplayError, replay

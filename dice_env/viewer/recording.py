@@ -10,7 +10,7 @@ from typing import Any
 
 import numpy as np
 
-from dice_env.envs.task import judge
+from dice_env.envs.throw_task import judge
 from dice_env.model.checks import check_choice, check_type
 from dice_env.model.die import Die
 from dice_env.model.rotations import (

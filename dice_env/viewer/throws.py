@@ -6,7 +6,7 @@ from typing import Any
 
 import numpy as np
 
-from dice_env.envs.task import ThrowTask
+from dice_env.envs.throw_task import ThrowTask
 from dice_env.model.checks import check_int
 from dice_env.viewer.recording import FPS, Recording, record
 

@@ -1,7 +1,12 @@
-"""The DiceThrow task over a batch: hands, noise, releases, throws, rewards.
+"""The DiceThrow task over a batch: a hand, a target, a judged landing, a reward.
 
-The single env, the vector env, the SB3 adapter and the oracle share this code path: a
-context from :meth:`ThrowTask.sample_hand`, then :meth:`ThrowTask.throw`. World frame, z up.
+As dm_control's tasks: the :class:`~dice_env.envs.hand.TaskHand` turns actions into releases, the
+kernel runs them, :func:`judge` says which throws count, the task's
+:class:`~dice_env.envs.targets.Target` scores the landing (:meth:`ThrowTask.reward`) and
+:meth:`ThrowTask.info` reports it. The single env, the vector env, the SB3 adapter and the oracle
+share this code path: a context from :meth:`ThrowTask.sample_hand`, then
+:meth:`ThrowTask.throw`. Execution settings (threads) belong to the caller: the env passes its
+own. World frame, z up.
 """
 
 from __future__ import annotations
@@ -15,22 +20,12 @@ from typing import Any
 
 import numpy as np
 
-from dice_env.envs.keywords import ENV_MAX_STEPS, SceneKeywords, check_face, check_scene
-from dice_env.model.checks import (
-    as_batch,
-    as_floats,
-    check_choice,
-    check_int,
-    check_nonnegative,
-    check_positive,
-)
+from dice_env.envs.hand import ORIENTATION_MODES, TaskHand, default_release_height
+from dice_env.envs.keywords import ENV_MAX_STEPS, SceneKeywords, check_scene
+from dice_env.envs.targets import TARGETS, Target
+from dice_env.model.checks import as_floats, check_choice, check_int, check_nonnegative
 from dice_env.model.die import Die
-from dice_env.model.rotations import (
-    orthonormality_error,
-    quaternion_to_matrix,
-    uniform_rotations,
-    up_rotation,
-)
+from dice_env.model.rotations import orthonormality_error
 from dice_env.model.scene import Scene
 from dice_env.simulation.group import GroupResult, GroupState, group_step, simulate_group
 from dice_env.simulation.simulate import (
@@ -40,24 +35,12 @@ from dice_env.simulation.simulate import (
     State,
     lock_energy,
     simulate,
-    thread_count,
 )
 
 ORIENTATION_DIM = 9  # the observation's orientation, row-major 3x3, after the target's one-hot
-ACTION_DIM = 6  # release velocity (3) + angular velocity (3), world frame, in [-1, 1]
-NOISE_DIM = 9  # standard normals: velocity (3), spin (3), orientation rotation vector (3)
-ORIENTATION_MODES = ("uniform", "flat", "identity")
 # How far a throw is simulated -> the void reason of one that does not get there in t_max.
 UNTIL = {"rest": "not_settled", "decided": "not_decided"}
-# Default release height (m) of the d6, and the gap (m) it leaves below its lowest corner; a die
-# that reaches further is released higher by default, with the same gap.
-RELEASE_HEIGHT = 0.015
-RELEASE_GAP = RELEASE_HEIGHT - math.sqrt(3.0) * 0.008
 MAX_NUM_DICE = 12
-TARGETS = ("faces", "sum", "avoid_sum")
-HAND_ROW = 4  # dice per row in the hand
-HAND_GAP = 0.002  # m: the least gap between neighbours in the hand, in any orientations
-SET_ANGLE = math.pi  # rad: a dice-setting action of 1 turns its die by this much
 
 
 @dataclass(frozen=True)
@@ -66,8 +49,9 @@ class ThrowTask:
 
     ``dice``: 1 … :data:`MAX_NUM_DICE` dice (default: the scene's die; the scene takes the
     first). Per-die arrays have a die axis only for several dice. ``release_height=None`` is
-    :data:`RELEASE_HEIGHT`, or :data:`RELEASE_GAP` above any die's farthest corner if higher.
-    Every field, the hand, the targets and void throws: ``docs/environment.md``.
+    :func:`~dice_env.envs.hand.default_release_height`. The hand's fields make :attr:`hand`,
+    ``target`` names :attr:`goal`'s kind. Every field, the hand, the targets and void throws:
+    ``docs/environment.md``.
     """
 
     scene: Scene
@@ -79,7 +63,6 @@ class ThrowTask:
     min_speed: float = 0.0
     min_spin: float = 0.0
     shaping: float = 0.0
-    num_threads: int | None = None
     until: str = "rest"
     dice: tuple[Die, ...] = ()
     target: str | None = None
@@ -89,26 +72,16 @@ class ThrowTask:
         if not isinstance(self.scene, Scene):
             raise ValueError(f"scene must be a Scene, got {type(self.scene).__name__}")
         self._check_dice()
-        clearance = max(die.reach for die in self.dice)
         if self.release_height is None:
-            object.__setattr__(self, "release_height",
-                               max(RELEASE_HEIGHT, round(clearance + RELEASE_GAP, 4),
-                                   clearance * (1 + 1e-9)))  # above a giant die's reach too
-        check_positive("release_height", self.release_height)
-        if self.release_height <= clearance:
-            raise ValueError(
-                f"release_height must be > {clearance:.6g} m, the die's farthest corner from its "
-                f"centre of mass (no corner may start in the table), got {self.release_height!r}")
-        for name in ("max_speed", "max_spin"):
-            check_positive(name, getattr(self, name))
-        for name in ("hand_noise", "orientation_noise", "min_speed", "min_spin", "shaping"):
+            object.__setattr__(self, "release_height", default_release_height(self.dice))
+        hand = self.hand  # checks the hand's fields
+        for name in ("min_speed", "min_spin", "shaping"):
             check_nonnegative(name, getattr(self, name))
         check_choice("until", self.until, UNTIL)
         if self.until == "decided" and not all(np.isfinite(lock_energy(s)).all()
                                                for s in self.die_scenes):
             raise ValueError("until='decided' needs a horizontal table with gravity (no energy "
                              "bound decides the face on a slope); use until='rest'")
-        thread_count(self.num_threads)  # refuses a count numba does not have
         for scene in self.die_scenes:
             check_scene(scene, self.release_height)
         if self.scene.t_max / self.step > ENV_MAX_STEPS:
@@ -116,12 +89,7 @@ class ThrowTask:
                 f"t_max must be at most {ENV_MAX_STEPS:.0e} steps: t_max={self.scene.t_max:g} s "
                 f"over the {self.n_dice} dice's step of {self.step:.3g} s is "
                 f"{self.scene.t_max / self.step:.3g} steps; lower t_max or num_dice")
-        for i, (centre, die) in enumerate(zip(self.release_positions, self.dice, strict=True)):
-            for wall in self.scene.walls:  # every die in the hand clears every wall by its reach
-                gap = float(np.asarray(wall.normal) @ centre - wall.offset)
-                if gap <= die.reach:
-                    raise ValueError(f"die {i} in the hand (centre {centre.round(4)} m) would "
-                                     f"reach through a wall (walls) by {die.reach - gap:.3g} m")
+        hand.check_walls()
 
     def _check_dice(self) -> None:
         """Check ``dice``, ``target`` and ``set_dice``; set their defaults and the scene's die."""
@@ -145,6 +113,17 @@ class ThrowTask:
             raise ValueError(f"set_dice needs num_dice >= 2, got set_dice={self.set_dice!r}")
 
     @cached_property
+    def hand(self) -> TaskHand:
+        """The hand: actions to releases, from the task's hand fields."""
+        return TaskHand(self.die_scenes, self.release_height, self.max_speed, self.max_spin,
+                    self.hand_noise, self.orientation_noise, self.set_dice)
+
+    @cached_property
+    def goal(self) -> Target:
+        """The target of the ``target`` kind over the dice's faces."""
+        return TARGETS[self.target](self.faces)
+
+    @cached_property
     def die_scenes(self) -> tuple[Scene, ...]:
         """The scene with each die of :attr:`dice` (the first is :attr:`scene`)."""
         return (self.scene, *(self.scene.with_(die=die) for die in self.dice[1:]))
@@ -162,7 +141,7 @@ class ThrowTask:
     @property
     def die_shape(self) -> tuple[int, ...]:
         """The die axis of per-die arrays: () for one die, (N,) for several."""
-        return () if self.n_dice == 1 else (self.n_dice,)
+        return self.hand.die_shape
 
     @property
     def faces(self) -> tuple[int, ...]:
@@ -184,22 +163,22 @@ class ThrowTask:
     @property
     def target_shape(self) -> tuple[int, ...]:
         """One throw's target: a face per die (:attr:`die_shape`) or a total (())."""
-        return self.die_shape if self.target == "faces" else ()
+        return self.goal.shape
 
     @property
     def target_dim(self) -> int:
         """One one-hot per die ("faces") or one over :attr:`totals` (a total's targets)."""
-        return sum(self.faces) if self.target == "faces" else len(self.totals)
+        return self.goal.dim
 
     @property
     def action_dim(self) -> int:
-        """The hand's velocity and spin (:data:`ACTION_DIM`), and 3 per die with ``set_dice``."""
-        return ACTION_DIM + (3 * self.n_dice if self.set_dice else 0)
+        """The hand's velocity and spin, and 3 per die with ``set_dice``."""
+        return self.hand.action_dim
 
     @property
     def noise_dim(self) -> int:
-        """Hand noise per throw: :data:`NOISE_DIM` standard normals per die."""
-        return NOISE_DIM * self.n_dice
+        """Hand noise per throw: 9 standard normals per die."""
+        return self.hand.noise_dim
 
     @property
     def obs_dim(self) -> int:
@@ -208,31 +187,23 @@ class ThrowTask:
 
     @property
     def release_position(self) -> np.ndarray:
-        """The hand's centre at release: ``release_height`` along the table normal (3,)."""
-        return self.release_height * np.asarray(self.scene.ground.normal)
+        """The hand's centre at release (3,): ``release_height`` along the table normal."""
+        return self.hand.centre
 
     @property
     def hand_spacing(self) -> float:
-        """Distance (m) between neighbours' centres: twice the largest reach + :data:`HAND_GAP`."""
-        return 2.0 * max(die.reach for die in self.dice) + HAND_GAP
+        """Distance (m) between neighbours' centres in the hand."""
+        return self.hand.spacing
 
     @property
     def hand_offsets(self) -> np.ndarray:
         """Each die's centre in the hand relative to :attr:`release_position`, (N, 3) m."""
-        normal = np.asarray(self.scene.ground.normal)
-        x_axis = np.cross([0.0, 1.0, 0.0], normal)
-        x_axis /= np.linalg.norm(x_axis)
-        y_axis = np.cross(normal, x_axis)
-        n, rows = self.n_dice, -(-self.n_dice // HAND_ROW)
-        row, column = np.divmod(np.arange(n), HAND_ROW)
-        in_row = np.minimum(HAND_ROW, n - row * HAND_ROW)
-        return self.hand_spacing * ((row - (rows - 1) / 2)[:, None] * x_axis
-                                    + (column - (in_row - 1) / 2)[:, None] * y_axis)
+        return self.hand.offsets
 
     @property
     def release_positions(self) -> np.ndarray:
         """Each die's centre at release, (N, 3) m."""
-        return self.release_position + self.hand_offsets
+        return self.hand.positions
 
     @property
     def hand_position(self) -> np.ndarray:
@@ -245,26 +216,7 @@ class ThrowTask:
         "faces": ``target_face``, a face (one die) or a sequence of N faces; "sum" and
         "avoid_sum": ``target_sum``, an int in :attr:`totals`. The other is refused.
         """
-        if self.target != "faces":
-            if target_face is not None:
-                raise ValueError(f"target_face needs target='faces'; target is {self.target!r} "
-                                 f"(fix the total with target_sum), got {target_face!r}")
-            if target_sum is None:
-                return None
-            return check_int("target_sum", target_sum, self.totals[0], self.totals[-1])
-        if target_sum is not None:
-            raise ValueError(f"target_sum needs target='sum' or 'avoid_sum'; target is 'faces' "
-                             f"(fix the faces with target_face), got {target_sum!r}")
-        if target_face is None:
-            return None
-        if self.n_dice == 1:
-            return check_face("target_face", target_face, self.faces[0])
-        if (not isinstance(target_face, Sequence | np.ndarray) or len(target_face) != self.n_dice
-                or isinstance(target_face, (str, bytes))):
-            raise ValueError(f"target_face must be a sequence of {self.n_dice} faces, one per "
-                             f"die (faces {self.faces}), got {target_face!r}")
-        return tuple(check_face("target_face", f, n)
-                     for f, n in zip(target_face, self.faces, strict=True))
+        return self.goal.fix(target_face, target_sum)
 
     def sample_hand(self, rng: np.random.Generator, target: Any = None,
                     orientation_mode: str = "uniform") -> tuple[Any, np.ndarray]:
@@ -284,33 +236,25 @@ class ThrowTask:
         generator draws the target, then each die's orientation in turn.
         """
         check_choice("orientation_mode", orientation_mode, ORIENTATION_MODES)
-        n, by_face = len(rngs), self.target == "faces"
-        low, high = (1, np.array(self.faces)) if by_face else (self.totals[0], self.totals[-1])
-        targets = np.zeros((n, self.n_dice) if by_face else n, np.int64)
-        draws = np.zeros((self.n_dice, n, 3))
+        n = len(rngs)
+        targets = np.zeros((n, math.prod(self.target_shape)), np.int64)
+        draws = np.zeros((n, self.n_dice, 3))
         for i, rng in enumerate(rngs):
-            targets[i] = rng.integers(low, high + 1) if target is None else target
-            for j in range(self.n_dice):  # three uniforms, or a face and a turn, or nothing
-                if orientation_mode == "uniform":
-                    draws[j, i] = rng.random(3)
-                elif orientation_mode == "flat":
-                    draws[j, i, :2] = rng.integers(0, self.faces[j]), rng.uniform(0, 2 * np.pi)
-        hands = np.stack([_orientations(orientation_mode, draws[j], die)
-                          for j, die in enumerate(self.dice)], axis=1)
+            targets[i] = self.goal.draw(rng) if target is None else target
+            draws[i] = self.hand.draw(rng, orientation_mode)
+        hands = self.hand.orientations(orientation_mode, draws)
         return (targets.reshape(n, *self.target_shape), hands.reshape(n, *self.die_shape, 3, 3))
 
     def sample_noise(self, rng: np.random.Generator, n: int = 1) -> np.ndarray:
-        """Hand noise for ``n`` throws: standard normals (n, :attr:`noise_dim`)."""
-        return rng.standard_normal((n, self.noise_dim))
+        """Hand noise for ``n`` throws: standard normals (n, the hand's ``noise_dim``)."""
+        return self.hand.sample_noise(rng, n)
 
     def observe(self, targets: np.ndarray, orientations: np.ndarray) -> np.ndarray:
         """Observations (n, :attr:`obs_dim`) float32: the target's one-hot(s), orientations."""
         orientations = np.asarray(orientations).reshape(-1, ORIENTATION_DIM * self.n_dice)
         n = len(orientations)
         obs = np.zeros((n, self.obs_dim), np.float32)
-        # A target's column: its one-hot's start, plus the target less the lowest one.
-        shift = np.cumsum([0, *self.faces[:-1]]) - 1 if self.target == "faces" else -self.totals[0]
-        obs[np.arange(n)[:, None], np.asarray(targets).reshape(n, -1) + shift] = 1.0
+        obs[np.arange(n)[:, None], self.goal.columns(targets)] = 1.0
         obs[:, self.target_dim:] = np.clip(orientations, -1.0, 1.0)
         return obs
 
@@ -320,93 +264,78 @@ class ThrowTask:
         if observations.shape[1] != self.obs_dim:
             raise ValueError(f"observations must have {self.obs_dim} columns, got "
                              f"{observations.shape[1]}")
-        n, encoding = len(observations), observations[:, :self.target_dim]
         u, _, vt = np.linalg.svd(observations[:, self.target_dim:].reshape(-1, 3, 3))
-        by_face = self.target == "faces"  # a one-hot per die, or one over the totals
-        one_hots = np.split(encoding, np.cumsum(self.faces[:-1]) if by_face else [], axis=1)
-        lowest = 1 if by_face else self.totals[0]
-        targets = np.stack([one_hot.argmax(axis=1) + lowest for one_hot in one_hots], axis=1)
-        return (targets.reshape(n, *self.target_shape), (u @ vt).reshape(n, *self.die_shape, 3, 3))
+        return (self.goal.decode(observations[:, :self.target_dim]),
+                (u @ vt).reshape(len(observations), *self.die_shape, 3, 3))
 
     def release(self, actions: np.ndarray, hands: np.ndarray,
                 noise: np.ndarray | Sequence[np.random.Generator], *,
                 action_shape: tuple[int, ...] | None = None,
                 ) -> tuple[State | GroupState, np.ndarray]:
-        """Releases for ``actions`` (n, :attr:`action_dim`), ``hands`` (n, [N,] 3, 3), ``noise``.
+        """The hand's releases: :meth:`TaskHand.release <dice_env.envs.hand.TaskHand.release>`."""
+        return self.hand.release(actions, hands, noise, action_shape=action_shape)
 
-        ``noise``: (n, :attr:`noise_dim`) standard normals, or one generator per throw (drawn
-        once the actions are checked: finite, of ``action_shape`` if given). Returns the State or
-        GroupState, and which actions were clipped to [-1, 1] (n,).
+    def fair(self, state: State | GroupState) -> np.ndarray:
+        """Whether each release (n,) is within ``min_speed`` and ``min_spin``, every die's."""
+        n = np.size(state.velocity) // (3 * self.n_dice)
+        speed = np.linalg.norm(state.velocity, axis=-1).reshape(n, -1)
+        spin = np.linalg.norm(state.angular_velocity, axis=-1).reshape(n, -1)
+        return np.all((speed >= self.min_speed) & (spin >= self.min_spin), axis=1)
+
+    def land(self, state: State | GroupState, targets: np.ndarray, *, record_every: int = 0,
+             num_threads: int | None = None) -> Landing:
+        """Simulate the released dice (:attr:`run_until`) and judge each throw (:func:`judge`).
+
+        ``targets`` (n, :attr:`target_shape`); ``num_threads``: the kernel's threads (None:
+        all); ``record_every`` > 0 records the centres and orientations every that many steps.
         """
-        actions = as_floats("action", actions)
-        if action_shape is not None and actions.shape != action_shape:
-            raise ValueError(f"action{'s' if len(action_shape) > 1 else ''} must have shape "
-                             f"{action_shape}, got {actions.shape}")
-        actions = as_batch("action", actions, (self.action_dim,))
-        clipped = np.any(np.abs(actions) > 1.0, axis=1)
-        actions = np.clip(actions, -1.0, 1.0)
-        if len(noise) and isinstance(noise[0], np.random.Generator):
-            noise = np.concatenate([self.sample_noise(rng) for rng in noise])
-        n, dice = len(actions), self.n_dice
-        noise = np.asarray(noise, dtype=np.float64).reshape(n, dice, NOISE_DIM)
-        noisy = actions[:, None, :ACTION_DIM] + self.hand_noise * noise[..., :ACTION_DIM]
-        spin = noisy[..., 3:] * self.max_spin
-        velocity = noisy[..., :3] * self.max_speed + np.cross(spin, self.hand_offsets)
-        hands = np.asarray(hands, dtype=np.float64).reshape(n, dice, 3, 3)
-        if self.set_dice:
-            hands = _rotation_matrices(SET_ANGLE * actions[:, ACTION_DIM:].reshape(n, dice, 3)) \
-                @ hands
-        orientation = _rotation_matrices(self.orientation_noise * noise[..., 6:]) @ hands
-        positions = self.release_positions
-        states = [State.release(scene, positions[i], velocity[:, i], spin[:, i], orientation[:, i])
-                  for i, scene in enumerate(self.die_scenes)]
-        return (GroupState.of(states) if dice > 1 else states[0]), clipped
+        fair = self.fair(state)
+        targets = np.array(targets, dtype=np.int64).reshape(len(fair), *self.target_shape)
+        run = self._simulate(state, record_every, num_threads)
+        result, void = judge(self.scene, self.dice, run, self.run_until, fair=fair)
+        return Landing(targets, result, void, fair)
+
+    def success(self, landing: Landing) -> np.ndarray:
+        """Whether each throw (n,) counts and hits its target."""
+        return (landing.void == "") & self.goal.hit(landing.faces, landing.targets)
+
+    def reward(self, landing: Landing) -> Reward:
+        """Each throw's reward, in its terms: success (1 or 0) and shaping at rest."""
+        alignment = self.goal.alignment(self.dice, np.asarray(self.scene.ground.normal),
+                                        landing.orientation, landing.targets)
+        return Reward(self.success(landing).astype(np.float64),
+                      np.where(landing.void == "", self.shaping * alignment, 0.0))
+
+    def info(self, landing: Landing, reward: Reward, state: State | GroupState,
+             clipped: np.ndarray) -> dict[str, np.ndarray]:
+        """The env's info over n throws (``docs/environment.md``); per-die keys with a die axis."""
+        result, n = landing.result, len(landing.void)
+        several = ({"total": landing.faces.sum(axis=1), "leaning": ~result.read}
+                   if self.n_dice > 1 else {})
+        return {"is_success": self.success(landing), self.goal.info_key: landing.targets,
+                "face": result.face, **several, "settled": result.settled,
+                "unstable": result.unstable, "sunk": result.sunk.reshape(n, -1).any(axis=1),
+                "max_sink": result.max_penetration.reshape(n, -1).max(axis=1),
+                "fair": landing.fair, "void_reason": landing.void, "rest_time": result.rest_time,
+                "impacts": result.impacts, "reward_success": reward.success,
+                "reward_shaping": reward.shaping, "release_velocity": state.velocity,
+                "release_spin": state.angular_velocity, "release_orientation": state.orientation,
+                "action_clipped": clipped}
 
     def throw(self, actions: np.ndarray, targets: np.ndarray, hands: np.ndarray,
               noise: np.ndarray | Sequence[np.random.Generator], *, record_every: int = 0,
-              action_shape: tuple[int, ...] | None = None) -> Throw:
-        """Simulate ``n`` throws of the dice in one kernel call and score them.
+              action_shape: tuple[int, ...] | None = None,
+              num_threads: int | None = None) -> Throw:
+        """Release, simulate in one kernel call, judge and score ``n`` throws of the dice.
 
-        ``targets`` (n, :attr:`target_shape`), the rest as :meth:`release`'s; ``record_every`` > 0
-        records the centres and orientations every that many steps. Info: the env's keys over n
-        (``docs/environment.md``), per-die ones with a die axis (:attr:`die_shape`).
+        ``targets`` (n, :attr:`target_shape`), the rest as :meth:`release`'s and :meth:`land`'s.
         """
         state, clipped = self.release(actions, hands, noise, action_shape=action_shape)
-        n, by_face = len(clipped), self.target == "faces"
-        targets = np.array(targets, dtype=np.int64).reshape(n, *self.target_shape)
-        speed = np.linalg.norm(state.velocity, axis=-1).reshape(n, -1)
-        spin = np.linalg.norm(state.angular_velocity, axis=-1).reshape(n, -1)
-        fair = np.all((speed >= self.min_speed) & (spin >= self.min_spin), axis=1)
-        result, void = judge(self.scene, self.dice, self._simulate(state, record_every),
-                             self.run_until, fair=fair)
-        sunk = result.sunk.reshape(n, -1).any(axis=1)
-        counts = void == ""
-        faces = result.face.reshape(n, -1)
-        if by_face:
-            per_die = targets.reshape(n, -1)
-            hit = np.all(faces == per_die, axis=1)
-            normal = np.asarray(self.scene.ground.normal)
-            final = result.final.orientation.reshape(n, -1, 3, 3)
-            alignment = np.mean([  # n_target . n_table: 1 with the target up, -1 down
-                np.einsum("bij,bj,i->b", final[:, i], die.reading[per_die[:, i] - 1], normal)
-                for i, die in enumerate(self.dice)], axis=0)
-        else:
-            hit = (faces.sum(axis=1) == targets) == (self.target == "sum")
-            alignment = np.zeros(n)
-        success = counts & hit
-        reward_success = success.astype(np.float64)
-        shaping = np.where(counts, self.shaping * alignment, 0.0)
-        several = {"total": faces.sum(axis=1), "leaning": ~result.read} if self.n_dice > 1 else {}
-        info = {"is_success": success, "target_face" if by_face else "target_sum": targets,
-                "face": result.face, **several, "settled": result.settled,
-                "unstable": result.unstable, "sunk": sunk,
-                "max_sink": result.max_penetration.reshape(n, -1).max(axis=1), "fair": fair,
-                "void_reason": void, "rest_time": result.rest_time, "impacts": result.impacts,
-                "reward_success": reward_success, "reward_shaping": shaping,
-                "release_velocity": state.velocity, "release_spin": state.angular_velocity,
-                "release_orientation": state.orientation, "action_clipped": clipped}
-        return Throw(reward=reward_success + shaping, info=info, result=result,
-                     observation=self.observe(targets, result.final.orientation))
+        landing = self.land(state, targets, record_every=record_every, num_threads=num_threads)
+        reward = self.reward(landing)
+        return Throw(reward=reward.total, info=self.info(landing, reward, state, clipped),
+                     result=landing.result,
+                     observation=self.observe(landing.targets, landing.result.final.orientation))
 
     @property
     def run_until(self) -> str:
@@ -416,15 +345,53 @@ class ThrowTask:
         """
         return "early_rest" if self.until == "rest" and self.n_dice == 1 else self.until
 
-    def _simulate(self, state: State | GroupState, record_every: int) -> Result | GroupResult:
+    def _simulate(self, state: State | GroupState, record_every: int,
+                  num_threads: int | None) -> Result | GroupResult:
         """The kernel's run of the released dice (:attr:`run_until`): one die's, or the group's."""
         if isinstance(state, GroupState):
             return simulate_group(self.scene, self.dice, state, until=self.run_until,
                                   record_every=record_every, orientations=bool(record_every),
-                                  num_threads=self.num_threads)
+                                  num_threads=num_threads)
         return simulate(self.scene, state, until=self.run_until, record_every=record_every,
                         record=("orientations",) if record_every else ("energy",),
-                        num_threads=self.num_threads)
+                        num_threads=num_threads)
+
+
+@dataclass(frozen=True)
+class Landing:
+    """n throws judged: their targets, the kernel's result and why each does not count.
+
+    ``targets`` (n, target shape); ``void`` (n,): :func:`judge`'s reasons, ``""`` where the
+    throw counts; ``fair`` (n,): releases within the task's speed and spin.
+    """
+
+    targets: np.ndarray
+    result: Result | GroupResult
+    void: np.ndarray
+    fair: np.ndarray
+
+    @property
+    def faces(self) -> np.ndarray:
+        """The face each die reads, (n, N)."""
+        return self.result.face.reshape(len(self.void), -1)
+
+    @property
+    def orientation(self) -> np.ndarray:
+        """Each die's orientation at the end, (n, N, 3, 3)."""
+        return self.result.final.orientation.reshape(len(self.void), -1, 3, 3)
+
+
+@dataclass(frozen=True)
+class Reward:
+    """n throws' reward terms, (n,) each: ``success`` (1.0 or 0.0) and ``shaping``."""
+
+    success: np.ndarray
+    shaping: np.ndarray
+
+    @property
+    def total(self) -> np.ndarray:
+        """The reward: success + shaping."""
+        return self.success + self.shaping
 
 
 @dataclass
@@ -541,7 +508,8 @@ def check_task_keywords(keywords: dict[str, object]) -> dict[str, object]:
     if unknown:
         raise ValueError(f"unknown keyword(s) {unknown}; DiceThrow-v0 takes "
                          f"{sorted(task_keywords())} plus target_face, target_sum, "
-                         "orientation_mode, render_mode, render_width, render_height")
+                         "orientation_mode, render_mode, render_width, render_height, "
+                         "num_threads")
     return keywords
 
 
@@ -559,31 +527,3 @@ def _held_within_t_max(result: Result, scene: Scene, t_max: float | None = None)
         return result
     return replace(result, settled=result.settled & ~late,
                    rest_time=np.where(late, n_steps * dt, result.rest_time))
-
-
-def _rotation_matrices(vectors: np.ndarray) -> np.ndarray:
-    """Rotation matrices (..., 3, 3) of rotation vectors (..., 3)."""
-    flat = np.reshape(vectors, (-1, 3))
-    angle = np.linalg.norm(flat, axis=1, keepdims=True)
-    safe = np.where(angle > 0, angle, 1.0)
-    quaternions = np.hstack([np.cos(angle / 2), np.sin(angle / 2) * flat / safe])
-    return quaternion_to_matrix(quaternions).reshape(*np.shape(vectors)[:-1], 3, 3)
-
-
-def _orientations(mode: str, draws: np.ndarray, die: Die) -> np.ndarray:
-    """Hand orientations (n, 3, 3) of ``die`` from :meth:`ThrowTask.sample_hands`' draws (n, 3)."""
-    if mode == "uniform":
-        return uniform_rotations(draws.T)
-    if mode == "flat":
-        return np.stack([_z_turn(turn) @ face_up_rotation(die, int(f) + 1) for f, turn, _ in draws])
-    return np.tile(np.eye(3), (len(draws), 1, 1))
-
-
-def _z_turn(angle: float) -> np.ndarray:
-    c, s = math.cos(angle), math.sin(angle)
-    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
-
-
-def face_up_rotation(die: Die, face: int) -> np.ndarray:
-    """An orientation (body to world, 3x3) in which ``die`` reads ``face``: its reading up."""
-    return up_rotation(die.reading[check_face("face", face, die.n_faces) - 1])
