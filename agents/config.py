@@ -26,6 +26,7 @@ from pathlib import Path
 from typing import Any
 
 from agents.hyperparams import HYPERPARAMS, algorithm_kwargs
+from dice_env.files import write_json
 from dice_env.model.die import Die
 
 # train.py's presets of PPO in agents.hyperparams.HYPERPARAMS.
@@ -168,7 +169,7 @@ class Config:
 
     def save(self, path: Path) -> None:
         """Write the config as JSON."""
-        path.write_text(json.dumps(dataclasses.asdict(self), indent=2) + "\n")
+        write_json(path, dataclasses.asdict(self), indent=2)
 
     @classmethod
     def load(cls, path: Path) -> Config:

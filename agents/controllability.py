@@ -24,6 +24,7 @@ from agents.episodes import Batch, PolicyThrower
 from agents.evaluate import clustered
 from agents.oracle import CEM, score, score_noise, search
 from dice_env.envs.task import ThrowTask, make_task
+from dice_env.files import write_text
 from dice_env.intervals import wilson_bounds
 
 HEIGHTS = (0.015, 0.02, 0.03, 0.05, 0.15)  # release height of the die's centre (m)
@@ -133,7 +134,7 @@ def write_markdown(path: Path, maps: dict[str, np.ndarray], heights: tuple[float
               "observation scored on 16 fresh noise draws), Wilson on the pooled throws divided "
               "by the design effect of the observations (agents/evaluate.py, `clustered`).", "",
               f"Made with `{command}` in {seconds / 60:.0f} min.", ""]
-    path.write_text("\n".join(lines))
+    write_text(path, "\n".join(lines))
     return path
 
 

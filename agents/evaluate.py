@@ -28,6 +28,7 @@ from agents.oracle import CEM, score, score_noise, search
 from agents.progress import bar
 from agents.report import headline_table, verdict, write_report
 from dice_env.envs.task import ThrowTask
+from dice_env.files import write_json
 from dice_env.intervals import Z95, wilson_bounds
 
 ORACLE_SCORE_SAMPLES = 16  # fresh noise draws per oracle observation
@@ -353,7 +354,7 @@ def evaluate_run(
         "gifs": [g.name for g in gifs],
         "seconds": time.perf_counter() - start,
     }
-    (run / "evaluation.json").write_text(json.dumps(evaluation, indent=2) + "\n")
+    write_json(run / "evaluation.json", evaluation, indent=2)
     write_report(run, config, evaluation, figures, gifs)
     log(f"wrote {run / 'report.md'}")
     log("\n".join(verdict(evaluation)))
