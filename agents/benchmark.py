@@ -14,15 +14,25 @@ evaluations left out). At the end it scores the policy on the :data:`FINAL_THROW
 ``benchmarks/tasks.py`` scores random and the rule on (seed 0: the same targets, hands and hand
 noise) and writes ``benchmarks/results/baselines/<task>/<algo>-<seed>.json``.
 
-An interrupted run continues from its last curve point: the model (and an off-policy
-algorithm's replay buffer) is saved under ``runs/benchmark/`` beside the curve so far; a run
-whose JSON exists is skipped. A resumed run is not bit-identical to an uninterrupted one (the
-environment's and the algorithm's random streams restart), which its JSON records
-(``resumed``). Every run takes one PyTorch thread and one kernel thread, so two commands on
-different tasks share a 2-core machine.
+An interrupted run continues from its last curve point: at each point the model (and an
+off-policy algorithm's replay buffer) is saved in a new checkpoint folder, then
+``progress.json`` (the curve so far) names it, so a run stopped between the two resumes from the
+point before and computes the lost one again. Checkpoints live in ``--out``'s ``runs/``
+(``runs/benchmark/results/`` for the kept results). A resumed run is not bit-identical to an
+uninterrupted one (the environment's and the algorithm's random streams restart), which its
+JSON records (``resumed``). Every run takes one PyTorch thread and one kernel thread, so two
+commands on different tasks share a 2-core machine.
 
-``--table`` (and the end of every command) gathers the kept JSONs with ``tasks.json``'s random,
-rule and oracle into ``benchmarks/results/baselines.json`` and ``docs/figures/baselines.png``.
+Every result JSON and checkpoint records what it was made with (task, algorithm, seed, budget,
+hyperparameters, evaluation throws and seeds, ``--quick``, the commit): a run whose JSON is kept
+with the same is skipped; one made otherwise, or an unreadable file, is refused by name before
+any training (exit 2), and ``--fresh`` trains it afresh. Every file is written whole (a
+temporary name renamed into place).
+
+``--table`` (and the end of every command) gathers the kept JSONs with ``--out``'s
+``tasks.json`` (random, rule and oracle) into ``baselines.json`` and ``baselines.png``
+(``docs/figures/`` for the kept results); a JSON of another budget or evaluation size, or a
+curve of other points, is refused by name.
 """
 
 from __future__ import annotations
@@ -35,7 +45,6 @@ import shutil
 import sys
 import tempfile
 import time
-import zipfile
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -43,6 +52,7 @@ from typing import Any
 import numpy as np
 
 from agents.hyperparams import ALGOS, BUDGETS, algorithm_kwargs, entry
+from agents.kept import RunError, differences, read_json, readable_zip
 from dice_env.files import write_json
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -90,10 +100,6 @@ def success(model: Any, task: Any, batch: Any) -> dict[str, Any]:
     return rate(np.asarray(batch.throw(task, PolicyThrower(model))["is_success"], bool))
 
 
-class RunError(ValueError):
-    """A kept result or checkpoint that cannot be used as it is; the message says what to do."""
-
-
 FRESH = "pass --fresh to train it afresh"
 
 
@@ -113,54 +119,24 @@ def commit() -> str:
     return code_version()
 
 
-def differences(saved: dict[str, Any], wanted: dict[str, Any]) -> str:
-    """How ``saved`` differs from ``wanted`` on ``wanted``'s keys ("" when it does not)."""
-    return "; ".join("other hyperparameters" if key == "hyperparams" else
-                     f"{key} {saved.get(key)!r} there, {value!r} here"
-                     for key, value in wanted.items() if saved.get(key) != value)
-
-
-def read_json(path: Path, hint: str) -> dict[str, Any]:
-    """The JSON object of ``path``; :class:`RunError` naming it, with ``hint``, if not one."""
-    try:
-        data = json.loads(path.read_bytes())
-        if not isinstance(data, dict):
-            raise ValueError(f"JSON {type(data).__name__}, not an object")
-    except (OSError, ValueError) as error:
-        raise RunError(f"{path} is unreadable ({type(error).__name__}: {error}): {hint}") \
-            from None
-    return data
-
-
-def readable_zip(path: Path, hint: str) -> None:
-    """:class:`RunError` naming ``path``, with ``hint``, unless it is a whole zip archive."""
-    try:
-        with zipfile.ZipFile(path) as archive:
-            bad = archive.testzip()
-    except (OSError, EOFError, zipfile.BadZipFile) as error:
-        raise RunError(f"{path} is not a readable zip archive ({error}): {hint}") from None
-    if bad is not None:
-        raise RunError(f"{path} is corrupt ({bad} fails its CRC check): {hint}")
-
-
 class Run:
     """One (task, algorithm, seed): its files, its budget and its curve so far.
 
     ``final``: the final evaluation's throws and the seed that draws them. ``params``
-    (default: the benchmark's entry), ``name`` (default: ``algo-seed``) and ``folder`` let the
-    search (:mod:`agents.tune`) train other keywords into files of their own; ``quick``: a
-    smoke run. :attr:`identity` is what the run is made with; a kept result or checkpoint is
-    used only when it records the same.
+    (default: the benchmark's entry) and ``kept_as`` (the results' subfolder and the run's name;
+    default: ``baselines`` and ``algo-seed``) let the search (:mod:`agents.tune`) train other
+    keywords into files of their own; ``quick``: a smoke run. ``identity`` is what the run is
+    made with; a kept result or checkpoint is used only when it records the same.
     """
 
     def __init__(self, task_id: str, algo: str, seed: int, out: Path, budget: int,
                  curve_throws: int, final: tuple[int, int], *,
-                 params: dict[str, Any] | None = None, name: str | None = None,
-                 folder: str = "baselines", quick: bool = False) -> None:
+                 params: dict[str, Any] | None = None,
+                 kept_as: tuple[str, str] | None = None, quick: bool = False) -> None:
         self.task_id, self.algo, self.seed, self.budget = task_id, algo, seed, budget
         self.curve_throws, (self.final_throws, self.final_seed) = curve_throws, final
         self.params = entry(task_id, algo) if params is None else params
-        name = f"{algo}-{seed}" if name is None else name
+        folder, name = ("baselines", f"{algo}-{seed}") if kept_as is None else kept_as
         self.result = out / folder / task_id / f"{name}.json"
         self.work = work_root(out) / task_id / name
         step = self.params["n_envs"]  # throws per env step

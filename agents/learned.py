@@ -2,18 +2,18 @@ r"""What the benchmark's learned throwers do: each task's best run against the o
 
     python -m agents.learned          # after python -m agents.benchmark; about 10 min on 2 cores
 
-For each named task the best algorithm (highest mean final success over its seeds) and its best
-seed are loaded from ``runs/benchmark/`` and compared on ``benchmarks/tasks.py``'s throws
-(:func:`agents.evaluate.compare`) with the oracle searched from their actions
-(:func:`agents.oracle.task_budget`), both scored on the same fresh throws: their success with
-intervals and the paired difference; what each does on those observations (medians of the
-intended release speed, its vertical part and the spin; for one die, per class of how far the
+For each named task the best seed of the best algorithm (highest mean final success over its seeds)
+is loaded from its last checkpoint (checked to be the one its JSON was made with) and compared on
+``benchmarks/tasks.py``'s throws (:func:`agents.evaluate.compare`) with the oracle searched from
+its actions (:func:`agents.oracle.task_budget`), both scored on the same fresh throws: their
+success with intervals and the paired difference; what each does on those observations (medians of
+the intended release speed, its vertical part and the spin; for one die, per class of how far the
 target must turn, the push along the roll direction and the spin axis against the target's tilt,
 :func:`agents.evaluate.strategy`); the learned thrower's failures on all the throws (success per
 turn class or per target, void reasons). For the craps task (avoid a seven), P(seven) of the
 learned throw and of the set throw against the hand's noise (:data:`CRAPS_NOISES`), Wilson 95 %
 intervals, and the largest noise at which the interval is still wholly below 1/6. Writes
-``benchmarks/results/learned.json``.
+``benchmarks/results/learned.json`` after each task.
 """
 
 from __future__ import annotations
@@ -33,16 +33,15 @@ from agents.benchmark import (
     ALGOS,
     FINAL_THROWS,
     RESULTS,
-    RunError,
     algorithm,
     benchmark_run,
     episode,
     evaluation,
     kept_runs,
-    read_json,
 )
 from agents.episodes import Batch, PolicyThrower
 from agents.evaluate import by_turn, compare, paired_difference, strategy, strategy_table, tilt
+from agents.kept import RunError, read_json
 from agents.oracle import CEM, task_budget
 from dice_env.files import write_json
 

@@ -20,9 +20,9 @@ from typing import Any
 import numpy as np
 
 from agents.baselines import HandThrower, RandomThrower
-from agents.benchmark import RunError, readable_zip
 from agents.config import Config
 from agents.episodes import Batch, PolicyThrower, make_eval_task
+from agents.kept import RunError, readable_zip
 from dice_env.envs.task import ThrowTask
 
 FPS = 30  # frames per second of the GIFs (the env's render_fps)

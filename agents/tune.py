@@ -30,11 +30,11 @@ from agents.benchmark import (
     QUICK_THROWS,
     RESULTS,
     Run,
-    RunError,
     keep,
     out_problem,
 )
 from agents.hyperparams import ALGOS, SEARCH, benchmark_entry
+from agents.kept import RunError
 from dice_env.files import write_json
 
 TASK = "DiceThrow-v0"
@@ -48,15 +48,15 @@ def runs(algo: str, out: Path, quick: bool) -> list[tuple[str, Run]]:
     return [(variant, Run(TASK, algo, TUNE_SEED, out, QUICK_BUDGET if quick else TUNE_BUDGET,
                           QUICK_THROWS if quick else CURVE_THROWS,
                           (QUICK_THROWS if quick else TUNE_THROWS, TUNE_THROWS_SEED),
-                          params=benchmark_entry(algo, TASK, variant), name=f"tune-{algo}-{i}",
-                          folder="tuning", quick=quick))
+                          params=benchmark_entry(algo, TASK, variant),
+                          kept_as=("tuning", f"tune-{algo}-{i}"), quick=quick))
             for i, variant in enumerate(SEARCH[algo])]
 
 
 def gather(out: Path) -> dict[str, Any]:
     """Every kept variant's success, per algorithm, best first.
 
-    :class:`agents.benchmark.RunError` if a kept variant is not of the search's settings.
+    :class:`agents.kept.RunError` if a kept variant is not of the search's settings.
     """
     found: dict[str, Any] = {}
     for algo in ALGOS:

@@ -7,6 +7,7 @@ import pytest
 
 from agents import benchmark, learned
 from agents.hyperparams import BUDGETS, HYPERPARAMS, algorithm_kwargs, entry
+from agents.kept import RunError
 from dice_env.envs.tasks import TASKS
 
 TASK = "DiceThrow-v0"
@@ -125,7 +126,7 @@ def test_learned_analyses_the_best_run_against_the_oracle(tmp_path):
 
 def test_learned_names_the_command_that_rebuilds_a_missing_model(tmp_path):
     run = {"task": TASK, "algo": "sac", "seed": 2}
-    with pytest.raises(benchmark.RunError, match="--tasks DiceThrow-v0 --algos sac --seeds 2"):
+    with pytest.raises(RunError, match="--tasks DiceThrow-v0 --algos sac --seeds 2"):
         learned.model_path(run, tmp_path / "results")
 
 

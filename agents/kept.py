@@ -1,0 +1,42 @@
+"""Files the agents keep for later, read back: refused by name, with what to do, when unusable."""
+
+from __future__ import annotations
+
+import json
+import zipfile
+from pathlib import Path
+from typing import Any
+
+
+class RunError(ValueError):
+    """A kept result or checkpoint that cannot be used as it is; the message says what to do."""
+
+
+def differences(saved: dict[str, Any], wanted: dict[str, Any]) -> str:
+    """How ``saved`` differs from ``wanted`` on ``wanted``'s keys ("" when it does not)."""
+    return "; ".join("other hyperparameters" if key == "hyperparams" else
+                     f"{key} {saved.get(key)!r} there, {value!r} here"
+                     for key, value in wanted.items() if saved.get(key) != value)
+
+
+def read_json(path: Path, hint: str) -> dict[str, Any]:
+    """The JSON object of ``path``; :class:`RunError` naming it, with ``hint``, if not one."""
+    try:
+        data = json.loads(path.read_bytes())
+        if not isinstance(data, dict):
+            raise ValueError(f"JSON {type(data).__name__}, not an object")
+    except (OSError, ValueError) as error:
+        raise RunError(f"{path} is unreadable ({type(error).__name__}: {error}): {hint}") \
+            from None
+    return data
+
+
+def readable_zip(path: Path, hint: str) -> None:
+    """:class:`RunError` naming ``path``, with ``hint``, unless it is a whole zip archive."""
+    try:
+        with zipfile.ZipFile(path) as archive:
+            bad = archive.testzip()
+    except (OSError, EOFError, zipfile.BadZipFile) as error:
+        raise RunError(f"{path} is not a readable zip archive ({error}): {hint}") from None
+    if bad is not None:
+        raise RunError(f"{path} is corrupt ({bad} fails its CRC check): {hint}")
