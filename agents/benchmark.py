@@ -52,7 +52,7 @@ from typing import Any
 import numpy as np
 
 from agents.hyperparams import ALGOS, BUDGETS, algorithm_kwargs, entry
-from agents.kept import RunError, differences, read_json, readable_zip
+from agents.kept import RunError, differences, interrupted, read_json, readable_zip
 from dice_env.files import write_json
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -474,6 +474,9 @@ def main(argv: Sequence[str] | None = None) -> int:
                   "rates); copy benchmarks/results/tasks.json there and run --table")
     except RunError as error:
         parser.error(str(error))
+    except KeyboardInterrupt:
+        return interrupted("every finished run and the last curve point of the one in training "
+                           "are kept; the same command continues")
     return 0
 
 

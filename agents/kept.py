@@ -3,9 +3,12 @@
 from __future__ import annotations
 
 import json
+import sys
 import zipfile
 from pathlib import Path
 from typing import Any
+
+INTERRUPTED = 130  # exit status after Ctrl-C (128 + SIGINT), as shells report it
 
 
 class RunError(ValueError):
@@ -40,3 +43,9 @@ def readable_zip(path: Path, hint: str) -> None:
         raise RunError(f"{path} is not a readable zip archive ({error}): {hint}") from None
     if bad is not None:
         raise RunError(f"{path} is corrupt ({bad} fails its CRC check): {hint}")
+
+
+def interrupted(what_is_kept: str) -> int:
+    """Say after Ctrl-C what is kept and how to go on (``what_is_kept``); :data:`INTERRUPTED`."""
+    print(f"\ninterrupted (Ctrl-C): {what_is_kept}", file=sys.stderr)
+    return INTERRUPTED

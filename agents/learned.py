@@ -41,7 +41,7 @@ from agents.benchmark import (
 )
 from agents.episodes import Batch, PolicyThrower
 from agents.evaluate import by_turn, compare, paired_difference, strategy, strategy_table, tilt
-from agents.kept import RunError, read_json
+from agents.kept import RunError, interrupted, read_json
 from agents.oracle import CEM, task_budget
 from dice_env.files import write_json
 
@@ -206,7 +206,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         parser.error(str(error))
     for task_id in args.tasks or kept:
         start = time.perf_counter()
-        r = analyse(task_id, args.out, args.quick)
+        try:
+            r = analyse(task_id, args.out, args.quick)
+        except KeyboardInterrupt:
+            return interrupted(f"{path} keeps the tasks analysed before {task_id}; --tasks "
+                               "analyses the others")
         reports[task_id] = {**r, "seconds": time.perf_counter() - start, "commit": code_version()}
         oracle = r["on_oracle_throws"]["oracle"]["rate"]
         print(f"{task_id:<24} {r['algo'].upper()} seed {r['seed']}: {r['learned']:.3f}; on the "

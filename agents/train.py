@@ -50,12 +50,12 @@ from stable_baselines3.common.vec_env import VecEnv
 
 import dice_env  # noqa: F401  (registers DiceThrow-v0)
 from agents.config import Config, is_run_folder, parse_config
+from agents.kept import INTERRUPTED
 from agents.progress import Bar
 from dice_env.envs.sb3 import make_sb3_env
 from dice_env.files import write_atomically, write_json, write_text
 
 CHECKPOINT_PREFIX = "ppo"
-INTERRUPTED = 130  # exit status after Ctrl-C (128 + SIGINT), as shells report it
 
 
 class Interrupted(Exception):

@@ -34,7 +34,7 @@ from agents.benchmark import (
     out_problem,
 )
 from agents.hyperparams import ALGOS, SEARCH, benchmark_entry
-from agents.kept import RunError
+from agents.kept import RunError, interrupted
 from dice_env.files import write_json
 
 TASK = "DiceThrow-v0"
@@ -112,6 +112,9 @@ def main(argv: Sequence[str] | None = None) -> int:
             write_json(args.out / "tuning.json", gather(args.out))
     except RunError as error:
         parser.error(str(error))
+    except KeyboardInterrupt:
+        return interrupted("every finished variant and the last curve point of the one in "
+                           "training are kept; the same command continues")
     print(f"done in {(time.perf_counter() - start) / 60:.1f} min")
     return 0
 

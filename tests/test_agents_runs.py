@@ -4,18 +4,25 @@ name (exit 2, one line) when they are not: other folders, settings, smoke runs, 
 
 import io
 import json
+import os
 import shutil
+import signal
+import subprocess
+import sys
 import zipfile
+from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
 import pytest
+from subprocess_signals import interruptible
 
 from agents import benchmark, learned, replay, tune
 from agents.config import Config
 from agents.hyperparams import BUDGETS, entry
 
 TASK, OTHER = list(BUDGETS)[:2]
+ROOT = Path(__file__).resolve().parents[1]
 
 
 @pytest.fixture(autouse=True)
@@ -140,8 +147,8 @@ def test_a_truncated_checkpoint_is_refused_by_name(tmp_path, capsys, monkeypatch
 
     with monkeypatch.context() as patch:
         patch.setattr(benchmark, "success", ctrl_c_at_the_third_point)
-        with pytest.raises(KeyboardInterrupt):
-            bench(out)
+        assert bench(out) == 130
+    assert "the same command continues" in capsys.readouterr().err
     path = next(tmp_path.rglob(name))
     path.write_bytes(path.read_bytes()[:len(path.read_bytes()) // 2])
     line = refused(capsys, lambda: bench(out))
@@ -149,6 +156,30 @@ def test_a_truncated_checkpoint_is_refused_by_name(tmp_path, capsys, monkeypatch
     assert bench(out, "--fresh") == 0
     again = json.loads(result_of(out).read_text())
     assert again["resumed"] == 0 and len(again["curve"]) == benchmark.CURVE_POINTS
+
+
+@pytest.mark.slow  # two commands' start: about 30 s on a busy 2-core machine
+def test_ctrl_c_in_a_command_keeps_a_run_that_the_same_command_finishes(tmp_path):
+    command = [sys.executable, "-u", "-m", "agents.benchmark", "--quick", "--out",
+               str(tmp_path / "res"), "--tasks", TASK, "--algos", "sac", "--seeds", "0"]
+    env = {**os.environ, "PYTHONPATH": str(ROOT), "NUMBA_NUM_THREADS": "1"}
+    proc = subprocess.Popen(command, cwd=ROOT, env=env, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True, preexec_fn=interruptible)
+    try:
+        for line in proc.stdout:  # the first curve point: a checkpoint is being kept
+            if " throws, success " in line:
+                break
+        proc.send_signal(signal.SIGINT)
+        _, err = proc.communicate(timeout=120)
+    finally:
+        proc.kill()
+    assert proc.returncode == 130 and "Traceback" not in err, err
+    assert "interrupted (Ctrl-C)" in err and "the same command continues" in err
+    done = subprocess.run(command, cwd=ROOT, env=env, capture_output=True, text=True,
+                          timeout=120)
+    assert done.returncode == 0, done.stderr
+    kept = json.loads(result_of(tmp_path / "res", "sac-0").read_text())
+    assert [p["throws"] for p in kept["curve"]] == [64, 128, 192, 256, 320]
 
 
 @pytest.mark.parametrize("under", ["", "sub"])
@@ -197,8 +228,7 @@ def test_learned_keeps_each_task_as_soon_as_it_is_analysed(two_tasks, monkeypatc
         return report(task_id)
 
     monkeypatch.setattr(learned, "analyse", analyse)
-    with pytest.raises(KeyboardInterrupt):
-        learned.main(["--quick", "--out", str(two_tasks)])
+    assert learned.main(["--quick", "--out", str(two_tasks)]) == 130
     kept = json.loads((two_tasks / "learned.json").read_text())
     assert [r["task"] for r in kept["tasks"]] == [TASK]
 
