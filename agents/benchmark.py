@@ -52,8 +52,7 @@ from typing import Any
 import numpy as np
 
 from agents.hyperparams import ALGOS, BUDGETS, algorithm_kwargs, entry
-from agents.kept import RunError, differences, interrupted, read_json, readable_zip
-from dice_env.files import write_json
+from agents.kept import RunError, differences, interrupted, read_json, readable_zip, write_json
 
 ROOT = Path(__file__).resolve().parent.parent
 RESULTS = ROOT / "benchmarks" / "results"

@@ -26,7 +26,7 @@ from pathlib import Path
 from typing import Any
 
 from agents.hyperparams import HYPERPARAMS, algorithm_kwargs
-from dice_env.files import write_json
+from agents.kept import write_json
 from dice_env.model.die import Die
 
 # train.py's presets of PPO in agents.hyperparams.HYPERPARAMS.

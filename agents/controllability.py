@@ -22,9 +22,9 @@ import numpy as np
 from agents.baselines import HandThrower, Thrower
 from agents.episodes import Batch, PolicyThrower
 from agents.evaluate import clustered
+from agents.kept import write_text
 from agents.oracle import CEM, score, score_noise, search
 from dice_env.envs.task import ThrowTask, make_task
-from dice_env.files import write_text
 from dice_env.intervals import wilson_bounds
 
 HEIGHTS = (0.015, 0.02, 0.03, 0.05, 0.15)  # release height of the die's centre (m)

@@ -24,11 +24,11 @@ import numpy as np
 from agents.baselines import HandThrower, RandomThrower, Thrower, decode
 from agents.config import Config, field_docs
 from agents.episodes import Batch, PolicyThrower, make_eval_task, throw_impacts
+from agents.kept import write_json
 from agents.oracle import CEM, score, score_noise, search
 from agents.progress import bar
 from agents.report import headline_table, verdict, write_report
 from dice_env.envs.task import ThrowTask
-from dice_env.files import write_json
 from dice_env.intervals import Z95, wilson_bounds
 
 ORACLE_SCORE_SAMPLES = 16  # fresh noise draws per oracle observation

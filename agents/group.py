@@ -9,7 +9,7 @@ from typing import Any
 import numpy as np
 
 from agents.config import Config
-from dice_env.files import write_json, write_text
+from agents.kept import write_json, write_text
 
 THROWERS = ("PPO", "hand-written", "oracle", "random")
 

@@ -1,12 +1,20 @@
-"""Files the agents keep for later, read back: refused by name, with what to do, when unusable."""
+"""Files the agents keep for later: written whole, read back or refused by name.
+
+Written through :func:`dice_env.viewer.disk.write_atomically` (a name unique to the process,
+renamed into place); an unusable one is refused with what to do (:class:`RunError`).
+"""
 
 from __future__ import annotations
 
+import io
 import json
 import sys
 import zipfile
+from collections.abc import Callable
 from pathlib import Path
-from typing import Any
+from typing import IO, Any
+
+from dice_env.viewer.disk import write_atomically
 
 INTERRUPTED = 130  # exit status after Ctrl-C (128 + SIGINT), as shells report it
 
@@ -49,3 +57,22 @@ def interrupted(what_is_kept: str) -> int:
     """Say after Ctrl-C what is kept and how to go on (``what_is_kept``); :data:`INTERRUPTED`."""
     print(f"\ninterrupted (Ctrl-C): {what_is_kept}", file=sys.stderr)
     return INTERRUPTED
+
+
+def write_text(path: Path, text: str) -> Path:
+    """``text`` (UTF-8) written whole to ``path``."""
+    write_atomically(Path(path), text.encode())
+    return path
+
+
+def write_json(path: Path, data: Any, indent: int | None = 1) -> Path:
+    """``data`` as JSON (and a final newline) written whole to ``path``."""
+    return write_text(path, json.dumps(data, indent=indent) + "\n")
+
+
+def write_saved(path: Path, save: Callable[[IO[bytes]], Any]) -> Path:
+    """What ``save(file)`` writes (a model's ``save``, a figure's ``savefig``), written whole."""
+    buffer = io.BytesIO()
+    save(buffer)
+    write_atomically(Path(path), buffer.getvalue())
+    return path

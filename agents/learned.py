@@ -41,9 +41,8 @@ from agents.benchmark import (
 )
 from agents.episodes import Batch, PolicyThrower
 from agents.evaluate import by_turn, compare, paired_difference, strategy, strategy_table, tilt
-from agents.kept import RunError, interrupted, read_json
+from agents.kept import RunError, interrupted, read_json, write_json
 from agents.oracle import CEM, task_budget
-from dice_env.files import write_json
 
 SEED = 0  # benchmarks/tasks.py's: the same throws
 CRAPS = "DiceThrowCraps-v0"

@@ -7,7 +7,7 @@ from pathlib import Path
 from typing import Any
 
 from agents.config import Config
-from dice_env.files import write_text
+from agents.kept import write_text
 
 
 def training_summary(run: Path) -> tuple[int, float]:

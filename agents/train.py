@@ -50,10 +50,9 @@ from stable_baselines3.common.vec_env import VecEnv
 
 import dice_env  # noqa: F401  (registers DiceThrow-v0)
 from agents.config import Config, is_run_folder, parse_config
-from agents.kept import INTERRUPTED
+from agents.kept import INTERRUPTED, write_json, write_saved, write_text
 from agents.progress import Bar
 from dice_env.envs.sb3 import make_sb3_env
-from dice_env.files import write_atomically, write_json, write_text
 
 CHECKPOINT_PREFIX = "ppo"
 
@@ -280,9 +279,9 @@ def _learn(model: PPO, config: Config, run: Path, eval_env: VecEnv, fresh: bool)
         interrupted = True  # that checkpoint is rewritten whole below (the same step)
     finally:
         (run / "checkpoints").mkdir(exist_ok=True)
-        write_atomically(run / "checkpoints" / f"{CHECKPOINT_PREFIX}_{model.num_timesteps}"
-                         "_steps.zip", model.save)
-        write_atomically(run / "model.zip", model.save)
+        write_saved(run / "checkpoints" / f"{CHECKPOINT_PREFIX}_{model.num_timesteps}_steps.zip",
+                    model.save)
+        write_saved(run / "model.zip", model.save)
         log = {"throws": model.num_timesteps, "seconds": time.perf_counter() - start,
                "interrupted": interrupted}
         with open(run / "training.jsonl", "a") as f:

@@ -34,8 +34,7 @@ from agents.benchmark import (
     out_problem,
 )
 from agents.hyperparams import ALGOS, SEARCH, benchmark_entry
-from agents.kept import RunError, interrupted
-from dice_env.files import write_json
+from agents.kept import RunError, interrupted, write_json
 
 TASK = "DiceThrow-v0"
 TUNE_BUDGET = 40_000

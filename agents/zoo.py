@@ -27,7 +27,7 @@ from typing import Any
 import yaml
 
 from agents.hyperparams import ALGOS, HYPERPARAMS, entry
-from dice_env.files import write_text
+from agents.kept import write_text
 
 ZOO = Path(__file__).resolve().parent / "zoo_configs"
 HEADER = "# Written by `python -m agents.zoo` from agents/hyperparams.py; do not edit by hand.\n"

@@ -63,6 +63,19 @@ def test_two_outs_of_the_same_name_are_two_runs_and_say_what_made_them(tmp_path)
     assert second["curve_points"] == benchmark.CURVE_POINTS and second["commit"]
 
 
+def test_results_and_checkpoints_are_renamed_into_place_whole(tmp_path, monkeypatch):
+    real, renamed = os.replace, []
+
+    def rename(source, target):
+        renamed.append(Path(target).name)
+        real(source, target)
+
+    monkeypatch.setattr(os, "replace", rename)
+    bench(tmp_path / "res")
+    assert {"ppo-0.json", "progress.json"} <= set(renamed)
+    assert any(name.startswith("checkpoint-320") for name in renamed)
+
+
 def test_a_smoke_result_is_refused_by_a_real_run(tmp_path, capsys):
     out = tmp_path / "res"
     bench(out)
