@@ -300,6 +300,11 @@ def _check_resume(config: Config) -> None:
     run = Path(str(config.resume))
     if not is_run_folder(run):
         raise OptionError("resume", f"{run} is not a run folder (no config.json)")
+    try:
+        Config.load(run / "config.json")
+    except (OSError, ValueError, TypeError) as error:  # not JSON, or not train.py's options
+        raise OptionError("resume", f"{run / 'config.json'} is not a run's config "
+                          f"({type(error).__name__}: {error})") from None
     defaults = Config()
     given = [f.name for f in dataclasses.fields(Config)
              if f.name not in RESUME_OPTIONS and getattr(config, f.name) != getattr(defaults,
