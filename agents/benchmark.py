@@ -460,23 +460,39 @@ def main(argv: Sequence[str] | None = None) -> int:
     if args.table and not (args.out / "tasks.json").is_file():
         parser.error(f"argument --table: {args.out} has no tasks.json (the random, rule and "
                      "oracle rates): copy benchmarks/results/tasks.json there")
-    runs = [benchmark_run(task_id, algo, seed, args.out, args.quick)
-            for task_id in args.tasks for algo in args.algos for seed in args.seeds]
+    runs = [] if args.table else [benchmark_run(task_id, algo, seed, args.out, args.quick)
+                                  for task_id in args.tasks for algo in args.algos
+                                  for seed in args.seeds]
     try:
-        for run in [] if args.table else runs:
-            run.check(args.fresh)
-        _train(runs if not args.table else [])
+        check(runs, args.fresh)
+        _train(runs)
         if summarise:
             _summarise(args.out, args.quick)
         else:
             print(f"no summary: {args.out} has no tasks.json (the random, rule and oracle "
-                  "rates); copy benchmarks/results/tasks.json there and run --table")
+                  "rates); copy benchmarks/results/tasks.json there and add --table")
     except RunError as error:
         parser.error(str(error))
     except KeyboardInterrupt:
         return interrupted("every finished run and the last curve point of the one in training "
                            "are kept; the same command continues")
     return 0
+
+
+def check(runs: list[Run], fresh: bool) -> None:
+    """Every run's kept files checked (:meth:`Run.check`) before any training.
+
+    One :class:`RunError`: the first run refused, and how many more are.
+    """
+    refused = []
+    for run in runs:
+        try:
+            run.check(fresh)
+        except RunError as error:
+            refused.append(error)
+    if refused:
+        more = f" ({len(refused) - 1} more refused too)" if len(refused) > 1 else ""
+        raise RunError(f"{refused[0]}{more}")
 
 
 def _train(runs: list[Run]) -> None:

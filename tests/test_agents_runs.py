@@ -86,11 +86,12 @@ def test_results_and_checkpoints_are_renamed_into_place_whole(tmp_path, monkeypa
 
 def test_a_smoke_result_is_refused_by_a_real_run(tmp_path, capsys):
     out = tmp_path / "res"
-    bench(out)
+    bench(out, seeds=("0", "1"))
     line = refused(capsys, lambda: benchmark.main(["--out", str(out), "--tasks", TASK, "--algos",
-                                                   "ppo", "--seeds", "0"]))
+                                                   "ppo", "--seeds", "0", "1"]))
     assert str(result_of(out)) in line and "quick True there, False here" in line
     assert "budget 320 there" in line and "pass --fresh" in line
+    assert line.endswith("(1 more refused too)")
 
 
 @pytest.mark.parametrize(("key", "value", "said"), [
