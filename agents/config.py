@@ -26,6 +26,7 @@ from pathlib import Path
 from typing import Any
 
 from agents.hyperparams import HYPERPARAMS, algorithm_kwargs
+from agents.kept import write_json
 from dice_env.model.die import Die
 
 # train.py's presets of PPO in agents.hyperparams.HYPERPARAMS.
@@ -168,7 +169,7 @@ class Config:
 
     def save(self, path: Path) -> None:
         """Write the config as JSON."""
-        path.write_text(json.dumps(dataclasses.asdict(self), indent=2) + "\n")
+        write_json(path, dataclasses.asdict(self), indent=2)
 
     @classmethod
     def load(cls, path: Path) -> Config:
@@ -299,6 +300,11 @@ def _check_resume(config: Config) -> None:
     run = Path(str(config.resume))
     if not is_run_folder(run):
         raise OptionError("resume", f"{run} is not a run folder (no config.json)")
+    try:
+        Config.load(run / "config.json")
+    except (OSError, ValueError, TypeError) as error:  # not JSON, or not train.py's options
+        raise OptionError("resume", f"{run / 'config.json'} is not a run's config "
+                          f"({type(error).__name__}: {error})") from None
     defaults = Config()
     given = [f.name for f in dataclasses.fields(Config)
              if f.name not in RESUME_OPTIONS and getattr(config, f.name) != getattr(defaults,

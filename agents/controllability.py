@@ -22,6 +22,7 @@ import numpy as np
 from agents.baselines import HandThrower, Thrower
 from agents.episodes import Batch, PolicyThrower
 from agents.evaluate import clustered
+from agents.kept import write_text
 from agents.oracle import CEM, score, score_noise, search
 from dice_env.envs.throw_task import ThrowTask, make_task
 from dice_env.intervals import wilson_bounds
@@ -132,7 +133,7 @@ def write_markdown(path: Path, maps: dict[str, np.ndarray], heights: tuple[float
               "observation scored on 16 fresh noise draws), Wilson on the pooled throws divided "
               "by the design effect of the observations (agents/evaluate.py, `clustered`).", "",
               f"Made with `{command}` in {seconds / 60:.0f} min.", ""]
-    path.write_text("\n".join(lines))
+    write_text(path, "\n".join(lines))
     return path
 
 

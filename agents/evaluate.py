@@ -24,6 +24,7 @@ import numpy as np
 from agents.baselines import HandThrower, RandomThrower, Thrower, decode
 from agents.config import Config, field_docs
 from agents.episodes import Batch, PolicyThrower, make_eval_task, throw_impacts
+from agents.kept import write_json
 from agents.oracle import CEM, score, score_noise, search
 from agents.progress import bar
 from agents.report import headline_table, verdict, write_report
@@ -353,7 +354,7 @@ def evaluate_run(
         "gifs": [g.name for g in gifs],
         "seconds": time.perf_counter() - start,
     }
-    (run / "evaluation.json").write_text(json.dumps(evaluation, indent=2) + "\n")
+    write_json(run / "evaluation.json", evaluation, indent=2)
     write_report(run, config, evaluation, figures, gifs)
     log(f"wrote {run / 'report.md'}")
     log("\n".join(verdict(evaluation)))

@@ -9,6 +9,7 @@ from typing import Any
 import numpy as np
 
 from agents.config import Config
+from agents.kept import write_json, write_text
 
 THROWERS = ("PPO", "hand-written", "oracle", "random")
 
@@ -116,7 +117,7 @@ def write_group_report(group: Path) -> Path:
     lines += ["Runs: " + ", ".join(f"[{m.name}]({m.name}/report.md)" for _, m, _ in results),
               ""]
     path = group / "report.md"
-    path.write_text("\n".join(lines))
+    write_text(path, "\n".join(lines))
     summary = {"config": json.loads((group / "config.json").read_text()),
                "commit": code_version(), "settings": [
                    {"setting": setting,
@@ -125,5 +126,5 @@ def write_group_report(group: Path) -> Path:
                                              if e["common"]],
                     "evaluation_seconds": [e["seconds"] for e in evaluations]}
                    for setting, evaluations in by_setting.values()]}
-    (group / "summary.json").write_text(json.dumps(summary, indent=1) + "\n")
+    write_json(group / "summary.json", summary)
     return path

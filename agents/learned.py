@@ -2,25 +2,24 @@ r"""What the benchmark's learned throwers do: each task's best run against the o
 
     python -m agents.learned          # after python -m agents.benchmark; about 10 min on 2 cores
 
-For each named task the best algorithm (highest mean final success over its seeds) and its best
-seed are loaded from ``runs/benchmark/`` and compared on ``benchmarks/tasks.py``'s throws
-(:func:`agents.evaluate.compare`) with the oracle searched from their actions
-(:func:`agents.oracle.task_budget`), both scored on the same fresh throws: their success with
-intervals and the paired difference; what each does on those observations (medians of the
-intended release speed, its vertical part and the spin; for one die, per class of how far the
+For each named task the best seed of the best algorithm (highest mean final success over its seeds)
+is loaded from its last checkpoint (checked to be the one its JSON was made with) and compared on
+``benchmarks/tasks.py``'s throws (:func:`agents.evaluate.compare`) with the oracle searched from
+its actions (:func:`agents.oracle.task_budget`), both scored on the same fresh throws: their
+success with intervals and the paired difference; what each does on those observations (medians of
+the intended release speed, its vertical part and the spin; for one die, per class of how far the
 target must turn, the push along the roll direction and the spin axis against the target's tilt,
 :func:`agents.evaluate.strategy`); the learned thrower's failures on all the throws (success per
 turn class or per target, void reasons). For the craps task (avoid a seven), P(seven) of the
 learned throw and of the set throw against the hand's noise (:data:`CRAPS_NOISES`), Wilson 95 %
 intervals, and the largest noise at which the interval is still wholly below 1/6. Writes
-``benchmarks/results/learned.json``.
+``benchmarks/results/learned.json`` after each task.
 """
 
 from __future__ import annotations
 
 import argparse
 import collections
-import json
 import sys
 import time
 from collections.abc import Sequence
@@ -30,9 +29,19 @@ from typing import Any
 import numpy as np
 
 from agents.baselines import rule_throwers
-from agents.benchmark import FINAL_THROWS, RESULTS, RUNS, algorithm, episode, evaluation
+from agents.benchmark import (
+    ALGOS,
+    FINAL_THROWS,
+    RESULTS,
+    algorithm,
+    benchmark_run,
+    episode,
+    evaluation,
+    kept_runs,
+)
 from agents.episodes import Batch, PolicyThrower
 from agents.evaluate import by_turn, compare, paired_difference, strategy, strategy_table, tilt
+from agents.kept import RunError, interrupted, read_json, write_json
 from agents.oracle import CEM, task_budget
 
 SEED = 0  # benchmarks/tasks.py's: the same throws
@@ -44,25 +53,39 @@ QUICK = {"throws": 16, "observations": 2, "cem": CEM(
     validation_samples=4)}
 
 
-def best_run(task_id: str, out: Path = RESULTS) -> dict[str, Any]:
-    """The kept result of the task's best algorithm's best seed."""
-    runs = [json.loads(p.read_text()) for p in sorted((out / "baselines" / task_id).glob("*.json"))]
-    if not runs:
-        raise SystemExit(f"no kept run of {task_id}: run python -m agents.benchmark first")
-    by_algo = collections.defaultdict(list)
-    for r in runs:
-        by_algo[r["algo"]].append(r)
+def best_run(task_id: str, out: Path = RESULTS, quick: bool = False) -> dict[str, Any]:
+    """The kept result of the task's best algorithm's best seed.
+
+    :class:`RunError` if the task has no kept run or one that is not the benchmark's
+    (``quick``: the smoke run's).
+    """
+    by_algo = {algo: runs for algo in ALGOS if (runs := kept_runs(out, task_id, algo, quick))}
+    if not by_algo:
+        raise RunError(f"no kept run of {task_id} in {out}: run python -m agents.benchmark "
+                       f"--tasks {task_id} first")
     algo = max(by_algo, key=lambda a: np.mean([r["final"]["rate"] for r in by_algo[a]]))
     return max(by_algo[algo], key=lambda r: r["final"]["rate"])
 
 
-def load_model(run: dict[str, Any], out: Path = RESULTS) -> Any:
-    """The final model of a kept run (saved at its last curve point)."""
-    path = RUNS / out.name / run["task"] / f"{run['algo']}-{run['seed']}" / "model.zip"
-    if not path.exists():
-        raise SystemExit(f"{path} is missing: delete its JSON and rerun python -m agents.benchmark "
-                         f"--tasks {run['task']} --algos {run['algo']} --seeds {run['seed']}")
-    return algorithm(run["algo"]).load(path, device="cpu")
+def model_path(run: dict[str, Any], out: Path = RESULTS) -> Path:
+    """The final model of a kept run (saved at its last curve point), checked to be its.
+
+    :class:`RunError` naming the command that rebuilds it when it is missing, unreadable or of
+    another run.
+    """
+    rebuild = (f"rerun python -m agents.benchmark --tasks {run['task']} --algos {run['algo']} "
+               f"--seeds {run['seed']} --fresh" + (" --quick" if run.get("quick") else "")
+               + f" --out {out}")
+    kept = benchmark_run(run["task"], run["algo"], run["seed"], out, bool(run.get("quick")))
+    kept.identity = {key: run.get(key) for key in kept.identity}
+    try:
+        progress = kept.progress()
+    except RunError as error:
+        raise RunError(f"{error} (its model is not the one {kept.result} was made with): "
+                       f"{rebuild}") from None
+    if progress is None:
+        raise RunError(f"{kept.work} holds no model: {rebuild}")
+    return kept.work / progress["checkpoint"] / "model.zip"
 
 
 def release(actions: np.ndarray, task: Any) -> dict[str, float]:
@@ -80,8 +103,8 @@ def analyse(task_id: str, out: Path = RESULTS, quick: bool = False) -> dict[str,
 
     ``quick``: a smoke run (:data:`QUICK`: few throws, a tiny search).
     """
-    run = best_run(task_id, out)
-    model = load_model(run, out)
+    run = best_run(task_id, out, quick)
+    model = algorithm(run["algo"]).load(model_path(run, out), device="cpu")
     task, _ = evaluation(task_id, 1, SEED)
     observations, cem = task_budget(task)
     throws = FINAL_THROWS
@@ -148,37 +171,54 @@ def sevens(model: Any, throws: int = CRAPS_THROWS) -> dict[str, Any]:
 def main(argv: Sequence[str] | None = None) -> int:
     """Analyse the tasks (default: every task with kept runs) into ``learned.json``.
 
-    Each task's entry (with its own time and commit) replaces that task's in the file; the
-    other tasks' are kept.
+    Each task's entry (with its own time and commit) replaces that task's in the file, which is
+    written after each task; the other tasks' are kept. Every argument, kept run and model is
+    checked first: exit 2 with one line naming what cannot be used and how to go on.
     """
     from dice_env.envs.tasks import TASKS
     from dice_env.provenance import code_version
 
     parser = argparse.ArgumentParser(prog="python -m agents.learned",
                                      description=__doc__.split("\n")[0])
-    parser.add_argument("--tasks", nargs="+", default=None, help="task ids (default: all kept)")
+    parser.add_argument("--tasks", nargs="+", default=None, choices=[t.id for t in TASKS],
+                        help="task ids (default: all kept)")
     parser.add_argument("--out", type=Path, default=RESULTS, help="the benchmark's results folder")
     parser.add_argument("--quick", action="store_true",
                         help="a smoke run: few throws, a tiny search, numbers meaningless")
     args = parser.parse_args(argv)
     if args.quick and args.out.resolve() == RESULTS.resolve():
         parser.error("--quick needs --out: its numbers must not replace the kept results")
+    if not (args.out / "baselines").is_dir():
+        parser.error(f"argument --out: {args.out} holds no baselines/ folder: pass the folder "
+                     "python -m agents.benchmark --out wrote")
     kept = [t.id for t in TASKS if (args.out / "baselines" / t.id).is_dir()]
+    if not (args.tasks or kept):
+        parser.error(f"argument --out: {args.out} holds no kept run: run python -m "
+                     "agents.benchmark first")
     path = args.out / "learned.json"
-    reports = {r["task"]: r for r in
-               (json.loads(path.read_text())["tasks"] if path.exists() else [])}
+    try:
+        reports = {r["task"]: r for r in (read_json(path, "delete it").get("tasks", [])
+                                          if path.exists() else [])}
+        for task_id in args.tasks or kept:  # before any work: each task's best model is there
+            model_path(best_run(task_id, args.out, args.quick), args.out)
+    except RunError as error:
+        parser.error(str(error))
     for task_id in args.tasks or kept:
         start = time.perf_counter()
-        r = analyse(task_id, args.out, args.quick)
+        try:
+            r = analyse(task_id, args.out, args.quick)
+        except KeyboardInterrupt:
+            return interrupted(f"{path} keeps the tasks analysed before {task_id}; --tasks "
+                               "analyses the others")
         reports[task_id] = {**r, "seconds": time.perf_counter() - start, "commit": code_version()}
         oracle = r["on_oracle_throws"]["oracle"]["rate"]
         print(f"{task_id:<24} {r['algo'].upper()} seed {r['seed']}: {r['learned']:.3f}; on the "
               f"oracle's throws {r['on_oracle_throws']['learned']['rate']:.3f} against the "
               f"oracle's {oracle:.3f}", flush=True)
-    ordered = [reports[t.id] for t in TASKS if t.id in reports]
-    commits = " ".join(sorted({r["commit"] for r in ordered}))  # the entries' own
-    path.write_text(json.dumps({"tasks": ordered, "command": "python -m agents.learned",
-                                "commit": commits}, indent=1) + "\n")
+        ordered = [reports[t.id] for t in TASKS if t.id in reports]
+        commits = " ".join(sorted({r["commit"] for r in ordered}))  # the entries' own
+        write_json(path, {"tasks": ordered, "command": "python -m agents.learned",
+                          "commit": commits})
     print(f"wrote {path}")
     return 0
 

@@ -13,6 +13,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from agents.episodes import throw_impacts
+from agents.kept import write_saved
 
 COLOURS = {"PPO": "tab:blue", "hand-written": "tab:orange", "random": "tab:gray",
            "oracle": "tab:green"}
@@ -23,7 +24,7 @@ def save(fig: Any, path: Path) -> Path:
     """Lay out ``fig``, write it as a PNG at ``path`` (creating the folder), close it."""
     fig.tight_layout()
     path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=110)
+    write_saved(path, lambda f: fig.savefig(f, format="png", dpi=110))
     plt.close(fig)
     return path
 

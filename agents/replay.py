@@ -22,6 +22,7 @@ import numpy as np
 from agents.baselines import HandThrower, RandomThrower
 from agents.config import Config
 from agents.episodes import Batch, PolicyThrower, make_eval_task
+from agents.kept import RunError, readable_zip
 from dice_env.envs.throw_task import ThrowTask
 
 FPS = 30  # frames per second of the GIFs (the env's render_fps)
@@ -98,17 +99,14 @@ def replay(run: Path, throws: int, seed: int, target: int | None, thrower: str,
 
     ``html``: one page of them instead, failures first.
     """
-    from stable_baselines3 import PPO
-
     from dice_env.envs.video import save_video
 
-    config = Config.load(run / "config.json")
-    task, episode = make_eval_task(config)
+    task, episode = make_eval_task(Config.load(run / "config.json"))
     if target is not None:
         episode["target_face"] = target
     batch = Batch.sample(task, throws, np.random.default_rng(seed), **episode)
     if thrower == "PPO":
-        act = PolicyThrower(PPO.load(run / "model.zip", device="cpu"))
+        act = PolicyThrower(load_model(run / "model.zip"))
     elif thrower == "hand-written":
         act = HandThrower(task)
     else:
@@ -130,6 +128,17 @@ def replay(run: Path, throws: int, seed: int, target: int | None, thrower: str,
     return paths
 
 
+def load_model(path: Path) -> Any:
+    """The PPO model saved at ``path``; :class:`RunError` naming it if SB3 cannot load it."""
+    from stable_baselines3 import PPO
+
+    try:
+        return PPO.load(path, device="cpu")
+    except Exception as error:  # a foreign or corrupt file fails in many ways
+        raise RunError(f"{path} is not a PPO model ({type(error).__name__}: {error}): retrain "
+                       "the run, or pass --thrower random") from None
+
+
 def write_page(task: ThrowTask, batch: Batch, actions: np.ndarray, thrower: str,
                path: Path) -> Path:
     """The page of ``batch``'s throws by ``thrower`` (its ``actions``), failures first."""
@@ -138,7 +147,7 @@ def write_page(task: ThrowTask, batch: Batch, actions: np.ndarray, thrower: str,
 
     recordings = task_throws(task, actions, batch.targets, batch.hands, batch.noise)
     success = np.array([rec.outcome["success"] for rec in recordings])
-    ordered = [recordings[i] for i in pick_throws(success, len(recordings))]
+    ordered = [recordings[i] for i in np.argsort(success, kind="stable")]  # failures first
     for k, rec in enumerate(ordered):
         print(f"throw {k}: target {rec.outcome['target']}, landed {rec.outcome['faces']} "
               f"({'success' if rec.outcome['success'] else 'failure'})")
@@ -170,25 +179,36 @@ def main(argv: list[str] | None = None) -> None:
     args = parser.parse_args(argv)
     if not (args.run / "config.json").is_file():
         parser.error(f"argument run: {args.run} is not a run folder (no config.json)")
-    if args.thrower == "PPO" and not (args.run / "model.zip").is_file():
-        parser.error(f"argument run: {args.run} has no model.zip")
+    if args.thrower == "PPO":
+        try:
+            readable_zip(args.run / "model.zip", "retrain the run, or pass --thrower random")
+        except RunError as error:
+            parser.error(f"argument run: {error}")
     if args.throws < 1:
         parser.error(f"argument --throws: must be an integer >= 1, got {args.throws}")
     if args.seed < 0:
         parser.error(f"argument --seed: must be an integer >= 0, got {args.seed}")
-    task = make_eval_task(Config.load(args.run / "config.json"))[0]
+    try:
+        task = make_eval_task(Config.load(args.run / "config.json"))[0]
+    except (OSError, ValueError, TypeError) as error:  # not JSON, or not train.py's options
+        parser.error(f"argument run: {args.run / 'config.json'} is not a run's config "
+                     f"({type(error).__name__}: {error}): pass a folder train.py wrote")
     if args.thrower == "hand-written" and task.n_dice > 1:
         parser.error(f"argument --thrower: hand-written is a one-die rule; the run throws "
                      f"{task.n_dice} dice (target {task.target!r}; use PPO or random)")
     if args.target is not None:
         if task.n_dice > 1:
             parser.error("argument --target: fixes one die's face; the run throws "
-                         f"{task.n_dice} dice (fix theirs with --env target_sum or target_face)")
+                         f"{task.n_dice} dice, whose targets are the run's own (train.py's "
+                         "--env target_sum=... or target_face=... fixes them)")
         faces = task.n_faces
         if not 1 <= args.target <= faces:
             parser.error(f"argument --target: must be a face of the run's die, in [1, {faces}], "
                          f"got {args.target}")
-    replay(args.run, args.throws, args.seed, args.target, args.thrower, args.out, args.html)
+    try:
+        replay(args.run, args.throws, args.seed, args.target, args.thrower, args.out, args.html)
+    except RunError as error:
+        parser.error(f"argument run: {error}")
 
 
 if __name__ == "__main__":

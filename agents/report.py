@@ -7,6 +7,7 @@ from pathlib import Path
 from typing import Any
 
 from agents.config import Config
+from agents.kept import write_text
 
 
 def training_summary(run: Path) -> tuple[int, float]:
@@ -201,5 +202,5 @@ def write_report(run: Path, config: Config, evaluation: dict[str, Any],
                  if evaluation.get("oracle_seconds") else "."),
               f"Reproduce: `python -m agents.evaluate {run}`.", ""]
     path = run / "report.md"
-    path.write_text("\n".join(lines))
+    write_text(path, "\n".join(lines))
     return path

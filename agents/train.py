@@ -50,11 +50,11 @@ from stable_baselines3.common.vec_env import VecEnv
 
 import dice_env  # noqa: F401  (registers DiceThrow-v0)
 from agents.config import Config, is_run_folder, parse_config
+from agents.kept import INTERRUPTED, write_json, write_saved, write_text
 from agents.progress import Bar
 from dice_env.envs.sb3 import make_sb3_env
 
 CHECKPOINT_PREFIX = "ppo"
-INTERRUPTED = 130  # exit status after Ctrl-C (128 + SIGINT), as shells report it
 
 
 class Interrupted(Exception):
@@ -150,9 +150,9 @@ def evaluate_start(model: PPO, eval_env: VecEnv, episodes: int, run: Path,
                                  return_episode_rewards=True)
     success = float(np.mean(rewards))  # the evaluation env has no shaping: reward = success
     (run / "eval").mkdir(exist_ok=True)
-    (run / "eval" / "start.json").write_text(json.dumps(
-        {"timesteps": 0, "success": success, "episodes": episodes,
-         "warm_start": warm_start}) + "\n")
+    write_json(run / "eval" / "start.json", {"timesteps": 0, "success": success,
+                                             "episodes": episodes, "warm_start": warm_start},
+               indent=None)
     return success
 
 
@@ -193,7 +193,7 @@ def new_run(config: Config) -> Path:
         print(f"removed the earlier {run} (--overwrite)")
     run.mkdir(parents=True, exist_ok=False)
     config.save(run / "config.json")
-    (run / "hyperparams.json").write_text(json.dumps(config.hyperparams(), indent=2) + "\n")
+    write_json(run / "hyperparams.json", config.hyperparams(), indent=2)
     return run
 
 
@@ -278,8 +278,10 @@ def _learn(model: PPO, config: Config, run: Path, eval_env: VecEnv, fresh: bool)
             raise
         interrupted = True  # that checkpoint is rewritten whole below (the same step)
     finally:
-        model.save(run / "checkpoints" / f"{CHECKPOINT_PREFIX}_{model.num_timesteps}_steps")
-        model.save(run / "model")
+        (run / "checkpoints").mkdir(exist_ok=True)
+        write_saved(run / "checkpoints" / f"{CHECKPOINT_PREFIX}_{model.num_timesteps}_steps.zip",
+                    model.save)
+        write_saved(run / "model.zip", model.save)
         log = {"throws": model.num_timesteps, "seconds": time.perf_counter() - start,
                "interrupted": interrupted}
         with open(run / "training.jsonl", "a") as f:
@@ -324,7 +326,7 @@ def write_interrupted(error: Interrupted, resume: Path) -> Path:
                   f"Evaluate: `python -m agents.evaluate {run}`"
                   + (f", or `python train.py --resume {resume}`" if resume != run else "")]
     path = run / "report.md"
-    path.write_text("\n".join(lines) + "\n")
+    write_text(path, "\n".join(lines) + "\n")
     return path
 
 
@@ -382,10 +384,9 @@ def main(argv: list[str] | None = None) -> None:
         top = top or Path(config.runs) / str(config.name)
         path = write_interrupted(error, top)
         if top != error.run:
-            (top / "report.md").write_text(
-                f"# {top.name}: interrupted\n\n**The group was interrupted (Ctrl-C) in "
-                f"{error.run.name}** ({error.stage}); see its report.md. Continue: "
-                f"`python train.py --resume {top}`\n")
+            write_text(top / "report.md", f"# {top.name}: interrupted\n\n**The group was "
+                       f"interrupted (Ctrl-C) in {error.run.name}** ({error.stage}); see its "
+                       f"report.md. Continue: `python train.py --resume {top}`\n")
         print(f"\n{error}: saved; wrote {path}; continue with: python train.py --resume {top}",
               file=sys.stderr)
         sys.exit(INTERRUPTED)

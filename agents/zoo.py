@@ -27,6 +27,7 @@ from typing import Any
 import yaml
 
 from agents.hyperparams import ALGOS, HYPERPARAMS, entry
+from agents.kept import write_text
 
 ZOO = Path(__file__).resolve().parent / "zoo_configs"
 HEADER = "# Written by `python -m agents.zoo` from agents/hyperparams.py; do not edit by hand.\n"
@@ -69,7 +70,7 @@ def main(argv: list[str] | None = None) -> int:
         return 1 if stale else 0
     ZOO.mkdir(exist_ok=True)
     for path, text in texts.items():
-        path.write_text(text)
+        write_text(path, text)
         print(f"wrote {path}")
     return 0
 

@@ -1,11 +1,13 @@
 """python -m agents.benchmark and agents.learned: runs, resuming, the summary, the analysis."""
 
 import json
+import shutil
 
 import pytest
 
 from agents import benchmark, learned
 from agents.hyperparams import BUDGETS, HYPERPARAMS, algorithm_kwargs, entry
+from agents.kept import RunError
 from dice_env.envs.tasks import TASKS
 
 TASK = "DiceThrow-v0"
@@ -34,8 +36,7 @@ def test_every_task_has_a_budget_and_every_algorithm_an_entry():
 
 
 @pytest.mark.parametrize("algo", ["ppo", "sac"])
-def test_a_run_evaluates_at_each_curve_point_and_on_the_final_throws(tmp_path, algo, monkeypatch):
-    monkeypatch.setattr(benchmark, "RUNS", tmp_path / "runs")
+def test_a_run_evaluates_at_each_curve_point_and_on_the_final_throws(tmp_path, algo):
     result = benchmark.train(_run(tmp_path, algo), log=lambda _: None)
     curve = result["curve"]
     assert len(curve) == benchmark.CURVE_POINTS
@@ -47,8 +48,7 @@ def test_a_run_evaluates_at_each_curve_point_and_on_the_final_throws(tmp_path, a
     assert curve[-1]["train_seconds"] == result["train_seconds"] > 0
 
 
-def test_an_interrupted_run_continues_from_its_last_checkpoint(tmp_path, monkeypatch):
-    monkeypatch.setattr(benchmark, "RUNS", tmp_path / "runs")
+def test_an_interrupted_run_continues_from_its_last_checkpoint(tmp_path):
     seen = []
 
     def stop_after_two(line):
@@ -68,8 +68,7 @@ def test_an_interrupted_run_continues_from_its_last_checkpoint(tmp_path, monkeyp
     assert result["throws"] >= 320
 
 
-def test_the_command_keeps_one_json_per_run_and_skips_kept_ones(tmp_path, monkeypatch, capsys):
-    monkeypatch.setattr(benchmark, "RUNS", tmp_path / "runs")
+def test_the_command_keeps_one_json_per_run_and_skips_kept_ones(tmp_path, capsys):
     out = tmp_path / "results"
     args = ["--quick", "--out", str(out), "--tasks", TASK, "--algos", "td3", "--seeds", "0"]
     assert benchmark.main(args) == 0
@@ -91,11 +90,13 @@ def test_the_summary_is_made_from_the_kept_runs_and_tasks_json(tmp_path):
     out = tmp_path / "results"
     folder = out / "baselines" / TASK
     folder.mkdir(parents=True)
+    shutil.copy(benchmark.RESULTS / "tasks.json", out)
     for seed, rate in enumerate((0.5, 0.7)):
         curve = [{"throws": 10 * (i + 1), "train_seconds": float(i + 1), "rate": rate}
                  for i in range(benchmark.CURVE_POINTS)]
+        identity = benchmark.benchmark_run(TASK, "sac", seed, out, False).identity
         (folder / f"sac-{seed}.json").write_text(json.dumps(
-            {"seed": seed, "curve": curve, "final": {"rate": rate, "ci": [0.0, 1.0], "n": 16},
+            {**identity, "curve": curve, "final": {"rate": rate, "ci": [0.0, 1.0], "n": 16},
              "train_seconds": 5.0}))
     summary = benchmark.table(out)
     row = next(r for r in summary["rows"] if r["task"] == TASK)
@@ -107,9 +108,7 @@ def test_the_summary_is_made_from_the_kept_runs_and_tasks_json(tmp_path):
     assert sac["curve"][0] == [10.0, 1.0, pytest.approx(0.6)]
 
 
-def test_learned_analyses_the_best_run_against_the_oracle(tmp_path, monkeypatch):
-    monkeypatch.setattr(benchmark, "RUNS", tmp_path / "runs")
-    monkeypatch.setattr(learned, "RUNS", tmp_path / "runs")
+def test_learned_analyses_the_best_run_against_the_oracle(tmp_path):
     out = tmp_path / "results"
     benchmark.main(["--quick", "--out", str(out), "--tasks", TASK, "--algos", "ppo",
                     "--seeds", "0", "1"])
@@ -125,11 +124,10 @@ def test_learned_analyses_the_best_run_against_the_oracle(tmp_path, monkeypatch)
     assert sum(report["void_reasons"].values()) == learned.QUICK["throws"]
 
 
-def test_learned_names_the_command_that_rebuilds_a_missing_model(tmp_path, monkeypatch):
-    monkeypatch.setattr(learned, "RUNS", tmp_path / "runs")
+def test_learned_names_the_command_that_rebuilds_a_missing_model(tmp_path):
     run = {"task": TASK, "algo": "sac", "seed": 2}
-    with pytest.raises(SystemExit, match="--tasks DiceThrow-v0 --algos sac --seeds 2"):
-        learned.load_model(run, tmp_path / "results")
+    with pytest.raises(RunError, match="--tasks DiceThrow-v0 --algos sac --seeds 2"):
+        learned.model_path(run, tmp_path / "results")
 
 
 def test_the_kept_runs_cover_every_task_algorithm_and_seed_with_todays_settings():

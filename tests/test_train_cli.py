@@ -73,6 +73,18 @@ def test_resume_refuses_options_it_cannot_change(tmp_path, capsys):
     assert "not a run folder" in capsys.readouterr().err
 
 
+@pytest.mark.parametrize("text", ["{", "[]", '{"presett": "quick"}'])
+def test_resume_refuses_a_config_that_is_not_a_run_s(tmp_path, capsys, text):
+    (tmp_path / "run").mkdir()
+    (tmp_path / "run" / "config.json").write_text(text)
+    with pytest.raises(SystemExit) as exit_info:
+        parse_config(["--resume", str(tmp_path / "run")], prog="train.py")
+    assert exit_info.value.code == 2
+    err = capsys.readouterr().err
+    assert "argument --resume: " in err and "config.json is not a run's config" in err
+    assert "Traceback" not in err
+
+
 def test_a_bad_option_exits_2_without_a_traceback(tmp_path):
     done = train_py("--runs", tmp_path / "runs", "--env", "releas_height=0.03")
     assert done.returncode == 2 and "Traceback" not in done.stderr
