@@ -14,7 +14,7 @@ import contextlib
 import functools
 from pathlib import Path
 
-from dice_env.studies.distributed import at_least, connected, hand_faces, ray_address
+from dice_env.simulation.runner import at_least, connected, hand_faces, ray_address
 from studies import CHUNKED, KEPT, SIZED, STUDIES, run
 from studies.common import DOCS
 

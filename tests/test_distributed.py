@@ -15,9 +15,9 @@ import pytest
 from dice_env import throws as hands
 from dice_env.model.die import Die
 from dice_env.model.scene import Scene
-from dice_env.studies import distributed as dist
-from dice_env.studies.chunks import FolderError, kept_chunks, prepare, write_atomically
-from dice_env.studies.distributed import hand_faces
+from dice_env.simulation import runner as dist
+from dice_env.simulation.chunks import FolderError, kept_chunks, prepare, write_atomically
+from dice_env.simulation.runner import hand_faces
 from studies import run as run_study
 from studies import shapes as sh
 from studies.__main__ import main as studies_main
@@ -302,9 +302,9 @@ def test_writers_of_one_file_never_rename_each_others_temporary_files(tmp_path):
 
 
 # A runner that starts when the file argv[1] appears: imported first, so both start at once.
-AT_ONCE = ("import pathlib, sys, time\nfrom dice_env.studies import distributed\n"
+AT_ONCE = ("import pathlib, sys, time\nfrom dice_env.simulation import runner\n"
            "print('ready', flush=True)\nwhile not pathlib.Path(sys.argv[1]).exists():\n"
-           "    time.sleep(0.001)\ndistributed.main(sys.argv[2:])")
+           "    time.sleep(0.001)\nrunner.main(sys.argv[2:])")
 
 
 def test_two_processes_on_one_folder_both_finish_with_the_same_tally(tmp_path):
@@ -396,7 +396,7 @@ def test_command_line_gives_usage_errors_for_bad_values(tmp_path, capsys, argv, 
     with pytest.raises(SystemExit) as exit_:
         dist.main(argv)
     err = capsys.readouterr().err
-    assert exit_.value.code == 2 and err.startswith("usage: python -m dice_env.studies.distributed")
+    assert exit_.value.code == 2 and err.startswith("usage: python -m dice_env.simulation.runner")
     assert any(re.search(match, line) for line in err.splitlines()), err
 
 

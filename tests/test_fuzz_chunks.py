@@ -8,7 +8,7 @@ import zipfile
 import numpy as np
 import pytest
 
-from dice_env.studies import distributed as dist
+from dice_env.simulation import runner as dist
 
 CASES = 300  # tampered files, each read once (no throw is simulated): a few seconds in all
 ARGV = ["--throws", "40", "--chunk", "20", "--seed", "3"]
@@ -92,7 +92,7 @@ def test_every_tampered_chunk_gives_a_tally_or_the_runners_refusal(tmp_path, cap
         except SystemExit as exit_:
             err = capsys.readouterr().err.splitlines()
             assert exit_.code == 2, err
-            assert err[-1].startswith("python -m dice_env.studies.distributed: error: "
+            assert err[-1].startswith("python -m dice_env.simulation.runner: error: "
                                       "argument --out: "), err
             assert "delete it" in err[-1] and chunk.name in err[-1], err
             outcomes["refused"] += 1

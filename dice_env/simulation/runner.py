@@ -4,7 +4,7 @@ Chunk ``i`` draws from ``SeedSequence(seed, spawn_key=(i,))`` alone and :class:`
 merge exactly, so :func:`run_throws` gives the same result bit for bit here or on Ray. A run
 folder keeps each finished chunk; run again, it computes only the missing ones. Command line::
 
-    python -m dice_env.studies.distributed --die d20 --throws 1000000 --ray auto --out runs/d20
+    python -m dice_env.simulation.runner --die d20 --throws 1000000 --ray auto --out runs/d20
 
 Ray is an optional extra (``pip install 'dice_env[ray]'``).
 """
@@ -31,8 +31,8 @@ from dice_env.markdown import bracket, markdown_table
 from dice_env.model.checks import check_int
 from dice_env.model.die import STANDARD_SIZES, Die
 from dice_env.model.scene import Scene
+from dice_env.simulation.chunks import FolderError, identity, load, prepare, write_atomically
 from dice_env.simulation.simulate import State, simulate
-from dice_env.studies.chunks import FolderError, identity, load, prepare, write_atomically
 from dice_env.throws import Faces, counted, hand_throws
 
 # Per-throw outcomes a chunk keeps, with their dtypes.
@@ -418,7 +418,7 @@ def ray_address(text: str) -> str:
 def main(argv: list[str] | None = None) -> None:
     """Throw a standard die many times (optionally on Ray) and print the summary."""
     parser = argparse.ArgumentParser(
-        prog="python -m dice_env.studies.distributed",
+        prog="python -m dice_env.simulation.runner",
         description="Many vigorous hand throws of a standard die to a decided face, in seeded "
         "chunks, in this process or on a Ray cluster; prints the faces and their chi-square.")
     parser.add_argument("--die", choices=tuple(STANDARD_SIZES), default="d6")
@@ -447,6 +447,6 @@ def main(argv: list[str] | None = None) -> None:
 
 if __name__ == "__main__":
     # the imported module's main, so that Ray ships throw_chunk by reference, not by value
-    from dice_env.studies.distributed import main as imported_main
+    from dice_env.simulation.runner import main as imported_main
 
     imported_main()
