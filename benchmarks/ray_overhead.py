@@ -55,8 +55,8 @@ def main() -> None:
     spec = Spec(scene, args.throws, args.chunk, args.seed)
     warm_up = Spec(scene, 2 * args.chunk, args.chunk, args.seed)
     one_thread(warm_up)  # compile (or load) both kernels here: serial and parallel
-    run_throws(scene, warm_up.throws, chunk=args.chunk, progress=False)
-    kwargs = {"chunk": args.chunk, "seed": args.seed, "progress": False}
+    run_throws(scene, warm_up.throws, chunk=args.chunk)
+    kwargs = {"chunk": args.chunk, "seed": args.seed}
     rows = []
 
     def row(path: str, workers: int, seconds: float, tally: Tally) -> None:

@@ -141,7 +141,7 @@ def run(out: Path = DOCS, quick: bool = False, seed: int = SEED, throws: int | N
     ``throws``: fair throws per die (default :data:`FULL`'s, or :data:`QUICK`'s with
     ``quick``); the loaded dice get half as many (at least the quick size).
     ``faces_of(scene, n, seed)``: the faces of ``n`` hand throws of ``scene`` (each die its own
-    seed from ``SeedSequence(seed)``), e.g. :func:`dice_env.simulation.runner.hand_faces`;
+    seed from ``SeedSequence(seed)``), e.g. :func:`studies.many_throws.hand_faces`;
     default: thrown here, every die's throws drawn in turn from one generator.
     """
     sizes = dict(QUICK if quick else FULL)
