@@ -20,7 +20,7 @@ from dice_env.markdown import bracket, markdown_table
 from dice_env.model.die import Die
 from dice_env.model.scene import Scene
 from dice_env.model.surroundings import TRAY
-from dice_env.simulation.chunks import kept_chunks, prepare
+from dice_env.simulation.chunks import prepare
 from dice_env.simulation.group import (
     DieContact,
     GroupResult,
@@ -35,7 +35,7 @@ from dice_env.throws import (
     group_throws,
     tray_scene,
 )
-from studies.common import DOCS, SEED, checked_throws, join, progress, save_figure
+from studies.common import DOCS, SEED, checked_throws, join, kept_chunks, progress, save_figure
 from studies.templates import study_page
 
 # Throws of the pair in the full and the quick run, per kernel call, per seeded chunk.

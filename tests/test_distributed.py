@@ -16,11 +16,12 @@ from dice_env import throws as hands
 from dice_env.model.die import Die
 from dice_env.model.scene import Scene
 from dice_env.simulation import runner as dist
-from dice_env.simulation.chunks import FolderError, kept_chunks, prepare, write_atomically
+from dice_env.simulation.chunks import FolderError, prepare, write_atomically
 from studies import many_throws as cli
 from studies import run as run_study
 from studies import shapes as sh
 from studies.__main__ import main as studies_main
+from studies.common import kept_chunks
 from studies.many_throws import hand_faces
 
 THROWS, CHUNK, SEED = 120, 30, 7  # four chunks of default-d6 throws: about 0.3 s in all

@@ -97,25 +97,3 @@ def load(path: Path) -> Arrays:
         raise FolderError(f"{str(path)!r} is corrupt (not a readable .npz archive): delete it "
                           "to throw its chunk again") from error
 
-
-def kept_chunks(throw: Callable[[int, int], Arrays], throws: int, chunk: int,
-                folder: Path | None, prefix: str, bar: object = None,
-                unit: int = 1) -> list[Arrays]:
-    """``throws`` split into chunks of ``chunk`` (the last takes the rest), each ``throw(i, size)``.
-
-    With ``folder`` (see :func:`prepare`), chunk ``i`` is kept as ``<prefix>-<i>-<size>.npz``
-    there and read back when present; ``bar`` advances by ``size * unit`` per chunk.
-    """
-    parts = []
-    for i, start in enumerate(range(0, throws, chunk)):
-        size = min(chunk, throws - start)
-        path = None if folder is None else folder / f"{prefix}-{i:05d}-{size}.npz"
-        if path is not None and path.exists():
-            parts.append(load(path))
-        else:
-            parts.append(throw(i, size))
-            if path is not None:
-                write_atomically(path, lambda f, arrays=parts[-1]: np.savez(f, **arrays))
-        if bar is not None:
-            bar.update(size * unit)
-    return parts
