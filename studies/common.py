@@ -13,8 +13,9 @@ import matplotlib.pyplot as plt
 import numpy as np
 from tqdm import tqdm
 
+from dice_env.disk import write_atomically
 from dice_env.model.checks import check_int
-from dice_env.simulation.chunks import Arrays, load, write_atomically
+from dice_env.simulation.chunks import Arrays, load
 from dice_env.simulation.simulate import DiceArrays
 from studies import ROOT
 

@@ -13,10 +13,11 @@ import numpy as np
 import pytest
 
 from dice_env import throws as hands
+from dice_env.disk import write_atomically
 from dice_env.model.die import Die
 from dice_env.model.scene import Scene
 from dice_env.simulation import runner as dist
-from dice_env.simulation.chunks import FolderError, prepare, write_atomically
+from dice_env.simulation.chunks import FolderError, prepare
 from studies import many_throws as cli
 from studies import run as run_study
 from studies import shapes as sh

@@ -9,14 +9,13 @@ from __future__ import annotations
 
 import hashlib
 import json
-import os
-import secrets
 import zipfile
 import zlib
-from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
+
+from dice_env.disk import write_atomically
 
 SPEC_FILE = "spec.json"
 
@@ -66,22 +65,6 @@ def prepare(folder: Path, record: dict, name: str = "keep") -> Path:
         folder.mkdir(parents=True, exist_ok=True)
         write_atomically(path, lambda f: f.write(json.dumps(record, indent=1).encode()))
     return folder
-
-
-def write_atomically(path: Path, write: Callable) -> None:
-    """``write(file)`` to a temporary file renamed to ``path``: never a half-written file.
-
-    The temporary name is this process's alone (``<name>.<pid>-<random>.partial``, created
-    exclusively), so that processes writing the same folder never rename each other's files;
-    it is removed if ``write`` fails.
-    """
-    partial = path.with_name(f"{path.name}.{os.getpid()}-{secrets.token_hex(4)}.partial")
-    try:
-        with open(partial, "xb") as f:
-            write(f)
-        os.replace(partial, path)
-    finally:
-        partial.unlink(missing_ok=True)
 
 
 def load(path: Path) -> Arrays:

@@ -23,10 +23,11 @@ from pathlib import Path
 
 import numpy as np
 
+from dice_env.disk import write_atomically
 from dice_env.model.checks import check_int
 from dice_env.model.die import STANDARD_SIZES, Die
 from dice_env.model.scene import Scene
-from dice_env.simulation.chunks import FolderError, identity, load, prepare, write_atomically
+from dice_env.simulation.chunks import FolderError, identity, load, prepare
 from dice_env.simulation.simulate import State, simulate
 from dice_env.throws import Faces, counted, hand_throws
 
