@@ -32,9 +32,15 @@ def parse_with_mujoco(parser: argparse.ArgumentParser) -> argparse.Namespace:
     return args
 
 
-def command_line() -> str:
-    """The command line that ran this benchmark, from the repository root."""
-    return " ".join(["python", f"benchmarks/{Path(sys.argv[0]).name}", *sys.argv[1:]])
+def command_line(placeholders: dict[Path, str] | None = None) -> str:
+    """The command line that ran this benchmark, from the repository root.
+
+    An argument naming a path in ``placeholders`` is written as its placeholder (``BASE`` for
+    the other tree of ``kernel_ab.py``): a path on this machine means nothing elsewhere.
+    """
+    named = {path.resolve(): name for path, name in (placeholders or {}).items()}
+    args = [named.get(Path(arg).resolve(), arg) for arg in sys.argv[1:]]
+    return " ".join(["python", f"benchmarks/{Path(sys.argv[0]).name}", *args])
 
 
 def timed(fn: Callable[[], object], repeats: int, threads: int = 1) -> tuple[float, object]:

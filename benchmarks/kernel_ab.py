@@ -190,7 +190,8 @@ def main() -> None:
         table[key] = {"base": base, "this": this, "ratios": ratios}
         print(f"| {label} | {_rate(np.median(base))} | {_rate(np.median(this))} | "
               f"{', '.join(f'{x:.3f}' for x in ratios)} |")
-    write_json(out, {"command": command_line(), "commit": code_version(args.this),
+    write_json(out, {"command": command_line({args.base: "BASE"}),
+                     "commit": code_version(args.this),
                      "base": str(args.base), "base_commit": code_version(args.base),
                      "this": str(args.this),
                      "same_faces" if not args.groups else "bit_identical": same,

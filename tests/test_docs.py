@@ -118,7 +118,17 @@ def test_every_cited_json_is_in_the_repository(page):
 def test_every_result_json_records_its_command_and_commit(path):
     report = json.loads(path.read_text())
     assert report.get("command", "").startswith("python "), path.name
+    assert not re.search(r"(^|\s)(/|~)", report["command"]), f"{path.name}: a local path"
     assert report.get("commit") not in (None, "", "unknown"), path.name
+
+
+def test_a_benchmark_command_writes_a_local_tree_as_its_placeholder(tmp_path, monkeypatch):
+    monkeypatch.syspath_prepend(str(ROOT / "benchmarks"))
+    import harness
+
+    monkeypatch.setattr(sys, "argv", ["benchmarks/kernel_ab.py", f"{tmp_path}/", "--rounds", "9"])
+    assert harness.command_line({tmp_path: "BASE"}) == \
+        "python benchmarks/kernel_ab.py BASE --rounds 9"
 
 
 def test_every_docstring_reference_names_something():
@@ -148,13 +158,86 @@ def test_the_readme_fits_a_front_door():
     assert "bash .ci/setup && .venv/bin/python -m pytest" in head
 
 
-def test_the_readme_starts_run(monkeypatch):
-    """The README's three examples, as written (PPO for one rollout instead of its budget)."""
-    blocks = re.findall(r"```python\n(.*?)```", (ROOT / "README.md").read_text(), re.S)
-    assert len(blocks) == 3
-    code = "\n".join(blocks).replace('model.learn(hp["n_timesteps"])', 'model.learn(1)')
+EXAMPLE = re.compile(r"(?:<!-- example not run: (?P<why>[^>]*?) -->\n)?```python\n(?P<code>.*?)```",
+                     re.S)
+# Budgets cut in the default suite (the slow test runs the pages as written).
+SHORTER = {'model.learn(hp["n_timesteps"])': "model.learn(1)"}  # PPO for one rollout
+# Pages written from docs/templates by the studies are left out: their examples are the studies'.
+EXAMPLE_PAGES = [page for page in PAGES if page.name not in {t.name for t in TEMPLATES}
+                 and "```python" in page.read_text()]
+
+
+def run_examples(page: Path, shorter: dict[str, str]) -> dict:
+    """Run ``page``'s python blocks in order in one namespace (the last block's names)."""
+    text, scope = page.read_text(), {}
+    for match in EXAMPLE.finditer(text):
+        if match["why"] is None:
+            code = match["code"]
+            for long, short in shorter.items():
+                code = code.replace(long, short)
+            line = text.count("\n", 0, match.start("code"))
+            exec(compile("\n" * line + code, str(page.relative_to(ROOT)), "exec"), scope)
+    return scope
+
+
+@pytest.mark.parametrize("page", [p for p in EXAMPLE_PAGES if p.name != "README.md"],
+                         ids=lambda p: p.name)
+def test_every_example_runs(page, tmp_path, monkeypatch):
+    """Each page's examples as written, budgets cut (``SHORTER``), in a temporary folder (the
+    README's: the next test)."""
+    monkeypatch.chdir(tmp_path)
     monkeypatch.setattr("builtins.print", lambda *a, **k: None)
-    scope: dict = {}
-    exec(compile(code, "README.md", "exec"), scope)
+    run_examples(page, SHORTER)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("page", [p for p in EXAMPLE_PAGES
+                                  if any(long in p.read_text() for long in SHORTER)],
+                         ids=lambda p: p.name)
+def test_every_example_runs_at_its_budget(page, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    run_examples(page, {})
+
+
+def test_an_example_left_out_says_why():
+    for page in EXAMPLE_PAGES:
+        text = page.read_text()
+        whys = [m["why"] for m in EXAMPLE.finditer(text) if m["why"] is not None]
+        assert len(whys) == text.count("<!-- example not run"), page.name  # each before a block
+        assert all(why.strip() for why in whys), page.name
+    assert {"README.md", "guide.md", "environment.md", "viewer.md"} <= {
+        p.name for p in EXAMPLE_PAGES}
+
+
+def test_the_readme_starts_run(tmp_path, monkeypatch):
+    """The README's three examples, as written (PPO for one rollout instead of its budget)."""
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setattr("builtins.print", lambda *a, **k: None)
+    scope = run_examples(ROOT / "README.md", SHORTER)
+    assert len(EXAMPLE.findall((ROOT / "README.md").read_text())) == 3
     assert scope["result"].face.shape == (100,) and scope["both"].face.shape == (100, 2)
-    assert scope["model"].num_timesteps > 0
+    assert scope["model"].num_timesteps > 0 and scope["model"].env is scope["env"]
+
+def refused_examples() -> list[tuple[str, str]]:
+    """docs/environment.md's refusals: (keywords, the message fragment the page gives)."""
+    page = (ROOT / "docs/environment.md").read_text()
+    table = page[page.index("| limit | why | refused, e.g. |"):]
+    table = table[:table.index("\n\n")]
+    rows = re.findall(r"^\|[^|]*\|[^|]*\| (.*?) \| `(.*?)` \|$", table, re.M)
+    return [(example, message) for examples, message in rows
+            for example in re.findall(r"`(.*?)`", examples)]
+
+
+@pytest.mark.parametrize(("keywords", "message"), refused_examples())
+def test_each_documented_refusal_gives_its_documented_message(keywords, message):
+    import gymnasium as gym
+
+    kwargs = eval(f"dict({keywords})")  # the page's own keyword set
+    make = gym.make_vec if "num_envs" in kwargs else gym.make
+    with pytest.raises(ValueError) as refused:
+        make("DiceThrow-v0", **kwargs)
+    assert message in str(refused.value)
+
+
+def test_every_refusal_row_is_checked():
+    assert len(refused_examples()) >= 20

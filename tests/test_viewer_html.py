@@ -20,11 +20,13 @@ import numpy as np
 import pytest
 
 from dice_env import Die, Scene, State
+from dice_env.envs import make_task
 from dice_env.model.surroundings import walls
 from dice_env.simulation.group import GroupState
 from dice_env.viewer import Recording, browser, load, record
 from dice_env.viewer.html import read_html, write_html
 from dice_env.viewer.recording import as_data
+from dice_env.viewer.throws import task_throws
 
 VIEWPORT = {"width": 800, "height": 600}
 MAX_PAGE_BYTES = 2_000_000  # a 2 s throw of two dice
@@ -105,6 +107,27 @@ def browser_page(page: Path) -> Iterator[tuple[Any, list[str]]]:
         yield tab, errors
 
 
+def _goto(tab: Any, page: Path) -> None:
+    tab.goto(page.resolve().as_uri())
+    tab.wait_for_function(browser.READY, timeout=15_000)
+
+
+@pytest.fixture(scope="module")
+def aimed() -> list[Recording]:
+    """Two still drops of a d6 held face 1 up, without hand noise: at target 1 and 6."""
+    task = make_task(hand_noise=0.0, orientation_noise=0.0)
+    _, hands = task.sample_hands([np.random.default_rng(0)] * 2, orientation_mode="identity")
+    recordings = task_throws(task, np.zeros((2, 6)), np.array([1, 6]), hands,
+                             task.sample_noise(np.random.default_rng(0), 2))
+    assert [r.outcome["success"] for r in recordings] == [True, False]
+    return recordings
+
+
+def _heading(tab: Any, t: float) -> str:
+    tab.evaluate(f"diceViewer.setTime({t!r})")
+    return tab.evaluate("document.getElementById('dice-title').textContent")
+
+
 # The canvas's pixels (RGBA) at CSS pixel points, read through a 2D canvas copy of it.
 PIXELS = """points => {
   const gl = document.querySelector("canvas");
@@ -166,4 +189,31 @@ def test_dice_are_drawn_where_recorded(browser_page: tuple[Any, list[str]],
         behind = _pixels(tab, [tuple(centre)])[0]
         assert np.abs(colour - behind).max() > 24, \
             f"frame {i}: die 0's pixel {colour} is what shows without it ({behind})"
+    assert errors == []
+
+
+def test_the_heading_gives_the_faces_and_total_when_the_dice_stop(
+        browser_page: tuple[Any, list[str]], throw: Recording) -> None:
+    tab, errors = browser_page
+    faces = throw.outcome["faces"]
+    assert all(throw.outcome["read"])
+    assert _heading(tab, 0.0) == _heading(tab, float(throw.t[-1]) / 2) == "two in a tray"
+    assert _heading(tab, 1e9) == \
+        f"two in a tray: faces {faces[0]}, {faces[1]} (total {sum(faces)})"
+    assert errors == []
+
+
+def test_the_heading_gives_a_target_and_its_verdict_only_where_there_is_one(
+        browser_page: tuple[Any, list[str]], page: Path, aimed: list[Recording],
+        tmp_path: Path) -> None:
+    tab, errors = browser_page
+    try:
+        for rec, verdict in zip(aimed, ("success", "failure"), strict=True):
+            target, (face,) = rec.outcome["target"], rec.outcome["faces"]
+            _goto(tab, write_html(rec, tmp_path / f"{verdict}.html"))
+            assert _heading(tab, 0.0) == f"dice_env throws · target {target}"
+            assert _heading(tab, 1e9) == \
+                f"dice_env throws: faces {face} · target {target}: {verdict}"
+    finally:
+        _goto(tab, page)
     assert errors == []

@@ -11,7 +11,7 @@ from typing import Any
 
 import gymnasium as gym
 import numpy as np
-from gymnasium.vector import VectorEnv
+from gymnasium.vector import AutoresetMode, VectorEnv
 from stable_baselines3.common.vec_env import VecEnv, VecMonitor
 from stable_baselines3.common.vec_env.base_vec_env import VecEnvIndices, VecEnvStepReturn
 
@@ -46,6 +46,9 @@ class DiceThrowSB3VecEnv(VecEnv):
         if not isinstance(venv, DiceThrowVectorEnv):
             raise ValueError(f"venv must be an unwrapped DiceThrowVectorEnv (wrap the adapter in "
                              f"SB3's wrappers instead), got {type(venv).__name__}")
+        if venv.autoreset_mode is not AutoresetMode.SAME_STEP:
+            raise ValueError(f"venv must autoreset in the same step (autoreset_mode=SAME_STEP, "
+                             f"the default), got {venv.autoreset_mode}")
         self.venv = venv
         self._actions: np.ndarray | None = None
         super().__init__(venv.num_envs, venv.single_observation_space, venv.single_action_space)

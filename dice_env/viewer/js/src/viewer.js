@@ -69,7 +69,6 @@ const ui = {
   throw: document.getElementById("dice-throw"),
   layout: document.getElementById("dice-layout"),
 };
-ui.title.textContent = data.title;
 ui.layout.value = data.layout;
 
 // --- Scene --------------------------------------------------------------------------------
@@ -267,11 +266,26 @@ function update() {
   const th = throws[state.current];
   ui.outcome.hidden = state.t < th.end;
   if (!ui.outcome.hidden) ui.outcome.innerHTML = outcomeHtml(th.recording);
+  ui.title.textContent = heading(th.recording, !ui.outcome.hidden);
   dirty = true;
 }
 
 function escapeHtml(text) {
   return String(text).replace(/[&<>"]/g, (c) => ({ "&": "&amp;", "<": "&lt;", ">": "&gt;", '"': "&quot;" })[c]);
+}
+
+/** The heading: the page's title and the throw's target where it has one; once the dice
+ * stop, their faces, the total of several read dice and the target's verdict. */
+function heading(recording, stopped) {
+  const o = recording.outcome;
+  const target = Array.isArray(o.target) ? o.target.join(", ") : o.target;
+  if (!stopped) return o.target === undefined ? data.title : `${data.title} · target ${target}`;
+  let faces = `faces ${o.faces.join(", ")}`;
+  if (o.faces.length > 1 && o.read.every(Boolean)) {
+    faces += ` (total ${o.faces.reduce((a, b) => a + b, 0)})`;
+  }
+  const verdict = o.target === undefined ? "" : ` · target ${target}: ${o.success ? "success" : "failure"}`;
+  return `${data.title}: ${faces}${verdict}`;
 }
 
 /** The outcome panel's text: faces landed, settled / decided, why void, the title. */
