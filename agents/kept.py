@@ -1,6 +1,6 @@
 """Files the agents keep for later: written whole, read back or refused by name.
 
-Written through :func:`dice_env.viewer.disk.write_atomically` (a name unique to the process,
+Written through :func:`dice_env.disk.write_atomically` (a name unique to the process,
 renamed into place); an unusable one is refused with what to do (:class:`RunError`).
 """
 
@@ -14,7 +14,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import IO, Any
 
-from dice_env.viewer.disk import write_atomically
+from dice_env.disk import write_atomically
 
 INTERRUPTED = 130  # exit status after Ctrl-C (128 + SIGINT), as shells report it
 

@@ -3,7 +3,7 @@
     python benchmarks/ray_overhead.py                     # 20,000 d6 throws, a few minutes
     python benchmarks/ray_overhead.py --throws 8000 --chunk 1000
 
-The same throws each time: ``dice_env.studies.distributed.run_throws`` of the default scene's d6
+The same throws each time: ``dice_env.simulation.runner.run_throws`` of the default scene's d6
 (vigorous hand throws, each until its face is decided), ``--throws`` in chunks of ``--chunk``.
 Rows: the chunks one after the other in this process on one thread (``throw_chunk(...,
 num_threads=1)``, the work of one Ray task) and on all numba threads (``run_throws`` without
@@ -29,7 +29,7 @@ from harness import RESULTS, write_json
 from dice_env.markdown import markdown_table
 from dice_env.model.scene import Scene
 from dice_env.provenance import code_version
-from dice_env.studies.distributed import Spec, Tally, run_throws, throw_chunk
+from dice_env.simulation.runner import Spec, Tally, run_throws, throw_chunk
 
 
 def timed(fn: object) -> tuple[float, Tally]:
@@ -55,8 +55,8 @@ def main() -> None:
     spec = Spec(scene, args.throws, args.chunk, args.seed)
     warm_up = Spec(scene, 2 * args.chunk, args.chunk, args.seed)
     one_thread(warm_up)  # compile (or load) both kernels here: serial and parallel
-    run_throws(scene, warm_up.throws, chunk=args.chunk, progress=False)
-    kwargs = {"chunk": args.chunk, "seed": args.seed, "progress": False}
+    run_throws(scene, warm_up.throws, chunk=args.chunk)
+    kwargs = {"chunk": args.chunk, "seed": args.seed}
     rows = []
 
     def row(path: str, workers: int, seconds: float, tally: Tally) -> None:

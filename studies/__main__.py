@@ -14,9 +14,10 @@ import contextlib
 import functools
 from pathlib import Path
 
-from dice_env.studies.distributed import at_least, connected, hand_faces, ray_address
+from dice_env.simulation.runner import connected
 from studies import CHUNKED, KEPT, SIZED, STUDIES, run
 from studies.common import DOCS
+from studies.many_throws import at_least, hand_faces, ray_address
 
 QUICK = Path("studies-quick")
 

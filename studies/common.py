@@ -1,7 +1,8 @@
-"""What every study shares: docs folder, seed, figures, progress bar, throw count."""
+"""What every study shares: docs folder, seed, figures, progress bar, throw count, chunks."""
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import fields
 from pathlib import Path
 
@@ -12,7 +13,9 @@ import matplotlib.pyplot as plt
 import numpy as np
 from tqdm import tqdm
 
+from dice_env.disk import write_atomically
 from dice_env.model.checks import check_int
+from dice_env.simulation.chunks import Arrays, load
 from dice_env.simulation.simulate import DiceArrays
 from studies import ROOT
 
@@ -47,3 +50,27 @@ def join(parts: list) -> object:
 def checked_throws(throws: object, least: int, default: int | None = None) -> int | None:
     """A study's ``throws`` checked: an int >= ``least``, or ``default`` (its own size) for None."""
     return default if throws is None else check_int("throws", throws, least)
+
+
+def kept_chunks(throw: Callable[[int, int], Arrays], throws: int, chunk: int,
+                folder: Path | None, prefix: str, bar: object = None,
+                unit: int = 1) -> list[Arrays]:
+    """``throws`` split into chunks of ``chunk`` (the last takes the rest), each ``throw(i, size)``.
+
+    With ``folder`` (see :func:`dice_env.simulation.chunks.prepare`), chunk ``i`` is kept as
+    ``<prefix>-<i>-<size>.npz`` there and read back when present; ``bar`` advances by
+    ``size * unit`` per chunk.
+    """
+    parts = []
+    for i, start in enumerate(range(0, throws, chunk)):
+        size = min(chunk, throws - start)
+        path = None if folder is None else folder / f"{prefix}-{i:05d}-{size}.npz"
+        if path is not None and path.exists():
+            parts.append(load(path))
+        else:
+            parts.append(throw(i, size))
+            if path is not None:
+                write_atomically(path, lambda f, arrays=parts[-1]: np.savez(f, **arrays))
+        if bar is not None:
+            bar.update(size * unit)
+    return parts

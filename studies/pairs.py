@@ -20,6 +20,7 @@ from dice_env.markdown import bracket, markdown_table
 from dice_env.model.die import Die
 from dice_env.model.scene import Scene
 from dice_env.model.surroundings import TRAY
+from dice_env.simulation.chunks import prepare
 from dice_env.simulation.group import (
     DieContact,
     GroupResult,
@@ -27,7 +28,6 @@ from dice_env.simulation.group import (
     group_step,
     simulate_group,
 )
-from dice_env.studies.chunks import kept_chunks, prepare
 from dice_env.throws import (
     HAND,
     T_TRAY,
@@ -35,7 +35,7 @@ from dice_env.throws import (
     group_throws,
     tray_scene,
 )
-from studies.common import DOCS, SEED, checked_throws, join, progress, save_figure
+from studies.common import DOCS, SEED, checked_throws, join, kept_chunks, progress, save_figure
 from studies.templates import study_page
 
 # Throws of the pair in the full and the quick run, per kernel call, per seeded chunk.
@@ -144,7 +144,7 @@ def chunked_pairs(scene: Scene, dice: tuple[Die, ...], throws: int, seed: int,
     """``throws`` hand throws in chunks of ``chunk`` seeded ``(seed, i)``, joined.
 
     Returns the pairs and the wall-clock and CPU seconds their throwing took. ``keep``: a folder
-    keeping the chunks, read back when present (:mod:`dice_env.studies.chunks`): same result.
+    keeping the chunks, read back when present (:mod:`dice_env.simulation.chunks`): same result.
     """
     if keep is not None:
         prepare(keep, {"dice": [d.name for d in dice], "hand": asdict(HAND), "chunk": chunk,

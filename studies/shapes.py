@@ -141,7 +141,7 @@ def run(out: Path = DOCS, quick: bool = False, seed: int = SEED, throws: int | N
     ``throws``: fair throws per die (default :data:`FULL`'s, or :data:`QUICK`'s with
     ``quick``); the loaded dice get half as many (at least the quick size).
     ``faces_of(scene, n, seed)``: the faces of ``n`` hand throws of ``scene`` (each die its own
-    seed from ``SeedSequence(seed)``), e.g. :func:`dice_env.studies.distributed.hand_faces`;
+    seed from ``SeedSequence(seed)``), e.g. :func:`studies.many_throws.hand_faces`;
     default: thrown here, every die's throws drawn in turn from one generator.
     """
     sizes = dict(QUICK if quick else FULL)
@@ -243,7 +243,7 @@ def _markdown(fair: dict[str, Faces], loaded: dict[str, Loaded], flight: dict,
     note = ("" if sizes["fair"] >= full else
             f"\nThis page was made with {sizes['fair']} fair throws per die (the command's "
             f"default is {full}).\n") + (
-        "\nEach die's throws ran in seeded chunks (`dice_env.studies.distributed`, one seed per "
+        "\nEach die's throws ran in seeded chunks (`dice_env.simulation.runner`, one seed per "
         "die from the study's seed; `--chunks DIR` keeps them, `--ray ADDRESS` runs them on Ray): "
         "the same numbers here or on any Ray cluster, not those of a run without chunks.\n"
         if chunked else "")

@@ -25,11 +25,11 @@ from dice_env.model.checks import check_int
 from dice_env.model.die import Die
 from dice_env.model.pips import Pips
 from dice_env.model.scene import Scene
+from dice_env.simulation.chunks import prepare
 from dice_env.simulation.group import DieContact, GroupState, simulate_group
 from dice_env.simulation.simulate import State
-from dice_env.studies.chunks import kept_chunks, prepare
 from dice_env.throws import CUP, CUP_BLOCK, Faces, cup_throws, throw_faces
-from studies.common import DOCS, SEED, checked_throws, progress, save_figure
+from studies.common import DOCS, SEED, checked_throws, kept_chunks, progress, save_figure
 from studies.templates import study_page
 
 # Weldon's throws of twelve dice with 0..12 showing a 5 or a 6 (Pearson 1900, Kemp & Kemp 1991)
@@ -284,7 +284,7 @@ def chunked_together(scene: Scene, throws: int, seed: int, keep: Path | None = N
     """``throws`` cups thrown together, in chunks of ``chunk`` cups seeded ``(seed, i)``.
 
     With ``keep``, each chunk is kept there and read back instead of thrown
-    (:mod:`dice_env.studies.chunks`); the result does not depend on ``keep``.
+    (:mod:`dice_env.simulation.chunks`); the result does not depend on ``keep``.
     """
     if keep is not None:
         prepare(keep, {"die": scene.die.name, "cup": asdict(CUP), "chunk": chunk,

@@ -13,20 +13,23 @@ import numpy as np
 import pytest
 
 from dice_env import throws as hands
+from dice_env.disk import write_atomically
 from dice_env.model.die import Die
 from dice_env.model.scene import Scene
-from dice_env.studies import distributed as dist
-from dice_env.studies.chunks import FolderError, kept_chunks, prepare, write_atomically
-from dice_env.studies.distributed import hand_faces
+from dice_env.simulation import runner as dist
+from dice_env.simulation.chunks import FolderError, prepare
+from studies import many_throws as cli
 from studies import run as run_study
 from studies import shapes as sh
 from studies.__main__ import main as studies_main
+from studies.common import kept_chunks
+from studies.many_throws import hand_faces
 
 THROWS, CHUNK, SEED = 120, 30, 7  # four chunks of default-d6 throws: about 0.3 s in all
 
 
 def throws(**kwargs):
-    options = {"chunk": CHUNK, "seed": SEED, "progress": False} | kwargs
+    options = {"chunk": CHUNK, "seed": SEED} | kwargs
     return dist.run_throws(Scene(), THROWS, **options)
 
 
@@ -92,7 +95,7 @@ def test_an_interrupted_run_resumes_from_its_saved_chunks(tmp_path, monkeypatch,
 
 
 def test_a_folder_of_another_spec_is_refused(tmp_path):
-    dist.run_throws(Scene(), 30, chunk=30, seed=SEED, out=tmp_path, progress=False)
+    dist.run_throws(Scene(), 30, chunk=30, seed=SEED, out=tmp_path)
     for scene, n, kwargs, what in (
             (Scene(), 60, {}, "throws 30 there, 60 asked"),
             (Scene(), 30, {"chunk": 15}, "chunk 30 there, 15 asked"),
@@ -101,8 +104,35 @@ def test_a_folder_of_another_spec_is_refused(tmp_path):
             (Scene(), 30, {"draw": hands.vigorous_throws}, "draw")):
         options = {"chunk": 30, "seed": SEED} | kwargs
         with pytest.raises(ValueError, match=f"holds a run of another spec.*{what}"):
-            dist.run_throws(scene, n, out=tmp_path, progress=False, **options)
+            dist.run_throws(scene, n, out=tmp_path, **options)
 
+
+
+def test_progress_is_told_the_throws_done_those_of_saved_chunks_first(folder, reference):
+    told = []
+    assert throws(progress=told.append).same_as(reference)
+    assert told == [CHUNK] * (THROWS // CHUNK)
+    (folder / "chunk_000002.npz").unlink()
+    told.clear()
+    assert throws(out=folder, progress=told.append).same_as(reference)
+    assert told == [THROWS - CHUNK, CHUNK]  # the three chunks read back, then the one thrown
+
+
+def test_progress_that_cannot_be_called_is_refused():
+    with pytest.raises(TypeError, match="progress must be None or a callable taking the "
+                       "throws done, got True"):
+        throws(progress=True)
+
+
+RUN_ALONE = ("import sys\nfrom dice_env.simulation.runner import run_throws\n"
+             "run_throws('d6', 4, chunk=2)\nprint('tqdm' in sys.modules)")
+
+
+def test_a_run_loads_no_progress_bar():
+    env = os.environ | {"DICE_ENV_QUIET_COMPILE": "1"}
+    done = subprocess.run([sys.executable, "-c", RUN_ALONE], capture_output=True, text=True,
+                          env=env, timeout=300, check=True)
+    assert done.stdout.split() == ["False"]
 
 @pytest.mark.parametrize(("kwargs", "match"), [
     ({"throws": 0}, "throws must be an int >= 1"), ({"chunk": 0}, "chunk must be an int >= 1"),
@@ -123,7 +153,7 @@ def test_without_ray_the_error_names_the_extra(monkeypatch):
 
 
 def test_command_line_prints_the_chi_square_summary(capsys):
-    dist.main(["--die", "d6", "--throws", "60", "--chunk", "30", "--seed", "1"])
+    cli.main(["--die", "d6", "--throws", "60", "--chunk", "30", "--seed", "1"])
     text = capsys.readouterr().out
     assert "## d6: 60 throws in chunks of 30, seed 1, in this process" in text
     assert "Chi-square of uniformity: chi2 =" in text and "(5 degrees of freedom)" in text
@@ -279,8 +309,8 @@ def test_a_chunk_outcome_of_the_wrong_kind_or_range_is_refused(folder, capsys, n
     with pytest.raises(FolderError, match=r"chunk_000001.npz' is corrupt \(" + match):
         throws(out=folder)
     with pytest.raises(SystemExit) as exit_:  # the command line: one line, exit 2
-        dist.main(["--throws", str(THROWS), "--chunk", str(CHUNK), "--seed", str(SEED),
-                   "--out", str(folder)])
+        cli.main(["--throws", str(THROWS), "--chunk", str(CHUNK), "--seed", str(SEED),
+                  "--out", str(folder)])
     last = capsys.readouterr().err.splitlines()[-1]
     assert exit_.value.code == 2 and "delete it to throw it again" in last
 
@@ -302,9 +332,9 @@ def test_writers_of_one_file_never_rename_each_others_temporary_files(tmp_path):
 
 
 # A runner that starts when the file argv[1] appears: imported first, so both start at once.
-AT_ONCE = ("import pathlib, sys, time\nfrom dice_env.studies import distributed\n"
+AT_ONCE = ("import pathlib, sys, time\nfrom studies import many_throws\n"
            "print('ready', flush=True)\nwhile not pathlib.Path(sys.argv[1]).exists():\n"
-           "    time.sleep(0.001)\ndistributed.main(sys.argv[2:])")
+           "    time.sleep(0.001)\nmany_throws.main(sys.argv[2:])")
 
 
 def test_two_processes_on_one_folder_both_finish_with_the_same_tally(tmp_path):
@@ -394,9 +424,9 @@ def test_command_line_gives_usage_errors_for_bad_values(tmp_path, capsys, argv, 
     argv = [a.format(corrupt=tmp_path / "corrupt", other=tmp_path / "other",
                      file=tmp_path / "file") for a in argv]
     with pytest.raises(SystemExit) as exit_:
-        dist.main(argv)
+        cli.main(argv)
     err = capsys.readouterr().err
-    assert exit_.value.code == 2 and err.startswith("usage: python -m dice_env.studies.distributed")
+    assert exit_.value.code == 2 and err.startswith("usage: python -m studies.many_throws")
     assert any(re.search(match, line) for line in err.splitlines()), err
 
 
@@ -454,5 +484,5 @@ def test_a_run_interrupted_here_resumes_on_ray(ray, reference, tmp_path, monkeyp
         throws(out=tmp_path)
     monkeypatch.setattr(dist, "throw_chunk", real)
     assert throws(ray="auto", out=tmp_path).same_as(reference)
-    assert dist.hand_faces(Scene(), THROWS, SEED, ray="auto", chunk=CHUNK).counts.tolist() \
+    assert hand_faces(Scene(), THROWS, SEED, ray="auto", chunk=CHUNK).counts.tolist() \
         == reference.counts.tolist()

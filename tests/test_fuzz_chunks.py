@@ -8,7 +8,8 @@ import zipfile
 import numpy as np
 import pytest
 
-from dice_env.studies import distributed as dist
+from dice_env.simulation import runner as dist
+from studies import many_throws as cli
 
 CASES = 300  # tampered files, each read once (no throw is simulated): a few seconds in all
 ARGV = ["--throws", "40", "--chunk", "20", "--seed", "3"]
@@ -79,7 +80,7 @@ def _tamper(rng, data):
 
 def test_every_tampered_chunk_gives_a_tally_or_the_runners_refusal(tmp_path, capsys):
     run = tmp_path / "run"
-    dist.main([*ARGV, "--out", str(run)])
+    cli.main([*ARGV, "--out", str(run)])
     capsys.readouterr()
     chunk = run / "chunk_000001.npz"
     data, rng, outcomes = chunk.read_bytes(), np.random.default_rng(47), {"refused": 0, "read": 0}
@@ -88,11 +89,11 @@ def test_every_tampered_chunk_gives_a_tally_or_the_runners_refusal(tmp_path, cap
         (folder / chunk.name).write_bytes(_tamper(rng, data))
         start = time.perf_counter()
         try:
-            dist.main([*ARGV, "--out", str(folder)])
+            cli.main([*ARGV, "--out", str(folder)])
         except SystemExit as exit_:
             err = capsys.readouterr().err.splitlines()
             assert exit_.code == 2, err
-            assert err[-1].startswith("python -m dice_env.studies.distributed: error: "
+            assert err[-1].startswith("python -m studies.many_throws: error: "
                                       "argument --out: "), err
             assert "delete it" in err[-1] and chunk.name in err[-1], err
             outcomes["refused"] += 1
@@ -108,9 +109,9 @@ def test_every_tampered_chunk_gives_a_tally_or_the_runners_refusal(tmp_path, cap
 @pytest.mark.parametrize("record", RECORDS)
 def test_a_chunk_record_of_any_kind_is_refused_by_name(tmp_path, capsys, record):
     run = tmp_path / "run"
-    dist.main([*ARGV, "--out", str(run)])
+    cli.main([*ARGV, "--out", str(run)])
     chunk = run / "chunk_000000.npz"
     chunk.write_bytes(_npz(_arrays(chunk.read_bytes()) | {"chunk": np.array(record)}))
     with pytest.raises(SystemExit) as exit_:
-        dist.main([*ARGV, "--out", str(run)])
+        cli.main([*ARGV, "--out", str(run)])
     assert exit_.value.code == 2 and chunk.name in capsys.readouterr().err.splitlines()[-1]

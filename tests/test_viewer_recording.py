@@ -1,7 +1,6 @@
 import dataclasses
 import json
 import time
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -236,17 +235,25 @@ def test_pages_and_recordings_are_written_whole_or_not_at_all(two_dice, tmp_path
         write(two_dice, path)
         whole = path.read_bytes()
         with monkeypatch.context() as patch:
-            patch.setattr(Path, "write_bytes", _interrupted(Path.write_bytes))
-            patch.setattr(Path, "write_text", _interrupted(Path.write_text))
+            patch.setattr("dice_env.disk.open", _HalfThenStopped, raising=False)
             with pytest.raises(KeyboardInterrupt):
                 write(two_dice, path)
         assert path.read_bytes() == whole
     assert sorted(p.name for p in tmp_path.iterdir()) == ["a.glb", "a.html", "a.json"]
 
 
-def _interrupted(write):
-    """``write`` (Path.write_bytes or write_text) that writes half its data, then is stopped."""
-    def half(self, data, *args, **keywords):
-        write(self, data[:len(data) // 2], *args, **keywords)
+class _HalfThenStopped:
+    """A file opened as ``open`` does whose ``write`` writes half its data, then is stopped."""
+
+    def __init__(self, path, mode):
+        self.file = open(path, mode)
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.file.close()
+
+    def write(self, data):
+        self.file.write(data[:len(data) // 2])
         raise KeyboardInterrupt
-    return half

@@ -12,7 +12,7 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
-from dice_env.viewer.disk import write_atomically
+from dice_env.disk import write_atomically
 
 # Headless, software WebGL, and no background connections (refused on a closed network).
 CHROMIUM_ARGS = ("--no-sandbox", "--disable-gpu", "--use-angle=swiftshader",

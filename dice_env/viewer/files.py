@@ -14,9 +14,9 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
+from dice_env.disk import parse_json, write_atomically
 from dice_env.envs.keywords import ENV_MAX_STEPS
 from dice_env.envs.throw_task import UNTIL
-from dice_env.viewer.disk import parse_json, write_atomically
 from dice_env.viewer.html import read_html
 from dice_env.viewer.recording import Recording, as_data, record, run_plan
 

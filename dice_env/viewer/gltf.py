@@ -20,10 +20,10 @@ from typing import Any
 import numpy as np
 import pygltflib as gl
 
+from dice_env.disk import parse_json, write_atomically
 from dice_env.envs.render import TABLE_COLOUR, WALL_COLOUR, _plane_axes, _unit
 from dice_env.model.die import Die
 from dice_env.model.rotations import matrix_to_quaternion
-from dice_env.viewer.disk import parse_json, write_atomically
 from dice_env.viewer.recording import Recording, library_version
 from dice_env.viewer.textures import face_atlas, png_bytes
 

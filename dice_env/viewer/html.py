@@ -17,10 +17,10 @@ from typing import Any
 
 import numpy as np
 
+from dice_env.disk import parse_json, write_atomically
 from dice_env.model.checks import check_choice
 from dice_env.model.die import Die
 from dice_env.model.scene import Scene
-from dice_env.viewer.disk import parse_json, write_atomically
 from dice_env.viewer.recording import Recording
 from dice_env.viewer.textures import face_atlas, png_bytes
 

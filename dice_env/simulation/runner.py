@@ -2,16 +2,13 @@
 
 Chunk ``i`` draws from ``SeedSequence(seed, spawn_key=(i,))`` alone and :class:`Tally` objects
 merge exactly, so :func:`run_throws` gives the same result bit for bit here or on Ray. A run
-folder keeps each finished chunk; run again, it computes only the missing ones. Command line::
-
-    python -m dice_env.studies.distributed --die d20 --throws 1000000 --ray auto --out runs/d20
-
-Ray is an optional extra (``pip install 'dice_env[ray]'``).
+folder keeps each finished chunk; run again, it computes only the missing ones. Ray is an
+optional extra (``pip install 'dice_env[ray]'``); the command line is a checkout's,
+``python -m studies.many_throws``.
 """
 
 from __future__ import annotations
 
-import argparse
 import contextlib
 import dataclasses
 import functools
@@ -19,7 +16,6 @@ import json
 import math
 import re
 import sys
-import time
 import types
 from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass
@@ -27,12 +23,12 @@ from pathlib import Path
 
 import numpy as np
 
-from dice_env.markdown import bracket, markdown_table
+from dice_env.disk import write_atomically
 from dice_env.model.checks import check_int
 from dice_env.model.die import STANDARD_SIZES, Die
 from dice_env.model.scene import Scene
+from dice_env.simulation.chunks import FolderError, identity, load, prepare
 from dice_env.simulation.simulate import State, simulate
-from dice_env.studies.chunks import FolderError, identity, load, prepare, write_atomically
 from dice_env.throws import Faces, counted, hand_throws
 
 # Per-throw outcomes a chunk keeps, with their dtypes.
@@ -210,17 +206,19 @@ def throw_chunk(spec: Spec, index: int, num_threads: int | None = None) -> dict[
 
 
 def run_throws(scene: Scene | str, throws: int, *, chunk: int = CHUNK, seed: int = 0,
-               ray: str | None = None, out: Path | str | None = None, progress: bool = True,
-               draw: Draw = hand_throws, workers: int | None = None,
-               max_retries: int = 3) -> Tally:
+               ray: str | None = None, out: Path | str | None = None,
+               progress: Callable[[int], object] | None = None, draw: Draw = hand_throws,
+               workers: int | None = None, max_retries: int = 3) -> Tally:
     """Throw ``throws`` throws of ``scene`` in seeded chunks of ``chunk``; merge their tallies.
 
     ``scene``: a :class:`Scene`, or a standard die's name (``"d20"``) on the default table.
     ``ray``: None (this process, all numba threads) or an address (``"auto"``,
     ``"ray://host:10001"``, ``"local"``: a fresh instance), one Ray task on one thread per chunk;
     ``workers``: chunks at once on Ray (default: its CPUs); ``max_retries``: reruns of a chunk
-    whose worker died; ``out``: the run folder (FolderError if another run's). The result does
-    not depend on ``ray``, ``workers``, ``out`` or on interruptions.
+    whose worker died; ``out``: the run folder (FolderError if another run's); ``progress(n)``:
+    called as throws are done, ``n`` at a time (those of a run folder's chunks first), e.g. a
+    tqdm bar's ``update``. The result does not depend on ``ray``, ``workers``, ``out``,
+    ``progress`` or on interruptions.
     """
     if isinstance(scene, str):
         if scene not in STANDARD_SIZES:
@@ -235,40 +233,28 @@ def run_throws(scene: Scene | str, throws: int, *, chunk: int = CHUNK, seed: int
                                 or workers < 1):
         raise ValueError(f"workers must be None or an int >= 1, got {workers!r}")
     check_int("max_retries", max_retries, 0)
+    if progress is not None and not callable(progress):
+        raise TypeError(f"progress must be None or a callable taking the throws done, "
+                        f"got {progress!r}")
+    advance = progress or (lambda n: None)
     folder = None if out is None else prepare(Path(out), spec.record(), "out")
     tallies = {} if folder is None else _saved_tallies(folder, spec)
+    if tallies:
+        advance(sum(t.throws for t in tallies.values()))
     todo = [i for i in range(spec.n_chunks) if i not in tallies]
-    from tqdm import tqdm  # imported here: importing the runner needs no progress bar
-
-    bar = tqdm(total=spec.throws, initial=sum(t.throws for t in tallies.values()),
-               unit="throw", unit_scale=True, desc="throws", disable=not progress,
-               dynamic_ncols=True)
 
     def done(index: int, outcomes: dict[str, np.ndarray]) -> None:
         if folder is not None:
             _save_chunk(folder, spec, index, outcomes)
         tallies[index] = Tally.of(spec.scene, outcomes)
-        bar.update(spec.size(index))
+        advance(spec.size(index))
 
-    try:
-        if ray is None:
-            for index in todo:
-                done(index, throw_chunk(spec, index))
-        else:
-            _run_on_ray(ray, spec, todo, done, workers, max_retries)
-    finally:
-        bar.close()
+    if ray is None:
+        for index in todo:
+            done(index, throw_chunk(spec, index))
+    else:
+        _run_on_ray(ray, spec, todo, done, workers, max_retries)
     return Tally.merge(tallies[i] for i in range(spec.n_chunks))
-
-
-def hand_faces(scene: Scene, n: int, seed: int, *, ray: str | None = None,
-               chunk: int = CHUNK, keep: Path | str | None = None) -> Faces:
-    """The faces of ``n`` hand throws of ``scene`` from ``seed`` by :func:`run_throws`, no bar.
-
-    A study's ``faces_of``; ``keep``: a folder holding one run folder per seed (``seed-N``).
-    """
-    out = None if keep is None else Path(keep) / f"seed-{seed}"
-    return run_throws(scene, n, chunk=chunk, seed=seed, ray=ray, out=out, progress=False).faces
 
 
 @contextlib.contextmanager
@@ -377,76 +363,3 @@ def _save_chunk(folder: Path, spec: Spec, index: int, outcomes: dict[str, np.nda
     record = np.array(json.dumps(spec.chunk_record(index)))
     write_atomically(_chunk_path(folder, index),
                      lambda f: np.savez(f, chunk=record, **outcomes))
-
-
-def summary(tally: Tally, title: str) -> str:
-    """A markdown summary of ``tally``: faces, chi-square, the other outcomes' moments."""
-    faces = tally.faces
-    table = markdown_table("face | count | share | 95% interval", (
-        (label, c, f"{s:.5f}", bracket(interval, 5)) for label, (c, s, interval)
-        in enumerate(zip(faces.counts, faces.shares, faces.intervals, strict=True), 1)))
-    return f"""{title}
-
-{table}
-
-Counted {faces.ended} of {tally.throws} throws (not counted: {tally.unfinished} unfinished, \
-{tally.unstable} unstable, {tally.sunk} sunk). Chi-square of uniformity: \
-chi2 = {faces.chi2:.2f} ({len(faces.counts) - 1} degrees of freedom), p = {faces.p_value:.4g}.
-Steps {tally.mean('steps'):.0f} ± {tally.std('steps'):.0f}; time to the decided face \
-{tally.mean('time'):.3f} ± {tally.std('time'):.3f} s; impacts {tally.mean('impacts'):.2f} \
-± {tally.std('impacts'):.2f} (mean ± standard deviation)."""
-
-
-def at_least(low: int) -> Callable[[str], int]:
-    """An argparse type: an int >= ``low``."""
-    def parse(text: str) -> int:
-        with contextlib.suppress(ValueError):
-            if int(text) >= low:
-                return int(text)
-        raise argparse.ArgumentTypeError(f"must be an int >= {low}, got {text!r}")
-    return parse
-
-
-def ray_address(text: str) -> str:
-    """An argparse type: a Ray address, not empty."""
-    if not text.strip():
-        raise argparse.ArgumentTypeError(f"must be a Ray address (auto, local, "
-                                         f"ray://host:port), got {text!r}")
-    return text
-
-
-def main(argv: list[str] | None = None) -> None:
-    """Throw a standard die many times (optionally on Ray) and print the summary."""
-    parser = argparse.ArgumentParser(
-        prog="python -m dice_env.studies.distributed",
-        description="Many vigorous hand throws of a standard die to a decided face, in seeded "
-        "chunks, in this process or on a Ray cluster; prints the faces and their chi-square.")
-    parser.add_argument("--die", choices=tuple(STANDARD_SIZES), default="d6")
-    parser.add_argument("--throws", type=at_least(1), default=100_000)
-    parser.add_argument("--chunk", type=at_least(1), default=CHUNK, help="throws per chunk")
-    parser.add_argument("--seed", type=at_least(0), default=0)
-    parser.add_argument("--ray", metavar="ADDRESS", type=ray_address, default=None,
-                        help="run on Ray: auto, ray://host:10001, or local (a fresh local "
-                        "instance); default: in this process")
-    parser.add_argument("--workers", type=at_least(1), default=None,
-                        help="chunks at once on Ray (default: the cluster's CPUs)")
-    parser.add_argument("--out", type=Path, default=None,
-                        help="run folder: per-chunk outcomes, resumed when run again")
-    args = parser.parse_args(argv)
-    start = time.perf_counter()
-    try:
-        tally = run_throws(args.die, args.throws, chunk=args.chunk, seed=args.seed,
-                           ray=args.ray, out=args.out, workers=args.workers)
-    except FolderError as error:
-        parser.error(f"argument --out: {error}")
-    seconds = time.perf_counter() - start
-    where = f"on Ray ({args.ray})" if args.ray else "in this process"
-    print(summary(tally, f"## {args.die}: {args.throws} throws in chunks of {args.chunk}, seed "
-                  f"{args.seed}, {where}: {seconds:.1f} s"))
-
-
-if __name__ == "__main__":
-    # the imported module's main, so that Ray ships throw_chunk by reference, not by value
-    from dice_env.studies.distributed import main as imported_main
-
-    imported_main()

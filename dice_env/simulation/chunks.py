@@ -9,14 +9,13 @@ from __future__ import annotations
 
 import hashlib
 import json
-import os
-import secrets
 import zipfile
 import zlib
-from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
+
+from dice_env.disk import write_atomically
 
 SPEC_FILE = "spec.json"
 
@@ -68,22 +67,6 @@ def prepare(folder: Path, record: dict, name: str = "keep") -> Path:
     return folder
 
 
-def write_atomically(path: Path, write: Callable) -> None:
-    """``write(file)`` to a temporary file renamed to ``path``: never a half-written file.
-
-    The temporary name is this process's alone (``<name>.<pid>-<random>.partial``, created
-    exclusively), so that processes writing the same folder never rename each other's files;
-    it is removed if ``write`` fails.
-    """
-    partial = path.with_name(f"{path.name}.{os.getpid()}-{secrets.token_hex(4)}.partial")
-    try:
-        with open(partial, "xb") as f:
-            write(f)
-        os.replace(partial, path)
-    finally:
-        partial.unlink(missing_ok=True)
-
-
 def load(path: Path) -> Arrays:
     """All the arrays of the ``.npz`` at ``path``; :class:`FolderError` naming it if corrupt."""
     try:
@@ -97,25 +80,3 @@ def load(path: Path) -> Arrays:
         raise FolderError(f"{str(path)!r} is corrupt (not a readable .npz archive): delete it "
                           "to throw its chunk again") from error
 
-
-def kept_chunks(throw: Callable[[int, int], Arrays], throws: int, chunk: int,
-                folder: Path | None, prefix: str, bar: object = None,
-                unit: int = 1) -> list[Arrays]:
-    """``throws`` split into chunks of ``chunk`` (the last takes the rest), each ``throw(i, size)``.
-
-    With ``folder`` (see :func:`prepare`), chunk ``i`` is kept as ``<prefix>-<i>-<size>.npz``
-    there and read back when present; ``bar`` advances by ``size * unit`` per chunk.
-    """
-    parts = []
-    for i, start in enumerate(range(0, throws, chunk)):
-        size = min(chunk, throws - start)
-        path = None if folder is None else folder / f"{prefix}-{i:05d}-{size}.npz"
-        if path is not None and path.exists():
-            parts.append(load(path))
-        else:
-            parts.append(throw(i, size))
-            if path is not None:
-                write_atomically(path, lambda f, arrays=parts[-1]: np.savez(f, **arrays))
-        if bar is not None:
-            bar.update(size * unit)
-    return parts
