@@ -12,6 +12,7 @@ from gymnasium.vector.utils import batch_space
 
 from dice_env.envs.dice_throw import (
     RENDER_FPS,
+    RESET_OPTIONS,
     action_space,
     configure,
     episode_hand,
@@ -95,6 +96,9 @@ class DiceThrowVectorEnv(VectorEnv):
             seeds = [None if seed is None else int(seed) + i for i in range(self.num_envs)]
         else:
             seeds = list(seed)
+        if options is not None and not isinstance(options, dict):
+            raise ValueError(f"options must be None or a dict with keys among {RESET_OPTIONS}, "
+                             f"got {options!r}")
         options = dict(options or {})
         mask = as_reset_mask(options.pop("reset_mask", None), self.num_envs)
         return self.reset_envs(seeds, [options] * self.num_envs, mask), {}
