@@ -175,12 +175,16 @@ class GroupOutcome(NamedTuple):
 
 
 @njit(cache=True, inline="always")
-def contact_force(depth: float, n: tuple, v: tuple, pair: Pair) -> tuple:
-    """Force (3) on the die ``n`` points into, ``depth`` deep at relative velocity ``v``; energy."""
+def contact_force(depth: float, share: float, n: tuple, v: tuple, pair: Pair) -> tuple:
+    """Force (3) on the die ``n`` points into, ``depth`` deep at relative velocity ``v``; energy.
+
+    ``share``: the point's depth over the contact's (see :func:`pair_contacts`), which scales
+    its damping as its depth scales its spring.
+    """
     n0, n1, n2 = n
     v0, v1, v2 = v
     vn = n0 * v0 + n1 * v1 + n2 * v2
-    fn = pair.stiffness * depth - pair.damping * vn
+    fn = pair.stiffness * depth - share * pair.damping * vn
     spring = 0.5 * pair.stiffness * depth * depth
     if fn <= 0.0:
         return 0.0, 0.0, 0.0, spring
@@ -227,18 +231,19 @@ def _apply(a: int, b: int, f: tuple, ra: tuple, rb: tuple, force: np.ndarray,
 
 
 @njit(cache=True, inline="always")
-def _push(a: int, b: int, point: tuple, depth: float, n: tuple, x: np.ndarray, cu: np.ndarray,
-          cw: np.ndarray, pair: Pair, force: np.ndarray, torque: np.ndarray) -> float:
+def _push(a: int, b: int, point: tuple, depth: float, share: float, n: tuple, x: np.ndarray,
+          cu: np.ndarray, cw: np.ndarray, pair: Pair, force: np.ndarray,
+          torque: np.ndarray) -> float:
     """A contact pushing die ``a`` along ``n``, ``b`` against it; returns the spring's energy."""
     v, ra, rb = _relative_velocity(a, b, point, x, cu, cw)
-    f0, f1, f2, spring = contact_force(depth, n, v, pair)
+    f0, f1, f2, spring = contact_force(depth, share, n, v, pair)
     _apply(a, b, (f0, f1, f2), ra, rb, force, torque)
     return spring
 
 
 @njit(cache=True, forceinline=True)
-def _push_tied(a: int, b: int, first: int, k: int, point: tuple, depth: float, n: tuple,
-               x: np.ndarray, q: np.ndarray, cu: np.ndarray, cw: np.ndarray, pair: Pair,
+def _push_tied(a: int, b: int, first: int, k: int, point: tuple, depth: float, share: float,
+               n: tuple, x: np.ndarray, q: np.ndarray, cu: np.ndarray, cw: np.ndarray, pair: Pair,
                ties: np.ndarray, fresh: bool, force: np.ndarray, torque: np.ndarray) -> tuple:
     """:func:`_push` for corner ``k`` of die ``first`` (``a`` or ``b``) with stick-slip friction.
 
@@ -249,7 +254,7 @@ def _push_tied(a: int, b: int, first: int, k: int, point: tuple, depth: float, n
     v, ra, rb = _relative_velocity(a, b, point, x, cu, cw)
     n0, n1, n2 = n
     vn = n0 * v[0] + n1 * v[1] + n2 * v[2]
-    fn = pair.stiffness * depth - pair.damping * vn
+    fn = pair.stiffness * depth - share * pair.damping * vn
     spring = 0.5 * pair.stiffness * depth * depth
     if fn <= 0.0:
         ties[first, k, other, 3] = 0.0
@@ -390,8 +395,8 @@ def inside_depth(h: tuple, depth: float, die: int, out: tuple, hulls: Hulls, tol
         if above > tol:
             return -1.0
         facing = m0 * out[0] + m1 * out[1] + m2 * out[2]
-        if facing >= FACING:
-            depth = min(depth, -above / facing)
+        if facing > FACING:  # the bound grows without limit as the face turns to FACING
+            depth = min(depth, -above * (1.0 - FACING) / (facing - FACING))
     return depth
 
 
@@ -458,12 +463,11 @@ def _crossings(a: int, b: int, first: int, other: int, n: tuple, out: tuple, hig
             depth = high_b - along if first == a else along - low_a
             if depth <= 0.0:
                 continue
-            h = (h0[0] + t * (h1[0] - h0[0]), h0[1] + t * (h1[1] - h0[1]),
-                 h0[2] + t * (h1[2] - h0[2]))
-            if inside_depth(h, 0.0, other, (0.0, 0.0, 0.0), hulls, tol) < 0.0:  # outside
+            if inside_depth(_turned_back(q, other, p, x), 0.0, other, (0.0, 0.0, 0.0), hulls,
+                            tol) < 0.0:  # outside
                 continue
-            depth = inside_depth(_middle(h0, h1, other, hulls), depth, other, out, hulls, np.inf)
-            if depth <= 0.0:
+            local = inside_depth(_middle(h0, h1, other, hulls), depth, other, out, hulls, np.inf)
+            if local <= 0.0:
                 continue
             r0, r1, r2 = p[0] - along * n0, p[1] - along * n1, p[2] - along * n2
             fresh = True
@@ -475,7 +479,7 @@ def _crossings(a: int, b: int, first: int, other: int, n: tuple, out: tuple, hig
             if not fresh:
                 continue
             n_seen = _seen(p, along, n, seen, n_seen)
-            spring += _push(a, b, p, depth, n, x, cu, cw, pair, force, torque)
+            spring += _push(a, b, p, local, local / depth, n, x, cu, cw, pair, force, torque)
     return spring, n_seen
 
 
@@ -516,21 +520,22 @@ def pair_contacts(a: int, b: int, n: tuple, world: np.ndarray, x: np.ndarray, q:
             p = (world[first, k, 0], world[first, k, 1], world[first, k, 2])
             along = n0 * p[0] + n1 * p[1] + n2 * p[2]
             depth = high_b - along if first == a else along - low_a
+            local = depth
             if depth > 0.0:
-                depth = inside_depth(_turned_back(q, other, p, x), depth, other, out, hulls, tol)
-            if depth <= 0.0:
+                local = inside_depth(_turned_back(q, other, p, x), depth, other, out, hulls, tol)
+            if local <= 0.0:
                 if pair.stick:
                     ties[first, k, other, 3] = 0.0
                 continue
             found = True
             n_seen = _seen(p, along, n, seen, n_seen)
             if pair.stick:
-                spring_k, stored_k = _push_tied(a, b, first, k, p, depth, n, x, q, cu, cw, pair,
-                                                ties, fresh, force, torque)
+                spring_k, stored_k = _push_tied(a, b, first, k, p, local, local / depth, n, x, q,
+                                                cu, cw, pair, ties, fresh, force, torque)
                 spring += spring_k
                 stored += stored_k
             else:
-                spring += _push(a, b, p, depth, n, x, cu, cw, pair, force, torque)
+                spring += _push(a, b, p, local, local / depth, n, x, cu, cw, pair, force, torque)
     gap2 = (LATERAL * min(r_max[a], r_max[b])) ** 2
     for first, other, out in ((a, b, out_b), (b, a, out_a)):
         spring_c, n_seen = _crossings(a, b, first, other, n, out, high_b, low_a, world,
