@@ -381,22 +381,32 @@ def least_overlap(a: int, b: int, world: np.ndarray, x: np.ndarray, q: np.ndarra
 
 
 @njit(cache=True, inline="always")
-def inside_depth(h: tuple, depth: float, die: int, out: tuple, hulls: Hulls, tol: float) -> float:
-    """How deep the point ``h`` lies inside die ``die`` along ``out`` (both in its body frame).
+def within(h: tuple, die: int, hulls: Hulls, tol: float) -> bool:
+    """Whether ``h`` (body frame) is inside die ``die``, its faces' planes moved out by ``tol``."""
+    planes = hulls.planes
+    for f in range(hulls.n_planes[die]):
+        if planes[die, f, 0] * h[0] + planes[die, f, 1] * h[1] + planes[die, f, 2] * h[2] \
+                - planes[die, f, 3] > tol:
+            return False
+    return True
 
-    At most ``depth`` (below the die's extreme along ``out``); each face within :data:`FACING`
-    of facing ``out`` bounds it by ``h``'s depth below that face. -1 where ``h`` is outside the
-    die (its faces' planes moved out by ``tol``).
+
+@njit(cache=True, inline="always")
+def inside_depth(h: tuple, depth: float, die: int, out: tuple, hulls: Hulls) -> float:
+    """How deep the point ``h`` inside die ``die`` lies along ``out`` (both in its body frame).
+
+    At most ``depth`` (below the die's extreme along ``out``); each face turned toward ``out``
+    by more than :data:`FACING` bounds it by ``h``'s depth below that face times
+    ``(1 - FACING) / (cos - FACING)``: exactly for a face square to ``out``, without limit as
+    the face turns to :data:`FACING`, so that the bound never jumps.
     """
     planes = hulls.planes
     for f in range(hulls.n_planes[die]):
         m0, m1, m2 = planes[die, f, 0], planes[die, f, 1], planes[die, f, 2]
-        above = m0 * h[0] + m1 * h[1] + m2 * h[2] - planes[die, f, 3]
-        if above > tol:
-            return -1.0
         facing = m0 * out[0] + m1 * out[1] + m2 * out[2]
-        if facing > FACING:  # the bound grows without limit as the face turns to FACING
-            depth = min(depth, -above * (1.0 - FACING) / (facing - FACING))
+        if facing > FACING:
+            below = planes[die, f, 3] - (m0 * h[0] + m1 * h[1] + m2 * h[2])
+            depth = min(depth, below * (1.0 - FACING) / (facing - FACING))
     return depth
 
 
@@ -463,10 +473,9 @@ def _crossings(a: int, b: int, first: int, other: int, n: tuple, out: tuple, hig
             depth = high_b - along if first == a else along - low_a
             if depth <= 0.0:
                 continue
-            if inside_depth(_turned_back(q, other, p, x), 0.0, other, (0.0, 0.0, 0.0), hulls,
-                            tol) < 0.0:  # outside
+            if not within(_turned_back(q, other, p, x), other, hulls, tol):
                 continue
-            local = inside_depth(_middle(h0, h1, other, hulls), depth, other, out, hulls, np.inf)
+            local = inside_depth(_middle(h0, h1, other, hulls), depth, other, out, hulls)
             if local <= 0.0:
                 continue
             r0, r1, r2 = p[0] - along * n0, p[1] - along * n1, p[2] - along * n2
@@ -520,9 +529,11 @@ def pair_contacts(a: int, b: int, n: tuple, world: np.ndarray, x: np.ndarray, q:
             p = (world[first, k, 0], world[first, k, 1], world[first, k, 2])
             along = n0 * p[0] + n1 * p[1] + n2 * p[2]
             depth = high_b - along if first == a else along - low_a
-            local = depth
+            local = 0.0
             if depth > 0.0:
-                local = inside_depth(_turned_back(q, other, p, x), depth, other, out, hulls, tol)
+                h = _turned_back(q, other, p, x)
+                if within(h, other, hulls, tol):
+                    local = inside_depth(h, depth, other, out, hulls)
             if local <= 0.0:
                 if pair.stick:
                     ties[first, k, other, 3] = 0.0
