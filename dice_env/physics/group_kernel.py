@@ -52,7 +52,8 @@ FACE_BIAS = 0.95
 # (corners exactly on a side plane, as in an aligned stack, must bear).
 LATERAL = 1e-3
 # A point inside a die is no deeper than below each face turned less than about 78 degrees from
-# the way it is pushed out (this cosine); the sides of a stack, at right angles to it, bound none.
+# the way it is pushed out (this cosine; see inside_depth); a stack's sides, at right angles to
+# it, bound none.
 FACING = 0.2
 
 
@@ -513,7 +514,9 @@ def pair_contacts(a: int, b: int, n: tuple, world: np.ndarray, x: np.ndarray, q:
     """Every contact of the overlapping dice ``a`` and ``b``, their forces applied.
 
     ``n``: :func:`least_overlap`'s axis. Corners inside the other die (:func:`_push_tied` with
-    ``pair.stick``), then :func:`_crossings`. Returns the two springs' energy, whether one bears.
+    ``pair.stick``), then :func:`_crossings`. A point is as deep as it lies beyond the other
+    die's extreme along ``n`` or, where less, inside that die (:func:`inside_depth`), and bears
+    that share of the damping. Returns the two springs' energy, whether one bears.
     """
     n_vertices = hulls.n_vertices
     n0, n1, n2 = n
