@@ -258,11 +258,12 @@ def test_fast_dice_do_not_pass_through_each_other(speed):
 
 def test_free_flight_jumps_only_where_no_die_can_touch_anything():
     # two dice dropped side by side from 30 cm toward each other: most of the fall is jumped;
-    # the landing and the collision are those of stepping every step to round-off, and after
-    # the chaos of the bounces the faces agree as often as round-off allows. "Round-off" grows
-    # in the bounces: where a stick-slip tie or a contact point starts or ends on a
-    # threshold, stepping alone turns 1e-13 m at the release into 1e-7 m at the end in one of
-    # these throws; a jump a step off would be 1e-5 m off (2.4 m/s for 6.5 us).
+    # the dice's first collision is that of stepping every step to round-off, the landing too
+    # where the collisions are not chaotic, and after the bounces the faces agree as often as
+    # round-off allows. A jump a step off would be 1e-5 m off (2.4 m/s for 6.5 us). The
+    # round-off grows where a stick-slip tie or a contact point starts or ends on a threshold:
+    # stepping alone turns 1e-13 m at the release into 1e-2 m by the landing in two of these
+    # throws (a nudge of die 1's release by +-1e-13 or 3e-13 m).
     scene = Scene(walls=tray(), t_max=1.0)
     rng = np.random.default_rng(3)
     n = 8
@@ -275,9 +276,14 @@ def test_free_flight_jumps_only_where_no_die_can_touch_anything():
                                    free_flight=flight, until="t_max")
             for flight in (True, False)}
     assert (runs[False].overlap > 0).any() and runs[False].impacts.all()  # met and landed
-    np.testing.assert_allclose(runs[True].final.position, runs[False].final.position,
-                               rtol=0, atol=1e-6)
-    np.testing.assert_allclose(runs[True].overlap, runs[False].overlap, rtol=1e-6)
+    met = runs[False].meet_steps[:, 1] >= 0
+    assert met.sum() >= 6
+    np.testing.assert_array_equal(runs[True].meet_steps[met], runs[False].meet_steps[met])
+    for field in ("meet_velocity", "meet_spin"):
+        np.testing.assert_allclose(getattr(runs[True], field)[met],
+                                   getattr(runs[False], field)[met], rtol=1e-8, atol=1e-9)
+    landed = np.abs(runs[True].final.position - runs[False].final.position).max(axis=(1, 2))
+    assert (landed < 1e-6).mean() >= 0.75, landed
     faces = [simulate_group(scene, (DIE, DIE), start, free_flight=flight,
                             until="decided").face for flight in (True, False)]
     assert (faces[0] == faces[1]).all(axis=1).mean() >= 0.75

@@ -51,6 +51,10 @@ FACE_BIAS = 0.95
 # A corner bears on another die's face when inside it to this fraction of that die's reach
 # (corners exactly on a side plane, as in an aligned stack, must bear).
 LATERAL = 1e-3
+# A point inside a die is no deeper than below each face turned less than about 78 degrees from
+# the way it is pushed out (this cosine; see inside_depth); a stack's sides, at right angles to
+# it, bound none.
+FACING = 0.2
 
 
 class Bodies(NamedTuple):
@@ -172,12 +176,16 @@ class GroupOutcome(NamedTuple):
 
 
 @njit(cache=True, inline="always")
-def contact_force(depth: float, n: tuple, v: tuple, pair: Pair) -> tuple:
-    """Force (3) on the die ``n`` points into, ``depth`` deep at relative velocity ``v``; energy."""
+def contact_force(depth: float, share: float, n: tuple, v: tuple, pair: Pair) -> tuple:
+    """Force (3) on the die ``n`` points into, ``depth`` deep at relative velocity ``v``; energy.
+
+    ``share``: the point's depth over the contact's (see :func:`pair_contacts`), which scales
+    its damping as its depth scales its spring.
+    """
     n0, n1, n2 = n
     v0, v1, v2 = v
     vn = n0 * v0 + n1 * v1 + n2 * v2
-    fn = pair.stiffness * depth - pair.damping * vn
+    fn = pair.stiffness * depth - share * pair.damping * vn
     spring = 0.5 * pair.stiffness * depth * depth
     if fn <= 0.0:
         return 0.0, 0.0, 0.0, spring
@@ -224,18 +232,19 @@ def _apply(a: int, b: int, f: tuple, ra: tuple, rb: tuple, force: np.ndarray,
 
 
 @njit(cache=True, inline="always")
-def _push(a: int, b: int, point: tuple, depth: float, n: tuple, x: np.ndarray, cu: np.ndarray,
-          cw: np.ndarray, pair: Pair, force: np.ndarray, torque: np.ndarray) -> float:
+def _push(a: int, b: int, point: tuple, depth: float, share: float, n: tuple, x: np.ndarray,
+          cu: np.ndarray, cw: np.ndarray, pair: Pair, force: np.ndarray,
+          torque: np.ndarray) -> float:
     """A contact pushing die ``a`` along ``n``, ``b`` against it; returns the spring's energy."""
     v, ra, rb = _relative_velocity(a, b, point, x, cu, cw)
-    f0, f1, f2, spring = contact_force(depth, n, v, pair)
+    f0, f1, f2, spring = contact_force(depth, share, n, v, pair)
     _apply(a, b, (f0, f1, f2), ra, rb, force, torque)
     return spring
 
 
 @njit(cache=True, forceinline=True)
-def _push_tied(a: int, b: int, first: int, k: int, point: tuple, depth: float, n: tuple,
-               x: np.ndarray, q: np.ndarray, cu: np.ndarray, cw: np.ndarray, pair: Pair,
+def _push_tied(a: int, b: int, first: int, k: int, point: tuple, depth: float, share: float,
+               n: tuple, x: np.ndarray, q: np.ndarray, cu: np.ndarray, cw: np.ndarray, pair: Pair,
                ties: np.ndarray, fresh: bool, force: np.ndarray, torque: np.ndarray) -> tuple:
     """:func:`_push` for corner ``k`` of die ``first`` (``a`` or ``b``) with stick-slip friction.
 
@@ -246,7 +255,7 @@ def _push_tied(a: int, b: int, first: int, k: int, point: tuple, depth: float, n
     v, ra, rb = _relative_velocity(a, b, point, x, cu, cw)
     n0, n1, n2 = n
     vn = n0 * v[0] + n1 * v[1] + n2 * v[2]
-    fn = pair.stiffness * depth - pair.damping * vn
+    fn = pair.stiffness * depth - share * pair.damping * vn
     spring = 0.5 * pair.stiffness * depth * depth
     if fn <= 0.0:
         ties[first, k, other, 3] = 0.0
@@ -373,15 +382,51 @@ def least_overlap(a: int, b: int, world: np.ndarray, x: np.ndarray, q: np.ndarra
 
 
 @njit(cache=True, inline="always")
-def within(p: tuple, die: int, x: np.ndarray, q: np.ndarray, hulls: Hulls, tol: float) -> bool:
-    """Whether the point ``p`` lies inside die ``die`` (its faces' planes moved out by ``tol``)."""
+def within(h: tuple, die: int, hulls: Hulls, tol: float) -> bool:
+    """Whether ``h`` (body frame) is inside die ``die``, its faces' planes moved out by ``tol``."""
     planes = hulls.planes
-    b0, b1, b2 = _turned_back(q, die, p, x)
     for f in range(hulls.n_planes[die]):
-        if planes[die, f, 0] * b0 + planes[die, f, 1] * b1 + planes[die, f, 2] * b2 \
+        if planes[die, f, 0] * h[0] + planes[die, f, 1] * h[1] + planes[die, f, 2] * h[2] \
                 - planes[die, f, 3] > tol:
             return False
     return True
+
+
+@njit(cache=True, inline="always")
+def inside_depth(h: tuple, depth: float, die: int, out: tuple, hulls: Hulls) -> float:
+    """How deep the point ``h`` inside die ``die`` lies along ``out`` (both in its body frame).
+
+    At most ``depth`` (below the die's extreme along ``out``); each face turned toward ``out``
+    by more than :data:`FACING` bounds it by ``h``'s depth below that face times
+    ``(1 - FACING) / (cos - FACING)``: exactly for a face square to ``out``, without limit as
+    the face turns to :data:`FACING`, so that the bound never jumps.
+    """
+    planes = hulls.planes
+    for f in range(hulls.n_planes[die]):
+        m0, m1, m2 = planes[die, f, 0], planes[die, f, 1], planes[die, f, 2]
+        facing = m0 * out[0] + m1 * out[1] + m2 * out[2]
+        if facing > FACING:
+            below = planes[die, f, 3] - (m0 * h[0] + m1 * h[1] + m2 * h[2])
+            depth = min(depth, below * (1.0 - FACING) / (facing - FACING))
+    return depth
+
+
+@njit(cache=True, inline="always")
+def _middle(h0: tuple, h1: tuple, die: int, hulls: Hulls) -> tuple:
+    """The middle of the stretch of the segment ``h0``-``h1`` inside die ``die`` (body frame)."""
+    planes = hulls.planes
+    low, high = 0.0, 1.0
+    for f in range(hulls.n_planes[die]):
+        m0, m1, m2 = planes[die, f, 0], planes[die, f, 1], planes[die, f, 2]
+        above0 = m0 * h0[0] + m1 * h0[1] + m2 * h0[2] - planes[die, f, 3]
+        above1 = m0 * h1[0] + m1 * h1[1] + m2 * h1[2] - planes[die, f, 3]
+        if above0 > 0.0 and above0 > above1:
+            low = max(low, above0 / (above0 - above1))
+        elif above1 > 0.0 and above1 > above0:
+            high = min(high, above0 / (above0 - above1))
+    t = 0.5 * (low + high)
+    return (h0[0] + t * (h1[0] - h0[0]), h0[1] + t * (h1[1] - h0[1]),
+            h0[2] + t * (h1[2] - h0[2]))
 
 
 @njit(cache=True, inline="always")
@@ -394,14 +439,17 @@ def _seen(p: tuple, along: float, n: tuple, seen: np.ndarray, n_seen: int) -> in
 
 
 @njit(cache=True, forceinline=True)
-def _crossings(a: int, b: int, first: int, other: int, n: tuple, high_b: float,
+def _crossings(a: int, b: int, first: int, other: int, n: tuple, out: tuple, high_b: float,
                low_a: float, world: np.ndarray, x: np.ndarray, q: np.ndarray, cu: np.ndarray,
                cw: np.ndarray, hulls: Hulls, pair: Pair, seen: np.ndarray, n_seen: int,
                gap2: float, force: np.ndarray, torque: np.ndarray) -> tuple:
     """Push every point where an edge of die ``first`` passes through a face of ``other``.
 
-    Unless within ``sqrt(gap2)`` across the axis of a point in ``seen``. Returns the springs'
-    energy and the new count in ``seen``.
+    Unless within ``sqrt(gap2)`` across the axis of a point in ``seen``; ``out``: the axis out
+    of ``other`` (its body frame), as :func:`inside_depth`. A point is no deeper than the
+    middle of its edge's stretch inside ``other``: an edge that grazes a ridge of ``other`` far
+    from that die's extreme bears as little as it is inside. Returns the springs' energy and
+    the new count in ``seen``.
     """
     n0, n1, n2 = n
     planes, edges = hulls.planes, hulls.edges
@@ -424,7 +472,12 @@ def _crossings(a: int, b: int, first: int, other: int, n: tuple, high_b: float,
                  p0[2] + t * (p1[2] - p0[2]))
             along = n0 * p[0] + n1 * p[1] + n2 * p[2]
             depth = high_b - along if first == a else along - low_a
-            if depth <= 0.0 or not within(p, other, x, q, hulls, tol):
+            if depth <= 0.0:
+                continue
+            if not within(_turned_back(q, other, p, x), other, hulls, tol):
+                continue
+            local = inside_depth(_middle(h0, h1, other, hulls), depth, other, out, hulls)
+            if local <= 0.0:
                 continue
             r0, r1, r2 = p[0] - along * n0, p[1] - along * n1, p[2] - along * n2
             fresh = True
@@ -436,17 +489,22 @@ def _crossings(a: int, b: int, first: int, other: int, n: tuple, high_b: float,
             if not fresh:
                 continue
             n_seen = _seen(p, along, n, seen, n_seen)
-            spring += _push(a, b, p, depth, n, x, cu, cw, pair, force, torque)
+            spring += _push(a, b, p, local, local / depth, n, x, cu, cw, pair, force, torque)
     return spring, n_seen
 
 
 @njit(cache=True, inline="always")
 def _turned_back(q: np.ndarray, die: int, p: tuple, x: np.ndarray) -> tuple:
     """The world point ``p`` in die ``die``'s body frame: ``q[die]^T (p - x[die])``."""
-    r0, r1, r2 = p[0] - x[die, 0], p[1] - x[die, 1], p[2] - x[die, 2]
-    return (q[die, 0, 0] * r0 + q[die, 1, 0] * r1 + q[die, 2, 0] * r2,
-            q[die, 0, 1] * r0 + q[die, 1, 1] * r1 + q[die, 2, 1] * r2,
-            q[die, 0, 2] * r0 + q[die, 1, 2] * r1 + q[die, 2, 2] * r2)
+    return _body(q, die, (p[0] - x[die, 0], p[1] - x[die, 1], p[2] - x[die, 2]))
+
+
+@njit(cache=True, inline="always")
+def _body(q: np.ndarray, die: int, v: tuple) -> tuple:
+    """The world vector ``v`` in die ``die``'s body frame: ``q[die]^T v``."""
+    return (q[die, 0, 0] * v[0] + q[die, 1, 0] * v[1] + q[die, 2, 0] * v[2],
+            q[die, 0, 1] * v[0] + q[die, 1, 1] * v[1] + q[die, 2, 1] * v[2],
+            q[die, 0, 2] * v[0] + q[die, 1, 2] * v[1] + q[die, 2, 2] * v[2])
 
 
 @njit(cache=True)
@@ -456,7 +514,9 @@ def pair_contacts(a: int, b: int, n: tuple, world: np.ndarray, x: np.ndarray, q:
     """Every contact of the overlapping dice ``a`` and ``b``, their forces applied.
 
     ``n``: :func:`least_overlap`'s axis. Corners inside the other die (:func:`_push_tied` with
-    ``pair.stick``), then :func:`_crossings`. Returns the two springs' energy, whether one bears.
+    ``pair.stick``), then :func:`_crossings`. A point is as deep as it lies beyond the other
+    die's extreme along ``n`` or, where less, inside that die (:func:`inside_depth`), and bears
+    that share of the damping. Returns the two springs' energy, whether one bears.
     """
     n_vertices = hulls.n_vertices
     n0, n1, n2 = n
@@ -464,28 +524,35 @@ def pair_contacts(a: int, b: int, n: tuple, world: np.ndarray, x: np.ndarray, q:
     high_b = _extent(b, n0, n1, n2, world)[1]
     r_max = hulls.r_max
     spring, stored, found, n_seen = 0.0, 0.0, False, np.int64(0)  # one type: one compile
-    for first, other in ((a, b), (b, a)):
+    # the axis out of each die, in its body frame: a's corners leave b along n, b's a along -n
+    out_b, out_a = _body(q, b, n), _body(q, a, (-n0, -n1, -n2))
+    for first, other, out in ((a, b, out_b), (b, a, out_a)):
         tol = LATERAL * r_max[other]
         for k in range(n_vertices[first]):
             p = (world[first, k, 0], world[first, k, 1], world[first, k, 2])
             along = n0 * p[0] + n1 * p[1] + n2 * p[2]
             depth = high_b - along if first == a else along - low_a
-            if depth <= 0.0 or not within(p, other, x, q, hulls, tol):
+            local = 0.0
+            if depth > 0.0:
+                h = _turned_back(q, other, p, x)
+                if within(h, other, hulls, tol):
+                    local = inside_depth(h, depth, other, out, hulls)
+            if local <= 0.0:
                 if pair.stick:
                     ties[first, k, other, 3] = 0.0
                 continue
             found = True
             n_seen = _seen(p, along, n, seen, n_seen)
             if pair.stick:
-                spring_k, stored_k = _push_tied(a, b, first, k, p, depth, n, x, q, cu, cw, pair,
-                                                ties, fresh, force, torque)
+                spring_k, stored_k = _push_tied(a, b, first, k, p, local, local / depth, n, x, q,
+                                                cu, cw, pair, ties, fresh, force, torque)
                 spring += spring_k
                 stored += stored_k
             else:
-                spring += _push(a, b, p, depth, n, x, cu, cw, pair, force, torque)
+                spring += _push(a, b, p, local, local / depth, n, x, cu, cw, pair, force, torque)
     gap2 = (LATERAL * min(r_max[a], r_max[b])) ** 2
-    for first, other in ((a, b), (b, a)):
-        spring_c, n_seen = _crossings(a, b, first, other, n, high_b, low_a, world,
+    for first, other, out in ((a, b, out_b), (b, a, out_a)):
+        spring_c, n_seen = _crossings(a, b, first, other, n, out, high_b, low_a, world,
                                                  x, q, cu, cw, hulls, pair, seen, n_seen, gap2,
                                                  force, torque)
         spring += spring_c
