@@ -126,11 +126,12 @@ def test_a_d20_lying_edge_across_a_d12_gains_no_energy():
 @pytest.mark.slow
 @pytest.mark.parametrize("names", [("d12", "d20"), ("d20", "d8"), ("d8", "d12")])
 def test_many_faced_dice_dropped_and_thrown_together_gain_no_energy(names):
-    dice, result = dropped(names, 500, seed=2)
+    # 320 drops: the old contact gained energy in drops 95, 300 (d12, d20) and 300, 308 (d8, d12)
+    dice, result = dropped(names, 500, seed=2, pick=slice(320))
     assert (result.energy_rise < 0.1).all(), np.flatnonzero(result.energy_rise >= 0.1)
     assert_apart(dice, result)
-    scene = Scene(walls=tray(), t_max=pairs.T_MAX)
-    start = pairs.hand_throws(scene, dice, 500, np.random.default_rng(2))
+    scene = Scene(walls=tray(), t_max=throws.T_TRAY)
+    start = throws.group_throws(scene, dice, 300, np.random.default_rng(2))
     result = simulate_group(scene, dice, start, until="decided")
     assert (result.energy_rise < 0.1).all(), np.flatnonzero(result.energy_rise >= 0.1)
     assert not result.unstable.any() and not result.sunk.any()
