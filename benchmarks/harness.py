@@ -10,6 +10,8 @@ import time
 from collections.abc import Callable
 from pathlib import Path
 
+from dice_env.disk import write_atomically
+
 RESULTS = Path(__file__).resolve().parent / "results"
 
 
@@ -60,6 +62,6 @@ def timed(fn: Callable[[], object], repeats: int, threads: int = 1) -> tuple[flo
 
 
 def write_json(out: Path, record: dict, indent: int = 2) -> None:
-    """Write ``record`` to ``out`` as JSON, creating its folder."""
+    """Write ``record`` to ``out`` as JSON, whole or not at all, creating its folder."""
     out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(json.dumps(record, indent=indent) + "\n")
+    write_atomically(out, (json.dumps(record, indent=indent) + "\n").encode())

@@ -30,7 +30,7 @@ from dice_env.simulation.group import (
     simulate_group,
 )
 from dice_env.throws import HAND, T_TRAY, group_throws, tray_scene
-from studies.common import DOCS, SEED, checked_throws, progress, save_figure
+from studies.common import DOCS, SEED, checked_throws, progress, save_figure, write_text
 from studies.pairs import not_void, simulate_in_batches, void_reasons
 from studies.templates import study_page
 
@@ -222,7 +222,7 @@ def run(out: Path = DOCS, quick: bool = False, throws: int | None = None,
     bar.close()
     numbers = _numbers(study, seconds, cpu, np.random.default_rng(seed))
     _plot(study, numbers, out / "figures" / "collisions.png")
-    (out / "collisions.md").write_text(_markdown(numbers, seed))
+    write_text(out / "collisions.md", _markdown(numbers, seed))
     return {k: v for k, v in numbers.items() if isinstance(v, float)}
 
 

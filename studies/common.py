@@ -24,10 +24,15 @@ SEED = 2026  # the studies' default seed
 
 
 def save_figure(fig: plt.Figure, path: Path) -> None:
-    """Write ``fig`` as a PNG (creating the folder) and close it."""
+    """Write ``fig`` as a PNG, whole or not at all (creating the folder), and close it."""
     path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=110, bbox_inches="tight")
+    write_atomically(path, lambda f: fig.savefig(f, format="png", dpi=110, bbox_inches="tight"))
     plt.close(fig)
+
+
+def write_text(path: Path, text: str) -> None:
+    """Write a page or JSON ``text`` to ``path``, whole or not at all."""
+    write_atomically(path, text.encode())
 
 
 def error_bars(p: np.ndarray, ci: np.ndarray) -> np.ndarray:

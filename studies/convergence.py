@@ -27,7 +27,7 @@ from dice_env.throws import (
     Release,
     face_agreement,
 )
-from studies.common import SEED, progress
+from studies.common import SEED, progress, write_text
 from studies.templates import study_page
 
 ENERGY_BINS = (0.0, 0.06, 0.12, 0.2, 0.3, np.inf)  # drop heights E / (m g) (m) of the bins
@@ -331,7 +331,7 @@ def write_report(out: Path, numbers: dict[str, object], quick: bool) -> dict[str
         outcome_table=_outcome_table(outcomes), agreement_table=_agreement_table(height, agreement),
         gentle_table=_gentle_table(gentle), RESTITUTION=RESTITUTION, FRICTION=FRICTION,
         STIFFNESS=STIFFNESS, DAMPING=DAMPING)
-    (out / "error-vs-runtime.md").write_text(text)
+    write_text(out / "error-vs-runtime.md", text)
     return {"cpu_ratio_at_equal_error": ratio, "order_default": orders[DEFAULT],
             "gentle_agreement": verdicts["default"]["gentle"],
             "min_p_value": verdicts["default"]["p_min"],

@@ -28,7 +28,7 @@ from dice_env.throws import (
     random_orientations,
     sevens_set,
 )
-from studies.common import DOCS, SEED, checked_throws, error_bars, progress, save_figure
+from studies.common import DOCS, SEED, checked_throws, error_bars, progress, save_figure, write_text
 from studies.pairs import (
     TOTALS,
     not_void,
@@ -117,7 +117,7 @@ def run(out: Path = DOCS, quick: bool = False, throws: int | None = None,
             table = [[c["sevens"], c["n"] - c["sevens"]], [r["sevens"], r["n"] - r["sevens"]]]
             c["fisher_p"] = float(stats.fisher_exact(table).pvalue)
     _plot(cells, noises, speeds, out / "figures" / "craps.png")
-    (out / "craps.md").write_text(_markdown(cells, noises, speeds, n, seconds, cpu, seed))
+    write_text(out / "craps.md", _markdown(cells, noises, speeds, n, seconds, cpu, seed))
     p7 = {f"p7_{way}_{noise:g}_{speed:g}": c["p7"] for (noise, speed, way), c in cells.items()}
     return {"throws_per_cell": float(n), "seconds": seconds, **p7,
             "voided": sum(c["thrown"] - c["n"] for c in cells.values()) / (n * len(cells))}

@@ -21,7 +21,7 @@ from dice_env.model.die import Die
 from dice_env.model.scene import Ground, Scene
 from dice_env.model.table import DIE_EDGE, DIE_MASS, RESTITUTION, damping_for_restitution
 from dice_env.throws import VIGOROUS, Vigour, hand_throws, throw_faces
-from studies.common import DOCS, SEED, checked_throws, progress, save_figure
+from studies.common import DOCS, SEED, checked_throws, progress, save_figure, write_text
 from studies.templates import study_page
 
 # x/y of the shapes thrown (1 is the cube).
@@ -77,7 +77,7 @@ def run(out: Path = DOCS, quick: bool = False, seed: int = SEED,
             table[label, ratio] = (faces, hits / faces.ended, wilson(hits, faces.ended))
     bar.close()
     _plot(table, ratios, n, out / "figures" / "cuboids.png")
-    (out / "cuboids.md").write_text(_markdown(table, ratios, n, seed, quick, throws))
+    write_text(out / "cuboids.md", _markdown(table, ratios, n, seed, quick, throws))
     first = CONDITIONS[0][0]
     _, cube_p, (cube_lo, cube_hi) = table[first, 1.0]
     return {**{f"p_{r:g}": table[first, r][1] for r in ratios}, "cube_p": cube_p,

@@ -25,7 +25,7 @@ from dice_env.throws import (
     energy_throws,
     vigorous_throws,
 )
-from studies.common import DOCS, SEED, error_bars, join, progress, save_figure
+from studies.common import DOCS, SEED, error_bars, join, progress, save_figure, write_text
 from studies.templates import study_page
 
 # Throws of the full and quick runs: fair, loaded, and the memory-against-energy throws.
@@ -115,7 +115,7 @@ def run(out: Path = DOCS, quick: bool = False, seed: int = SEED) -> dict[str, fl
         "up_gentle": float(memory["p_up"][0]), "up_vigorous": float(memory["p_up"][-1]),
         "fair_energy_median": float(np.median(throw_energy(scene, fair_state))),
     }
-    (out / "fairness.md").write_text(_markdown(scene, loaded_die, fair, loaded, memory, numbers,
+    write_text(out / "fairness.md", _markdown(scene, loaded_die, fair, loaded, memory, numbers,
                                                sizes, seed))
     return numbers
 

@@ -21,7 +21,7 @@ from dice_env.model import materials
 from dice_env.simulation.calibration import measured_restitution
 from dice_env.simulation.simulate import UP, State, simulate
 from dice_env.throws import BATCH, VIGOROUS, Faces, Vigour, batches, counted, vigorous_throws
-from studies.common import DOCS, SEED, checked_throws, progress, save_figure
+from studies.common import DOCS, SEED, checked_throws, progress, save_figure, write_text
 from studies.cuboids import GENTLE
 from studies.fairness import T_MAX, throw_energy
 from studies.templates import study_page
@@ -94,7 +94,7 @@ def run(out: Path = DOCS, quick: bool = False, throws: int | None = None,
     energy = {label: float(np.median(throw_energy(base, state)))
               for label, state in releases.items()}
     _plot(results, out / "figures" / "materials.png")
-    (out / "materials.md").write_text(_markdown(results, restitution, energy, sizes, seconds,
+    write_text(out / "materials.md", _markdown(results, restitution, energy, sizes, seconds,
                                                 seed))
     numbers = {"seconds": seconds}
     for name, kinds in results.items():

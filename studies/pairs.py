@@ -35,7 +35,16 @@ from dice_env.throws import (
     group_throws,
     tray_scene,
 )
-from studies.common import DOCS, SEED, checked_throws, join, kept_chunks, progress, save_figure
+from studies.common import (
+    DOCS,
+    SEED,
+    checked_throws,
+    join,
+    kept_chunks,
+    progress,
+    save_figure,
+    write_text,
+)
 from studies.templates import study_page
 
 # Throws of the pair in the full and the quick run, per kernel call, per seeded chunk.
@@ -200,7 +209,7 @@ def run(out: Path = DOCS, quick: bool = False, throws: int | None = None,
     bar.close()
     _plot(pairs, out / "figures" / "pairs.png")
     numbers = _numbers(pairs, seconds, cpu)
-    (out / "pairs.md").write_text(_markdown(pairs, numbers, scene, seed))
+    write_text(out / "pairs.md", _markdown(pairs, numbers, scene, seed))
     return numbers
 
 

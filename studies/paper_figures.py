@@ -15,7 +15,7 @@ import numpy as np
 from dice_env.markdown import markdown_table
 from dice_env.model.scene import ContactLaw
 from dice_env.simulation.paper import PaperRun, ground_cube, paper_scene, real_throw_cube
-from studies.common import DOCS, progress, save_figure
+from studies.common import DOCS, progress, save_figure, write_text
 from studies.templates import study_page
 
 THROW_SEED = 0  # seed of the real throw's initial angular momentum (the listing's rand(3,1))
@@ -151,7 +151,7 @@ def run(out: Path = DOCS, quick: bool = False) -> dict[str, float]:
     _plot_variants(runs, figs / "paper_fig6_12_ground_cube.png")
     _plot_search(stiffnesses, search, figs / "paper_fig13_steps_vs_stiffness.png")
     numbers = _numbers(throws, runs, stiffnesses, search)
-    (out / "paper.md").write_text(_markdown(numbers, throws, stiffnesses, search))
+    write_text(out / "paper.md", _markdown(numbers, throws, stiffnesses, search))
     return numbers
 
 

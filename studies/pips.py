@@ -13,7 +13,7 @@ import numpy as np
 from dice_env.markdown import markdown_table
 from dice_env.model.die import Die
 from dice_env.model.pips import DRILLINGS, SOURCES, Pips, cap_properties
-from studies.common import DOCS
+from studies.common import DOCS, write_text
 from studies.templates import study_page
 
 
@@ -41,7 +41,7 @@ def run(out: Path = DOCS, quick: bool = False) -> dict[str, float]:
         "products yz, xz, xy / (m s²/6) (10⁻³)",
         (_mass_row(label, die, pips) for label, die, pips in rows))
     out.mkdir(parents=True, exist_ok=True)
-    (out / "pips.md").write_text(study_page(
+    write_text(out / "pips.md", study_page(
         "pips", presets=presets, masses=masses, sources=SOURCES, z_share=5 / math.sqrt(35),
         z_angle=math.degrees(math.atan(math.sqrt(10) / 5))))
     drilled = rows[0][1]

@@ -25,7 +25,7 @@ from dice_env.throws import (
     random_orientations,
     throw_faces,
 )
-from studies.common import DOCS, SEED, checked_throws, progress, save_figure
+from studies.common import DOCS, SEED, checked_throws, progress, save_figure, write_text
 from studies.templates import study_page
 
 DICE = tuple(STANDARD_SIZES)
@@ -176,7 +176,7 @@ def run(out: Path = DOCS, quick: bool = False, seed: int = SEED, throws: int | N
         numbers[f"{name}_loaded_excess"] = loaded[name].share - 1 / fair[name].counts.size
     for q in ("velocity", "momentum", "energy"):
         numbers[f"flight_{q}"] = max(f[k][q] for f in flight.values() for k in (0, 1))
-    (out / "shapes.md").write_text(_markdown(fair, loaded, flight, sizes, seed, quick, throws,
+    write_text(out / "shapes.md", _markdown(fair, loaded, flight, sizes, seed, quick, throws,
                                              faces_of is not None))
     return numbers
 

@@ -21,7 +21,7 @@ from dice_env.model.scene import MAX_STEPS, ContactLaw, Ground, Scene
 from dice_env.simulation.paper import paper_scene
 from dice_env.simulation.simulate import Result, State, simulate
 from dice_env.throws import Vigour, vigorous_throws
-from studies.common import DOCS, progress, save_figure
+from studies.common import DOCS, progress, save_figure, write_text
 from studies.templates import study_page
 
 STABLE, DRIFTING, BLOWUP = 0, 1, 2
@@ -182,7 +182,7 @@ def run(out: Path = DOCS, quick: bool = False, seed: int = 7) -> dict[str, float
         numbers[f"{name}_first_blowup"] = _first_ratio(maps[law] == BLOWUP, ratios)
     numbers["extreme_any_nan"] = float(any(r["nan"] for _, r in rows))
     numbers["automatic_step_flagged_cases"] = float(sum(r["unstable"] > 0 for _, r in rows))
-    (out / "stability.md").write_text(
+    write_text(out / "stability.md",
         _markdown(stiffnesses, ratios, maps, rows, throws, numbers, sweep_cases, sweep))
     return numbers
 

@@ -26,6 +26,7 @@ import sys
 from dataclasses import dataclass
 from pathlib import Path
 
+from dice_env.disk import write_atomically
 from studies import ROOT
 
 TEMPLATES = ROOT / "docs" / "templates"  # the studies' pages, filled by :func:`study_page`
@@ -155,7 +156,7 @@ def fill(page: Path) -> bool:
     new = BLOCK.sub(lambda m: f"<!-- numbers {m['sources']}\n{m['template']}-->\n"
                               f"{_block(page, text, m).render()}<!-- /numbers -->", text)
     if new != text:
-        page.write_text(new)
+        write_atomically(page, new.encode())
     return new != text
 
 

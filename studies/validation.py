@@ -21,7 +21,7 @@ from dice_env.simulation.calibration import measured_restitution
 from dice_env.simulation.simulate import UP, State, simulate
 from dice_env.throws import energy_throws
 from studies import cuboids, weldon
-from studies.common import DOCS, SEED
+from studies.common import DOCS, SEED, write_text
 from studies.fairness import face_down, throw_energy
 from studies.templates import study_page
 
@@ -124,7 +124,7 @@ def run(out: Path = DOCS, quick: bool = False, seed: int = SEED) -> dict[str, fl
     command = COMMAND + (" --quick" if quick else "")
     e_verdict = "agrees" if all(within(e, *RESTITUTION_RANGE) == "agrees"
                                 for e in restitution.values()) else "differs"
-    (out / "validation.md").write_text(study_page(
+    write_text(out / "validation.md", study_page(
         "validation", globals(), command=command, e_verdict=e_verdict, friction=friction,
         g=scene.ground, m=memory, map=map, restitution=restitution, table=table,
         **_weldon_names(w),

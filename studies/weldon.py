@@ -29,7 +29,15 @@ from dice_env.simulation.chunks import prepare
 from dice_env.simulation.group import DieContact, GroupState, simulate_group
 from dice_env.simulation.simulate import State
 from dice_env.throws import CUP, CUP_BLOCK, Faces, cup_throws, throw_faces
-from studies.common import DOCS, SEED, checked_throws, kept_chunks, progress, save_figure
+from studies.common import (
+    DOCS,
+    SEED,
+    checked_throws,
+    kept_chunks,
+    progress,
+    save_figure,
+    write_text,
+)
 from studies.templates import study_page
 
 # Weldon's throws of twelve dice with 0..12 showing a 5 or a 6 (Pearson 1900, Kemp & Kemp 1991)
@@ -376,9 +384,9 @@ def run(out: Path = DOCS, quick: bool = False, seed: int = SEED,
                        "sizes": sizes, "seconds_together": together.seconds,
                        "seconds_alone": alone_seconds, "quick": quick}
     out.mkdir(parents=True, exist_ok=True)
-    (out / "weldon.json").write_text(json.dumps(numbers, indent=1) + "\n")
+    write_text(out / "weldon.json", json.dumps(numbers, indent=1) + "\n")
     _plot(numbers, out / "figures" / "weldon.png")
-    (out / "weldon.md").write_text(markdown(numbers))
+    write_text(out / "weldon.md", markdown(numbers))
     return {"together_p": numbers["together"]["p"], "alone_p": numbers["alone"]["drilled16"]["p"],
             "together_throws": float(together.successes.size),
             "large_p": numbers["alone"]["large"]["p"]}

@@ -123,7 +123,7 @@ LAYERS = {
     # the chunked runner: the top of the simulation, its default draw the hand of the throws
     "dice_env.simulation.runner": {"dice_env.model", "dice_env.simulation", "dice_env.throws",
                                    "dice_env.disk"},
-    "dice_env.envs": {"dice_env.model", "dice_env.simulation"},
+    "dice_env.envs": {"dice_env.model", "dice_env.simulation", "dice_env.disk"},
     "dice_env.viewer": {"dice_env", "dice_env.model", "dice_env.simulation", "dice_env.envs",
                         "dice_env.disk"},
 }

@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
+from dice_env.disk import write_atomically
 from dice_env.envs.dice_throw import RENDER_FPS
 
 
@@ -27,7 +28,9 @@ def save_video(frames: Sequence[np.ndarray], path: str | Path, fps: float = REND
         from PIL import Image
 
         first, *rest = (Image.fromarray(frame) for frame in stack)
-        first.save(path, save_all=True, append_images=rest, duration=1000.0 / fps, loop=0)
+        write_atomically(path, lambda f: first.save(f, format="GIF", save_all=True,
+                                                    append_images=rest,
+                                                    duration=1000.0 / fps, loop=0))
     else:
         try:
             import imageio.v3 as iio
