@@ -190,11 +190,12 @@ def test_every_example_runs(page, tmp_path, monkeypatch):
     run_examples(page, SHORTER)
 
 
-@pytest.mark.slow
+@pytest.mark.budget
 @pytest.mark.parametrize("page", [p for p in EXAMPLE_PAGES
                                   if any(long in p.read_text() for long in SHORTER)],
                          ids=lambda p: p.name)
 def test_every_example_runs_at_its_budget(page, tmp_path, monkeypatch):
+    """The training examples at their full budgets (PPO's 800,000 throws): ``-m budget``."""
     monkeypatch.chdir(tmp_path)
     run_examples(page, {})
 
