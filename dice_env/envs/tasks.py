@@ -1,8 +1,8 @@
 """Named tasks: DiceThrow-v0 and the ids beside it, each the same env with a few keywords fixed.
 
 ``gym.make(task.id)`` is ``gym.make("DiceThrow-v0", **task.keywords)`` (the keywords are the
-registered ``kwargs``; keywords given to ``gym.make`` override them). In :data:`TASKS`, from
-nearly solved to hard (the oracle's margin over chance, ``docs/environment.md``):
+registered ``kwargs``; keywords given to ``gym.make`` override them). In :data:`TASKS`, easiest
+first (by the oracle's margin over chance, ``docs/environment.md``):
 
 - ``DiceThrow-v0``: no keyword (a d6 from 1.5 cm, 5 % hand noise).
 - ``DiceThrowHigh-v0``: ``release_height=0.15``, ``hand_noise=0.01``,
@@ -45,7 +45,7 @@ class NamedTask:
 
 TASKS = (
     NamedTask("DiceThrow-v0", {},
-              "a d6 placed from 1.5 cm above the table for a drawn face: nearly solved"),
+              "a d6 placed from 1.5 cm above the table for a drawn face: the easiest"),
     NamedTask("DiceThrowHigh-v0",
               {"release_height": 0.15, "hand_noise": 0.01, "orientation_noise": 0.01,
                "until": "decided"},

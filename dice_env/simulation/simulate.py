@@ -374,14 +374,14 @@ BACKENDS: dict[str, tuple[Callable, Callable]] = {
     "paper": (vector_kernel.simulate_batch, vector_kernel.simulate_serial),
     "dice": (group_kernel.simulate_groups, group_kernel.simulate_groups_serial),
 }
-# Each CPU kernel loop's name and cold compile time on two cores (s; benchmarks/cold_start.py).
+# Each CPU kernel loop's name in the compile notice (its cold compile time: compile_times.json).
 COMPILES = {
-    kernel.simulate_serial: ("the die's kernel", 8.0),
-    kernel.simulate_batch: ("the die's kernel on threads", 11.0),
-    vector_kernel.simulate_serial: ("the paper scene's kernel", 10.0),
-    vector_kernel.simulate_batch: ("the paper scene's kernel on threads", 13.0),
-    group_kernel.simulate_groups_serial: ("the kernel of several dice", 20.0),
-    group_kernel.simulate_groups: ("the kernel of several dice on threads", 27.0),
+    kernel.simulate_serial: "the die's kernel",
+    kernel.simulate_batch: "the die's kernel on threads",
+    vector_kernel.simulate_serial: "the paper scene's kernel",
+    vector_kernel.simulate_batch: "the paper scene's kernel on threads",
+    group_kernel.simulate_groups_serial: "the kernel of several dice",
+    group_kernel.simulate_groups: "the kernel of several dice on threads",
 }
 SERIAL_FIRST = 256  # throws: a batch up to this size runs serially until its parallel loop
 # is compiled (a first small batch does not wait for that compile)
@@ -451,7 +451,7 @@ def run_kernel(kind: str, inputs: tuple, outcome: tuple, *, batch: int, threads:
     serial_run = (batch == 1 or threads == 1 or _after_fork
                   or (batch <= SERIAL_FIRST and not ready(parallel, args)))
     run = serial if serial_run else parallel
-    announce(run, args, *COMPILES[run])
+    announce(run, args, COMPILES[run])
     with cache_hint(run):
         _run_interruptibly(run, args, outcome.abort, threads, long=work > _LONG_RUN)
 
@@ -516,8 +516,8 @@ def _rest_energy(scene: Scene, early_rest: bool) -> tuple[float, float]:
     return weight * float(die.resting_heights.min()) - lift, 0.5 * min(lift, move)
 
 
-LOCK_MARGIN = 0.25  # the energy's rise after a decision: <= 0.04 of the barrier at the
-# default step, 0.18 at safety 0.9 (tests/test_decided.py, slow)
+LOCK_MARGIN = 0.25  # of the barrier: above the energy's largest rise after a decision, at the
+# default step and the largest safety (tests/test_decided.py checks it)
 
 
 def lock_energy(scene: Scene, margin: float = LOCK_MARGIN) -> np.ndarray:
