@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 from scipy import ndimage
 
-from dice_env.envs.render import FIGURES, WALL_ALPHA, has_pips, main, render_die, resting
+from dice_env.envs.render import WALL_ALPHA, has_pips, render_die, resting
+from studies.readme_figures import FIGURES, main
 from dice_env.model.die import STANDARD_SIZES, Die
 from dice_env.model.scene import Scene
 from dice_env.model.surroundings import walls

@@ -2,12 +2,10 @@
 
 An orthographic camera looks down at the dice; each pixel casts a ray against the dice (face
 half-spaces) and the walls (boards :data:`WALL_HEIGHT` high, translucent in front of a die).
-``python -m dice_env.envs.render NAME --out PATH`` writes a figure of :data:`FIGURES`.
 """
 
 from __future__ import annotations
 
-import argparse
 import math
 import os
 import sys
@@ -22,9 +20,6 @@ from dice_env.model.checks import as_shaped, check_int, check_positive, check_ra
 from dice_env.model.die import Die
 from dice_env.model.rotations import axis_angle
 from dice_env.model.scene import Plane, Scene
-from dice_env.model.surroundings import walls
-from dice_env.simulation.group import GroupState, simulate_group
-from dice_env.simulation.simulate import State
 
 # In-face axes (u, v) of the d6's pip faces, body frame, so that u x v is the outward normal.
 FACE_U = np.array([[1, 0, 0], [0, 1, 0], [0, 0, 1], [0, 0, 1], [0, 0, 1], [0, 1, 0]], float)
@@ -527,7 +522,7 @@ def _text_strokes(text: str, underline: bool) -> np.ndarray:
     return segments - (width / 2, (1 + low) / 2)
 
 
-# --- input and figures --------------------------------------------------------------------
+# --- input and poses ----------------------------------------------------------------------
 
 def _check_pose(position: np.ndarray, orientation: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return as_shaped("position", position, (3,)), as_shaped("orientation", orientation, (3, 3))
@@ -549,40 +544,6 @@ def resting(die: Die, label: int, at: tuple[float, float] = (0.0, 0.0),
         tilt = np.diag([1.0, flip, flip])
     orientation = axis_angle([0.0, 0.0, 1.0], turn) @ tilt
     return np.array([*at, die.resting_heights[label - 1]]), orientation
-
-
-def _figure_resting(scene: Scene, label: int, turn: float, at: tuple[float, float] = (0.0, 0.0),
-                    **view: Any) -> np.ndarray:
-    """The scene's die at rest showing ``label`` (:func:`resting`), seen through ``view``."""
-    return render_die(scene, *resting(scene.die, label, at, turn), **view)
-
-
-def _figure_pair() -> np.ndarray:
-    """Two d6 thrown together into the tray, six frames of a seeded throw side by side."""
-    scene = Scene(walls=walls("tray"), t_max=3.0)
-    dice = (Die(), Die())
-    rng = np.random.default_rng(11)
-    hands = [State.release(scene, [-0.09, 0.022 * side, 0.06], [0.9, -0.22 * side, 0.0],
-                           rng.normal(0.0, 25.0, 3), axis_angle(rng.normal(size=3), 2.0))
-             for side in (1.0, -1.0)]
-    every = 40
-    result = simulate_group(scene, dice, GroupState.of(hands), until="decided",
-                            record_every=every, orientations=True)
-    last = max(1, int(result.steps[0]) // every - 1)
-    shown = np.linspace(0, last, 6).round().astype(int)
-    images = [render_dice(scene, dice, result.x_cm[0, j], result.orientations[0, j],
-                          size=(240, 240), elevation=60.0, view_edges=6.0) for j in shown]
-    gap = np.full((240, 6, 3), 255, np.uint8)
-    return np.concatenate([part for image in images for part in (image, gap)][:-1], axis=1)
-
-
-# The README's pictures: ``python -m dice_env.envs.render NAME --out PATH``.
-FIGURES = {  # a d20 seen close, a d6 in the whole tray, a pair's throw
-    "die-d20": lambda: _figure_resting(Scene(die=Die.standard("d20")), 20, 0.3 + math.pi,
-                                       size=(360, 480), elevation=40.0, view_edges=2.6),
-    "tray": lambda: _figure_resting(Scene(walls=walls("tray")), 5, 0.4, (-0.01, 0.01),
-                                    size=(480, 640), elevation=50.0, view_edges=25.0),
-    "pair": _figure_pair}
 
 
 class Viewer:
@@ -617,18 +578,3 @@ class Viewer:
 
             plt.close(self._figure)
             self._figure = None
-
-
-def main(argv: list[str] | None = None) -> None:
-    """Write one of :data:`FIGURES` as a PNG."""
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("name", choices=sorted(FIGURES))
-    parser.add_argument("--out", required=True, help="PNG file to write")
-    args = parser.parse_args(argv)
-    from PIL import Image
-
-    Image.fromarray(FIGURES[args.name]()).save(args.out, format="PNG")
-
-
-if __name__ == "__main__":
-    main()
