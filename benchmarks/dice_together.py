@@ -42,8 +42,8 @@ from harness import benchmark_parser, timed, write_json
 
 from dice_env import Scene, simulate
 from dice_env.markdown import markdown_table
+from dice_env.model.defaults import RESTITUTION, damping_ratio
 from dice_env.model.die import Die
-from dice_env.model.table import RESTITUTION, damping_ratio
 from dice_env.provenance import code_version
 from dice_env.simulation.group import DieContact, GroupState, group_step, simulate_group
 from dice_env.simulation.simulate import UP, lock_energy

@@ -43,8 +43,8 @@ import numpy as np
 from harness import benchmark_parser, command_line, write_json
 from numba import njit
 
+from dice_env.model.defaults import rebound
 from dice_env.model.scene import Scene
-from dice_env.model.table import rebound
 from dice_env.physics.kernel import rotate
 from dice_env.provenance import code_version
 from dice_env.simulation.calibration import measured_restitution

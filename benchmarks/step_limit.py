@@ -29,7 +29,7 @@ from harness import benchmark_parser, parse_with_mujoco, timed, write_json
 from physics import hand_throws, mujoco_model, mujoco_to_rest
 
 from dice_env import Scene, State, simulate
-from dice_env.model.table import RESTITUTION, damping_ratio, rebound
+from dice_env.model.defaults import RESTITUTION, damping_ratio, rebound
 from dice_env.provenance import code_version
 from dice_env.simulation.calibration import measured_restitution
 from dice_env.throws import RELEASES, face_agreement

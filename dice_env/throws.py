@@ -18,11 +18,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from dice_env.intervals import wilson
+from dice_env.model.defaults import DIE_EDGE
 from dice_env.model.die import Die
 from dice_env.model.rotations import axis_angle, quaternion_to_matrix
 from dice_env.model.scene import Scene
 from dice_env.model.surroundings import tray
-from dice_env.model.table import DIE_EDGE
 from dice_env.simulation.group import GroupState
 from dice_env.simulation.simulate import DiceArrays, Result, State, simulate
 

@@ -16,9 +16,9 @@ import numpy as np
 from scipy.stats import chi2_contingency, norm
 
 from dice_env.markdown import markdown_table
+from dice_env.model.defaults import DAMPING, FRICTION, RESTITUTION, STIFFNESS
 from dice_env.model.rotations import random_rotations
 from dice_env.model.scene import FrictionLaw, Scene, Scheme
-from dice_env.model.table import DAMPING, FRICTION, RESTITUTION, STIFFNESS
 from dice_env.simulation.calibration import measured_restitution
 from dice_env.simulation.simulate import Result, State, simulate
 from dice_env.throws import (

@@ -17,9 +17,9 @@ import numpy as np
 
 from dice_env.intervals import wilson
 from dice_env.markdown import estimate, markdown_table
+from dice_env.model.defaults import DIE_EDGE, DIE_MASS, RESTITUTION, damping_for_restitution
 from dice_env.model.die import Die
 from dice_env.model.scene import Ground, Scene
-from dice_env.model.table import DIE_EDGE, DIE_MASS, RESTITUTION, damping_for_restitution
 from dice_env.throws import VIGOROUS, Vigour, hand_throws, throw_faces
 from studies.common import DOCS, SEED, checked_throws, progress, save_figure, write_text
 from studies.templates import study_page

@@ -13,9 +13,9 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from dice_env.markdown import estimate, markdown_table
+from dice_env.model.defaults import DIE_EDGE
 from dice_env.model.die import STANDARD_SIZES, Die
 from dice_env.model.scene import Scene
-from dice_env.model.table import DIE_EDGE
 from dice_env.simulation.simulate import UP, State, simulate
 from dice_env.throws import (
     VIGOROUS,

@@ -14,7 +14,7 @@ import numpy as np
 
 from dice_env.intervals import wilson
 from dice_env.markdown import estimate, markdown_table
-from dice_env.model import table
+from dice_env.model import defaults
 from dice_env.model.rotations import up_rotation
 from dice_env.model.scene import Scene
 from dice_env.simulation.calibration import measured_restitution
@@ -29,7 +29,7 @@ COMMAND = "python -m studies validation"
 MEMORY_THROWS = {False: 4000, True: 300}  # throws of the initially-down face, by ``quick``
 ENERGY_RANGE = (0.01, 100.0)  # throw energy above a gentle release (m g a), log-uniform
 Z_ONE_SIDED = 1.644854  # 5% one-sided
-# The default table's sources (dice_env/model/table.py, docs/error-vs-runtime.md).
+# The default table's sources (dice_env/model/defaults.py, docs/error-vs-runtime.md).
 RESTITUTION_RANGE = (0.4, 0.5)
 RESTITUTION_SOURCE = ("dice on wooden tables, 0.4–0.5: Kapitaniak, Strzalko, Grabski & "
                       "Kapitaniak, Chaos 22, 047504 (2012); Strzalko et al., Physics Reports "
@@ -126,7 +126,7 @@ def run(out: Path = DOCS, quick: bool = False, seed: int = SEED) -> dict[str, fl
                                 for e in restitution.values()) else "differs"
     write_text(out / "validation.md", study_page(
         "validation", globals(), command=command, e_verdict=e_verdict, friction=friction,
-        g=scene.ground, m=memory, map=map, restitution=restitution, table=table,
+        g=scene.ground, m=memory, map=map, restitution=restitution, defaults=defaults,
         **_weldon_names(w),
         **_memory_names(memory), **_cuboid_names(page)))
     low, high = memory["bins"][0], memory["bins"][-1]

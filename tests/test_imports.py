@@ -58,7 +58,7 @@ def test_no_import_cycle():
 
 def test_the_table_is_the_bottom_layer():
     modules = _modules()
-    assert _imports(modules["dice_env.model.table"], "dice_env.model.table", modules) == {
+    assert _imports(modules["dice_env.model.defaults"], "dice_env.model.defaults", modules) == {
         "dice_env.model.checks"}
 
 

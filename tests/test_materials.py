@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from dice_env import Die, Ground, Scene, State
-from dice_env.model import materials, table
+from dice_env.model import defaults, materials
 from dice_env.simulation.calibration import measured_restitution
 from studies import materials as study
 from studies import run as run_study
@@ -30,11 +30,11 @@ def test_each_preset_builds_and_gives_its_restitution(name):
 
 
 def test_damping_follows_the_die_mass():
-    heavy = Die.standard("d6", mass=4 * table.DIE_MASS)
+    heavy = Die.standard("d6", mass=4 * defaults.DIE_MASS)
     for name, material in materials.MATERIALS.items():
         light, heavier = materials.ground(name), materials.ground(name, heavy)
         assert heavier.damping == pytest.approx(2 * light.damping)
-        assert heavier.damping == pytest.approx(table.damping_for_restitution(
+        assert heavier.damping == pytest.approx(defaults.damping_for_restitution(
             material.restitution, material.stiffness, heavy.mass))
     assert materials.scene("felt", heavy).die is heavy
 

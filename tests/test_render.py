@@ -7,10 +7,10 @@ import pytest
 from scipy import ndimage
 
 from dice_env.envs.render import WALL_ALPHA, has_pips, render_die, resting
-from studies.readme_figures import FIGURES, main
 from dice_env.model.die import STANDARD_SIZES, Die
 from dice_env.model.scene import Scene
 from dice_env.model.surroundings import walls
+from studies.readme_figures import FIGURES, main
 
 CUBOID = Die.cuboid((0.012, 0.016, 0.02))
 DICE = [Die.standard(name) for name in STANDARD_SIZES] + [CUBOID]

@@ -16,8 +16,8 @@ import numpy as np
 
 from dice_env.model import polyhedra
 from dice_env.model.checks import as_shaped, check_choice, check_int, check_positive, check_range
+from dice_env.model.defaults import DIE_EDGE, DIE_MASS
 from dice_env.model.pips import Pips, drill, with_defaults
-from dice_env.model.table import DIE_EDGE, DIE_MASS
 
 # The d6's corner signs in the order of the paper's cube.m (node k = row k).
 _CORNER_SIGNS = np.array([[1, 1, 1], [1, -1, 1], [-1, -1, 1], [-1, 1, 1],

@@ -10,11 +10,11 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from dice_env.model import table
+from dice_env.model import defaults
 from dice_env.model.checks import check_choice, check_positive, check_range
+from dice_env.model.defaults import damping_for_restitution
 from dice_env.model.die import Die
 from dice_env.model.scene import Ground, Scene
-from dice_env.model.table import damping_for_restitution
 
 
 @dataclass(frozen=True)
@@ -39,7 +39,7 @@ class Material:
 MATERIALS: dict[str, Material] = {
     "felt": Material(0.30, 0.30, 2e4, "e estimate (fibre layer deadens); mu billiard cloth "
                      "0.2 plus the nap ploughed (estimate); S: ~1 mm sink"),
-    "wood": Material(table.RESTITUTION, table.FRICTION, table.STIFFNESS,
+    "wood": Material(defaults.RESTITUTION, defaults.FRICTION, defaults.STIFFNESS,
                      "the default table: e 0.4-0.5 (Kapitaniak 2012), mu 0.3-0.5 (Murase "
                      "1984; Blau 2001)"),
     "glass": Material(0.60, 0.45, 1e5, "e estimate between wood 0.45 and acetate spheres "

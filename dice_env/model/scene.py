@@ -13,7 +13,7 @@ from typing import Self
 
 import numpy as np
 
-from dice_env.model import table
+from dice_env.model import defaults
 from dice_env.model.checks import (
     as_enum,
     as_shaped,
@@ -71,12 +71,12 @@ class Plane:
     signed distance from the origin along it. ``stiffness`` S (N/m per vertex), ``damping`` D
     (N s/m per vertex), sliding ``friction`` mu; ``tangential``: the stick-slip spring and
     damper as a fraction of S and D, in (0, 1]. Defaults: the wooden table of
-    :mod:`dice_env.model.table` for the default die.
+    :mod:`dice_env.model.defaults` for the default die.
     """
 
-    stiffness: float = table.STIFFNESS
-    damping: float = table.DAMPING
-    friction: float = table.FRICTION
+    stiffness: float = defaults.STIFFNESS
+    damping: float = defaults.DAMPING
+    friction: float = defaults.FRICTION
     normal: tuple[float, float, float] = (0.0, 0.0, 1.0)
     offset: float = 0.0
     tangential: float = 2.0 / 7.0

@@ -7,10 +7,7 @@ import math
 import numpy as np
 
 from dice_env.model.checks import check_positive
-from dice_env.model.die import Die
-from dice_env.model.rotations import up_rotation
-from dice_env.model.scene import Ground, Scene
-from dice_env.model.table import (
+from dice_env.model.defaults import (
     DIE_EDGE,
     DIE_MASS,
     FRICTION,
@@ -19,6 +16,9 @@ from dice_env.model.table import (
     damping_for_restitution,
     rebound,
 )
+from dice_env.model.die import Die
+from dice_env.model.rotations import up_rotation
+from dice_env.model.scene import Ground, Scene
 from dice_env.simulation.simulate import State, simulate
 
 

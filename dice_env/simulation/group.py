@@ -20,9 +20,9 @@ from typing import ClassVar
 import numpy as np
 
 from dice_env.model.checks import as_enum, check_type
+from dice_env.model.defaults import DIE_MASS, STIFFNESS, damping_for_restitution
 from dice_env.model.die import Die
 from dice_env.model.scene import FrictionLaw, Scene, check_material, critical_step
-from dice_env.model.table import DIE_MASS, STIFFNESS, damping_for_restitution
 from dice_env.physics import group_kernel
 from dice_env.simulation.simulate import (
     UP,
