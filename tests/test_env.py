@@ -112,12 +112,32 @@ def test_bad_actions():
     ("tilt_deg", 95.0, "tilt_deg"),
     ("load_fraction", 1.5, "load_fraction"),
     ("num_threads", 0, "num_threads"),
+    ("device", "gpu", "device must be one of"),
     ("until", "landed", "until must be one of"),
     ("stifness", 1e5, "unknown keyword"),
 ])
 def test_bad_keywords(keyword, value, match):
     with pytest.raises(ValueError, match=match):
         make(**{keyword: value})
+
+
+def test_the_gpu_device_is_refused_where_it_cannot_run(monkeypatch):
+    if not numba_cuda_usable():  # no GPU: refused at make, not at the first step
+        with pytest.raises((ImportError, RuntimeError), match="device='cuda'"):
+            make(device="cuda")
+    monkeypatch.setattr("dice_env.envs.dice_throw.require_device", lambda device: None)
+    for keywords in ({"num_dice": 2}, {"render_mode": "rgb_array"}):
+        with pytest.raises(ValueError, match="device='cuda' runs one die a throw"):
+            make(device="cuda", **keywords)
+
+
+def numba_cuda_usable() -> bool:
+    """Whether numba-cuda is installed and finds a GPU."""
+    try:
+        from numba import cuda
+    except ImportError:
+        return False
+    return cuda.is_available()
 
 
 def test_until_decided_lands_the_same_faces_sooner():

@@ -51,22 +51,23 @@ def test_the_reward_is_the_task_s_function_of_the_landing(keywords):
     assert np.any(reward.shaping != 0.0)
 
 
-def test_num_threads_is_the_env_s_setting_not_the_task_s(monkeypatch):
-    assert "num_threads" not in {f.name for f in fields(ThrowTask)}
-    with pytest.raises(ValueError, match=r"unknown keyword\(s\) \['num_threads'\]"):
-        make_task(num_threads=1)
+def test_execution_settings_are_the_env_s_not_the_task_s(monkeypatch):
+    for name in ("num_threads", "device"):
+        assert name not in {f.name for f in fields(ThrowTask)}
+        with pytest.raises(ValueError, match=rf"unknown keyword\(s\) \['{name}'\]"):
+            make_task(**{name: 1})
     seen, real = [], throw_task.simulate
 
     def spy(*args, **kwargs):
-        seen.append(kwargs["num_threads"])
+        seen.append((kwargs["num_threads"], kwargs["device"]))
         return real(*args, **kwargs)
 
     monkeypatch.setattr(throw_task, "simulate", spy)
-    env = gym.make("DiceThrow-v0", num_threads=1)
-    assert env.unwrapped.settings.num_threads == 1
+    env = gym.make("DiceThrow-v0", num_threads=1, device="cpu")
+    assert (env.unwrapped.settings.num_threads, env.unwrapped.settings.device) == (1, "cpu")
     env.reset(seed=0)
     env.step(env.action_space.sample())
     envs = gym.make_vec("DiceThrow-v0", num_envs=2, num_threads=1)
     envs.reset(seed=0)
     envs.step(envs.action_space.sample())
-    assert seen == [1, 1]
+    assert seen == [(1, "cpu"), (1, "cpu")]

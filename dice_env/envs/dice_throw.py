@@ -13,7 +13,7 @@ from gymnasium import spaces
 from dice_env.envs.hand import ORIENTATION_MODES
 from dice_env.envs.throw_task import ORIENTATION_DIM, ThrowTask, check_rotation, make_task
 from dice_env.model.checks import check_choice, check_int
-from dice_env.simulation.simulate import thread_count
+from dice_env.simulation.simulate import require_device, thread_count
 
 RENDER_MODES = ("human", "rgb_array", "rgb_array_list")
 RENDER_FPS = 30
@@ -37,7 +37,8 @@ class EnvSettings:
     """The env's keywords beyond the task's: the episodes, the rendering, the execution.
 
     ``target_face``/``target_sum``/``orientation_mode``: each episode's (``reset`` options
-    override one); ``render_*``: the frames; ``num_threads``: the kernel's threads (None: all).
+    override one); ``render_*``: the frames; ``num_threads``: the kernel's threads (None: all);
+    ``device``: where the kernel runs (``"cuda"``: one die a throw, no frames).
     Checked against a task by :meth:`check`; the meanings: ``docs/environment.md``.
     """
 
@@ -48,6 +49,7 @@ class EnvSettings:
     render_width: int = 320
     render_height: int = 240
     num_threads: int | None = None
+    device: str = "cpu"
 
     @property
     def render_size(self) -> tuple[int, int]:
@@ -77,17 +79,22 @@ class EnvSettings:
         task.fixed_target(self.target_face, self.target_sum)
         check_choice("orientation_mode", self.orientation_mode, ORIENTATION_MODES)
         thread_count(self.num_threads)  # refuses a count numba does not have
+        require_device(self.device)
+        if self.device == "cuda" and (task.n_dice > 1 or self.render_mode is not None):
+            raise ValueError("device='cuda' runs one die a throw and keeps no frames: it needs "
+                             f"num_dice=1 and render_mode=None, got num_dice={task.n_dice} and "
+                             f"render_mode={self.render_mode!r}")
         return self
 
 
 def configure(modes: tuple[str, ...], render_mode: str | None = None, *,
               target_face: Any = None, target_sum: int | None = None,
               orientation_mode: str = "uniform", render_width: int = 320,
-              render_height: int = 240, num_threads: int | None = None,
+              render_height: int = 240, num_threads: int | None = None, device: str = "cpu",
               **task_keywords: Any) -> tuple[ThrowTask, EnvSettings]:
     """The single or vector env's task and settings from its keywords, each validated."""
     settings = EnvSettings(render_mode, target_face, target_sum, orientation_mode,
-                           render_width, render_height, num_threads)
+                           render_width, render_height, num_threads, device)
     settings.check_rendering(modes)
     task = make_task(**task_keywords)
     return task, settings.check(task, modes)
@@ -151,7 +158,8 @@ class DiceThrowEnv(gym.Env):
         throw = self.task.throw(action, [self._target], self._hand[None], [self.np_random],
                                 record_every=self._record_every(),
                                 action_shape=self.action_space.shape,
-                                num_threads=self.settings.num_threads)
+                                num_threads=self.settings.num_threads,
+                                device=self.settings.device)
         result = throw.result
         self._pose = (result.final.position[0], result.final.orientation[0])
         if result.orientations is not None:  # the frames until the die stopped, then at rest

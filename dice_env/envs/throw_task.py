@@ -283,15 +283,16 @@ class ThrowTask:
         return np.all((speed >= self.min_speed) & (spin >= self.min_spin), axis=1)
 
     def land(self, state: State | GroupState, targets: np.ndarray, *, record_every: int = 0,
-             num_threads: int | None = None) -> Landing:
+             num_threads: int | None = None, device: str = "cpu") -> Landing:
         """Simulate the released dice (:attr:`run_until`) and judge each throw (:func:`judge`).
 
         ``targets`` (n, :attr:`target_shape`); ``num_threads``: the kernel's threads (None:
-        all); ``record_every`` > 0 records the centres and orientations every that many steps.
+        all); ``device``: ``simulate``'s (one die only); ``record_every`` > 0 records the centres
+        and orientations every that many steps.
         """
         fair = self.fair(state)
         targets = np.array(targets, dtype=np.int64).reshape(len(fair), *self.target_shape)
-        run = self._simulate(state, record_every, num_threads)
+        run = self._simulate(state, record_every, num_threads, device)
         result, void = judge(self.scene, self.dice, run, self.run_until, fair=fair)
         return Landing(targets, result, void, fair)
 
@@ -325,13 +326,14 @@ class ThrowTask:
     def throw(self, actions: np.ndarray, targets: np.ndarray, hands: np.ndarray,
               noise: np.ndarray | Sequence[np.random.Generator], *, record_every: int = 0,
               action_shape: tuple[int, ...] | None = None,
-              num_threads: int | None = None) -> Throw:
+              num_threads: int | None = None, device: str = "cpu") -> Throw:
         """Release, simulate in one kernel call, judge and score ``n`` throws of the dice.
 
         ``targets`` (n, :attr:`target_shape`), the rest as :meth:`release`'s and :meth:`land`'s.
         """
         state, clipped = self.release(actions, hands, noise, action_shape=action_shape)
-        landing = self.land(state, targets, record_every=record_every, num_threads=num_threads)
+        landing = self.land(state, targets, record_every=record_every, num_threads=num_threads,
+                            device=device)
         reward = self.reward(landing)
         return Throw(reward=reward.total, info=self.info(landing, reward, state, clipped),
                      result=landing.result,
@@ -346,15 +348,16 @@ class ThrowTask:
         return "early_rest" if self.until == "rest" and self.n_dice == 1 else self.until
 
     def _simulate(self, state: State | GroupState, record_every: int,
-                  num_threads: int | None) -> Result | GroupResult:
+                  num_threads: int | None, device: str) -> Result | GroupResult:
         """The kernel's run of the released dice (:attr:`run_until`): one die's, or the group's."""
         if isinstance(state, GroupState):
+            check_choice("device", device, ("cpu",))  # several dice: the CPU's kernel only
             return simulate_group(self.scene, self.dice, state, until=self.run_until,
                                   record_every=record_every, orientations=bool(record_every),
                                   num_threads=num_threads)
         return simulate(self.scene, state, until=self.run_until, record_every=record_every,
                         record=("orientations",) if record_every else ("energy",),
-                        num_threads=num_threads)
+                        num_threads=num_threads, device=device)
 
 
 @dataclass(frozen=True)
@@ -509,7 +512,7 @@ def check_task_keywords(keywords: dict[str, object]) -> dict[str, object]:
         raise ValueError(f"unknown keyword(s) {unknown}; DiceThrow-v0 takes "
                          f"{sorted(task_keywords())} plus target_face, target_sum, "
                          "orientation_mode, render_mode, render_width, render_height, "
-                         "num_threads")
+                         "num_threads, device")
     return keywords
 
 

@@ -141,7 +141,8 @@ class DiceThrowVectorEnv(VectorEnv):
             return self._start_next()
         throw = self.task.throw(actions, self._targets, self._hands, self._rngs,
                                 action_shape=self.action_space.shape,
-                                num_threads=self.settings.num_threads)
+                                num_threads=self.settings.num_threads,
+                                device=self.settings.device)
         mask = np.ones(self.num_envs, np.bool_)
         info = {k: v for key, value in throw.info.items()
                 for k, v in ((key, value), ("_" + key, mask))}

@@ -194,7 +194,7 @@ def simulate(scene: Scene, state: State, *, t_max: float | None = None, until: s
                         free_flight=free_flight)
     ending(until)
     record = _record_names(record)
-    check_choice("device", device, DEVICES)
+    require_device(device)
     body, contact = _packed_scene(scene)
     n_steps = scene.steps_for(t_max)
     out = state.copy()
@@ -413,6 +413,13 @@ def _record_names(record: object) -> tuple[str, ...]:
         raise ValueError(f"record must name only {', '.join(map(repr, RECORDS))}, "
                          f"got {sorted(unknown)}")
     return tuple(names)
+
+
+def require_device(device: str) -> None:
+    """Refuse a ``device`` not in :data:`DEVICES`, or ``"cuda"`` without numba-cuda and a GPU."""
+    check_choice("device", device, DEVICES)
+    if device == "cuda":
+        _cuda_kernel()
 
 
 def _cuda_kernel() -> ModuleType:
