@@ -3,6 +3,7 @@
     python benchmarks/cold_start.py             # cold (an empty numba cache), then warm
     python benchmarks/cold_start.py --warm-only # the cache as it is
     python benchmarks/cold_start.py --suite     # also: precompile, then the README's tests
+    python benchmarks/cold_start.py --suite --slow  # and then the slow suite, as CI runs it
 
 Each run is a fresh process that imports ``dice_env`` and calls, one after another, the entry
 points below, timing each first call; the cold run gets an empty ``NUMBA_CACHE_DIR`` (every
@@ -10,7 +11,8 @@ kernel a call needs compiles then), the warm run the cache the cold run left. Th
 loops' first calls (2 threads, :data:`THREADED`) and a new user's first throw, import included
 (:data:`FIRST_THROWS`), are timed each in a process and an empty cache of its own. ``--suite``
 then times, in a second empty cache, ``python -m dice_env.simulation.precompile`` and the README's
-test command after it (``pytest -n auto``). Prints a table and writes
+test command after it (``pytest -n auto``), and with ``--slow`` CI's slow suite after that
+(``pytest -n auto -m slow``). Prints a table and writes
 ``benchmarks/results/cold_start.json`` (``--out`` to change); a cold run also writes each CPU
 kernel's first-call time into ``dice_env/simulation/compile_times.json``, which the compile
 notice quotes (:func:`compile_times`).
@@ -118,20 +120,27 @@ def alone(entry_points: tuple, setup: tuple = ()) -> tuple[dict[str, list], list
     return {"entry_points": [name for name, _ in entry_points], "seconds": seconds}, notices
 
 
-def suite(cache: Path) -> dict[str, object]:
-    """Seconds of the precompile and then the tests, with ``cache`` empty."""
+def suite(cache: Path, slow: bool) -> dict[str, object]:
+    """Seconds of the precompile, then the tests (and the ``slow`` suite), ``cache`` empty first.
+
+    The summaries are pytest's last lines, one per suite run.
+    """
     env = {**os.environ, "NUMBA_CACHE_DIR": str(cache)}
-    seconds = {}
-    for name, command in (("precompile", ["-m", "dice_env.simulation.precompile"]),
-                          ("tests", ["-m", "pytest", "-n", "auto", "-p", "no:cacheprovider"])):
+    seconds, summaries = {}, []
+    tests = ["-m", "pytest", "-n", "auto", "-p", "no:cacheprovider"]
+    commands = [("precompile", ["-m", "dice_env.simulation.precompile"]), ("tests", tests)]
+    for name, command in commands + ([("slow", [*tests, "-m", "slow"])] if slow else []):
         start = time.perf_counter()
         done = subprocess.run([sys.executable, *command], cwd=ROOT, env=env,
                               capture_output=True, text=True)
         seconds[name] = time.perf_counter() - start
+        if name != "precompile":
+            summaries.append(done.stdout.strip().splitlines()[-1])
         if done.returncode != 0:  # the times still count; the summary says what failed
             print(done.stdout[-4000:], done.stderr[-2000:], file=sys.stderr)
             break
-    return {"seconds": seconds, "summary": done.stdout.strip().splitlines()[-1],
+    return {"seconds": seconds, "summary": summaries[0] if summaries else "",
+            "slow_summary": summaries[1] if len(summaries) > 1 else None,
             "returncode": done.returncode}
 
 
@@ -161,7 +170,11 @@ def main() -> None:
                         help="time with the cache as it is (NUMBA_CACHE_DIR or numba's own)")
     parser.add_argument("--suite", action="store_true",
                         help="also time precompile and the test suite in an empty cache")
+    parser.add_argument("--slow", action="store_true",
+                        help="with --suite: then the slow suite too (as CI runs it)")
     args = parser.parse_args()
+    if args.slow and not args.suite:
+        parser.error("--slow times the slow suite after the tests: it needs --suite")
     runs, notices = {}, {}
     started = time.time()
     if args.warm_only:
@@ -176,7 +189,7 @@ def main() -> None:
     tests = None
     if args.suite:
         with tempfile.TemporaryDirectory(prefix="numba-cache-") as folder:
-            tests = suite(Path(folder))
+            tests = suite(Path(folder), args.slow)
     names = [name for name, _ in ENTRY_POINTS]
     print(f"{'entry point':40s}" + "".join(f"{kind:>10s}" for kind in runs))
     for i, name in enumerate(names):
@@ -192,6 +205,9 @@ def main() -> None:
         print(f"{'precompile, empty cache':40s}{tests['seconds']['precompile']:9.1f}s")
         print(f"{'then pytest -n auto':40s}{tests['seconds']['tests']:9.1f}s  "
               f"({tests['summary']})")
+        if "slow" in tests["seconds"]:
+            print(f"{'then pytest -n auto -m slow':40s}{tests['seconds']['slow']:9.1f}s  "
+                  f"({tests['slow_summary']})")
     commit = code_version()
     record = {"command": command_line(),
               "commit": commit, "entry_points": names, "seconds": runs, "notices": notices,
