@@ -2,8 +2,11 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
+from PIL import Image
 from scipy import ndimage
 
 from dice_env.envs.render import WALL_ALPHA, has_pips, render_die, resting
@@ -12,6 +15,7 @@ from dice_env.model.scene import Scene
 from dice_env.model.surroundings import walls
 from studies.readme_figures import FIGURES, main
 
+FIGURES_DIR = Path(__file__).resolve().parents[1] / "docs" / "figures"
 CUBOID = Die.cuboid((0.012, 0.016, 0.02))
 DICE = [Die.standard(name) for name in STANDARD_SIZES] + [CUBOID]
 
@@ -147,7 +151,14 @@ def test_resting_refuses_a_label_the_die_lacks():
             resting(Die(), label)
 
 
-def test_figures_are_written(tmp_path):
+@pytest.mark.slow
+def test_the_committed_figures_are_what_their_command_draws(tmp_path):
+    """``python -m studies.readme_figures NAME`` redraws docs/figures/NAME.png pixel for pixel."""
     for name in FIGURES:
         main([name, "--out", str(tmp_path / f"{name}.png")])
-        assert (tmp_path / f"{name}.png").stat().st_size > 10_000
+        drawn = np.asarray(Image.open(tmp_path / f"{name}.png").convert("RGB"))
+        committed = np.asarray(Image.open(FIGURES_DIR / f"{name}.png").convert("RGB"))
+        assert drawn.shape == committed.shape, name
+        differ = (drawn != committed).any(axis=-1).mean()
+        assert differ == 0.0, f"{name}: {differ:.1%} of the pixels differ; redraw it with " \
+            f"python -m studies.readme_figures {name} --out docs/figures/{name}.png"
