@@ -199,6 +199,7 @@ CHOICES = {
     "walls": ["none", "tray", "craps"],
     "target": ["faces", "sum"],
     "set_dice": [False, True],
+    "device": ["cpu", "CPU", "gpu"],  # "cuda" is refused by its own test (no GPU here)
 }
 RANGES = {  # name: (low, high, log scale)
     "release_height": (0.0145, 0.1, True), "max_speed": (0.1, 5.0, True),
@@ -288,7 +289,7 @@ def fuzz(rng, budget_s=math.inf, iterations=None):
 def test_fuzz_keywords_and_actions():
     known = task_keywords() - {"scene"}
     assert set(RANGES) | set(CHOICES) | set(INTEGERS) == known | {
-        "target_face", "orientation_mode", "num_threads"}  # the env's, not the task's
+        "target_face", "orientation_mode", "num_threads", "device"}  # the env's, not the task's
     for dice in (1, 2):  # compile the one-die and the group kernels outside the time budget
         env = gym.make("DiceThrow-v0", num_dice=dice, t_max=0.05)
         env.reset(seed=0)
