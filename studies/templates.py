@@ -1,20 +1,31 @@
-r"""Pages from templates: the numbers in hand-written pages filled from their result JSONs.
+r"""The docs' measured numbers, written once and filled from their result JSONs.
 
-A hand-written page (the README, ``docs/*.md``) quotes a measured figure only inside a block::
+Two forms, both written by ``python -m studies.templates``; ``--check`` changes nothing and
+lists what differs from its JSONs instead (``tests/test_docs.py`` runs it):
 
-    <!-- numbers env=benchmarks/results/env.json
-    the vector env runs {{ env.rest.vector_env_throws_per_s | ,.0f }} throws/s
-    -->
-    the vector env runs 1,399 throws/s
-    <!-- /numbers -->
+- **Generated files.** A table or a paragraph that carries measured numbers is a file
+  ``docs/generated/NAME.md``, rendered by a function of :mod:`studies.docs_numbers` from its
+  JSONs (every computation and verdict in Python) and included by the hand-written page with
+  ``--8<-- "generated/NAME.md"`` (``pymdownx.snippets``, ``base_path: docs``). Its first line
+  (:data:`HEADER`) names the command that writes it and the JSONs it reads; being a snippet
+  section marker, that line is left out of the page. The file ends without a newline, so that an
+  include may continue a paragraph.
+- **Fields.** The README is read raw (GitHub, PyPI) and includes nothing: there a sentence that
+  quotes a figure stands in a block, its hidden template above its filled copy::
 
-Each ``{{ expression | format }}`` of the hidden template is a Python expression over the named
-JSONs (keys by ``.name`` or ``["key"]``, the builtins of :data:`HELPERS`), written with the
-format spec. A source may name a part of its JSON, keys joined by ``/``:
-``rest=benchmarks/results/physics.json#throws_to_rest/Scene()``.
-``python -m studies.templates`` rewrites every block from its JSONs; ``--check`` lists
-the stale blocks instead (``tests/test_docs.py`` runs it). :func:`study_page` fills a study's
-page, ``docs/templates/NAME.md``, the same way from the study's Python objects.
+      <!-- numbers cold=benchmarks/results/cold_start.json
+      the precompile takes {{ cold.suite.seconds.precompile | .0f }} s
+      -->
+      the precompile takes 69 s
+      <!-- /numbers -->
+
+  A field is one value and a format spec: a source's name, keys (``.key``; ``.0`` for a list's
+  first item) and, after ``|``, the spec; no expression. A source may name a part of its JSON,
+  keys joined by ``/``: ``rest=benchmarks/results/physics.json#throws_to_rest/Scene()``. A
+  value computed from a JSON (a sum, a verdict) is computed in Python
+  (:data:`studies.docs_numbers.VALUES`) and read as a key of that JSON.
+
+:func:`study_page` fills a study's page, ``docs/templates/NAME.md``, from the study's objects.
 """
 
 from __future__ import annotations
@@ -29,11 +40,14 @@ from pathlib import Path
 from dice_env.disk import write_atomically
 from studies import ROOT
 
+GENERATED = ROOT / "docs" / "generated"  # the generated files, included by the pages
 TEMPLATES = ROOT / "docs" / "templates"  # the studies' pages, filled by :func:`study_page`
+HEADER = ("<!-- --8<-- [start:generated] written by {command} from {sources}: do not edit "
+          "(snippets leaves this line out) -->\n")
 BLOCK = re.compile(r"<!-- numbers (?P<sources>[^\n]*)\n(?P<template>.*?)-->\n(?P<text>.*?)"
                    r"<!-- /numbers -->", re.S)
-FIELD = re.compile(r"\{\{(.+?)\}\}", re.S)
-SPEC = re.compile(r"[\w ,.%+<>=^#-]*")  # what may follow the last "|" of a field: a format spec
+ANY_FIELD = re.compile(r"\{\{(.*?)\}\}", re.S)
+FIELD = re.compile(r"\s*(?P<path>[A-Za-z_]\w*(?:\.\w+)*)\s*(?:\|(?P<spec>[\w ,.%+<>=^#-]*))?")
 HELPERS = {f.__name__: f for f in (min, max, len, sum, abs, round, sorted, all, any, enumerate,
                                    zip, range, int, float, str, repr)}
 
@@ -57,79 +71,87 @@ def wrap(value: object) -> object:
     return value
 
 
+def shown(path: Path) -> str:
+    """``path`` relative to the checkout where it is inside it."""
+    return str(path.relative_to(ROOT) if path.is_relative_to(ROOT) else path)
+
+
+def load(source: str, where: str = "") -> object:
+    """The JSON (or its part) that ``source``, ``PATH[#key/key]``, names, as a :class:`Tree`."""
+    from studies.docs_numbers import VALUES
+
+    path, _, pointer = source.partition("#")
+    if not (ROOT / path).is_file():
+        raise FileNotFoundError(f"{where}{path} is not in the repository")
+    value = json.loads((ROOT / path).read_text())
+    for key in pointer.split("/") if pointer else ():
+        try:
+            value = value[key]
+        except (KeyError, TypeError):
+            raise KeyError(f"{where}{path} has no {pointer}") from None
+    value = wrap(value)
+    if source in VALUES:
+        computed = VALUES[source](value)
+        if clash := sorted(set(computed) & set(value)):
+            raise KeyError(f"{source}: computed values {clash} hide the JSON's own keys")
+        value = Tree(value | computed)
+    return value
+
+
+def field(names: dict[str, object], text: str, where: str) -> str:
+    """One field's text: ``name.key.key | spec`` looked up in ``names`` and formatted.
+
+    A field that is not one value (:func:`computes`) is evaluated as the Python expression it
+    is: the blocks of ``docs/benchmark.md`` and the README's results, until they are converted.
+    """
+    match = FIELD.fullmatch(text)
+    if match is None:
+        return substitute("{{" + text + "}}", names, where)
+    first, *keys = match["path"].split(".")
+    try:
+        value = names[first]
+        for key in keys:
+            value = value[int(key)] if isinstance(value, list) else value[key]
+    except (KeyError, IndexError, ValueError, TypeError):
+        raise KeyError(f"{where}: {{{{{text}}}}}: no such value") from None
+    return format(value, (match["spec"] or "").strip())
+
+
+def computes(template: str) -> list[str]:
+    """The fields of ``template`` that are not one value and a format: expressions."""
+    return [m[0] for m in ANY_FIELD.finditer(template) if FIELD.fullmatch(m[1]) is None]
+
+
 @dataclass(frozen=True)
 class Block:
     """One filled block of a page: where it is, its sources, its template and its text."""
 
     page: Path
     line: int
-    sources: dict[str, tuple[Path, tuple[str, ...]]]  # name -> (JSON file, keys into it)
+    sources: dict[str, str]  # name -> PATH[#key/key]
     template: str
     text: str
 
     def render(self) -> str:
         """The block's text as its JSONs give it."""
-        names = {}
-        for name, (path, keys) in self.sources.items():
-            if not path.is_file():
-                raise FileNotFoundError(f"{self.where}: {name}={_shown(path)} is not in the "
-                                        "repository")
-            value = json.loads(path.read_text())
-            for key in keys:
-                try:
-                    value = value[key]
-                except (KeyError, TypeError):
-                    raise KeyError(f"{self.where}: {name}: {_shown(path)} has no "
-                                   f"{'/'.join(keys)}") from None
-            names[name] = wrap(value)
-        return substitute(self.template, names, self.where)
+        names = {name: load(source, f"{self.where}: {name}=") for name, source in
+                 self.sources.items()}
+        return ANY_FIELD.sub(lambda m: field(names, m[1], self.where), self.template)
 
     @property
     def where(self) -> str:
         """``page:line`` of the block."""
-        return f"{_shown(self.page)}:{self.line}"
-
-
-def substitute(template: str, names: dict[str, object], where: str) -> str:
-    """``template`` with each ``{{ expression | format }}`` evaluated over ``names``."""
-    scope = {"__builtins__": {}, **HELPERS, **names}
-
-    def field(match: re.Match) -> str:
-        expression, sep, spec = match.group(1).rpartition("|")
-        if not sep or not SPEC.fullmatch(spec.strip()):  # a "|" inside the expression
-            expression, spec = match.group(1), ""
-        try:
-            value = eval(expression, scope)  # globals: comprehensions see the names
-        except Exception as error:
-            raise ValueError(f"{where}: {{{{{match.group(1)}}}}}: {error!r}") from None
-        return format(value, spec.strip())
-
-    return FIELD.sub(field, template)
-
-
-def study_page(name: str, namespace: dict[str, object] | None = None, /, **names: object) -> str:
-    """The study page ``docs/templates/NAME.md`` filled from ``names``, then ``namespace``.
-
-    A study passes its ``globals()`` as ``namespace``: its template sees its constants and helpers.
-    """
-    path = TEMPLATES / f"{name}.md"
-    scope = {k: v for k, v in (namespace or {}).items() if not k.startswith("__")} | names
-    return substitute(path.read_text(), scope, _shown(path))
-
-
-def _shown(path: Path) -> str:
-    return str(path.relative_to(ROOT) if path.is_relative_to(ROOT) else path)
+        return f"{shown(self.page)}:{self.line}"
 
 
 def _block(page: Path, text: str, match: re.Match) -> Block:
     sources = {}
     for item in match.group("sources").split():
-        name, sep, path = item.partition("=")
+        name, sep, source = item.partition("=")
         if not sep or not name.isidentifier():
             raise ValueError(f"{page}: a numbers block names its JSONs as NAME=PATH, not "
                              f"{item!r}")
-        path, _, pointer = path.partition("#")
-        sources[name] = ROOT / path, tuple(pointer.split("/")) if pointer else ()
+        sources[name] = source
     return Block(page, text.count("\n", 0, match.start()) + 1, sources, match.group("template"),
                  match.group("text"))
 
@@ -145,11 +167,6 @@ def pages() -> list[Path]:
     return [ROOT / "README.md", *sorted((ROOT / "docs").glob("**/*.md"))]
 
 
-def stale() -> list[str]:
-    """``page:line`` of every block whose text is not what its JSONs give."""
-    return [b.where for page in pages() for b in blocks(page) if b.render() != b.text]
-
-
 def fill(page: Path) -> bool:
     """Rewrite the page's blocks from their JSONs; whether anything changed."""
     text = page.read_text()
@@ -160,21 +177,95 @@ def fill(page: Path) -> bool:
     return new != text
 
 
+def generated_text(name: str) -> str:
+    """The file ``docs/generated/NAME.md`` as its JSONs give it: header and rendered text."""
+    from studies.docs_numbers import GENERATED as RENDERERS
+
+    renderer = RENDERERS[name]
+    jsons = {arg: load(source, f"generated/{name}.md: {arg}=")
+             for arg, source in renderer.sources.items()}
+    sources = ", ".join(dict.fromkeys(s.partition("#")[0] for s in renderer.sources.values()))
+    return (HEADER.format(command=renderer.command, sources=sources)
+            + renderer.render(**jsons).rstrip("\n"))
+
+
+def stale() -> list[str]:
+    """Each block (``page:line``) and generated file not what its JSONs give."""
+    from studies.docs_numbers import GENERATED as RENDERERS
+
+    differ = [b.where for page in pages() for b in blocks(page) if b.render() != b.text]
+    for name in RENDERERS:
+        path = GENERATED / f"{name}.md"
+        if not path.is_file() or path.read_text() != generated_text(name):
+            differ.append(shown(path))
+    return differ
+
+
+def write_generated() -> list[Path]:
+    """Write every generated file whose text differs from its JSONs'; the files written."""
+    from studies.docs_numbers import GENERATED as RENDERERS
+
+    written = []
+    GENERATED.mkdir(exist_ok=True)
+    for name in RENDERERS:
+        path, text = GENERATED / f"{name}.md", generated_text(name)
+        if not path.is_file() or path.read_text() != text:
+            write_atomically(path, text.encode())
+            written.append(path)
+    return written
+
+
+def substitute(template: str, names: dict[str, object], where: str) -> str:
+    """``template`` with each ``{{ expression | format }}`` evaluated over ``names``.
+
+    The studies' pages under ``docs/templates`` only, and the blocks not yet converted.
+    """
+    scope = {"__builtins__": {}, **HELPERS, **names}
+
+    def one(match: re.Match) -> str:
+        expression, sep, spec = match.group(1).rpartition("|")
+        if not sep or not re.fullmatch(r"[\w ,.%+<>=^#-]*", spec.strip()):
+            expression, spec = match.group(1), ""  # a "|" inside the expression
+        try:
+            value = eval(expression, scope)  # globals: comprehensions see the names
+        except Exception as error:
+            raise ValueError(f"{where}: {{{{{match.group(1)}}}}}: {error!r}") from None
+        return format(value, spec.strip())
+
+    return ANY_FIELD.sub(one, template)
+
+
+def study_page(name: str, namespace: dict[str, object] | None = None, /, **names: object) -> str:
+    """The study page ``docs/templates/NAME.md`` filled from ``names``, then ``namespace``.
+
+    A study passes its ``globals()`` as ``namespace``: its template sees its constants and helpers.
+    """
+    path = TEMPLATES / f"{name}.md"
+    scope = {k: v for k, v in (namespace or {}).items() if not k.startswith("__")} | names
+    return substitute(path.read_text(), scope, shown(path))
+
+
 def main(argv: list[str] | None = None) -> int:
-    """Fill every page's blocks, or with ``--check`` list the stale ones (exit 1 if any)."""
+    """Write the generated files and fill the blocks; ``--check``: list the stale ones instead.
+
+    Exit 1 if ``--check`` finds any.
+    """
     parser = argparse.ArgumentParser(prog="python -m studies.templates",
                                      description=__doc__.split("\n\n")[0])
     parser.add_argument("--check", action="store_true",
-                        help="change nothing; list the blocks that differ from their JSONs")
+                        help="change nothing; list the blocks and generated files that differ "
+                        "from their JSONs")
     args = parser.parse_args(argv)
     if args.check:
         differ = stale()
         for where in differ:
             print(f"{where}: differs from its JSONs (python -m studies.templates)")
         return 1 if differ else 0
+    for path in write_generated():
+        print(f"wrote {shown(path)}")
     for page in pages():
         if fill(page):
-            print(f"filled {_shown(page)}")
+            print(f"filled {shown(page)}")
     return 0
 
 

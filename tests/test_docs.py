@@ -15,7 +15,7 @@ from dice_env.envs.dice_throw import configure
 from dice_env.envs.throw_task import ThrowTask, make_task, task_keywords
 from dice_env.model.die import Die
 from dice_env.model.surroundings import walls
-from studies import templates
+from studies import docs_numbers, templates
 
 ROOT = Path(__file__).resolve().parents[1]
 PAGES = [ROOT / "README.md", *sorted(p for p in (ROOT / "docs").glob("**/*.md")
@@ -34,9 +34,28 @@ TEXT<!-- /numbers -->
 """
 
 
-def test_every_filled_block_is_what_its_json_gives():
+def test_every_filled_block_and_generated_file_is_what_its_json_gives():
     assert templates.stale() == []
-    assert sum(len(templates.blocks(page)) for page in PAGES) >= 4
+    assert sum(len(templates.blocks(page)) for page in PAGES) >= 2
+    assert len(docs_numbers.GENERATED) >= 20
+
+
+def test_no_field_computes():
+    """A field is one value and a format: sums, verdicts and tables are computed in Python."""
+    computing = {b.where: templates.computes(b.template) for page in PAGES
+                 for b in templates.blocks(page)
+                 if "benchmarks/results/baselines.json" not in b.sources.values()}
+    assert {where: fields for where, fields in computing.items() if fields} == {}
+
+
+def test_every_generated_file_is_included_once_and_names_its_command():
+    included = re.findall(r'^--8<-- "generated/([\w-]+)\.md"$',
+                          "".join(p.read_text() for p in PAGES), re.M)
+    assert sorted(included) == sorted(docs_numbers.GENERATED)
+    for name in docs_numbers.GENERATED:
+        head = (templates.GENERATED / f"{name}.md").read_text().partition("\n")[0]
+        assert head.startswith("<!-- --8<-- [start:generated] written by python -m studies"), name
+        assert "benchmarks/results/" in head and "do not edit" in head, name
 
 
 def test_a_number_changed_by_hand_or_a_missing_json_is_found(tmp_path, monkeypatch):
@@ -49,10 +68,38 @@ def test_a_number_changed_by_hand_or_a_missing_json_is_found(tmp_path, monkeypat
     (block,) = templates.blocks(page)
     assert block.render() != block.text
     monkeypatch.setattr(templates, "pages", lambda: [page])
+    monkeypatch.setattr(docs_numbers, "GENERATED", {})
     assert templates.main(["--check"]) == 1
     page.write_text(BLOCK.replace("env.json", "gone.json"))
     with pytest.raises(FileNotFoundError, match=r"gone\.json is not in the repository"):
         templates.blocks(page)[0].render()
+
+
+def test_a_generated_file_changed_by_hand_is_found_and_rewritten(tmp_path, monkeypatch):
+    monkeypatch.setattr(templates, "GENERATED", tmp_path)
+    monkeypatch.setattr(templates, "pages", lambda: [])
+    speed = {"env-speed": docs_numbers.GENERATED["env-speed"]}
+    monkeypatch.setattr(docs_numbers, "GENERATED", speed)
+    assert templates.stale() == [str(tmp_path / "env-speed.md")]  # missing
+    assert templates.write_generated() == [tmp_path / "env-speed.md"]
+    assert templates.stale() == [] and templates.write_generated() == []
+    path = tmp_path / "env-speed.md"
+    text = path.read_text()
+    assert text.startswith("<!-- --8<-- [start:generated] written by python -m studies.templates "
+                           "from benchmarks/results/env.json") and not text.endswith("\n")
+    path.write_text(text.replace("batch 256", "batch 512"))
+    assert templates.main(["--check"]) == 1
+    assert templates.main([]) == 0 and path.read_text() == text
+
+
+def test_a_field_is_one_value_and_a_format():
+    names = {"env": templates.wrap({"rest": {"batch": 256, "rates": [0.5, 0.25]}})}
+    assert templates.field(names, " env.rest.batch | ,d ", "here") == "256"
+    assert templates.field(names, " env.rest.rates.1 | .2f ", "here") == "0.25"
+    assert templates.computes("{{ env.rest.batch }} {{ sum(env.rest.rates) | .2f }}") == [
+        "{{ sum(env.rest.rates) | .2f }}"]
+    with pytest.raises(KeyError, match=r"here: \{\{ env\.rest\.gone \}\}: no such value"):
+        templates.field(names, " env.rest.gone ", "here")
 
 
 def test_a_study_page_fills_its_template_and_names_a_missing_value(tmp_path, monkeypatch):
