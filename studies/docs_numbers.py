@@ -3,8 +3,9 @@
 Each function decorated with :func:`generated` renders ``docs/generated/NAME.md`` from the result
 JSONs its keywords name (as :class:`studies.templates.Tree`: keys read as attributes); the
 hand-written page includes the file (``--8<-- "generated/NAME.md"``). Every number, verdict
-and sum is computed here, in Python. :data:`VALUES` adds named values computed from a JSON to
-what the README's fields may read. ``python -m studies.templates`` writes them all.
+and sum is computed here, in Python, or in the study of :data:`STUDY_MODULES` that writes it.
+:data:`VALUES` adds named values computed from a JSON to what the README's fields may read.
+``python -m studies.templates`` writes them all.
 """
 
 from __future__ import annotations
@@ -35,12 +36,19 @@ class Generated:
 
 
 GENERATED: dict[str, Generated] = {}
+# The studies whose renderers sit beside them (``python -m studies NAME`` writes their files).
+STUDY_MODULES = ("studies.pips",)
 
 
-def generated(name: str, **sources: str) -> Callable[[Callable[..., str]], Callable[..., str]]:
-    """Register the decorated function as the renderer of ``docs/generated/NAME.md``."""
+def generated(name: str, command: str = WRITER,
+              **sources: str) -> Callable[[Callable[..., str]], Callable[..., str]]:
+    """Register the decorated function as the renderer of ``docs/generated/NAME.md``.
+
+    The file is written by ``command`` (a study's: ``python -m studies NAME``) from the JSONs
+    ``sources`` names.
+    """
     def register(render: Callable[..., str]) -> Callable[..., str]:
-        GENERATED[name] = Generated(sources, render)
+        GENERATED[name] = Generated(sources, render, command)
         return render
     return register
 

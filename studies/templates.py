@@ -31,6 +31,7 @@ lists what differs from its JSONs instead (``tests/test_docs.py`` runs it):
 from __future__ import annotations
 
 import argparse
+import importlib
 import json
 import re
 import sys
@@ -42,8 +43,9 @@ from studies import ROOT
 
 GENERATED = ROOT / "docs" / "generated"  # the generated files, included by the pages
 TEMPLATES = ROOT / "docs" / "templates"  # the studies' pages, filled by :func:`study_page`
-HEADER = ("<!-- --8<-- [start:generated] written by {command} from {sources}: do not edit "
+HEADER = ("<!-- --8<-- [start:generated] written by {command}{sources}: do not edit "
           "(snippets leaves this line out) -->\n")
+INCLUDE = re.compile(r'^--8<-- "generated/(?P<name>[\w-]+)\.md"$', re.M)
 BLOCK = re.compile(r"<!-- numbers (?P<sources>[^\n]*)\n(?P<template>.*?)-->\n(?P<text>.*?)"
                    r"<!-- /numbers -->", re.S)
 ANY_FIELD = re.compile(r"\{\{(.*?)\}\}", re.S)
@@ -177,24 +179,55 @@ def fill(page: Path) -> bool:
     return new != text
 
 
-def generated_text(name: str) -> str:
-    """The file ``docs/generated/NAME.md`` as its JSONs give it: header and rendered text."""
-    from studies.docs_numbers import GENERATED as RENDERERS
+def renderers() -> dict[str, object]:
+    """Every generated file's :class:`studies.docs_numbers.Generated`, the studies' included."""
+    from studies import docs_numbers
 
-    renderer = RENDERERS[name]
+    for module in docs_numbers.STUDY_MODULES:  # their renderers register themselves on import
+        importlib.import_module(module)
+    return docs_numbers.GENERATED
+
+
+def generated_text(name: str, renderer: object | None = None) -> str:
+    """The file ``docs/generated/NAME.md`` as its JSONs give it: header and rendered text."""
+    renderer = renderer or renderers()[name]
     jsons = {arg: load(source, f"generated/{name}.md: {arg}=")
              for arg, source in renderer.sources.items()}
     sources = ", ".join(dict.fromkeys(s.partition("#")[0] for s in renderer.sources.values()))
-    return (HEADER.format(command=renderer.command, sources=sources)
+    return (HEADER.format(command=renderer.command, sources=f" from {sources}" if sources else "")
             + renderer.render(**jsons).rstrip("\n"))
+
+
+def expand(page: str, folder: Path) -> str:
+    """``page`` as the docs show it, its includes replaced by the files of ``folder``.
+
+    Each ``--8<-- "generated/NAME.md"`` becomes ``folder/NAME.md``, its header left out.
+    """
+    return INCLUDE.sub(lambda m: (folder / f"{m['name']}.md").read_text().partition("\n")[2],
+                       page)
+
+
+def write_study(out: Path, page: str, names: list[str]) -> None:
+    """Write a study's generated files ``names`` into ``out/generated/``.
+
+    Outside ``docs/`` (a quick run, another ``--out``) also the page ``out/PAGE.md``: the
+    hand-written ``docs/PAGE.md`` with those files included, to be read whole.
+    """
+    files = renderers()
+    (out / "generated").mkdir(parents=True, exist_ok=True)
+    for name in names:
+        path, text = out / "generated" / f"{name}.md", generated_text(name, files[name])
+        if not path.is_file() or path.read_text() != text:
+            write_atomically(path, text.encode())
+    if out.resolve() != GENERATED.parent:
+        text = expand((GENERATED.parent / f"{page}.md").read_text(), out / "generated")
+        write_atomically(out / f"{page}.md", text.encode())
 
 
 def stale() -> list[str]:
     """Each block (``page:line``) and generated file not what its JSONs give."""
-    from studies.docs_numbers import GENERATED as RENDERERS
-
     differ = [b.where for page in pages() for b in blocks(page) if b.render() != b.text]
-    for name in RENDERERS:
+    for name in renderers():
         path = GENERATED / f"{name}.md"
         if not path.is_file() or path.read_text() != generated_text(name):
             differ.append(shown(path))
@@ -203,11 +236,9 @@ def stale() -> list[str]:
 
 def write_generated() -> list[Path]:
     """Write every generated file whose text differs from its JSONs'; the files written."""
-    from studies.docs_numbers import GENERATED as RENDERERS
-
     written = []
     GENERATED.mkdir(exist_ok=True)
-    for name in RENDERERS:
+    for name in renderers():
         path, text = GENERATED / f"{name}.md", generated_text(name)
         if not path.is_file() or path.read_text() != text:
             write_atomically(path, text.encode())
