@@ -188,14 +188,19 @@ def renderers() -> dict[str, object]:
     return docs_numbers.GENERATED
 
 
-def generated_text(name: str, renderer: object | None = None) -> str:
-    """The file ``docs/generated/NAME.md`` as its JSONs give it: header and rendered text."""
+def generated_text(name: str, renderer: object | None = None,
+                   jsons: dict[str, object] | None = None) -> str:
+    """The file ``docs/generated/NAME.md`` as its JSONs give it: header and rendered text.
+
+    ``jsons``: the sources' values, by keyword (a study's fresh numbers), instead of the files.
+    """
     renderer = renderer or renderers()[name]
-    jsons = {arg: load(source, f"generated/{name}.md: {arg}=")
-             for arg, source in renderer.sources.items()}
+    if jsons is None:
+        jsons = {arg: load(source, f"generated/{name}.md: {arg}=")
+                 for arg, source in renderer.sources.items()}
     sources = ", ".join(dict.fromkeys(s.partition("#")[0] for s in renderer.sources.values()))
     return (HEADER.format(command=renderer.command, sources=f" from {sources}" if sources else "")
-            + renderer.render(**jsons).rstrip("\n"))
+            + renderer.render(**{k: wrap(v) for k, v in jsons.items()}).rstrip("\n"))
 
 
 def expand(page: str, folder: Path) -> str:
@@ -207,8 +212,11 @@ def expand(page: str, folder: Path) -> str:
                        page)
 
 
-def write_study(out: Path, page: str, names: list[str]) -> None:
+def write_study(out: Path, page: str, names: list[str],
+                jsons: dict[str, object] | None = None) -> None:
     """Write a study's generated files ``names`` into ``out/generated/``.
+
+    From ``jsons`` (the run's numbers, by the renderers' keywords) or else the committed JSONs.
 
     Outside ``docs/`` (a quick run, another ``--out``) also the page ``out/PAGE.md``: the
     hand-written ``docs/PAGE.md`` with those files included, to be read whole.
@@ -216,7 +224,8 @@ def write_study(out: Path, page: str, names: list[str]) -> None:
     files = renderers()
     (out / "generated").mkdir(parents=True, exist_ok=True)
     for name in names:
-        path, text = out / "generated" / f"{name}.md", generated_text(name, files[name])
+        path = out / "generated" / f"{name}.md"
+        text = generated_text(name, files[name], jsons)
         if not path.is_file() or path.read_text() != text:
             write_atomically(path, text.encode())
     if out.resolve() != GENERATED.parent:
