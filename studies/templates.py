@@ -214,18 +214,33 @@ def expand(page: str, folder: Path) -> str:
 
 def write_study(out: Path, page: str, names: list[str],
                 jsons: dict[str, object] | None = None) -> None:
-    """Write a study's generated files ``names`` into ``out/generated/``.
+    """Write a study's generated files ``names``, rendered from its JSONs, into ``out``.
 
-    From ``jsons`` (the run's numbers, by the renderers' keywords) or else the committed JSONs.
+    From ``jsons`` (the run's numbers, by the renderers' keywords) or else the committed JSONs;
+    see :func:`write_study_files`.
+    """
+    files = renderers()
+    write_files(out, page, {name: generated_text(name, files[name], jsons) for name in names})
+
+
+def write_study_files(out: Path, page: str, command: str, files: dict[str, str]) -> None:
+    """Write the files a study rendered from its run, ``files`` (name -> text), into ``out``.
+
+    Each gets the header naming ``command``; see :func:`write_files`.
+    """
+    write_files(out, page, {name: HEADER.format(command=command, sources="") + text.rstrip("\n")
+                            for name, text in files.items()})
+
+
+def write_files(out: Path, page: str, texts: dict[str, str]) -> None:
+    """Write a study's generated files (name -> text, header included) to ``out/generated/``.
 
     Outside ``docs/`` (a quick run, another ``--out``) also the page ``out/PAGE.md``: the
     hand-written ``docs/PAGE.md`` with those files included, to be read whole.
     """
-    files = renderers()
     (out / "generated").mkdir(parents=True, exist_ok=True)
-    for name in names:
+    for name, text in texts.items():
         path = out / "generated" / f"{name}.md"
-        text = generated_text(name, files[name], jsons)
         if not path.is_file() or path.read_text() != text:
             write_atomically(path, text.encode())
     if out.resolve() != GENERATED.parent:
