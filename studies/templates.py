@@ -25,7 +25,8 @@ lists what differs from its JSONs instead (``tests/test_docs.py`` runs it):
   value computed from a JSON (a sum, a verdict) is computed in Python
   (:data:`studies.docs_numbers.VALUES`) and read as a key of that JSON.
 
-:func:`study_page` fills a study's page, ``docs/templates/NAME.md``, from the study's objects.
+A study (``python -m studies NAME``) writes its page's files the same way: rendered from its JSON
+(:func:`write_study`, checked by ``--check``) or from its run (:func:`write_study_files`).
 """
 
 from __future__ import annotations
@@ -42,7 +43,6 @@ from dice_env.disk import write_atomically
 from studies import ROOT
 
 GENERATED = ROOT / "docs" / "generated"  # the generated files, included by the pages
-TEMPLATES = ROOT / "docs" / "templates"  # the studies' pages, filled by :func:`study_page`
 HEADER = ("<!-- --8<-- [start:generated] written by {command}{sources}: do not edit "
           "(snippets leaves this line out) -->\n")
 INCLUDE = re.compile(r'^--8<-- "generated/(?P<name>[\w-]+)\.md"$', re.M)
@@ -273,7 +273,7 @@ def write_generated() -> list[Path]:
 def substitute(template: str, names: dict[str, object], where: str) -> str:
     """``template`` with each ``{{ expression | format }}`` evaluated over ``names``.
 
-    The studies' pages under ``docs/templates`` only, and the blocks not yet converted.
+    For the blocks not yet converted (``docs/benchmark.md``, the README's results) only.
     """
     scope = {"__builtins__": {}, **HELPERS, **names}
 
@@ -288,16 +288,6 @@ def substitute(template: str, names: dict[str, object], where: str) -> str:
         return format(value, spec.strip())
 
     return ANY_FIELD.sub(one, template)
-
-
-def study_page(name: str, namespace: dict[str, object] | None = None, /, **names: object) -> str:
-    """The study page ``docs/templates/NAME.md`` filled from ``names``, then ``namespace``.
-
-    A study passes its ``globals()`` as ``namespace``: its template sees its constants and helpers.
-    """
-    path = TEMPLATES / f"{name}.md"
-    scope = {k: v for k, v in (namespace or {}).items() if not k.startswith("__")} | names
-    return substitute(path.read_text(), scope, shown(path))
 
 
 def main(argv: list[str] | None = None) -> int:

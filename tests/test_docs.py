@@ -18,9 +18,7 @@ from dice_env.model.surroundings import walls
 from studies import docs_numbers, templates
 
 ROOT = Path(__file__).resolve().parents[1]
-PAGES = [ROOT / "README.md", *sorted(p for p in (ROOT / "docs").glob("**/*.md")
-                                     if not p.is_relative_to(templates.TEMPLATES))]
-TEMPLATES = sorted(templates.TEMPLATES.glob("*.md"))
+PAGES = [ROOT / "README.md", *sorted((ROOT / "docs").glob("**/*.md"))]
 HISTORY = re.compile(
     r"\b(reverted|the issue|issue's|used to|formerly|previously|an earlier (run|version)|"
     r"earlier figures|now (sticks|flagged|gives|runs|takes|costs|passes|fails|rests|reads)|"
@@ -108,20 +106,6 @@ def test_a_field_is_one_value_and_a_format():
         templates.field(names, " env.rest.gone ", "here")
 
 
-def test_a_study_page_fills_its_template_and_names_a_missing_value(tmp_path, monkeypatch):
-    monkeypatch.setattr(templates, "TEMPLATES", tmp_path)
-    (tmp_path / "study.md").write_text("p = {{ p | .3f }} over {{ len(faces) }} faces\n")
-    assert templates.study_page("study", p=1 / 6, faces=range(6)) == "p = 0.167 over 6 faces\n"
-    with pytest.raises(ValueError, match=r"study\.md: \{\{ p \| \.3f \}\}: NameError"):
-        templates.study_page("study", faces=range(6))
-
-
-@pytest.mark.parametrize("name", [p.stem for p in TEMPLATES])
-def test_every_study_template_is_filled_by_a_study(name):
-    studies = "".join(p.read_text() for p in (ROOT / "studies").glob("*.py"))
-    assert re.search(rf'study_page\(\s*"{re.escape(name)}"', studies)
-
-
 def test_the_environment_page_lists_every_keyword():
     page = (ROOT / "docs/environment.md").read_text()
     table = page[page.index("## Keywords"):page.index("### Keywords and a base scene")]
@@ -195,7 +179,7 @@ def test_every_docstring_reference_names_something():
     assert references.unresolved(ROOT) == []
 
 
-@pytest.mark.parametrize("path", [*PAGES, *TEMPLATES, *sorted((ROOT / "dice_env").glob("**/*.py")),
+@pytest.mark.parametrize("path", [*PAGES, *sorted((ROOT / "dice_env").glob("**/*.py")),
                                   *sorted((ROOT / "agents").glob("**/*.py"))],
                          ids=lambda p: str(p.relative_to(ROOT)))
 def test_pages_and_code_describe_rather_than_narrate(path):
@@ -217,9 +201,7 @@ EXAMPLE = re.compile(r"(?:<!-- example not run: (?P<why>[^>]*?) -->\n)?```python
                      re.S)
 # Budgets cut in the default suite (the slow test runs the pages as written).
 SHORTER = {'model.learn(hp["n_timesteps"])': "model.learn(1)"}  # PPO for one rollout
-# Pages written from docs/templates by the studies are left out: their examples are the studies'.
-EXAMPLE_PAGES = [page for page in PAGES if page.name not in {t.name for t in TEMPLATES}
-                 and "```python" in page.read_text()]
+EXAMPLE_PAGES = [page for page in PAGES if "```python" in page.read_text()]
 
 
 def run_examples(page: Path, shorter: dict[str, str]) -> dict:
