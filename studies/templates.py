@@ -6,7 +6,7 @@ lists what differs from its JSONs instead (``tests/test_docs.py`` runs it):
 - **Generated files.** A table or a paragraph that carries measured numbers is a file
   ``docs/generated/NAME.md``, rendered by a function of :mod:`studies.docs_numbers` from its
   JSONs (every computation and verdict in Python) and included by the hand-written page with
-  ``--8<-- "generated/NAME.md"`` (``pymdownx.snippets``, ``base_path: docs``). Its first line
+  ``--8<-- "generated/NAME.md"`` (``pymdownx.snippets``, ``docs`` in its ``base_path``). Its first line
   (:data:`HEADER`) names the command that writes it and the JSONs it reads; being a snippet
   section marker, that line is left out of the page. The file ends without a newline, so that an
   include may continue a paragraph.
@@ -50,8 +50,6 @@ BLOCK = re.compile(r"<!-- numbers (?P<sources>[^\n]*)\n(?P<template>.*?)-->\n(?P
                    r"<!-- /numbers -->", re.S)
 ANY_FIELD = re.compile(r"\{\{(.*?)\}\}", re.S)
 FIELD = re.compile(r"\s*(?P<path>[A-Za-z_]\w*(?:\.\w+)*)\s*(?:\|(?P<spec>[\w ,.%+<>=^#-]*))?")
-HELPERS = {f.__name__: f for f in (min, max, len, sum, abs, round, sorted, all, any, enumerate,
-                                   zip, range, int, float, str, repr)}
 
 
 class Tree(dict):
@@ -101,14 +99,12 @@ def load(source: str, where: str = "") -> object:
 
 
 def field(names: dict[str, object], text: str, where: str) -> str:
-    """One field's text: ``name.key.key | spec`` looked up in ``names`` and formatted.
-
-    A field that is not one value (:func:`computes`) is evaluated as the Python expression it
-    is: the blocks of ``docs/benchmark.md`` and the README's results, until they are converted.
-    """
+    """One field's text: ``name.key.key | spec`` looked up in ``names`` and formatted."""
     match = FIELD.fullmatch(text)
     if match is None:
-        return substitute("{{" + text + "}}", names, where)
+        raise ValueError(f"{where}: {{{{{text}}}}}: a field is one value and a format "
+                         "(name.key | spec), not an expression: compute it in Python "
+                         "(studies.docs_numbers.VALUES)")
     first, *keys = match["path"].split(".")
     try:
         value = names[first]
@@ -268,26 +264,6 @@ def write_generated() -> list[Path]:
             write_atomically(path, text.encode())
             written.append(path)
     return written
-
-
-def substitute(template: str, names: dict[str, object], where: str) -> str:
-    """``template`` with each ``{{ expression | format }}`` evaluated over ``names``.
-
-    For the blocks not yet converted (``docs/benchmark.md``, the README's results) only.
-    """
-    scope = {"__builtins__": {}, **HELPERS, **names}
-
-    def one(match: re.Match) -> str:
-        expression, sep, spec = match.group(1).rpartition("|")
-        if not sep or not re.fullmatch(r"[\w ,.%+<>=^#-]*", spec.strip()):
-            expression, spec = match.group(1), ""  # a "|" inside the expression
-        try:
-            value = eval(expression, scope)  # globals: comprehensions see the names
-        except Exception as error:
-            raise ValueError(f"{where}: {{{{{match.group(1)}}}}}: {error!r}") from None
-        return format(value, spec.strip())
-
-    return ANY_FIELD.sub(one, template)
 
 
 def main(argv: list[str] | None = None) -> int:
