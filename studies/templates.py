@@ -6,10 +6,10 @@ lists what differs from its JSONs instead (``tests/test_docs.py`` runs it):
 - **Generated files.** A table or a paragraph that carries measured numbers is a file
   ``docs/generated/NAME.md``, rendered by a function of :mod:`studies.docs_numbers` from its
   JSONs (every computation and verdict in Python) and included by the hand-written page with
-  ``--8<-- "generated/NAME.md"`` (``pymdownx.snippets``, ``docs`` in its ``base_path``). Its first line
-  (:data:`HEADER`) names the command that writes it and the JSONs it reads; being a snippet
-  section marker, that line is left out of the page. The file ends without a newline, so that an
-  include may continue a paragraph.
+  ``--8<-- "generated/NAME.md"`` (``pymdownx.snippets``, ``docs`` in its ``base_path``). Its
+  first line (:data:`HEADER`) names the command that writes it and the JSONs it reads; being a
+  snippet section marker, that line is left out of the page. The file ends without a newline,
+  so that an include may continue a paragraph.
 - **Fields.** The README is read raw (GitHub, PyPI) and includes nothing: there a sentence that
   quotes a figure stands in a block, its hidden template above its filled copy::
 
