@@ -37,7 +37,8 @@ class Generated:
 
 GENERATED: dict[str, Generated] = {}
 # The studies whose renderers sit beside them (``python -m studies NAME`` writes their files).
-STUDY_MODULES = ("studies.pips", "studies.weldon", "studies.paper_figures")
+STUDY_MODULES = ("studies.pips", "studies.weldon", "studies.paper_figures",
+                 "studies.cuboids")
 
 
 def generated(name: str, command: str = WRITER,
