@@ -38,7 +38,8 @@ class Generated:
 GENERATED: dict[str, Generated] = {}
 # The studies whose renderers sit beside them (``python -m studies NAME`` writes their files).
 STUDY_MODULES = ("studies.pips", "studies.weldon", "studies.paper_figures",
-                 "studies.cuboids", "studies.shapes")
+                 "studies.cuboids", "studies.shapes",
+                 "studies.craps")
 
 
 def generated(name: str, command: str = WRITER,
