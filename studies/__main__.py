@@ -1,10 +1,11 @@
 """The studies' command line.
 
 ``python -m studies {all,<study>} [--quick] [--throws N] [--ray ADDR] [--chunks DIR]
-[--out DIR]``. A full run writes its page into the repository's docs/; a ``--quick`` run writes
-into ./studies-quick unless ``--out`` is given, and never into docs/, so that a reduced run
-cannot replace a full page. The studies are not installed with ``dice_env``: they run from a
-checkout, from its root folder (``docs/`` is the checkout's).
+[--out DIR]``. A full run writes its page's numbers (``docs/generated/``, included by the
+hand-written ``docs/NAME.md``) and figures into the repository's docs/; a ``--quick`` run writes
+them, and the page with them included, into ./studies-quick unless ``--out`` is given, and never
+into docs/, so that a reduced run cannot replace a full page. The studies are not installed
+with ``dice_env``: they run from a checkout, from its root folder (``docs/`` is the checkout's).
 """
 
 from __future__ import annotations

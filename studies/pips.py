@@ -1,11 +1,11 @@
 """The pips page: the drilled-pip model, its presets and their mass properties.
 
-``python -m studies pips`` writes ``docs/pips.md`` (closed form, instant).
+``python -m studies pips`` writes the tables of ``docs/pips.md`` (closed form, instant) into
+``docs/generated/``; the page around them is hand-written.
 """
 
 from __future__ import annotations
 
-import math
 from pathlib import Path
 
 import numpy as np
@@ -13,13 +13,26 @@ import numpy as np
 from dice_env.markdown import markdown_table
 from dice_env.model.die import Die
 from dice_env.model.pips import DRILLINGS, SOURCES, Pips, cap_properties
-from studies.common import DOCS, write_text
-from studies.templates import study_page
+from studies.common import DOCS
+from studies.docs_numbers import generated
+from studies.templates import write_study
+
+COMMAND = "python -m studies pips"
+FILES = ("pips-presets", "pips-masses", "pips-sources")  # docs/generated/, included by pips.md
 
 
 def run(out: Path = DOCS, quick: bool = False) -> dict[str, float]:
-    """Write ``out/pips.md`` (``quick`` changes nothing); the drilled d6's com offset / edge."""
-    # the presets, then the casino die with its spots left empty and with paint 10 % light
+    """Write ``out/generated/pips-*.md``; the drilled d6's com offset / edge.
+
+    Outside docs/ also the page ``out/pips.md``; ``quick`` changes nothing.
+    """
+    write_study(out, "pips", list(FILES))
+    drilled = _rows()[0][1]
+    return {"drilled16_com_over_edge": float(np.linalg.norm(drilled.com) / drilled.size)}
+
+
+def _rows() -> list[tuple[str, Die, Pips]]:
+    """The presets, then the casino die with its spots left empty and with paint 10 % light."""
     rows = [(f"`{name}`", Die.standard("d6", pips=name), preset.pips)
             for name, preset in DRILLINGS.items()]
     casino = DRILLINGS["casino19"]
@@ -27,25 +40,36 @@ def run(out: Path = DOCS, quick: bool = False) -> dict[str, float]:
         pips = Pips(casino.pips.radius, casino.pips.depth, casino.pips.offset, paint)
         die = Die.standard("d6", casino.size, casino.density * casino.size**3, pips=pips)
         rows.append((f"`casino19`, {label}", die, pips))
-    presets = markdown_table(
+    return rows
+
+
+@generated("pips-presets", COMMAND)
+def presets_table() -> str:
+    """Each preset's size, mass, pips and paint, and its source."""
+    return markdown_table(
         "preset | edge (mm) | mass (g) | pip opening (mm) | depth (mm) | offset | paint "
         "(g/cm³) | source",
         ((f"`{name}`", f"{die.size * 1e3:.2f}", f"{die.mass * 1e3:.3f}",
           f"{2e3 * pips.radius:g}", f"{1e3 * pips.depth:g}", f"{pips.offset:g}",
           "empty" if pips.paint_density is None else f"{pips.paint_density / 1e3:g}",
           preset.source)
-         for (name, preset), (_, die, pips) in zip(DRILLINGS.items(), rows, strict=False)))
-    masses = markdown_table(
+         for (name, preset), (_, die, pips) in zip(DRILLINGS.items(), _rows(), strict=False)))
+
+
+@generated("pips-masses", COMMAND)
+def masses_table() -> str:
+    """Each die's cavities, centre of mass and inertia against the uniform cube's."""
+    return markdown_table(
         "die | cavities (% of the cube) | com x, y, z (µm) | \\|com\\| (µm) | "
         "\\|com\\| / edge | principal moments / (m s²/6) − 1 (10⁻³) | "
         "products yz, xz, xy / (m s²/6) (10⁻³)",
-        (_mass_row(label, die, pips) for label, die, pips in rows))
-    out.mkdir(parents=True, exist_ok=True)
-    write_text(out / "pips.md", study_page(
-        "pips", presets=presets, masses=masses, sources=SOURCES, z_share=5 / math.sqrt(35),
-        z_angle=math.degrees(math.atan(math.sqrt(10) / 5))))
-    drilled = rows[0][1]
-    return {"drilled16_com_over_edge": float(np.linalg.norm(drilled.com) / drilled.size)}
+        (_mass_row(label, die, pips) for label, die, pips in _rows()))
+
+
+@generated("pips-sources", COMMAND)
+def sources_list() -> str:
+    """The presets' sources (``dice_env.model.pips.SOURCES``)."""
+    return "\n".join(f"- {source}" for source in SOURCES)
 
 
 def _mass_row(label: str, die: Die, pips: Pips) -> tuple:

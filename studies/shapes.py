@@ -5,6 +5,7 @@
 
 from __future__ import annotations
 
+import json
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -26,8 +27,12 @@ from dice_env.throws import (
     throw_faces,
 )
 from studies.common import DOCS, SEED, checked_throws, progress, save_figure, write_text
-from studies.templates import study_page
+from studies.docs_numbers import generated
+from studies.templates import write_study
 
+COMMAND = "python -m studies shapes"  # writes docs/generated/shapes-*.md
+JSON = "docs/shapes.json"  # every number of the page, written by the full study
+FILES = ("shapes-intro", "shapes-intro-2", "shapes-intro-3", "shapes-intro-4", "shapes-free-flight")
 DICE = tuple(STANDARD_SIZES)
 # Throws per die, fair and loaded, in the full and the quick run.
 FULL = {"fair": 100_000, "loaded": 20_000}
@@ -176,8 +181,10 @@ def run(out: Path = DOCS, quick: bool = False, seed: int = SEED, throws: int | N
         numbers[f"{name}_loaded_excess"] = loaded[name].share - 1 / fair[name].counts.size
     for q in ("velocity", "momentum", "energy"):
         numbers[f"flight_{q}"] = max(f[k][q] for f in flight.values() for k in (0, 1))
-    write_text(out / "shapes.md", _markdown(fair, loaded, flight, sizes, seed, quick, throws,
-                                             faces_of is not None))
+    data = page_data(fair, loaded, flight, sizes, seed, quick, throws, faces_of is not None)
+    out.mkdir(parents=True, exist_ok=True)
+    write_text(out / "shapes.json", json.dumps(data, indent=1) + "\n")
+    write_study(out, "shapes", list(FILES), {"d": json.loads(json.dumps(data))})
     return numbers
 
 
@@ -202,43 +209,30 @@ def _plot(fair: dict[str, Faces], loaded: dict[str, Loaded], path: Path) -> None
     save_figure(fig, path)
 
 
-def _load_verdict(loaded: dict[str, Loaded]) -> str:
-    """Which loaded dice show their predicted face more than ``1/n`` beyond the 95% interval."""
-    shown = [n for n, h in loaded.items() if h.interval[0] > 1 / h.faces.counts.size]
-    hidden = [n for n in loaded if n not in shown]
-    text = f"The predicted face shows more than 1/n beyond its 95% interval on: {', '.join(shown)}."
-    if hidden:
-        text += (f" Not detectable at this sample: {', '.join(hidden)} (the d4's offset is half"
-                 " the others'; `tests/test_studies_shapes.py` loads it with 0.3 of the mass"
-                 " at depth 0.9 and finds face 1 read most).")
-    return text
+def page_data(fair: dict[str, Faces], loaded: dict[str, Loaded], flight: dict,
+              sizes: dict, seed: int, quick: bool, throws: int | None, chunked: bool) -> dict:
+    """Every number of the page (JSON-ready), kept as ``shapes.json``."""
+    return {
+        "command": "python -m studies shapes" + (" --quick" if quick else "") + (
+            f" --throws {throws}" if throws is not None else "") + (
+            " --chunks DIR" if chunked else ""),
+        "seed": seed, "sizes": sizes, "chunked": chunked,
+        "fair": {name: {"counted": int(f.ended), "undecided": int(f.undecided),
+                        "chi2": float(f.chi2), "p": float(f.p_value),
+                        "max_deviation": float(f.max_deviation)} for name, f in fair.items()},
+        "loaded": {name: {"com_offset": float(np.linalg.norm(h.die.com) / h.die.size),
+                          "favoured": int(h.favoured), "counted": int(h.faces.ended),
+                          "share": h.share, "interval": [float(x) for x in h.interval],
+                          "most_frequent": int(h.most_frequent), "p": float(h.faces.p_value)}
+                   for name, h in loaded.items()},
+        "flight": {name: [{q: float(flight[name][k][q]) for q in FLIGHT_COLUMNS} for k in (0, 1)]
+                   for name in flight}}
 
 
-def _markdown(fair: dict[str, Faces], loaded: dict[str, Loaded], flight: dict,
-              sizes: dict, seed: int, quick: bool, throws: int | None, chunked: bool) -> str:
-    command = "python -m studies shapes" + (" --quick" if quick else "") + (
-        f" --throws {throws}" if throws is not None else "") + (
-        " --chunks DIR" if chunked else "")
-    fairness = markdown_table(
-        "die | faces | vertices | size (mm) | mass (g) | counted | undecided | chi2 | p | "
-        "largest deviation of share × n from 1",
-        ((name, die.n_faces, len(die.vertices), f"{die.size * 1e3:g}", f"{die.mass * 1e3:.3g}",
-          f.ended, f.undecided, f"{f.chi2:.1f}", f"**{f.p_value:.3g}**",
-          f"{f.max_deviation * die.n_faces:.3f}")
-         for name in DICE for die, f in [(Die.standard(name), fair[name])]))
-    loads = markdown_table(
-        "die | centre of mass offset (size) | predicted face | counted | its share [95%] | 1/n | "
-        "share × n | most frequent | chi2 p",
-        ((name, f"{np.linalg.norm(h.die.com) / h.die.size:.3f}", h.favoured, h.faces.ended,
-          estimate(h.share, h.interval, 4), f"{1 / h.die.n_faces:.4f}",
-          f"{h.share * h.die.n_faces:.2f}", h.most_frequent, f"{h.faces.p_value:.3g}")
-         for name, h in loaded.items()))
-    flights = markdown_table(
-        "die | isotropic | " + " | ".join(f"{mode}: {q}" for mode in ("jump", "stepped")
-                                          for q in FLIGHT_COLUMNS),
-        ((name, "yes" if die.is_isotropic else "no",
-          *(f"{flight[name][k][q]:.1e}" for k in (0, 1) for q in FLIGHT_COLUMNS))
-         for name, die in flight_dice().items()))
+@generated("shapes-intro", COMMAND, d=JSON)
+def intro_text(d: dict) -> str:
+    """The run, the dice, the table and the throws."""
+    command, seed, sizes, v, g = d["command"], d["seed"], d["sizes"], VIGOROUS, Scene().ground
     full = FULL["fair"]
     note = ("" if sizes["fair"] >= full else
             f"\nThis page was made with {sizes['fair']} fair throws per die (the command's "
@@ -246,7 +240,80 @@ def _markdown(fair: dict[str, Faces], loaded: dict[str, Loaded], flight: dict,
         "\nEach die's throws ran in seeded chunks (`dice_env.simulation.runner`, one seed per "
         "die from the study's seed; `--chunks DIR` keeps them, `--ray ADDRESS` runs them on Ray): "
         "the same numbers here or on any Ray cluster, not those of a run without chunks.\n"
-        if chunked else "")
-    return study_page("shapes", globals(), DIE_EDGE=DIE_EDGE, command=command,
-                      fairness=fairness, flights=flights, g=Scene().ground, loaded=loaded,
-                      loads=loads, note=note, seed=seed, sizes=sizes, v=VIGOROUS)
+        if d["chunked"] else "")
+    return f"""\
+Generated by `{command}` (module `studies/shapes.py`, seed {seed}).
+{note}
+Dice: `Die.standard(name)` at their default sizes and the default density (uniform solids);
+table: the default scene's (S = {g.stiffness:g} N/m, D = {g.damping:.4g} N s/m, mu =
+{g.friction:g} per vertex, stick-slip friction, automatic step), no walls. Throws: the
+vigorous hand throws of `fairness.md`, in the same physical units for every die: orientation
+uniform over rotations, released {v.clearance[0] * DIE_EDGE * 100:g}–{v.clearance[1] * DIE_EDGE * 100:g} cm above touching, {v.speed[0] * DIE_EDGE:g}–{v.speed[1] * DIE_EDGE:g} m/s
+in a uniform direction toward the table, spin {v.spin[0]:g}–{v.spin[1]:g} rad/s about a
+uniform axis. Each throw runs until its face is decided (`simulate(...,
+until="decided")`: its energy can no longer tip it, so this is the face it rests on)
+or {Scene().t_max:g} s; faces are read against gravity, the d4 by the face down.
+"Undecided": throws with no face by then, or flagged unstable or sunk; not counted.
+
+## Fairness: {sizes['fair']} throws per die"""  # noqa: E501
+
+
+@generated("shapes-intro-2", COMMAND, d=JSON)
+def fairness_table(d: dict) -> str:
+    """Each standard die's faces against uniform."""
+    return markdown_table(
+        "die | faces | vertices | size (mm) | mass (g) | counted | undecided | chi2 | p | "
+        "largest deviation of share × n from 1",
+        ((name, die.n_faces, len(die.vertices), f"{die.size * 1e3:g}", f"{die.mass * 1e3:.3g}",
+          f["counted"], f["undecided"], f"{f['chi2']:.1f}", f"**{f['p']:.3g}**",
+          f"{f['max_deviation'] * die.n_faces:.3f}")
+         for name in DICE for die, f in [(Die.standard(name), d["fair"][name])]))
+
+
+@generated("shapes-intro-3", COMMAND, d=JSON)
+def loaded_heading(d: dict) -> str:
+    """The loaded dice's heading, with their throws."""
+    return f"## Loaded dice: {d['sizes']['loaded']} throws each"
+
+
+@generated("shapes-intro-4", COMMAND, d=JSON)
+def loaded_table(d: dict) -> str:
+    """Each loaded die's predicted face against 1/n, and which show it."""
+    n = {name: Die.standard(name).n_faces for name in d["loaded"]}
+    loads = markdown_table(
+        "die | centre of mass offset (size) | predicted face | counted | its share [95%] | 1/n | "
+        "share × n | most frequent | chi2 p",
+        ((name, f"{h['com_offset']:.3f}", h["favoured"], h["counted"],
+          estimate(h["share"], h["interval"], 4), f"{1 / n[name]:.4f}",
+          f"{h['share'] * n[name]:.2f}", h["most_frequent"], f"{h['p']:.3g}")
+         for name, h in d["loaded"].items()))
+    shown = [name for name, h in d["loaded"].items() if h["interval"][0] > 1 / n[name]]
+    hidden = [name for name in d["loaded"] if name not in shown]
+    text = f"The predicted face shows more than 1/n beyond its 95% interval on: {', '.join(shown)}."
+    if hidden:
+        text += (f" Not detectable at this sample: {', '.join(hidden)} (the d4's offset is half"
+                 " the others'; `tests/test_studies_shapes.py` loads it with 0.3 of the mass"
+                 " at depth 0.9 and finds face 1 read most).")
+    return f"{loads}\n\n{text}"
+
+
+@generated("shapes-free-flight", COMMAND, d=JSON)
+def flight_text(d: dict) -> str:
+    """Free flight: each shape's largest errors, jumped and stepped."""
+    flights = markdown_table(
+        "die | isotropic | " + " | ".join(f"{mode}: {q}" for mode in ("jump", "stepped")
+                                          for q in FLIGHT_COLUMNS),
+        ((name, "yes" if die.is_isotropic else "no",
+          *(f"{d['flight'][name][k][q]:.1e}" for k in (0, 1) for q in FLIGHT_COLUMNS))
+         for name, die in flight_dice().items()))
+    return rf"""Eight throws of each die released {FLIGHT_HEIGHT:g} m up with 0.2–1 m/s and 20–100 rad/s,
+flying {FLIGHT_TIME:g} s without touching anything (`free_flight` in the module). Largest
+error over the throws (and, for the energy and height, over 200 recorded instants), each
+relative to its scale: velocity \|u − u0 − g t\| / (\|u0\| + g t); angular momentum
+\|L − L0\| / \|L0\|; energy (kinetic plus m g z from the recorded state, plus the
+symplectic Euler step's exact defect in uniform gravity, m g² dt t / 2) \|E − E0\| / KE0,
+and its rotational part alone; height of the centre against the exact parabola, over the
+drop g t²/2. With the analytic contact-free jumps (the default) and stepped one by one
+(`free_flight=False`).
+
+{flights}"""  # noqa: E501

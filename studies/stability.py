@@ -21,10 +21,11 @@ from dice_env.model.scene import MAX_STEPS, ContactLaw, Ground, Scene
 from dice_env.simulation.paper import paper_scene
 from dice_env.simulation.simulate import Result, State, simulate
 from dice_env.throws import Vigour, vigorous_throws
-from studies.common import DOCS, progress, save_figure, write_text
-from studies.templates import study_page
+from studies.common import DOCS, progress, save_figure
+from studies.templates import write_study_files
 
 STABLE, DRIFTING, BLOWUP = 0, 1, 2
+COMMAND = "python -m studies stability"  # writes docs/generated/stability-*.md
 DRIFT_LIMIT = 10.0  # worst energy rise (fraction of KE0 + m g (h0 + edge)) still drifting
 MAP_T_MAX = 5.0  # simulated time of each map cell (s): the paper throw lands at about 1.5 s
 
@@ -182,8 +183,8 @@ def run(out: Path = DOCS, quick: bool = False, seed: int = 7) -> dict[str, float
         numbers[f"{name}_first_blowup"] = _first_ratio(maps[law] == BLOWUP, ratios)
     numbers["extreme_any_nan"] = float(any(r["nan"] for _, r in rows))
     numbers["automatic_step_flagged_cases"] = float(sum(r["unstable"] > 0 for _, r in rows))
-    write_text(out / "stability.md",
-        _markdown(stiffnesses, ratios, maps, rows, throws, numbers, sweep_cases, sweep))
+    write_study_files(out, "stability", COMMAND, _markdown(
+        stiffnesses, ratios, maps, rows, throws, numbers, sweep_cases, sweep))
     return numbers
 
 
@@ -217,7 +218,7 @@ def _plot_maps(stiffnesses: np.ndarray, ratios: np.ndarray, maps: dict, path: Pa
 
 def _markdown(stiffnesses: np.ndarray, ratios: np.ndarray, maps: dict, rows: list,
               throws: int, n: dict[str, float], sweep_cases: list[Case],
-              sweep: np.ndarray) -> str:
+              sweep: np.ndarray) -> dict[str, str]:
     base = Scene()
     law_lines = markdown_table(
         "law | below: stable | drift | blow-up | above: stable | drift | blow-up | 1st drift | "
@@ -247,8 +248,7 @@ def _markdown(stiffnesses: np.ndarray, ratios: np.ndarray, maps: dict, rows: lis
     sink = [f"{c.label}: {100 * _static_sink(c.scene):.2g}% static, "
             f"{100 * r['max_penetration']:.3g}% in the throws" for c, r in rows
             if c.group == "mass"]
-    return study_page(
-        "stability-markdown", globals(), base=base, by_label={c.label: r for c, r in rows},
+    return page_files(base=base, by_label={c.label: r for c, r in rows},
         d_rows=[(c.label, r) for c, r in rows if c.group == "damping"], flagged=flagged,
         g=base.ground, law_lines=law_lines, n=n, nan_cases=nan_cases, ratios=ratios, sink=sink,
         slip=float(np.degrees(np.arctan(base.ground.friction))),
@@ -280,3 +280,87 @@ def _static_sink(scene: Scene) -> float:
 
 def _indent(text: str) -> str:
     return "\n".join("  " + line for line in text.splitlines())
+
+
+def page_files(base, by_label, d_rows, flagged, g, law_lines, n, nan_cases, ratios, sink, slip,
+               stiff, stiffnesses, sunk, sweep, sweep_cases, sweep_rows, table, throws,
+               tilt_rows) -> dict[str, str]:
+    """The page's generated files (``docs/generated/stability-*.md``), by name."""
+    return {
+        "stability-stability-map": f"""\
+The paper's real throw (its die, x0 = (0, 0, 3), u0 = (5, 0, 5), D = 0.1, mu = 0.1,
+{MAP_T_MAX:g} s simulated, 3 seeded spins L0 = rand·0.75 + 1e-6 per cell) for S =
+{stiffnesses[0]:g}–{stiffnesses[-1]:g} ({len(stiffnesses)} values) and dt from
+{ratios[0]:g} to {ratios[-1]:g} times the predicted bound `Scene.critical_dt` =
+(sqrt(D^2 + 4 S m_eff) - D) / S with m_eff = m/6 (the fastest contact mode of a face on the
+table: rocking about an edge), {len(ratios)} values. Classes, from the worst of the spins:
+*stable* = the total energy (kinetic + potential + ground springs) never rose above its start
+by more than 10% of KE0 + m g (h0 + edge) (`Result.unstable` False); *drifting* = rose more
+than that but less than {DRIFT_LIMIT:g} times that scale and stayed finite; *blowing up* =
+beyond, or non-finite.
+
+{law_lines}
+
+Blow-up starts at {n['paper_first_blowup']:.3g} (paper law) and
+{n['gated_first_blowup']:.3g} (gated law) times the bound (grid spacing
+{100 * (ratios[1] / ratios[0] - 1):.0f}%), and no cell above the bound stays stable
+{_above_stable_phrase(n)}: the predicted bound is the
+stability limit of the scheme. *Drifting* (energy up by more than 10% but bounded) starts
+below it: at {n['paper_first_not_stable']:.2g} of the bound for the paper law and
+{n['gated_first_not_stable']:.2g} for the gated law. The 10% tolerance is an accuracy test: a
+coarse step gives each impact an energy error, and in this scene almost nothing removes it
+under the gated law (the ground's damping ratio is about 0.1%), while the paper law's air drag
+(8·D·v on a falling die) takes energy out on every flight and hides it. The node-mass bound
+(m/8, dashed) lies slightly below the effective-mass bound: a conservative estimate, not the
+limit.""",
+        "stability-extreme-cases-default-scene": f"""\
+Default scene: die {base.die.size * 1e3:g} mm, {base.die.mass * 1e3:g} g; table
+S = {g.stiffness:g} N/m, D = {g.damping:.4g} N s/m, mu = {g.friction:g},
+{g.contact_law.name.lower()} law; automatic step = {base.safety:g} x critical =
+{base.step:.3g} s; up to {base.t_max:g} s per throw. Each row: {throws} random throws
+(uniform orientation, centre 3–10 edges above touching, 10–30 edges/s toward the table, 10–30
+rad/s) with one thing changed. Max pen. = deepest corner in % of the edge; drift = largest rise
+of total energy above its start as a fraction of KE0 + m g (h0 + edge); unstable = share of
+throws flagged; sunk = share whose deepest corner passed `Scene.sink_limit`
+({base.sink_limit:g} of the die's size: `Result.sunk`, voided by the env); rest = median rest
+time of the settled throws; wall = seconds for the batch on this machine (2 cores, shared);
+warn = warnings raised. The last two columns of the map table are the smallest dt/bound where
+any stiffness is not stable / blows up.
+
+{table}
+
+- NaN or infinite values: {', '.join(nan_cases) if nan_cases else 'none in any case'}.
+- Flagged unstable at the automatic step: {', '.join(flagged) if flagged else 'none'}.
+- Flagged sunk (deepest corner beyond {base.sink_limit:g} of the die's size, `Result.sunk`):
+  {', '.join(sunk) if sunk else 'none'}.
+  The drift shrinks fast with the step (same throws, drift / share flagged):
+
+{_indent(sweep_rows)}
+
+  At the automatic safety factor {base.safety:g}, {_sweep_sentence(sweep_cases, sweep)}
+  The tolerance's scale KE0 + m g (h0 + edge) includes the drop height h0 of the centre above
+  the table, so a drop is judged against the energy it brings to its first impact.
+- Very stiff ground at the automatic step costs time, not accuracy: the step shrinks like
+  1/sqrt(S) (S = {stiff[-1][0].scene.ground.stiffness:g}: dt = {stiff[-1][1]['dt']:.2g} s,
+  {stiff[-1][1]['steps_per_s']:.3g} steps per simulated second). The simulator neither warns
+  nor refuses (warn column); it just takes longer: {stiff[-1][1]['wall']:.1f} s wall for
+  the {throws} throws at S = {stiff[-1][0].scene.ground.stiffness:g}
+  ({stiff[-1][1]['die_steps'] / throws:.3g} steps per throw, counting the flight steps taken
+  in analytic jumps). A user-given step above the bound raises `ValueError` unless
+  `allow_unstable=True`.
+- Tilted table (settled within {base.t_max:g} s: {tilt_rows}): a die can only stay where
+  tan(angle) < mu, i.e. below {slip:.1f}°. Steeper tables let it slide and tumble down the
+  infinite plane until the time limit, so "not settled" there is physics, not a failure; it
+  gathers speed and hits hard (the penetration column).
+- Damping (critical = 2 sqrt(S m_eff), m_eff = m/{base.die.mass / base.effective_mass:.0f}): settled
+  {', '.join(f"{lab.split(' (')[0]}: {100 * r['settled']:.0f}%" for lab, r in d_rows)};
+  median rest {', '.join(f"{r['rest_time']:.2f} s" for _, r in d_rows)} (baseline
+  {by_label['default scene']['rest_time']:.2f} s). Without damping only sliding friction dissipates
+  (a sticking corner's tangential spring is undamped too);
+  near-critical damping settles fastest and needs a smaller automatic step (the bound's D term).
+- Mass, same die size and table (sink m g / (4 S) of a flat die vs deepest corner seen):
+  {'; '.join(sink)}. At 1000 kg the penalty ground is far outside its valid range (the die
+  sinks through it), though the automatic step grows with the mass and nothing becomes
+  non-finite. The same D is a smaller damping ratio for a heavier die (D / (2 sqrt(S m_eff))),
+  so heavy dice bounce longer and drift like the undamped case.""",
+    }

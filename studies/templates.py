@@ -1,25 +1,38 @@
-r"""Pages from templates: the numbers in hand-written pages filled from their result JSONs.
+r"""The docs' measured numbers, written once and filled from their result JSONs.
 
-A hand-written page (the README, ``docs/*.md``) quotes a measured figure only inside a block::
+Two forms, both written by ``python -m studies.templates``; ``--check`` changes nothing and
+lists what differs from its JSONs instead (``tests/test_docs.py`` runs it):
 
-    <!-- numbers env=benchmarks/results/env.json
-    the vector env runs {{ env.rest.vector_env_throws_per_s | ,.0f }} throws/s
-    -->
-    the vector env runs 1,399 throws/s
-    <!-- /numbers -->
+- **Generated files.** A table or a paragraph that carries measured numbers is a file
+  ``docs/generated/NAME.md``, rendered by a function of :mod:`studies.docs_numbers` from its
+  JSONs (every computation and verdict in Python) and included by the hand-written page with
+  ``--8<-- "generated/NAME.md"`` (``pymdownx.snippets``, ``docs`` in its ``base_path``). Its
+  first line (:data:`HEADER`) names the command that writes it and the JSONs it reads; being a
+  snippet section marker, that line is left out of the page. The file ends without a newline,
+  so that an include may continue a paragraph.
+- **Fields.** The README is read raw (GitHub, PyPI) and includes nothing: there a sentence that
+  quotes a figure stands in a block, its hidden template above its filled copy::
 
-Each ``{{ expression | format }}`` of the hidden template is a Python expression over the named
-JSONs (keys by ``.name`` or ``["key"]``, the builtins of :data:`HELPERS`), written with the
-format spec. A source may name a part of its JSON, keys joined by ``/``:
-``rest=benchmarks/results/physics.json#throws_to_rest/Scene()``.
-``python -m studies.templates`` rewrites every block from its JSONs; ``--check`` lists
-the stale blocks instead (``tests/test_docs.py`` runs it). :func:`study_page` fills a study's
-page, ``docs/templates/NAME.md``, the same way from the study's Python objects.
+      <!-- numbers cold=benchmarks/results/cold_start.json
+      the precompile takes {{ cold.suite.seconds.precompile | .0f }} s
+      -->
+      the precompile takes 69 s
+      <!-- /numbers -->
+
+  A field is one value and a format spec: a source's name, keys (``.key``; ``.0`` for a list's
+  first item) and, after ``|``, the spec; no expression. A source may name a part of its JSON,
+  keys joined by ``/``: ``rest=benchmarks/results/physics.json#throws_to_rest/Scene()``. A
+  value computed from a JSON (a sum, a verdict) is computed in Python
+  (:data:`studies.docs_numbers.VALUES`) and read as a key of that JSON.
+
+A study (``python -m studies NAME``) writes its page's files the same way: rendered from its JSON
+(:func:`write_study`, checked by ``--check``) or from its run (:func:`write_study_files`).
 """
 
 from __future__ import annotations
 
 import argparse
+import importlib
 import json
 import re
 import sys
@@ -29,13 +42,14 @@ from pathlib import Path
 from dice_env.disk import write_atomically
 from studies import ROOT
 
-TEMPLATES = ROOT / "docs" / "templates"  # the studies' pages, filled by :func:`study_page`
+GENERATED = ROOT / "docs" / "generated"  # the generated files, included by the pages
+HEADER = ("<!-- --8<-- [start:generated] written by {command}{sources}: do not edit "
+          "(snippets leaves this line out) -->\n")
+INCLUDE = re.compile(r'^--8<-- "generated/(?P<name>[\w-]+)\.md"$', re.M)
 BLOCK = re.compile(r"<!-- numbers (?P<sources>[^\n]*)\n(?P<template>.*?)-->\n(?P<text>.*?)"
                    r"<!-- /numbers -->", re.S)
-FIELD = re.compile(r"\{\{(.+?)\}\}", re.S)
-SPEC = re.compile(r"[\w ,.%+<>=^#-]*")  # what may follow the last "|" of a field: a format spec
-HELPERS = {f.__name__: f for f in (min, max, len, sum, abs, round, sorted, all, any, enumerate,
-                                   zip, range, int, float, str, repr)}
+ANY_FIELD = re.compile(r"\{\{(.*?)\}\}", re.S)
+FIELD = re.compile(r"\s*(?P<path>[A-Za-z_]\w*(?:\.\w+)*)\s*(?:\|(?P<spec>[\w ,.%+<>=^#-]*))?")
 
 
 class Tree(dict):
@@ -57,79 +71,85 @@ def wrap(value: object) -> object:
     return value
 
 
+def shown(path: Path) -> str:
+    """``path`` relative to the checkout where it is inside it."""
+    return str(path.relative_to(ROOT) if path.is_relative_to(ROOT) else path)
+
+
+def load(source: str, where: str = "") -> object:
+    """The JSON (or its part) that ``source``, ``PATH[#key/key]``, names, as a :class:`Tree`."""
+    from studies.docs_numbers import VALUES
+
+    path, _, pointer = source.partition("#")
+    if not (ROOT / path).is_file():
+        raise FileNotFoundError(f"{where}{path} is not in the repository")
+    value = json.loads((ROOT / path).read_text())
+    for key in pointer.split("/") if pointer else ():
+        try:
+            value = value[key]
+        except (KeyError, TypeError):
+            raise KeyError(f"{where}{path} has no {pointer}") from None
+    value = wrap(value)
+    if source in VALUES:
+        computed = VALUES[source](value)
+        if clash := sorted(set(computed) & set(value)):
+            raise KeyError(f"{source}: computed values {clash} hide the JSON's own keys")
+        value = Tree(value | computed)
+    return value
+
+
+def field(names: dict[str, object], text: str, where: str) -> str:
+    """One field's text: ``name.key.key | spec`` looked up in ``names`` and formatted."""
+    match = FIELD.fullmatch(text)
+    if match is None:
+        raise ValueError(f"{where}: {{{{{text}}}}}: a field is one value and a format "
+                         "(name.key | spec), not an expression: compute it in Python "
+                         "(studies.docs_numbers.VALUES)")
+    first, *keys = match["path"].split(".")
+    try:
+        value = names[first]
+        for key in keys:
+            value = value[int(key)] if isinstance(value, list) else value[key]
+    except (KeyError, IndexError, ValueError, TypeError):
+        raise KeyError(f"{where}: {{{{{text}}}}}: no such value") from None
+    return format(value, (match["spec"] or "").strip())
+
+
+def computes(template: str) -> list[str]:
+    """The fields of ``template`` that are not one value and a format: expressions."""
+    return [m[0] for m in ANY_FIELD.finditer(template) if FIELD.fullmatch(m[1]) is None]
+
+
 @dataclass(frozen=True)
 class Block:
     """One filled block of a page: where it is, its sources, its template and its text."""
 
     page: Path
     line: int
-    sources: dict[str, tuple[Path, tuple[str, ...]]]  # name -> (JSON file, keys into it)
+    sources: dict[str, str]  # name -> PATH[#key/key]
     template: str
     text: str
 
     def render(self) -> str:
         """The block's text as its JSONs give it."""
-        names = {}
-        for name, (path, keys) in self.sources.items():
-            if not path.is_file():
-                raise FileNotFoundError(f"{self.where}: {name}={_shown(path)} is not in the "
-                                        "repository")
-            value = json.loads(path.read_text())
-            for key in keys:
-                try:
-                    value = value[key]
-                except (KeyError, TypeError):
-                    raise KeyError(f"{self.where}: {name}: {_shown(path)} has no "
-                                   f"{'/'.join(keys)}") from None
-            names[name] = wrap(value)
-        return substitute(self.template, names, self.where)
+        names = {name: load(source, f"{self.where}: {name}=") for name, source in
+                 self.sources.items()}
+        return ANY_FIELD.sub(lambda m: field(names, m[1], self.where), self.template)
 
     @property
     def where(self) -> str:
         """``page:line`` of the block."""
-        return f"{_shown(self.page)}:{self.line}"
-
-
-def substitute(template: str, names: dict[str, object], where: str) -> str:
-    """``template`` with each ``{{ expression | format }}`` evaluated over ``names``."""
-    scope = {"__builtins__": {}, **HELPERS, **names}
-
-    def field(match: re.Match) -> str:
-        expression, sep, spec = match.group(1).rpartition("|")
-        if not sep or not SPEC.fullmatch(spec.strip()):  # a "|" inside the expression
-            expression, spec = match.group(1), ""
-        try:
-            value = eval(expression, scope)  # globals: comprehensions see the names
-        except Exception as error:
-            raise ValueError(f"{where}: {{{{{match.group(1)}}}}}: {error!r}") from None
-        return format(value, spec.strip())
-
-    return FIELD.sub(field, template)
-
-
-def study_page(name: str, namespace: dict[str, object] | None = None, /, **names: object) -> str:
-    """The study page ``docs/templates/NAME.md`` filled from ``names``, then ``namespace``.
-
-    A study passes its ``globals()`` as ``namespace``: its template sees its constants and helpers.
-    """
-    path = TEMPLATES / f"{name}.md"
-    scope = {k: v for k, v in (namespace or {}).items() if not k.startswith("__")} | names
-    return substitute(path.read_text(), scope, _shown(path))
-
-
-def _shown(path: Path) -> str:
-    return str(path.relative_to(ROOT) if path.is_relative_to(ROOT) else path)
+        return f"{shown(self.page)}:{self.line}"
 
 
 def _block(page: Path, text: str, match: re.Match) -> Block:
     sources = {}
     for item in match.group("sources").split():
-        name, sep, path = item.partition("=")
+        name, sep, source = item.partition("=")
         if not sep or not name.isidentifier():
             raise ValueError(f"{page}: a numbers block names its JSONs as NAME=PATH, not "
                              f"{item!r}")
-        path, _, pointer = path.partition("#")
-        sources[name] = ROOT / path, tuple(pointer.split("/")) if pointer else ()
+        sources[name] = source
     return Block(page, text.count("\n", 0, match.start()) + 1, sources, match.group("template"),
                  match.group("text"))
 
@@ -145,11 +165,6 @@ def pages() -> list[Path]:
     return [ROOT / "README.md", *sorted((ROOT / "docs").glob("**/*.md"))]
 
 
-def stale() -> list[str]:
-    """``page:line`` of every block whose text is not what its JSONs give."""
-    return [b.where for page in pages() for b in blocks(page) if b.render() != b.text]
-
-
 def fill(page: Path) -> bool:
     """Rewrite the page's blocks from their JSONs; whether anything changed."""
     text = page.read_text()
@@ -160,21 +175,118 @@ def fill(page: Path) -> bool:
     return new != text
 
 
+def renderers() -> dict[str, object]:
+    """Every generated file's :class:`studies.docs_numbers.Generated`, the studies' included."""
+    from studies import docs_numbers
+
+    for module in docs_numbers.STUDY_MODULES:  # their renderers register themselves on import
+        importlib.import_module(module)
+    return docs_numbers.GENERATED
+
+
+def generated_text(name: str, renderer: object | None = None,
+                   jsons: dict[str, object] | None = None) -> str:
+    """The file ``docs/generated/NAME.md`` as its JSONs give it: header and rendered text.
+
+    ``jsons``: the sources' values, by keyword (a study's fresh numbers), instead of the files.
+    """
+    renderer = renderer or renderers()[name]
+    if jsons is None:
+        jsons = {arg: load(source, f"generated/{name}.md: {arg}=")
+                 for arg, source in renderer.sources.items()}
+    sources = ", ".join(dict.fromkeys(s.partition("#")[0] for s in renderer.sources.values()))
+    return (HEADER.format(command=renderer.command, sources=f" from {sources}" if sources else "")
+            + renderer.render(**{k: wrap(v) for k, v in jsons.items()}).rstrip("\n"))
+
+
+def expand(page: str, folder: Path) -> str:
+    """``page`` as the docs show it, its includes replaced by the files of ``folder``.
+
+    Each ``--8<-- "generated/NAME.md"`` becomes ``folder/NAME.md``, its header left out.
+    """
+    return INCLUDE.sub(lambda m: (folder / f"{m['name']}.md").read_text().partition("\n")[2],
+                       page)
+
+
+def write_study(out: Path, page: str, names: list[str],
+                jsons: dict[str, object] | None = None) -> None:
+    """Write a study's generated files ``names``, rendered from its JSONs, into ``out``.
+
+    From ``jsons`` (the run's numbers, by the renderers' keywords) or else the committed JSONs;
+    see :func:`write_study_files`.
+    """
+    files = renderers()
+    write_files(out, page, {name: generated_text(name, files[name], jsons) for name in names})
+
+
+def write_study_files(out: Path, page: str, command: str, files: dict[str, str]) -> None:
+    """Write the files a study rendered from its run, ``files`` (name -> text), into ``out``.
+
+    Each gets the header naming ``command``; see :func:`write_files`.
+    """
+    write_files(out, page, {name: HEADER.format(command=command, sources="") + text.rstrip("\n")
+                            for name, text in files.items()})
+
+
+def write_files(out: Path, page: str, texts: dict[str, str]) -> None:
+    """Write a study's generated files (name -> text, header included) to ``out/generated/``.
+
+    Outside ``docs/`` (a quick run, another ``--out``) also the page ``out/PAGE.md``: the
+    hand-written ``docs/PAGE.md`` with those files included, to be read whole.
+    """
+    (out / "generated").mkdir(parents=True, exist_ok=True)
+    for name, text in texts.items():
+        path = out / "generated" / f"{name}.md"
+        if not path.is_file() or path.read_text() != text:
+            write_atomically(path, text.encode())
+    if out.resolve() != GENERATED.parent:
+        text = expand((GENERATED.parent / f"{page}.md").read_text(), out / "generated")
+        write_atomically(out / f"{page}.md", text.encode())
+
+
+def stale() -> list[str]:
+    """Each block (``page:line``) and generated file not what its JSONs give."""
+    differ = [b.where for page in pages() for b in blocks(page) if b.render() != b.text]
+    for name in renderers():
+        path = GENERATED / f"{name}.md"
+        if not path.is_file() or path.read_text() != generated_text(name):
+            differ.append(shown(path))
+    return differ
+
+
+def write_generated() -> list[Path]:
+    """Write every generated file whose text differs from its JSONs'; the files written."""
+    written = []
+    GENERATED.mkdir(exist_ok=True)
+    for name in renderers():
+        path, text = GENERATED / f"{name}.md", generated_text(name)
+        if not path.is_file() or path.read_text() != text:
+            write_atomically(path, text.encode())
+            written.append(path)
+    return written
+
+
 def main(argv: list[str] | None = None) -> int:
-    """Fill every page's blocks, or with ``--check`` list the stale ones (exit 1 if any)."""
+    """Write the generated files and fill the blocks; ``--check``: list the stale ones instead.
+
+    Exit 1 if ``--check`` finds any.
+    """
     parser = argparse.ArgumentParser(prog="python -m studies.templates",
                                      description=__doc__.split("\n\n")[0])
     parser.add_argument("--check", action="store_true",
-                        help="change nothing; list the blocks that differ from their JSONs")
+                        help="change nothing; list the blocks and generated files that differ "
+                        "from their JSONs")
     args = parser.parse_args(argv)
     if args.check:
         differ = stale()
         for where in differ:
             print(f"{where}: differs from its JSONs (python -m studies.templates)")
         return 1 if differ else 0
+    for path in write_generated():
+        print(f"wrote {shown(path)}")
     for page in pages():
         if fill(page):
-            print(f"filled {_shown(page)}")
+            print(f"filled {shown(page)}")
     return 0
 
 

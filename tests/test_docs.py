@@ -15,12 +15,10 @@ from dice_env.envs.dice_throw import configure
 from dice_env.envs.throw_task import ThrowTask, make_task, task_keywords
 from dice_env.model.die import Die
 from dice_env.model.surroundings import walls
-from studies import templates
+from studies import docs_numbers, templates
 
 ROOT = Path(__file__).resolve().parents[1]
-PAGES = [ROOT / "README.md", *sorted(p for p in (ROOT / "docs").glob("**/*.md")
-                                     if not p.is_relative_to(templates.TEMPLATES))]
-TEMPLATES = sorted(templates.TEMPLATES.glob("*.md"))
+PAGES = [ROOT / "README.md", *sorted((ROOT / "docs").glob("**/*.md"))]
 HISTORY = re.compile(
     r"\b(reverted|the issue|issue's|used to|formerly|previously|an earlier (run|version)|"
     r"earlier figures|now (sticks|flagged|gives|runs|takes|costs|passes|fails|rests|reads)|"
@@ -34,9 +32,31 @@ TEXT<!-- /numbers -->
 """
 
 
-def test_every_filled_block_is_what_its_json_gives():
+def test_every_filled_block_and_generated_file_is_what_its_json_gives():
     assert templates.stale() == []
-    assert sum(len(templates.blocks(page)) for page in PAGES) >= 4
+    assert sum(len(templates.blocks(page)) for page in PAGES) >= 2
+    assert len(templates.renderers()) >= 23
+
+
+def test_no_field_computes():
+    """A field is one value and a format: sums, verdicts and tables are computed in Python."""
+    computing = {b.where: templates.computes(b.template) for page in PAGES
+                 for b in templates.blocks(page)}
+    assert {where: fields for where, fields in computing.items() if fields} == {}
+
+
+def test_every_generated_file_is_included_once_and_names_its_command():
+    included = re.findall(r'^--8<-- "generated/([\w-]+)\.md"$',
+                          "".join(p.read_text() for p in PAGES), re.M)
+    files = sorted(p.stem for p in templates.GENERATED.glob("*.md"))
+    assert sorted(included) == files and set(templates.renderers()) <= set(files)
+    for name in files:
+        head = (templates.GENERATED / f"{name}.md").read_text().partition("\n")[0]
+        assert re.fullmatch(r"<!-- --8<-- \[start:generated\] written by python -m studies"
+                            r"[\w. -]*( from [\w./, -]+\.json)?: do not edit \(.*\) -->",
+                            head), name
+        if name in templates.renderers():  # rendered from JSONs: checked by --check
+            assert templates.renderers()[name].command in head, name
 
 
 def test_a_number_changed_by_hand_or_a_missing_json_is_found(tmp_path, monkeypatch):
@@ -49,24 +69,42 @@ def test_a_number_changed_by_hand_or_a_missing_json_is_found(tmp_path, monkeypat
     (block,) = templates.blocks(page)
     assert block.render() != block.text
     monkeypatch.setattr(templates, "pages", lambda: [page])
+    monkeypatch.setattr(docs_numbers, "GENERATED", {})
+    monkeypatch.setattr(docs_numbers, "STUDY_MODULES", ())
     assert templates.main(["--check"]) == 1
     page.write_text(BLOCK.replace("env.json", "gone.json"))
     with pytest.raises(FileNotFoundError, match=r"gone\.json is not in the repository"):
         templates.blocks(page)[0].render()
 
 
-def test_a_study_page_fills_its_template_and_names_a_missing_value(tmp_path, monkeypatch):
-    monkeypatch.setattr(templates, "TEMPLATES", tmp_path)
-    (tmp_path / "study.md").write_text("p = {{ p | .3f }} over {{ len(faces) }} faces\n")
-    assert templates.study_page("study", p=1 / 6, faces=range(6)) == "p = 0.167 over 6 faces\n"
-    with pytest.raises(ValueError, match=r"study\.md: \{\{ p \| \.3f \}\}: NameError"):
-        templates.study_page("study", faces=range(6))
+def test_a_generated_file_changed_by_hand_is_found_and_rewritten(tmp_path, monkeypatch):
+    monkeypatch.setattr(templates, "GENERATED", tmp_path)
+    monkeypatch.setattr(templates, "pages", lambda: [])
+    speed = {"env-speed": docs_numbers.GENERATED["env-speed"]}
+    monkeypatch.setattr(docs_numbers, "GENERATED", speed)
+    monkeypatch.setattr(docs_numbers, "STUDY_MODULES", ())
+    assert templates.stale() == [str(tmp_path / "env-speed.md")]  # missing
+    assert templates.write_generated() == [tmp_path / "env-speed.md"]
+    assert templates.stale() == [] and templates.write_generated() == []
+    path = tmp_path / "env-speed.md"
+    text = path.read_text()
+    assert text.startswith("<!-- --8<-- [start:generated] written by python -m studies.templates "
+                           "from benchmarks/results/env.json") and not text.endswith("\n")
+    path.write_text(text.replace("batch 256", "batch 512"))
+    assert templates.main(["--check"]) == 1
+    assert templates.main([]) == 0 and path.read_text() == text
 
 
-@pytest.mark.parametrize("name", [p.stem for p in TEMPLATES])
-def test_every_study_template_is_filled_by_a_study(name):
-    studies = "".join(p.read_text() for p in (ROOT / "studies").glob("*.py"))
-    assert re.search(rf'study_page\(\s*"{re.escape(name)}"', studies)
+def test_a_field_is_one_value_and_a_format():
+    names = {"env": templates.wrap({"rest": {"batch": 256, "rates": [0.5, 0.25]}})}
+    assert templates.field(names, " env.rest.batch | ,d ", "here") == "256"
+    assert templates.field(names, " env.rest.rates.1 | .2f ", "here") == "0.25"
+    assert templates.computes("{{ env.rest.batch }} {{ sum(env.rest.rates) | .2f }}") == [
+        "{{ sum(env.rest.rates) | .2f }}"]
+    with pytest.raises(KeyError, match=r"here: \{\{ env\.rest\.gone \}\}: no such value"):
+        templates.field(names, " env.rest.gone ", "here")
+    with pytest.raises(ValueError, match=r"one value and a format"):
+        templates.field(names, " sum(env.rest.rates) | .2f ", "here")
 
 
 def test_the_environment_page_lists_every_keyword():
@@ -106,10 +144,12 @@ def test_the_keyword_table_gives_the_code_defaults():
 
 @pytest.mark.parametrize("page", PAGES, ids=lambda p: p.name)
 def test_every_cited_json_is_in_the_repository(page):
+    # a generated file reads as part of the page that includes it, in docs/
+    folder = ROOT / "docs" if page.parent == templates.GENERATED else page.parent
     for cited in set(re.findall(r"[\w./-]+\.json\b", page.read_text())):
         if cited.startswith(("runs/", "eval/")) or cited in RUN_FILES:
             continue  # a run folder's own files, written by train.py
-        assert (ROOT / cited).is_file() or (page.parent / cited).is_file(), \
+        assert (ROOT / cited).is_file() or (folder / cited).is_file(), \
             f"{page.relative_to(ROOT)} cites {cited}, which is not in the repository"
 
 
@@ -140,7 +180,7 @@ def test_every_docstring_reference_names_something():
     assert references.unresolved(ROOT) == []
 
 
-@pytest.mark.parametrize("path", [*PAGES, *TEMPLATES, *sorted((ROOT / "dice_env").glob("**/*.py")),
+@pytest.mark.parametrize("path", [*PAGES, *sorted((ROOT / "dice_env").glob("**/*.py")),
                                   *sorted((ROOT / "agents").glob("**/*.py"))],
                          ids=lambda p: str(p.relative_to(ROOT)))
 def test_pages_and_code_describe_rather_than_narrate(path):
@@ -162,9 +202,7 @@ EXAMPLE = re.compile(r"(?:<!-- example not run: (?P<why>[^>]*?) -->\n)?```python
                      re.S)
 # Budgets cut in the default suite (the slow test runs the pages as written).
 SHORTER = {'model.learn(hp["n_timesteps"])': "model.learn(1)"}  # PPO for one rollout
-# Pages written from docs/templates by the studies are left out: their examples are the studies'.
-EXAMPLE_PAGES = [page for page in PAGES if page.name not in {t.name for t in TEMPLATES}
-                 and "```python" in page.read_text()]
+EXAMPLE_PAGES = [page for page in PAGES if "```python" in page.read_text()]
 
 
 def run_examples(page: Path, shorter: dict[str, str]) -> dict:
