@@ -280,3 +280,28 @@ def test_each_documented_refusal_gives_its_documented_message(keywords, message)
 
 def test_every_refusal_row_is_checked():
     assert len(refused_examples()) >= 20
+
+
+@pytest.mark.parametrize("module", docs_numbers.STUDY_MODULES)
+def test_a_study_s_generated_file_edited_by_hand_fails_the_check(module, tmp_path, monkeypatch):
+    files = {name: g for name, g in templates.renderers().items()
+             if g.render.__module__ == module}
+    assert files, module
+    for name in files:
+        (tmp_path / f"{name}.md").write_text((templates.GENERATED / f"{name}.md").read_text())
+    monkeypatch.setattr(templates, "GENERATED", tmp_path)
+    monkeypatch.setattr(templates, "pages", lambda: [])
+    monkeypatch.setattr(docs_numbers, "GENERATED", files)
+    monkeypatch.setattr(docs_numbers, "STUDY_MODULES", ())
+    assert templates.stale() == []
+    for name in files:  # one number changed by hand in each file
+        path = tmp_path / f"{name}.md"
+        head, _, body = path.read_text().partition("\n")
+        digit = re.search(r"\d", body)
+        if digit is None:
+            continue
+        path.write_text(f"{head}\n{body[:digit.start()]}{(int(digit[0]) + 1) % 10}"
+                        f"{body[digit.end():]}")
+        assert templates.stale() == [str(path)], name
+        assert templates.main(["--check"]) == 1
+        assert templates.main([]) == 0 and templates.stale() == []
