@@ -39,7 +39,8 @@ GENERATED: dict[str, Generated] = {}
 # The studies whose renderers sit beside them (``python -m studies NAME`` writes their files).
 STUDY_MODULES = ("studies.pips", "studies.weldon", "studies.paper_figures",
                  "studies.cuboids", "studies.shapes",
-                 "studies.craps", "studies.pairs", "studies.collisions")
+                 "studies.craps", "studies.pairs", "studies.collisions",
+                 "studies.materials")
 
 
 def generated(name: str, command: str = WRITER,

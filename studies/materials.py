@@ -6,6 +6,7 @@ default die on each preset of :mod:`dice_env.model.materials`, the same releases
 
 from __future__ import annotations
 
+import json
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -21,13 +22,17 @@ from dice_env.model import materials
 from dice_env.simulation.calibration import measured_restitution
 from dice_env.simulation.simulate import UP, State, simulate
 from dice_env.throws import BATCH, VIGOROUS, Faces, Vigour, batches, counted, vigorous_throws
-from studies.common import DOCS, SEED, checked_throws, progress, save_figure
+from studies.common import DOCS, SEED, checked_throws, progress, save_figure, write_text
 from studies.cuboids import GENTLE
+from studies.docs_numbers import generated
 from studies.fairness import T_MAX, throw_energy
-from studies.templates import write_study_files
+from studies.templates import write_study
 
 FULL, QUICK = (10_000, 5_000), (60, 40)  # throws per material: (vigorous, gentle)
 COMMAND = "python -m studies materials"  # writes docs/generated/materials-*.md
+JSON = "docs/materials.json"  # every number of the page, written by the full study
+FILES = ("materials-intro", "materials-presets", "materials-outcomes", "materials-outcomes-2",
+         "materials-memory-release-orientation", "materials-against-kapitaniak-et")
 KINDS = (("vigorous", VIGOROUS), ("gentle", GENTLE))  # (label, hand) of the two kinds of throw
 SIGNIFICANT = 0.01  # p-value below which the materials' memories count as different
 HEADER = ("throws | preset | counted | not decided | faces 1–6 | chi2 | p | mean impacts | "
@@ -95,8 +100,10 @@ def run(out: Path = DOCS, quick: bool = False, throws: int | None = None,
     energy = {label: float(np.median(throw_energy(base, state)))
               for label, state in releases.items()}
     _plot(results, out / "figures" / "materials.png")
-    write_study_files(out, "materials", COMMAND, _markdown(
-        results, restitution, energy, sizes, seconds, seed))
+    data = page_data(results, restitution, energy, sizes, seconds, seed)
+    out.mkdir(parents=True, exist_ok=True)
+    write_text(out / "materials.json", json.dumps(data, indent=1) + "\n")
+    write_study(out, "materials", list(FILES), {"d": json.loads(json.dumps(data))})
     numbers = {"seconds": seconds}
     for name, kinds in results.items():
         numbers[f"{name}_restitution"] = restitution[name]
@@ -151,15 +158,17 @@ def _hand(v: Vigour) -> str:
             f"{v.spin[1]:g} rad/s about a uniform axis, orientation uniform")
 
 
-def _kapitaniak(results: dict, restitution: dict) -> str:
+def _kapitaniak(d: dict) -> str:
     """Whether the bouncier tables give more impacts and less memory, as a sentence."""
-    order = sorted(results, key=restitution.get)
+    restitution = d["restitution"]
+    order = sorted(restitution, key=restitution.get)
     lines = []
     for label, _ in KINDS:
-        impacts = [results[n][label].impacts.mean() for n in order]
-        down = [results[n][label].memory("down")[0] for n in order]
+        rows = {r["preset"]: r for r in d["rows"] if r["throws"] == label}
+        impacts = [rows[n]["impacts"] for n in order]
+        down = [rows[n]["down"][0] for n in order]
         extremes = int(np.argmax(down)) == 0 and int(np.argmin(down)) == len(down) - 1
-        p = memory_differs(results, label)
+        p = d["memory_p"][label]
         memory = (f"the least bouncy keeps {'the most' if extremes else 'not the most'} "
                   f"memory and the most bouncy {'the least' if extremes else 'not the least'}"
                   if p < SIGNIFICANT else
@@ -182,44 +191,52 @@ def _monotonic(values: list[float] | np.ndarray, word: str) -> str:
     return f"{word} in {int(np.sum(steps > 0))} of {len(steps)} steps"
 
 
-def _outcome(label: str, name: str, r: MaterialThrows) -> tuple:
-    """The outcome table's row of ``name``'s throws of kind ``label``."""
+def _row(label: str, name: str, r: MaterialThrows) -> dict:
+    """The numbers of ``name``'s throws of kind ``label`` (JSON-ready)."""
     f = r.faces
-    return (label, name, f.ended, f.undecided, " ".join(f"{s:.3f}" for s in f.shares),
-            f"{f.chi2:.2f}", f"{f.p_value:.3g}", f"{r.impacts.mean():.2f}",
-            f"{r.time.mean():.3f} / {np.median(r.time):.3f}",
-            f"{np.quantile(r.sink, 0.99) * 1e3:.2f} / {r.sink.max() * 1e3:.2f}")
+    down, up = r.memory("down"), r.memory("up")
+    return {"throws": label, "preset": name, "counted": int(f.ended),
+            "undecided": int(f.undecided), "shares": [float(s) for s in f.shares],
+            "chi2": float(f.chi2), "p": float(f.p_value), "impacts": float(r.impacts.mean()),
+            "time": [float(r.time.mean()), float(np.median(r.time))],
+            "sink_mm": [float(np.quantile(r.sink, 0.99) * 1e3), float(r.sink.max() * 1e3)],
+            "down": [float(down[0]), *(float(x) for x in down[1])],
+            "up": [float(up[0]), *(float(x) for x in up[1])]}
 
 
-def _markdown(results: dict, restitution: dict, energy: dict, sizes: tuple, seconds: float,
-              seed: int) -> dict[str, str]:
+def page_data(results: dict, restitution: dict, energy: dict, sizes: tuple, seconds: float,
+              seed: int) -> dict:
+    """Every number of the page (JSON-ready), kept as ``materials.json``."""
+    return {"command": COMMAND, "seed": seed, "seconds": seconds,
+            "threads": numba.get_num_threads(), "sizes": list(sizes),
+            "energy": {k: float(v) for k, v in energy.items()},
+            "restitution": {k: float(v) for k, v in restitution.items()},
+            "memory_p": {label: memory_differs(results, label) for label, _ in KINDS},
+            "rows": [_row(label, name, kinds[label])
+                     for label, _ in KINDS for name, kinds in results.items()]}
+
+
+@generated("materials-intro", COMMAND, d=JSON)
+def intro_text(d: dict) -> str:
+    """The run: command, seed, time and throws."""
+    return f"""\
+Generated by `{d['command']}` (module `studies/materials.py`,
+seed {d['seed']}); the presets are in `dice_env/model/materials.py` (`materials.ground("felt")`,
+`materials.scene("glass")`). The run took **{d['seconds']:.0f} s** on {d['threads']}
+thread(s) ({d['sizes'][0]} vigorous and {d['sizes'][1]} gentle throws per material)."""
+
+
+@generated("materials-presets", COMMAND, d=JSON)
+def presets_text(d: dict) -> str:
+    """The presets (from the code) and their measured restitution."""
     presets = markdown_table(
         "preset | e target | e measured | mu | S (N/m) | D (N s/m) | step (µs) | source",
-        ((name, f"{m.restitution:.2f}", f"{restitution[name]:.4f}", f"{m.friction:.2f}",
+        ((name, f"{m.restitution:.2f}", f"{d['restitution'][name]:.4f}", f"{m.friction:.2f}",
           f"{m.stiffness:.0e}", f"{materials.ground(name).damping:.4g}",
           f"{materials.scene(name).step * 1e6:.1f}", m.source)
          for name, m in materials.MATERIALS.items()))
-    outcomes = markdown_table(HEADER, (_outcome(label, name, kinds[label])
-                                       for label, _ in KINDS for name, kinds in results.items()))
-    memory = markdown_table("throws | preset | P(release-down face) | P(release-up face)", (
-        (label, name, estimate(*kinds[label].memory("down")), estimate(*kinds[label].memory("up")))
-        for label, _ in KINDS for name, kinds in results.items()))
     die = materials.scene("wood").die
-    return page_files(die=die, energy=energy, memory=memory, numba=numba,
-                      outcomes=outcomes, presets=presets, restitution=restitution, results=results,
-                      seconds=seconds, seed=seed, sizes=sizes)
-
-
-def page_files(die, energy, memory, numba, outcomes, presets, restitution, results, seconds, seed,
-               sizes) -> dict[str, str]:
-    """The page's generated files (``docs/generated/materials-*.md``), by name."""
-    return {
-        "materials-intro": f"""\
-Generated by `python -m studies materials` (module `studies/materials.py`,
-seed {seed}); the presets are in `dice_env/model/materials.py` (`materials.ground("felt")`,
-`materials.scene("glass")`). The run took **{seconds:.0f} s** on {numba.get_num_threads()}
-thread(s) ({sizes[0]} vigorous and {sizes[1]} gentle throws per material).""",
-        "materials-presets": f"""\
+    return f"""\
 Restitution e (normal, flat landing) and sliding friction mu of a plastic die on each surface,
 with their sources; "estimate" marks a value no measurement gives directly, and the reason.
 The damping D gives the target e for the default die ({die.mass * 1e3:g} g), from the
@@ -228,27 +245,52 @@ produces (`calibration.measured_restitution`: the die dropped flat at 1 m/s, reb
 over impact speed, `tests/test_materials.py` holds it within 0.01 of the target). The step
 is the scene's automatic one (it grows as S falls).
 
-{presets}""",
-        "materials-outcomes": f"""\
+{presets}"""
+
+
+@generated("materials-outcomes", COMMAND, d=JSON)
+def outcomes_text(d: dict) -> str:
+    """The two throws and the release energies."""
+    die = materials.scene("wood").die
+    return f"""\
 The same releases on every material: **vigorous**, the fairness study's hand throws
-({_hand(VIGOROUS)}; median energy {energy['vigorous']:.1f} m g a), and **gentle**, the cuboid
-study's ({_hand(GENTLE)}; median {energy['gentle']:.2f} m g a); edges of the default
+({_hand(VIGOROUS)}; median energy {d['energy']['vigorous']:.1f} m g a), and **gentle**, the cuboid
+study's ({_hand(GENTLE)}; median {d['energy']['gentle']:.2f} m g a); edges of the default
 {die.size * 1e3:g} mm die. Each throw runs until its face is decided (`until="decided"`:
 too little energy left to change face) or {T_MAX:g} s; impacts and time are counted up to the
 decision. Faces: shares of faces 1–6 among the counted throws, chi-square test of
 uniformity (5 degrees of freedom). Sink: the deepest corner below the table surface, 99th
-percentile / maximum.""",
-        "materials-outcomes-2": f"""\
-{outcomes}""",
-        "materials-memory-release-orientation": f"""\
+percentile / maximum."""
+
+
+@generated("materials-outcomes-2", COMMAND, d=JSON)
+def outcomes_table(d: dict) -> str:
+    """Each material's and throw's outcome."""
+    return markdown_table(HEADER, (
+        (r["throws"], r["preset"], r["counted"], r["undecided"],
+         " ".join(f"{s:.3f}" for s in r["shares"]), f"{r['chi2']:.2f}", f"{r['p']:.3g}",
+         f"{r['impacts']:.2f}", f"{r['time'][0]:.3f} / {r['time'][1]:.3f}",
+         f"{r['sink_mm'][0]:.2f} / {r['sink_mm'][1]:.2f}") for r in d["rows"]))
+
+
+@generated("materials-memory-release-orientation", COMMAND, d=JSON)
+def memory_text(d: dict) -> str:
+    """P(release-down face) and P(release-up face), and the test that the materials differ."""
+    memory = markdown_table("throws | preset | P(release-down face) | P(release-up face)", (
+        (r["throws"], r["preset"], estimate(r["down"][0], r["down"][1:]),
+         estimate(r["up"][0], r["up"][1:])) for r in d["rows"]))
+    return f"""\
 P(the die rests on the face that was down at release) and P(it rests on the face that was up
 at release, i.e. lands upside down), as `docs/fairness.md` measures them, with 95% Wilson
 intervals; 1/6 = 0.167 is no memory. Chi-square test that the release-down probability is the
-same on all four materials: vigorous p = {memory_differs(results, 'vigorous'):.3g}, gentle
-p = {memory_differs(results, 'gentle'):.3g} (conservative: the materials share their releases,
+same on all four materials: vigorous p = {d['memory_p']['vigorous']:.3g}, gentle
+p = {d['memory_p']['gentle']:.3g} (conservative: the materials share their releases,
 which correlates their outcomes and narrows their true differences' spread).
 
-{memory}""",
-        "materials-against-kapitaniak-et": f"""\
-{_kapitaniak(results, restitution)}""",
-    }
+{memory}"""
+
+
+@generated("materials-against-kapitaniak-et", COMMAND, d=JSON)
+def kapitaniak_text(d: dict) -> str:
+    """Whether the bouncier tables give more impacts and less memory."""
+    return _kapitaniak(d)
