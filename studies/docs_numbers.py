@@ -40,7 +40,7 @@ GENERATED: dict[str, Generated] = {}
 STUDY_MODULES = ("studies.pips", "studies.weldon", "studies.paper_figures",
                  "studies.cuboids", "studies.shapes",
                  "studies.craps", "studies.pairs", "studies.collisions",
-                 "studies.materials")
+                 "studies.materials", "studies.validation")
 
 
 def generated(name: str, command: str = WRITER,

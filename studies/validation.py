@@ -21,11 +21,15 @@ from dice_env.simulation.calibration import measured_restitution
 from dice_env.simulation.simulate import UP, State, simulate
 from dice_env.throws import energy_throws
 from studies import cuboids, weldon
-from studies.common import DOCS, SEED
+from studies.common import DOCS, SEED, write_text
+from studies.docs_numbers import generated
 from studies.fairness import face_down, throw_energy
-from studies.templates import write_study_files
+from studies.templates import write_study
 
 COMMAND = "python -m studies validation"
+JSON = "docs/validation.json"  # the page's own numbers, written by the full study
+FILES = ("validation-intro", "validation-intro-2", "validation-weldon-s-dice",
+         "validation-weldon-s-dice-2", "validation-weldon-s-dice-3", "validation-weldon-s-dice-4")
 MEMORY_THROWS = {False: 4000, True: 300}  # throws of the initially-down face, by ``quick``
 ENERGY_RANGE = (0.01, 100.0)  # throw energy above a gentle release (m g a), log-uniform
 Z_ONE_SIDED = 1.644854  # 5% one-sided
@@ -114,21 +118,18 @@ def run(out: Path = DOCS, quick: bool = False, seed: int = SEED) -> dict[str, fl
     out.mkdir(parents=True, exist_ok=True)
     if not (out / "weldon.json").exists():
         weldon.run(out, quick)
-    if not (out / "cuboids.md").exists():
+    if not (out / "cuboids.json").exists():
         cuboids.run(out, quick)
     w, page = json.loads((out / "weldon.json").read_text()), cuboids.read_page(out / "cuboids.md")
     scene = Scene()
     memory = initial_face_memory(MEMORY_THROWS[quick], np.random.default_rng(seed), scene)
     restitution = {v: measured_restitution(scene, v) for v in SPEEDS}
     friction = sliding_friction(scene)
-    command = COMMAND + (" --quick" if quick else "")
-    e_verdict = "agrees" if all(within(e, *RESTITUTION_RANGE) == "agrees"
-                                for e in restitution.values()) else "differs"
-    write_study_files(out, "validation", COMMAND, page_files(
-        command=command, e_verdict=e_verdict, friction=friction,
-        g=scene.ground, m=memory, map=map, restitution=restitution, defaults=defaults,
-        **_weldon_names(w),
-        **_memory_names(memory), **_cuboid_names(page)))
+    data = page_data(COMMAND + (" --quick" if quick else ""), seed, memory, restitution,
+                     friction)
+    write_text(out / "validation.json", json.dumps(data, indent=1) + "\n")
+    c = json.loads((out / "cuboids.json").read_text())
+    write_study(out, "validation", list(FILES), {"d": data, "w": w, "c": c})
     low, high = memory["bins"][0], memory["bins"][-1]
     return {"weldon_p": w["alone"]["drilled16"]["p"], "memory_low": low["down"] / low["n"],
             "memory_high": high["down"] / high["n"], "restitution": restitution[1.0],
@@ -200,13 +201,45 @@ def _cuboid_names(page: cuboids.Page) -> dict[str, object]:
             else "differs", "flat": min(page.table[record]), "tall": max(page.table[record])}
 
 
-def page_files(command, e_verdict, friction, g, m, map, restitution, defaults, meta, wd, t, ref,
-               sens, s, dist_line, together, t_verdict, dist, low, high, m_verdict, memory_table,
-               page, record, cuboid_rows, cube, check, flat, tall) -> dict[str, str]:
+def page_data(command: str, seed: int, memory: dict, restitution: dict,
+              friction: float) -> dict:
+    """The page's own numbers (JSON-ready), kept as ``validation.json``.
+
+    The weldon and cuboids sections read those studies' JSONs.
+    """
+    return {"command": command, "seed": seed, "memory": memory,
+            "restitution": [[float(v), float(e)] for v, e in restitution.items()],
+            "friction": float(friction)}
+
+
+def cuboid_page(c: dict) -> cuboids.Page:
+    """The cuboids study's numbers (its JSON, ``c``) as :class:`studies.cuboids.Page`."""
+    return cuboids.Page(c["command"], c["seed"], c["throws"], {
+        label: {float(r): tuple(v) for r, v in zip(c["ratios"], rows, strict=True)}
+        for label, rows in c["shares"].items()})
+
+
+def _page(d: dict, w: dict, c: dict) -> dict[str, str]:
+    """The page's generated files (``docs/generated/validation-*.md``), by name.
+
+    From its own numbers ``d``, the weldon study's ``w`` and the cuboids study's ``c``.
+    """
+    restitution = {v: e for v, e in d["restitution"]}
+    friction, m = d["friction"], d["memory"]
+    e_verdict = "agrees" if all(within(e, *RESTITUTION_RANGE) == "agrees"
+                                for e in restitution.values()) else "differs"
+    return _files(command=d["command"], seed=d["seed"], e_verdict=e_verdict, friction=friction,
+                  g=Scene().ground, m=m, restitution=restitution, defaults=defaults,
+                  **_weldon_names(w), **_memory_names(m), **_cuboid_names(cuboid_page(c)))
+
+
+def _files(command, seed, e_verdict, friction, g, m, restitution, defaults, meta, wd, t, ref,
+           sens, s, dist_line, together, t_verdict, dist, low, high, m_verdict, memory_table,
+           page, record, cuboid_rows, cube, check, flat, tall) -> dict[str, str]:
     """The page's generated files (``docs/generated/validation-*.md``), by name."""
     return {
         "validation-intro": f"""\
-Generated by `{command}` (module `studies/validation.py`, seed {SEED}). One section
+Generated by `{command}` (module `studies/validation.py`, seed {seed}). One section
 per experiment: what was measured on real dice and where, what the simulator gives for the
 same set-up and by which command, and a verdict computed by the script. Nothing is fitted to
 the data it is compared with; where a parameter was set from the same source, the section
@@ -299,3 +332,12 @@ square faces must come up 1/3 of the time by symmetry; 1/3 is inside the interva
 {sum(lo <= 1 / 3 <= hi for _, lo, hi in cube.values())} of {len(cube)} conditions:
 **{check}**.""",
     }
+
+
+def _renderer(name: str) -> None:
+    generated(name, COMMAND, d=JSON, w=weldon.JSON, c=cuboids.JSON)(
+        lambda d, w, c: _page(d, w, c)[name])
+
+
+for _name in FILES:
+    _renderer(_name)
