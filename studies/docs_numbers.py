@@ -40,7 +40,8 @@ GENERATED: dict[str, Generated] = {}
 STUDY_MODULES = ("studies.pips", "studies.weldon", "studies.paper_figures",
                  "studies.cuboids", "studies.shapes",
                  "studies.craps", "studies.pairs", "studies.collisions",
-                 "studies.materials", "studies.validation")
+                 "studies.materials", "studies.validation",
+                 "studies.stability")
 
 
 def generated(name: str, command: str = WRITER,

@@ -6,6 +6,7 @@ defines a map cell's classes (:data:`STABLE`, :data:`DRIFTING`, :data:`BLOWUP`).
 
 from __future__ import annotations
 
+import json
 import time
 import warnings
 from dataclasses import dataclass, replace
@@ -21,11 +22,15 @@ from dice_env.model.scene import MAX_STEPS, ContactLaw, Ground, Scene
 from dice_env.simulation.paper import paper_scene
 from dice_env.simulation.simulate import Result, State, simulate
 from dice_env.throws import Vigour, vigorous_throws
-from studies.common import DOCS, progress, save_figure
-from studies.templates import write_study_files
+from studies.common import DOCS, progress, save_figure, write_text
+from studies.docs_numbers import generated
+from studies.templates import write_study
 
 STABLE, DRIFTING, BLOWUP = 0, 1, 2
 COMMAND = "python -m studies stability"  # writes docs/generated/stability-*.md
+JSON = "docs/stability.json"  # every number of the page, written by the full study
+FILES = ("stability-stability-map", "stability-extreme-cases-default-scene")
+LAWS = (ContactLaw.PAPER, ContactLaw.GATED)  # the map's contact laws
 DRIFT_LIMIT = 10.0  # worst energy rise (fraction of KE0 + m g (h0 + edge)) still drifting
 MAP_T_MAX = 5.0  # simulated time of each map cell (s): the paper throw lands at about 1.5 s
 
@@ -161,7 +166,7 @@ def run(out: Path = DOCS, quick: bool = False, seed: int = 7) -> dict[str, float
     sweep_cases = [c for c in cases if c.group == "baseline" or c.label == "mu = 2"
                    or c.label.startswith("D = 0 ")] + [stiffest]
     throws = 4 if quick else 32
-    laws = (ContactLaw.PAPER, ContactLaw.GATED)
+    laws = LAWS
     bar = progress(len(laws) * len(stiffnesses) * len(ratios) + len(cases) + 1, "stability")
     maps = {law: stability_map(stiffnesses, ratios, law, bar) for law in laws}
     rng = np.random.default_rng(seed)
@@ -183,8 +188,10 @@ def run(out: Path = DOCS, quick: bool = False, seed: int = 7) -> dict[str, float
         numbers[f"{name}_first_blowup"] = _first_ratio(maps[law] == BLOWUP, ratios)
     numbers["extreme_any_nan"] = float(any(r["nan"] for _, r in rows))
     numbers["automatic_step_flagged_cases"] = float(sum(r["unstable"] > 0 for _, r in rows))
-    write_study_files(out, "stability", COMMAND, _markdown(
-        stiffnesses, ratios, maps, rows, throws, numbers, sweep_cases, sweep))
+    data = page_data(stiffnesses, ratios, rows, throws, numbers, sweep_cases, sweep, seed)
+    out.mkdir(parents=True, exist_ok=True)
+    write_text(out / "stability.json", json.dumps(data, indent=1) + "\n")
+    write_study(out, "stability", list(FILES), {"d": json.loads(json.dumps(data))})
     return numbers
 
 
@@ -216,78 +223,44 @@ def _plot_maps(stiffnesses: np.ndarray, ratios: np.ndarray, maps: dict, path: Pa
     save_figure(fig, path)
 
 
-def _markdown(stiffnesses: np.ndarray, ratios: np.ndarray, maps: dict, rows: list,
-              throws: int, n: dict[str, float], sweep_cases: list[Case],
-              sweep: np.ndarray) -> dict[str, str]:
-    base = Scene()
+def page_data(stiffnesses: np.ndarray, ratios: np.ndarray, rows: list, throws: int,
+              n: dict[str, float], sweep_cases: list[Case], sweep: np.ndarray,
+              seed: int) -> dict:
+    """Every number of the page (JSON-ready), kept as ``stability.json``.
+
+    A case's rest time is null where no throw settled (NaN).
+    """
+    def row(c: Case, r: dict) -> dict:
+        rest = None if np.isnan(r["rest_time"]) else r["rest_time"]
+        return {"group": c.group, "label": c.label, **r, "rest_time": rest,
+                "stiffness": c.scene.ground.stiffness, "static_sink": _static_sink(c.scene)}
+
+    return {"seed": seed, "stiffnesses": [float(x) for x in stiffnesses],
+            "ratios": [float(x) for x in ratios], "numbers": n, "throws": throws,
+            "cases": [row(c, r) for c, r in rows], "safeties": list(SAFETIES),
+            "sweep": [{"group": c.group, "label": c.label,
+                       "drift": [float(x) for x in sweep[i, :, 0]],
+                       "flagged": [float(x) for x in sweep[i, :, 1]]}
+                      for i, c in enumerate(sweep_cases)]}
+
+
+def _rest(r: dict) -> float:
+    """A case's median rest time (NaN where none settled: null in the JSON)."""
+    return float("nan") if r["rest_time"] is None else r["rest_time"]
+
+
+@generated("stability-stability-map", COMMAND, d=JSON)
+def map_text(d: dict) -> str:
+    """The stability map: the share of each class on either side of the bound, and where."""
+    n, stiffnesses, ratios = d["numbers"], d["stiffnesses"], d["ratios"]
     law_lines = markdown_table(
         "law | below: stable | drift | blow-up | above: stable | drift | blow-up | 1st drift | "
         "1st blowup",
         ((name, *(f"{100 * n[f'{name}_{c}_{side}_bound']:.0f}%" for side in ("below", "above")
                   for c in ("stable", "drifting", "blowing_up")),
           f"{n[f'{name}_first_not_stable']:.3g}", f"{n[f'{name}_first_blowup']:.3g}")
-         for name in (law.name.lower() for law in maps)))
-    table = markdown_table(
-        "group | case | settled | max pen. | drift | unstable | sunk | rest (s) | NaN | dt (s) | "
-        "wall (s) | warn",
-        ((c.group, c.label, f"{100 * r['settled']:.0f}%", f"{100 * r['max_penetration']:.2f}%",
-          f"{100 * r['energy_drift']:+.2f}%", f"{100 * r['unstable']:.0f}%",
-          f"{100 * r['sunk']:.0f}%", f"{r['rest_time']:.2f}", "NaN!" if r["nan"] else "none",
-          f"{r['dt']:.2g}", f"{r['wall']:.2f}", r["warnings"] or "-") for c, r in rows))
-    sweep_rows = markdown_table(
-        "case | " + " | ".join(f"safety {s:g}" for s in SAFETIES),
-        ((f"{c.group}: {c.label}", *(f"{100 * sweep[i, j, 0]:+.1f}% / {100 * sweep[i, j, 1]:.0f}%"
-                                     for j in range(len(SAFETIES))))
-         for i, c in enumerate(sweep_cases)))
-    flagged = [f"{c.group} {c.label} ({100 * r['unstable']:.0f}%)" for c, r in rows
-               if r["unstable"] > 0]
-    sunk = [f"{c.group} {c.label} ({100 * r['sunk']:.0f}%)" for c, r in rows if r["sunk"] > 0]
-    nan_cases = [f"{c.group} {c.label}" for c, r in rows if r["nan"]]
-    tilt_rows = ", ".join(f"{c.label} {100 * r['settled']:.0f}%" for c, r in rows
-                          if c.group == "tilt")
-    sink = [f"{c.label}: {100 * _static_sink(c.scene):.2g}% static, "
-            f"{100 * r['max_penetration']:.3g}% in the throws" for c, r in rows
-            if c.group == "mass"]
-    return page_files(base=base, by_label={c.label: r for c, r in rows},
-        d_rows=[(c.label, r) for c, r in rows if c.group == "damping"], flagged=flagged,
-        g=base.ground, law_lines=law_lines, n=n, nan_cases=nan_cases, ratios=ratios, sink=sink,
-        slip=float(np.degrees(np.arctan(base.ground.friction))),
-        stiff=[(c, r) for c, r in rows if c.group == "stiffness"], stiffnesses=stiffnesses,
-        sunk=sunk, sweep=sweep, sweep_cases=sweep_cases, sweep_rows=sweep_rows, table=table,
-        throws=throws, tilt_rows=tilt_rows)
-
-
-def _above_stable_phrase(n: dict[str, float]) -> str:
-    bad = [law for law in ("paper", "gated") if n[f"{law}_stable_above_bound"] > 0]
-    return f"(except some cells of the {' and '.join(bad)} law)" if bad else "(either law)"
-
-
-def _sweep_sentence(cases: list[Case], sweep: np.ndarray) -> str:
-    """Which swept cases miss the 10% tolerance at the first safety, and what fixes them."""
-    bad = [i for i in range(len(cases)) if sweep[i, 0, 1] > 0]
-    if not bad:
-        return "every swept case stays within the 10% energy tolerance."
-    names = ", ".join(f"{cases[i].group} {cases[i].label}" for i in bad)
-    fixed = [s for j, s in enumerate(SAFETIES) if all(sweep[i, j, 1] == 0 for i in bad)]
-    fix = f"a safety of {fixed[0]:g} brings them within it" if fixed else "no swept safety does"
-    return f"{names} miss the 10% energy tolerance; {fix}."
-
-
-def _static_sink(scene: Scene) -> float:
-    """Sink of a die resting flat, ``m g / (4 S)``, in edges."""
-    return scene.die.mass * scene.gravity / (4 * scene.ground.stiffness) / scene.die.size
-
-
-def _indent(text: str) -> str:
-    return "\n".join("  " + line for line in text.splitlines())
-
-
-def page_files(base, by_label, d_rows, flagged, g, law_lines, n, nan_cases, ratios, sink, slip,
-               stiff, stiffnesses, sunk, sweep, sweep_cases, sweep_rows, table, throws,
-               tilt_rows) -> dict[str, str]:
-    """The page's generated files (``docs/generated/stability-*.md``), by name."""
-    return {
-        "stability-stability-map": f"""\
+         for name in (law.name.lower() for law in LAWS)))
+    return f"""\
 The paper's real throw (its die, x0 = (0, 0, 3), u0 = (5, 0, 5), D = 0.1, mu = 0.1,
 {MAP_T_MAX:g} s simulated, 3 seeded spins L0 = rand·0.75 + 1e-6 per cell) for S =
 {stiffnesses[0]:g}–{stiffnesses[-1]:g} ({len(stiffnesses)} values) and dt from
@@ -312,8 +285,43 @@ coarse step gives each impact an energy error, and in this scene almost nothing 
 under the gated law (the ground's damping ratio is about 0.1%), while the paper law's air drag
 (8·D·v on a falling die) takes energy out on every flight and hides it. The node-mass bound
 (m/8, dashed) lies slightly below the effective-mass bound: a conservative estimate, not the
-limit.""",
-        "stability-extreme-cases-default-scene": f"""\
+limit."""
+
+
+@generated("stability-extreme-cases-default-scene", COMMAND, d=JSON)
+def cases_text(d: dict) -> str:
+    """The extreme cases at the automatic step, the safety sweep, and what they show."""
+    rows, throws, sweep = d["cases"], d["throws"], d["sweep"]
+    base = Scene()
+    g = base.ground
+    table = markdown_table(
+        "group | case | settled | max pen. | drift | unstable | sunk | rest (s) | NaN | dt (s) | "
+        "wall (s) | warn",
+        ((r["group"], r["label"], f"{100 * r['settled']:.0f}%",
+          f"{100 * r['max_penetration']:.2f}%", f"{100 * r['energy_drift']:+.2f}%",
+          f"{100 * r['unstable']:.0f}%", f"{100 * r['sunk']:.0f}%", f"{_rest(r):.2f}",
+          "NaN!" if r["nan"] else "none", f"{r['dt']:.2g}", f"{r['wall']:.2f}",
+          r["warnings"] or "-") for r in rows))
+    sweep_rows = markdown_table(
+        "case | " + " | ".join(f"safety {s:g}" for s in d["safeties"]),
+        ((f"{c['group']}: {c['label']}", *(f"{100 * x:+.1f}% / {100 * f:.0f}%"
+                                           for x, f in zip(c["drift"], c["flagged"],
+                                                           strict=True)))
+         for c in sweep))
+    flagged = [f"{r['group']} {r['label']} ({100 * r['unstable']:.0f}%)" for r in rows
+               if r["unstable"] > 0]
+    sunk = [f"{r['group']} {r['label']} ({100 * r['sunk']:.0f}%)" for r in rows if r["sunk"] > 0]
+    nan_cases = [f"{r['group']} {r['label']}" for r in rows if r["nan"]]
+    tilt_rows = ", ".join(f"{r['label']} {100 * r['settled']:.0f}%" for r in rows
+                          if r["group"] == "tilt")
+    sink = [f"{r['label']}: {100 * r['static_sink']:.2g}% static, "
+            f"{100 * r['max_penetration']:.3g}% in the throws" for r in rows
+            if r["group"] == "mass"]
+    by_label = {r["label"]: r for r in rows}
+    d_rows = [(r["label"], r) for r in rows if r["group"] == "damping"]
+    stiff = [r for r in rows if r["group"] == "stiffness"]
+    slip = float(np.degrees(np.arctan(base.ground.friction)))
+    return f"""\
 Default scene: die {base.die.size * 1e3:g} mm, {base.die.mass * 1e3:g} g; table
 S = {g.stiffness:g} N/m, D = {g.damping:.4g} N s/m, mu = {g.friction:g},
 {g.contact_law.name.lower()} law; automatic step = {base.safety:g} x critical =
@@ -337,15 +345,15 @@ any stiffness is not stable / blows up.
 
 {_indent(sweep_rows)}
 
-  At the automatic safety factor {base.safety:g}, {_sweep_sentence(sweep_cases, sweep)}
+  At the automatic safety factor {base.safety:g}, {_sweep_sentence(sweep, d['safeties'])}
   The tolerance's scale KE0 + m g (h0 + edge) includes the drop height h0 of the centre above
   the table, so a drop is judged against the energy it brings to its first impact.
 - Very stiff ground at the automatic step costs time, not accuracy: the step shrinks like
-  1/sqrt(S) (S = {stiff[-1][0].scene.ground.stiffness:g}: dt = {stiff[-1][1]['dt']:.2g} s,
-  {stiff[-1][1]['steps_per_s']:.3g} steps per simulated second). The simulator neither warns
-  nor refuses (warn column); it just takes longer: {stiff[-1][1]['wall']:.1f} s wall for
-  the {throws} throws at S = {stiff[-1][0].scene.ground.stiffness:g}
-  ({stiff[-1][1]['die_steps'] / throws:.3g} steps per throw, counting the flight steps taken
+  1/sqrt(S) (S = {stiff[-1]['stiffness']:g}: dt = {stiff[-1]['dt']:.2g} s,
+  {stiff[-1]['steps_per_s']:.3g} steps per simulated second). The simulator neither warns
+  nor refuses (warn column); it just takes longer: {stiff[-1]['wall']:.1f} s wall for
+  the {throws} throws at S = {stiff[-1]['stiffness']:g}
+  ({stiff[-1]['die_steps'] / throws:.3g} steps per throw, counting the flight steps taken
   in analytic jumps). A user-given step above the bound raises `ValueError` unless
   `allow_unstable=True`.
 - Tilted table (settled within {base.t_max:g} s: {tilt_rows}): a die can only stay where
@@ -354,13 +362,37 @@ any stiffness is not stable / blows up.
   gathers speed and hits hard (the penetration column).
 - Damping (critical = 2 sqrt(S m_eff), m_eff = m/{base.die.mass / base.effective_mass:.0f}): settled
   {', '.join(f"{lab.split(' (')[0]}: {100 * r['settled']:.0f}%" for lab, r in d_rows)};
-  median rest {', '.join(f"{r['rest_time']:.2f} s" for _, r in d_rows)} (baseline
-  {by_label['default scene']['rest_time']:.2f} s). Without damping only sliding friction dissipates
+  median rest {', '.join(f"{_rest(r):.2f} s" for _, r in d_rows)} (baseline
+  {_rest(by_label['default scene']):.2f} s). Without damping only sliding friction dissipates
   (a sticking corner's tangential spring is undamped too);
   near-critical damping settles fastest and needs a smaller automatic step (the bound's D term).
 - Mass, same die size and table (sink m g / (4 S) of a flat die vs deepest corner seen):
   {'; '.join(sink)}. At 1000 kg the penalty ground is far outside its valid range (the die
   sinks through it), though the automatic step grows with the mass and nothing becomes
   non-finite. The same D is a smaller damping ratio for a heavier die (D / (2 sqrt(S m_eff))),
-  so heavy dice bounce longer and drift like the undamped case.""",
-    }
+  so heavy dice bounce longer and drift like the undamped case."""
+
+
+def _above_stable_phrase(n: dict[str, float]) -> str:
+    bad = [law for law in ("paper", "gated") if n[f"{law}_stable_above_bound"] > 0]
+    return f"(except some cells of the {' and '.join(bad)} law)" if bad else "(either law)"
+
+
+def _sweep_sentence(sweep: list[dict], safeties: list[float]) -> str:
+    """Which swept cases miss the 10% tolerance at the first safety, and what fixes them."""
+    bad = [c for c in sweep if c["flagged"][0] > 0]
+    if not bad:
+        return "every swept case stays within the 10% energy tolerance."
+    names = ", ".join(f"{c['group']} {c['label']}" for c in bad)
+    fixed = [s for j, s in enumerate(safeties) if all(c["flagged"][j] == 0 for c in bad)]
+    fix = f"a safety of {fixed[0]:g} brings them within it" if fixed else "no swept safety does"
+    return f"{names} miss the 10% energy tolerance; {fix}."
+
+
+def _static_sink(scene: Scene) -> float:
+    """Sink of a die resting flat, ``m g / (4 S)``, in edges."""
+    return scene.die.mass * scene.gravity / (4 * scene.ground.stiffness) / scene.die.size
+
+
+def _indent(text: str) -> str:
+    return "\n".join("  " + line for line in text.splitlines())
