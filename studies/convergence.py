@@ -7,6 +7,7 @@
 from __future__ import annotations
 
 import itertools
+import json
 import math
 import time
 from pathlib import Path
@@ -27,10 +28,17 @@ from dice_env.throws import (
     Release,
     face_agreement,
 )
-from studies.common import SEED, progress
-from studies.templates import write_study_files
+from studies.common import SEED, progress, write_text
+from studies.docs_numbers import generated
+from studies.templates import write_study
 
 COMMAND = "python -m studies error"  # writes docs/generated/error-vs-runtime-*.md
+JSON = "docs/error-vs-runtime.json"  # every number of the page, written by the full study
+FILES = tuple(f"error-vs-runtime-{part}" for part in (
+    "intro", "default-scene-real", "default-scene-real-2", "default-scene-real-3",
+    "1-trajectory-error", "1-trajectory-error-2", "1-trajectory-error-3",
+    "2-outcome-statistics", "2-outcome-statistics-2", "3-throw-face", "3-throw-face-2",
+    "3-throw-face-3", "conclusions"))
 ENERGY_BINS = (0.0, 0.06, 0.12, 0.2, 0.3, np.inf)  # drop heights E / (m g) (m) of the bins
 
 
@@ -313,25 +321,9 @@ def write_report(out: Path, numbers: dict[str, object], quick: bool) -> dict[str
         name = DEFAULT if label == "default" else label
         verdicts[label] = {"gentle": float(gentle[name]["step"].mean()), "order": orders[name],
                            "p_min": min(min(o["p_faces"], o["p_success"]) for o in per.values())}
-    e = numbers["restitution"]
-    restitution = markdown_table("impact speed (m/s) | at dt | at dt/4", (
-        (speed, f"{e[(speed, 1)]:.4f}", f"{e[(speed, 4)]:.4f}") for speed in (0.3, 1.0, 3.0)))
-    work = markdown_table(
-        "variant | dt (µs) | centre error (mm) | angle error (mrad) | CPU (µs/throw)",
-        ((name, f"{1e6 * c['dt'][j]:.2f}", f"{1e3 * c['position'][j]:.4f}",
-          f"{1e3 * c['angle'][j]:.3f}", f"{1e6 * c['cpu'][j]:.0f}")
-         for name, c in curves.items() for j in range(len(SAFETIES))))
-
-    text = page_files(quick=quick, sizes=numbers["sizes"], scene=scene, pen=pen,
-        ratio=ratio, orders=orders, verdicts=verdicts, gentle_steps=gentle_steps,
-        paper=scene.with_(scheme=Scheme.PAPER),
-        paper_gentle=float(gentle["paper scheme, stick-slip, analytic flight"]["step"].mean()),
-        m_ratio=scene.die.mass / scene.effective_mass,
-        restitution=restitution, work=work,
-        outcome_table=_outcome_table(outcomes), agreement_table=_agreement_table(height, agreement),
-        gentle_table=_gentle_table(gentle), RESTITUTION=RESTITUTION, FRICTION=FRICTION,
-        STIFFNESS=STIFFNESS, DAMPING=DAMPING)
-    write_study_files(out, "error-vs-runtime", COMMAND, text)
+    data = page_data(numbers, quick, ratio, orders, pen, verdicts)
+    write_text(out / "error-vs-runtime.json", json.dumps(data, indent=1) + "\n")
+    write_study(out, "error-vs-runtime", list(FILES), {"d": json.loads(json.dumps(data))})
     return {"cpu_ratio_at_equal_error": ratio, "order_default": orders[DEFAULT],
             "gentle_agreement": verdicts["default"]["gentle"],
             "min_p_value": verdicts["default"]["p_min"],
@@ -345,7 +337,49 @@ def _verdict(ok: bool) -> str:
     return "met" if ok else "**not met**"
 
 
-def _outcome_table(outcomes: dict[str, dict[str, dict[str, object]]]) -> str:
+def page_data(numbers: dict, quick: bool, ratio: float, orders: dict, pen: np.ndarray,
+              verdicts: dict) -> dict:
+    """Every number of the page (JSON-ready), kept as ``error-vs-runtime.json``."""
+    height, e = numbers["height"], numbers["restitution"]
+
+    def outcome(o: dict) -> dict:
+        counts = np.asarray(o["counts"])
+        return {"shares": (counts / counts.sum(1, keepdims=True))[:2].tolist(),
+                "success": [float(x) for x in o["success"][:2]],
+                **{k: float(o[k]) for k in ("se", "p_faces", "p_success", "settled", "cpu",
+                                            "cpu_fine")}}
+
+    def gentle(g: dict) -> dict:
+        p = float(g["step"].mean())
+        return {"step": p, "se": math.sqrt(p * (1 - p) / g["step"].size),
+                "floor": float(g["floor"].mean())}
+
+    def agreement(result: dict, key: str) -> list[list[float]]:
+        share, se, _ = binned(height, result[key])
+        return [[float(f), float(s)] for f, s in zip(share, se, strict=True)]
+
+    first = next(iter(numbers["agreement"].values()))
+    return {
+        "command": COMMAND + (" --quick" if quick else ""), "quick": quick,
+        "sizes": dict(numbers["sizes"]),
+        "restitution": [[speed, e[(speed, 1)], e[(speed, 4)]] for speed in (0.3, 1.0, 3.0)],
+        "sink": {"throws": int(pen.size), "median": float(np.median(pen)),
+                 "p99": float(np.percentile(pen, 99)), "max": float(pen.max())},
+        "curves": {name: {k: [float(x) for x in c[k]] for k in ("dt", "position", "angle",
+                                                                   "cpu")}
+                   for name, c in numbers["curves"].items()},
+        "orders": orders, "ratio": ratio,
+        "outcomes": {label: {name: outcome(o) for name, o in per.items()}
+                     for label, per in numbers["outcomes"].items()},
+        "agreement": {"throws": [int(x) for x in binned(height, first["step"])[2]],
+                      "scenes": {label: {key: agreement(result, key) for key in ("step", "floor")}
+                                 for label, result in numbers["agreement"].items()}},
+        "gentle": {name: gentle(g) for name, g in numbers["gentle"].items()},
+        "gentle_steps": [[a, p] for a, p in numbers["gentle_steps"].items()],
+        "verdicts": verdicts}
+
+
+def _outcome_table(outcomes: dict) -> str:
     return markdown_table(
         "scene | release | faces 1–6 at dt (%) | faces 1–6 at dt/4 (%) | P(success) dt | "
         "P(success) dt/4 | ± s.e. | p faces | p success | settled | CPU ms/throw dt, dt/4",
@@ -353,21 +387,20 @@ def _outcome_table(outcomes: dict[str, dict[str, dict[str, object]]]) -> str:
          for name, o in per.items()))
 
 
-def _outcome_row(scene_label: str, name: str, o: dict[str, object]) -> tuple:
-    freq = 100 * o["counts"] / o["counts"].sum(1, keepdims=True)
-    return (scene_label, name, *(" ".join(f"{v:.1f}" for v in f) for f in freq[:2]),
+def _outcome_row(scene_label: str, name: str, o: dict) -> tuple:
+    return (scene_label, name, *(" ".join(f"{100 * v:.1f}" for v in f) for f in o["shares"]),
             f"{o['success'][0]:.4f}", f"{o['success'][1]:.4f}", f"{o['se']:.4f}",
             f"{o['p_faces']:.3f}", f"{o['p_success']:.3f}", f"{100 * o['settled']:.1f} %",
             f"{1e3 * o['cpu']:.2f}, {1e3 * o['cpu_fine']:.2f}")
 
 
-def _agreement_table(height: np.ndarray, agreement: dict[str, dict[str, np.ndarray]]) -> str:
+def _agreement_table(agreement: dict) -> str:
+    scenes = agreement["scenes"]
     header = "E/(m g) (cm) | throws | " + " | ".join(
-        f"{label}: dt vs dt/4 (%) | {label}: chaos floor (%)" for label in agreement)
-    columns = [binned(height, result[key]) for result in agreement.values()
-               for key in ("step", "floor")]
-    return markdown_table(header, ((label, columns[0][2][b], *(
-        f"{100 * frac[b]:.1f} ± {100 * err[b]:.1f}" for frac, err, _ in columns))
+        f"{label}: dt vs dt/4 (%) | {label}: chaos floor (%)" for label in scenes)
+    columns = [result[key] for result in scenes.values() for key in ("step", "floor")]
+    return markdown_table(header, ((label, agreement["throws"][b], *(
+        f"{100 * column[b][0]:.1f} ± {100 * column[b][1]:.1f}" for column in columns))
         for b, label in enumerate(_bin_labels("> "))))
 
 
@@ -377,14 +410,11 @@ def _bin_labels(above: str) -> list[str]:
             for a, b in itertools.pairwise(ENERGY_BINS)]
 
 
-def _gentle_table(gentle: dict[str, dict[str, np.ndarray]]) -> str:
-    rows = []
-    for name, g in gentle.items():
-        p = g["step"].mean()
-        err = math.sqrt(p * (1 - p) / g["step"].size)
-        rows.append((name, f"{1e6 * variants()[name][0].step:.2f}",
-                     f"{100 * p:.1f} ± {100 * err:.1f}", f"{100 * g['floor'].mean():.1f}"))
-    return markdown_table("variant | dt (µs) | dt vs dt/4 (%) | chaos floor (%)", rows)
+def _gentle_table(gentle: dict) -> str:
+    return markdown_table("variant | dt (µs) | dt vs dt/4 (%) | chaos floor (%)", (
+        (name, f"{1e6 * variants()[name][0].step:.2f}",
+         f"{100 * g['step']:.1f} ± {100 * g['se']:.1f}", f"{100 * g['floor']:.1f}")
+        for name, g in gentle.items()))
 
 
 def lines(items: object) -> str:
@@ -392,10 +422,26 @@ def lines(items: object) -> str:
     return "\n".join(items)
 
 
-def page_files(quick, sizes, scene, pen, ratio, orders, verdicts, gentle_steps, paper,
-               paper_gentle, m_ratio, restitution, work, outcome_table, agreement_table,
-               gentle_table, RESTITUTION, FRICTION, STIFFNESS, DAMPING) -> dict[str, str]:
-    """The page's generated files (``docs/generated/error-vs-runtime-*.md``), by name."""
+def _page(d: dict) -> dict[str, str]:
+    """The page's generated files (``docs/generated/error-vs-runtime-*.md``) from its numbers."""
+    scene = Scene()
+    paper = scene.with_(scheme=Scheme.PAPER)
+    m_ratio = scene.die.mass / scene.effective_mass
+    quick, sizes, ratio, orders, verdicts = (d[k] for k in ("quick", "sizes", "ratio", "orders",
+                                                             "verdicts"))
+    sink = d["sink"]
+    gentle_steps = {a: p for a, p in d["gentle_steps"]}
+    paper_gentle = d["gentle"]["paper scheme, stick-slip, analytic flight"]["step"]
+    restitution = markdown_table("impact speed (m/s) | at dt | at dt/4", (
+        (speed, f"{e1:.4f}", f"{e4:.4f}") for speed, e1, e4 in d["restitution"]))
+    work = markdown_table(
+        "variant | dt (µs) | centre error (mm) | angle error (mrad) | CPU (µs/throw)",
+        ((name, f"{1e6 * c['dt'][j]:.2f}", f"{1e3 * c['position'][j]:.4f}",
+          f"{1e3 * c['angle'][j]:.3f}", f"{1e6 * c['cpu'][j]:.0f}")
+         for name, c in d["curves"].items() for j in range(len(c["dt"]))))
+    outcome_table = _outcome_table(d["outcomes"])
+    agreement_table = _agreement_table(d["agreement"])
+    gentle_table = _gentle_table(d["gentle"])
     return {
         "error-vs-runtime-intro": f"""\
 Generated by `python -m studies error`{" --quick (reduced sizes: numbers are not the study's)" if quick else ""}; throws per part: trajectory {sizes['trajectory']}, outcomes {sizes['outcomes']} per release and step, agreement {sizes['agreement']}, gentle {sizes['gentle']}.""",  # noqa: E501
@@ -412,7 +458,7 @@ Generated by `python -m studies error`{" --quick (reduced sizes: numbers are not
         "error-vs-runtime-default-scene-real-2": f"""\
 {restitution}""",
         "error-vs-runtime-default-scene-real-3": f"""\
-**Corner sink.** Over the {pen.size} spread throws below (3–30 cm, hand speeds and spins), the deepest corner sink is {100 * np.median(pen):.2f} % of the edge (median), {100 * np.percentile(pen, 99):.2f} % (99th percentile), {100 * pen.max():.2f} % (max).""",  # noqa: E501
+**Corner sink.** Over the {sink['throws']} spread throws below (3–30 cm, hand speeds and spins), the deepest corner sink is {100 * sink['median']:.2f} % of the edge (median), {100 * sink['p99']:.2f} % (99th percentile), {100 * sink['max']:.2f} % (max).""",  # noqa: E501
         "error-vs-runtime-1-trajectory-error": f"""\
 {sizes['trajectory']} releases 6–10 cm up (speed ≈ 0.3 m/s, spin ≈ 10 rad/s per component, any orientation) are run to t = {HORIZON} s, which holds the first two or three impacts; the error is the median distance of the centre of mass (and the median rotation angle) from a reference run of the same model (same friction law, midpoint scheme) at 1/128 of the default step. CPU time is per throw of 0.25 s, one thread.""",  # noqa: E501
         "error-vs-runtime-1-trajectory-error-2": f"""\
@@ -438,9 +484,17 @@ Releases: {"; ".join(f"{r.name}: centre {100 * r.height:.1f} cm up, v = {r.veloc
         "error-vs-runtime-3-throw-face-3": f"""\
 {markdown_table("steps compared | agreement (%)", ((f"{'dt' if a == 1 else f'dt/{a}'} vs dt/{4 * a}", f"{100 * p:.1f}") for a, p in gentle_steps.items()))}""",  # noqa: E501
         "error-vs-runtime-conclusions": f"""\
-- Corner sink ≤ about 3 % of the edge: {_verdict(np.percentile(pen, 99) <= 0.035)} (99th percentile {100 * np.percentile(pen, 99):.2f} %).
+- Corner sink ≤ about 3 % of the edge: {_verdict(sink['p99'] <= 0.035)} (99th percentile {100 * sink['p99']:.2f} %).
 - 10× less CPU than the paper scheme at equal trajectory error: {_verdict(ratio >= 10)} ({ratio:.0f}×).
 {lines(f"- **{label}**: observed order {v['order']:.2f}; outcome statistics at dt and dt/4 agree within statistical error (all 6 p-values > 0.01): {_verdict(v['p_min'] > 0.01)} (smallest {v['p_min']:.3g}); gentle throws keep their face between dt and dt/4 in ≥ 98 % of cases: {_verdict(v['gentle'] >= 0.98)} ({100 * v['gentle']:.1f} %)." for label, v in verdicts.items())}
 - Why the listing's friction does not converge: with vmin = 1e-6 m/s its force is a sign function of the slip velocity, so a corner that stops slipping dithers about zero slip speed, switching the force's direction every step; a large vmin converges but creeps (on a 15° table a die slides at about 2·vmin instead of sticking). The default stick-slip friction ties a sticking corner with a tangential spring (it holds a die on a 15° table to 0.2 µm and slides it down a 30° table at Coulomb's acceleration, `tests/test_core.py`), and it takes the slip direction from the slip velocity.
 - The step: with the stick-slip friction, the paper's first-order step keeps the gentle release's face between dt and dt/4 in {100 * paper_gentle:.1f} % of throws; the default midpoint scheme in {100 * gentle_steps[1]:.1f} %, and {100 * gentle_steps[GENTLE_DIVISORS[-1]]:.1f} % between dt/{GENTLE_DIVISORS[-1]} and dt/{4 * GENTLE_DIVISORS[-1]} (tables above). It extrapolates the corner velocities to the middle of the kick and weights the damping of a corner that just touched by its time in contact; the friction limit μ·fn takes the unweighted normal force. Its stable step is smaller ({scene.critical_dt:.2g} s against {paper.critical_dt:.2g} s for the same m/{m_ratio:.0f} mode), so at the same safety it takes {paper.critical_dt / scene.critical_dt:.1f}× the steps of the paper scheme.""",  # noqa: E501
     }
+
+
+def _renderer(name: str) -> None:
+    generated(name, COMMAND, d=JSON)(lambda d: _page(d)[name])
+
+
+for _name in FILES:
+    _renderer(_name)
