@@ -41,7 +41,8 @@ STUDY_MODULES = ("studies.pips", "studies.weldon", "studies.paper_figures",
                  "studies.cuboids", "studies.shapes",
                  "studies.craps", "studies.pairs", "studies.collisions",
                  "studies.materials", "studies.validation",
-                 "studies.stability", "studies.convergence")
+                 "studies.stability", "studies.convergence",
+                 "studies.fairness")
 
 
 def generated(name: str, command: str = WRITER,

@@ -6,6 +6,7 @@ in units of ``m g a`` (mass, gravity, edge) above rest on a face.
 
 from __future__ import annotations
 
+import json
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -25,11 +26,15 @@ from dice_env.throws import (
     energy_throws,
     vigorous_throws,
 )
-from studies.common import DOCS, SEED, error_bars, join, progress, save_figure
-from studies.templates import write_study_files
+from studies.common import DOCS, SEED, error_bars, join, progress, save_figure, write_text
+from studies.docs_numbers import generated
+from studies.templates import write_study
 
 # Throws of the full and quick runs: fair, loaded, and the memory-against-energy throws.
 COMMAND = "python -m studies fairness"  # writes docs/generated/fairness-*.md
+JSON = "docs/fairness.json"  # every number of the page, written by the full study
+FILES = ("fairness-intro", "fairness-intro-2", "fairness-intro-3",
+         "fairness-comparison-with-kapitaniak")
 FULL = {"fair": 100_000, "loaded": 20_000, "memory": 40_000}
 QUICK = {"fair": 1_200, "loaded": 600, "memory": 1_200}
 T_MAX = 20.0  # simulated time limit per throw (s); throws still moving count as not settled
@@ -116,8 +121,10 @@ def run(out: Path = DOCS, quick: bool = False, seed: int = SEED) -> dict[str, fl
         "up_gentle": float(memory["p_up"][0]), "up_vigorous": float(memory["p_up"][-1]),
         "fair_energy_median": float(np.median(throw_energy(scene, fair_state))),
     }
-    write_study_files(out, "fairness", COMMAND, _markdown(
-        scene, loaded_die, fair, loaded, memory, numbers, sizes, seed))
+    data = page_data(fair, loaded, memory, numbers, sizes, seed)
+    out.mkdir(parents=True, exist_ok=True)
+    write_text(out / "fairness.json", json.dumps(data, indent=1) + "\n")
+    write_study(out, "fairness", list(FILES), {"d": json.loads(json.dumps(data))})
     return numbers
 
 
@@ -173,13 +180,14 @@ def _vigorous_sentence(m: dict) -> str:
     if down[0] <= 1 / 6 <= down[1] and up[0] <= 1 / 6 <= up[1]:
         return (f"in the most vigorous bin (median {m['e_mid'][-1]:.3g} m g a) both are "
                 f"within their 95% intervals of 1/6: the memory is gone.")
+    low, high = m["low_spin"], m["high_spin"]
     return (f"even the most vigorous bin (median {m['e_mid'][-1]:.3g} m g a) keeps a small "
             f"memory: release-down {estimate(m['p_down'][-1], down)}, release-up "
             f"{estimate(m['p_up'][-1], up)}. Splitting this bin at the median share of spin in "
-            f"the energy ({m['low_spin'][2]:.2f}): release-down {estimate(*m['low_spin'][:2])} "
-            f"with less spin, {estimate(*m['high_spin'][:2])} with more. "
+            f"the energy ({m['spin_cut']:.2f}): release-down {estimate(low[0], low[1:])} "
+            f"with less spin, {estimate(high[0], high[1:])} with more. "
             + ("The memory sits in the throws with little spin, which keep their orientation "
-               "in flight." if m["low_spin"][1][0] > m["high_spin"][1][1] else
+               "in flight." if low[1] > high[2] else
                "The memory is no weaker with more spin, so it is not simply throws that keep "
                "their orientation in flight; we have not traced its cause."))
 
@@ -216,8 +224,64 @@ def _plot_memory(m: dict, path: Path) -> None:
     save_figure(fig, path)
 
 
-def _markdown(scene: Scene, loaded_die: Die, fair: FaceCounts, loaded: FaceCounts, m: dict,
-              n: dict, sizes: dict, seed: int) -> dict[str, str]:
+def page_data(fair: FaceCounts, loaded: FaceCounts, m: dict, n: dict, sizes: dict,
+              seed: int) -> dict:
+    """Every number of the page (JSON-ready), kept as ``fairness.json``.
+
+    Face counts, and each energy bin's settled throws and hits on the release-down and -up
+    faces, as counts; the spin halves of the most vigorous bin as share and interval.
+    """
+    def faces(c: FaceCounts) -> dict:
+        return {"counts": [int(x) for x in c.counts], "unsettled": c.unsettled,
+                "unstable": c.unstable, "sunk": c.sunk}
+
+    bins = [{"e_lo": float(m["e_lo"][b]), "e_hi": float(m["e_hi"][b]),
+             "e_mid": float(m["e_mid"][b]), "n": int(m["n"][b]),
+             "down": round(float(m["p_down"][b]) * int(m["n"][b])),
+             "up": round(float(m["p_up"][b]) * int(m["n"][b]))} for b in range(len(m["n"]))]
+    return {"command": COMMAND, "seed": seed,
+            "sizes": dict(sizes),
+            "fair": faces(fair) | {"p_without_unstable": fair.p_without_unstable,
+                                   "energy_median": n["fair_energy_median"]},
+            "loaded": faces(loaded),
+            "memory": {"unsettled": n["memory_unsettled"], "bins": bins,
+                       **{half: [float(m[half][0]), *(float(x) for x in m[half][1])]
+                          for half in ("low_spin", "high_spin")},
+                       "spin_cut": float(m["low_spin"][2])}}
+
+
+def _faces(f: dict) -> FaceCounts:
+    """A :class:`FaceCounts` from the page's numbers of one die, ``f``."""
+    counts = np.asarray(f["counts"])
+    chi2, p = stats.chisquare(counts)
+    return FaceCounts(counts, f["unsettled"], f["unstable"], f["sunk"], float(chi2), float(p),
+                      f.get("p_without_unstable", float("nan")))
+
+
+def _memory(bins: list[dict]) -> dict:
+    """The memory table's columns (as :func:`_memory_table` gives them) from its counts."""
+    n = np.array([b["n"] for b in bins])
+    m = {k: np.array([b[k] for b in bins]) for k in ("e_lo", "e_hi", "e_mid")}
+    for key in ("down", "up"):
+        hits = np.array([b[key] for b in bins])
+        m[f"p_{key}"], m[f"ci_{key}"] = hits / n, wilson(hits, n)
+    return m | {"n": n}
+
+
+def _page(d: dict) -> dict[str, str]:
+    """The page's generated files (``docs/generated/fairness-*.md``) from its numbers ``d``."""
+    scene = Scene()
+    loaded_die = Die.loaded(face=1, fraction=0.1, edge=scene.die.size, mass=scene.die.mass)
+    fair, loaded = _faces(d["fair"]), _faces(d["loaded"])
+    mem = d["memory"]
+    m = _memory(mem["bins"]) | {k: mem[k] for k in ("low_spin", "high_spin", "spin_cut")}
+    n = {"fair_energy_median": d["fair"]["energy_median"],
+         "fair_max_dev": float(np.abs(fair.counts / fair.total - 1 / 6).max()),
+         "loaded_p6": float(loaded.counts[5] / loaded.total),
+         "loaded_p1": float(loaded.counts[0] / loaded.total),
+         "memory_unsettled": mem["unsettled"],
+         "down_gentle": float(m["p_down"][0]), "up_gentle": float(m["p_up"][0])}
+
     def cells(c: FaceCounts, f: int) -> tuple:
         return c.counts[f - 1], f"{c.counts[f - 1] / c.total:.4f}", bracket(c.intervals[f - 1], 4)
 
@@ -231,16 +295,16 @@ def _markdown(scene: Scene, loaded_die: Die, fair: FaceCounts, loaded: FaceCount
           estimate(m["p_down"][b], m["ci_down"][b]), estimate(m["p_up"][b], m["ci_up"][b]))
          for b in range(len(m["n"]))))
     return page_files(faces=faces, fair=fair, g=scene.ground, loaded=loaded,
-                      loaded_die=loaded_die, m=m, memory=memory, n=n, scene=scene, seed=seed,
-                      sizes=sizes, v=VIGOROUS)
+                      loaded_die=loaded_die, m=m, memory=memory, n=n, scene=scene,
+                      seed=d["seed"], sizes=d["sizes"], v=VIGOROUS, command=d["command"])
 
 
 def page_files(faces, fair, g, loaded, loaded_die, m, memory, n, scene, seed, sizes,
-               v) -> dict[str, str]:
+               v, command) -> dict[str, str]:
     """The page's generated files (``docs/generated/fairness-*.md``), by name."""
     return {
         "fairness-intro": f"""\
-Generated by `python -m studies fairness` (module `studies/fairness.py`,
+Generated by `{command}` (module `studies/fairness.py`,
 seed {seed}). Default scene: die edge {scene.die.size * 1e3:g} mm, mass
 {scene.die.mass * 1e3:g} g; table S = {g.stiffness:g} N/m, D = {g.damping:.4g} N s/m,
 mu = {g.friction:g}, {g.contact_law.name.lower()} law;
@@ -304,3 +368,11 @@ equal numbers of settled throws (not settled: {100 * n['memory_unsettled']:.3f}%
   {n['fair_energy_median']:.1f} m g a) show no detectable bias over {fair.total} throws,
   because a uniform release orientation averages the memory out over the faces.""",
     }
+
+
+def _renderer(name: str) -> None:
+    generated(name, COMMAND, d=JSON)(lambda d: _page(d)[name])
+
+
+for _name in FILES:
+    _renderer(_name)
