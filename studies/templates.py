@@ -25,8 +25,9 @@ lists what differs from its JSONs instead (``tests/test_docs.py`` runs it):
   value computed from a JSON (a sum, a verdict) is computed in Python
   (:data:`studies.docs_numbers.VALUES`) and read as a key of that JSON.
 
-A study (``python -m studies NAME``) writes its page's files the same way: rendered from its JSON
-(:func:`write_study`, checked by ``--check``) or from its run (:func:`write_study_files`).
+A study (``python -m studies NAME``) writes its page's files the same way: its run's numbers as
+``OUT/NAME.json``, its files rendered from them (:func:`write_study`); ``--check`` renders the
+committed files again from ``docs/NAME.json``.
 """
 
 from __future__ import annotations
@@ -213,19 +214,10 @@ def write_study(out: Path, page: str, names: list[str],
     """Write a study's generated files ``names``, rendered from its JSONs, into ``out``.
 
     From ``jsons`` (the run's numbers, by the renderers' keywords) or else the committed JSONs;
-    see :func:`write_study_files`.
+    see :func:`write_files`.
     """
     files = renderers()
     write_files(out, page, {name: generated_text(name, files[name], jsons) for name in names})
-
-
-def write_study_files(out: Path, page: str, command: str, files: dict[str, str]) -> None:
-    """Write the files a study rendered from its run, ``files`` (name -> text), into ``out``.
-
-    Each gets the header naming ``command``; see :func:`write_files`.
-    """
-    write_files(out, page, {name: HEADER.format(command=command, sources="") + text.rstrip("\n")
-                            for name, text in files.items()})
 
 
 def write_files(out: Path, page: str, texts: dict[str, str]) -> None:

@@ -1,7 +1,8 @@
 """The validation page: the simulator against experiments on real dice, one section each.
 
-``run(out, quick)`` writes ``out/validation.md`` from its own throws and the weldon and cuboids
-studies' output under ``out`` (``weldon.json``, ``cuboids.md``; each study run first if absent).
+``run(out, quick)`` writes ``out/validation.json`` (its own throws' numbers) and the page's files,
+rendered from it and the weldon and cuboids studies' JSONs under ``out`` (``weldon.json``,
+``cuboids.json``; each study run first if absent).
 """
 
 from __future__ import annotations
