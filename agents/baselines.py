@@ -142,11 +142,22 @@ class SetThrower:
         return np.hstack([np.tile(throw, (len(hands), 1)), setting])
 
 
-def rule_throwers(task: ThrowTask, seed: int = 0) -> dict[str, Thrower]:
-    """Random actions and the task's rule: hand-written for one die, the set throw for craps."""
-    out: dict[str, Thrower] = {"random": RandomThrower(seed, task.action_dim)}
+def task_rule(task: ThrowTask) -> tuple[str, Thrower] | None:
+    """The task's rule and its name: hand-written for one die, the set throw for two set dice.
+
+    None where the task has none (two dice thrown as drawn, three or more dice).
+    """
     if task.n_dice == 1:
-        out["hand-written"] = HandThrower(task)
-    elif task.set_dice and task.n_dice == 2:
-        out["set"] = SetThrower(task)
+        return "hand-written", HandThrower(task)
+    if task.set_dice and task.n_dice == 2:
+        return "set", SetThrower(task)
+    return None
+
+
+def rule_throwers(task: ThrowTask, seed: int = 0) -> dict[str, Thrower]:
+    """Random actions and the task's rule (:func:`task_rule`), where it has one."""
+    out: dict[str, Thrower] = {"random": RandomThrower(seed, task.action_dim)}
+    rule = task_rule(task)
+    if rule is not None:
+        out[rule[0]] = rule[1]
     return out

@@ -8,9 +8,10 @@ evaluation is on the task without them) and the algorithm's keywords, TD3's expl
 
 * ``"benchmark"``: every named task with PPO, A2C, SAC and TD3 at the benchmark's budgets
   (``python -m agents.benchmark``; ``python -m agents.zoo`` writes them as rl-zoo3 files).
-* ``"quick"`` and ``"best"``: ``train.py``'s PPO on DiceThrow-v0, warm-started by imitating the
-  hand-written thrower, with the target face's direction as a feature
-  (:class:`agents.policy.TargetNormal`).
+* ``"quick"`` and ``"best"``: ``train.py``'s PPO on every named task (``--env-id``). One die:
+  warm-started by imitating the hand-written thrower, with the target face's direction as a
+  feature (:class:`agents.policy.TargetNormal`); two dice: the benchmark's PPO, warm-started
+  by imitating the set throw where the task has one (craps; :func:`agents.baselines.task_rule`).
 * ``"scratch"``: plain PPO from scratch, ``MlpPolicy`` on the raw observation (target one-hot
   and hand orientation), no imitation (``train.py --preset scratch``; :data:`PPO_HYPERPARAMS`):
 
@@ -164,8 +165,21 @@ HYPERPARAMS: dict[str, dict[str, dict[str, dict[str, Any]]]] = {
     env_id: {algo: {BENCHMARK: benchmark_entry(algo, env_id)} for algo in ALGOS}
     for env_id in BUDGETS
 }
-HYPERPARAMS["DiceThrow-v0"]["ppo"].update(
-    quick=_WARM_START, best={**_WARM_START, "n_timesteps": 500_000}, scratch=_SCRATCH)
+# train.py's presets on every named task: the warm start for one die; for two dice (no
+# TargetNormal, a one-die feature) the benchmark's PPO, with ``"best"`` five times its budget
+# and the imitation of the set throw where the task has it (the craps throw).
+ONE_DIE_TASKS = ("DiceThrow-v0", "DiceThrowHigh-v0", "DiceThrowD20-v0")
+for _id in ONE_DIE_TASKS:
+    HYPERPARAMS[_id]["ppo"].update(quick=_WARM_START, best={**_WARM_START, "n_timesteps": 500_000},
+                                   scratch=_SCRATCH)
+for _id, _imitation in (("DiceThrowTray2d6Sum-v0", {}),
+                        ("DiceThrowCraps-v0", {"imitation_throws": 20_000,
+                                               "imitation_steps": 1500})):
+    _plain = HYPERPARAMS[_id]["ppo"][BENCHMARK]
+    HYPERPARAMS[_id]["ppo"].update(
+        quick={**_plain, **_imitation},
+        best={**_plain, **_imitation, "n_timesteps": 5 * _plain["n_timesteps"]}, scratch=_plain)
+del _id, _imitation, _plain
 
 # The "scratch" entries by env id: plain PPO as an SB3 user writes it (the README's snippet).
 PPO_HYPERPARAMS: dict[str, dict[str, Any]] = {

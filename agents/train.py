@@ -1,7 +1,8 @@
-"""Train PPO (Stable-Baselines3) on the natively batched DiceThrow env, then evaluate it.
+"""Train PPO (Stable-Baselines3) on a named dice task's natively batched env, then evaluate it.
 
     python -m agents.train                     # quick preset: train, evaluate, write report.md
     python -m agents.train --preset best       # longer run for the best result
+    python -m agents.train --env-id DiceThrowD20-v0  # any registered task (python train.py --help)
     python -m agents.train --seeds 3           # three seeds: mean and spread in one report
     python -m agents.train --sweep release_height=0.015,0.03 hand_noise=0.02,0.05
     python -m agents.train --resume runs/NAME  # continue a run (or group) from its checkpoints
@@ -111,21 +112,26 @@ class ResumableEval(EvalCallback):
                     self.evaluations_successes = old["successes"].tolist()
 
 
-def imitate(model: PPO, config: Config, throws: int, steps: int, batch: int = 256) -> float:
-    """Warm start: fit the policy's mean action to the hand-written thrower's (MSE).
+def imitate(model: PPO, config: Config, throws: int, steps: int,
+            batch: int = 256) -> tuple[str, float]:
+    """Warm start: fit the policy's mean action to the task's rule (MSE); its name, final loss.
 
-    Observations are drawn as the env draws them (no simulation is needed: the hand-written
-    thrower only reads the observation). Returns the final loss.
+    The rule is :func:`agents.baselines.task_rule`'s (the hand-written thrower for one die).
+    Observations are drawn as the env draws them (no simulation is needed: the rule only reads
+    the observation).
     """
     import torch
 
-    from agents.baselines import HandThrower
+    from agents.baselines import task_rule
     from agents.episodes import Batch, make_eval_task
 
     task, episode = make_eval_task(config)
+    rule = task_rule(task)
+    if rule is None:  # agents.config.check refuses such a preset first
+        raise ValueError(f"{config.env_id} with {config.env_kwargs()} has no rule to imitate")
     data = Batch.sample(task, throws, np.random.default_rng(config.seed + 3 * 10**6), **episode)
     obs = torch.as_tensor(data.observations)
-    actions = torch.as_tensor(HandThrower(task)(data.observations), dtype=torch.float32)
+    actions = torch.as_tensor(rule[1](data.observations), dtype=torch.float32)
     policy = model.policy
     # Its own optimizer: PPO's Adam must not inherit moment estimates of this regression.
     optimizer = torch.optim.Adam(policy.parameters(), lr=1e-3)
@@ -138,7 +144,7 @@ def imitate(model: PPO, config: Config, throws: int, steps: int, batch: int = 25
         optimizer.zero_grad()
         loss.backward()
         optimizer.step()
-    return loss.item()
+    return rule[0], loss.item()
 
 
 def evaluate_start(model: PPO, eval_env: VecEnv, episodes: int, run: Path,
@@ -234,8 +240,9 @@ def train(config: Config, run: Path | None = None) -> Path:
                     device="cpu", verbose=0, **config.ppo_kwargs(env.get_attr("task")[0].scene.die))
         warm = bool(params.get("imitation_steps"))
         if warm:
-            loss = imitate(model, config, params["imitation_throws"], params["imitation_steps"])
-            print(f"warm start: imitated the hand-written thrower, MSE {loss:.2e}")
+            rule, loss = imitate(model, config, params["imitation_throws"],
+                                 params["imitation_steps"])
+            print(f"warm start: imitated the {rule} throw, MSE {loss:.2e}")
         start = evaluate_start(model, eval_env, config.eval_episodes, run, warm)
         print(f"success before PPO's first update: {start:.3f}")
     try:

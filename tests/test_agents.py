@@ -28,6 +28,32 @@ def test_env_keywords_are_literals_not_code(tmp_path):
         Config(env=["friction"]).env_kwargs()
 
 
+def test_train_takes_every_named_task_by_id_and_refuses_an_unknown_one(tmp_path, capsys):
+    from agents.episodes import make_eval_task
+    from agents.hyperparams import HYPERPARAMS
+    from dice_env.envs.tasks import TASKS
+
+    for named in TASKS:
+        config = parse_config(["--env-id", named.id, "--runs", str(tmp_path)])
+        assert config.hyperparams() == HYPERPARAMS[named.id]["ppo"]["quick"]
+        task, episode = make_eval_task(config)  # the id's keywords, as gym.make(id) has them
+        assert task.n_dice == named.keywords.get("num_dice", 1)
+        assert task.scene.die.n_faces == (20 if named.keywords.get("die") == "d20" else 6)
+        assert episode == {k: v for k, v in named.keywords.items() if k == "target_sum"}
+    d20 = parse_config(["--env-id", "DiceThrowD20-v0", "--env", "release_height=0.03",
+                        "--runs", str(tmp_path)])
+    assert make_eval_task(d20)[0].release_height == 0.03  # --env overrides the id's keywords
+    with pytest.raises(SystemExit) as exit_info:
+        parse_config(["--env-id", "DiceThrowD8-v0", "--runs", str(tmp_path)], prog="train.py")
+    assert exit_info.value.code == 2
+    err = capsys.readouterr().err
+    assert f"argument --env-id: must be one of {sorted(t.id for t in TASKS)}" in err
+    with pytest.raises(SystemExit):  # the craps preset imitates the set throw: dice set
+        parse_config(["--env-id", "DiceThrowCraps-v0", "--env", "set_dice=False",
+                      "--runs", str(tmp_path)])
+    assert "has none" in capsys.readouterr().err
+
+
 def test_sweep_and_seeds_expand_into_member_runs():
     config = Config(name="g", runs="r", seeds=2, seed=5,
                     sweep=["release_height=0.015,0.03", "hand_noise=0.02,0.05"])
