@@ -369,7 +369,7 @@ def run_group(config: Config) -> Path:
         else:
             run_one(member)
     if config.evaluate:
-        from agents.group import write_group_report
+        from agents.sweep_report import write_group_report
 
         path = write_group_report(group)
         print(f"wrote {path}")
