@@ -21,12 +21,11 @@ import os
 import time
 
 import gymnasium as gym
-import numpy as np
 from harness import benchmark_parser, command_line, write_json
 
 from agents.baselines import rule_throwers
 from agents.episodes import EPISODE_KEYWORDS
-from agents.evaluate import ORACLE_SCORE_SAMPLES, compare
+from agents.evaluate import ORACLE_SCORE_SAMPLES, compare, fair_totals
 from agents.oracle import CEM, task_budget
 from dice_env.envs.tasks import TASKS, NamedTask
 from dice_env.envs.throw_task import ThrowTask
@@ -46,9 +45,7 @@ def chance(task: ThrowTask, episode: dict[str, object]) -> float:
     """
     if task.n_dice == 1:
         return 1.0 / task.n_faces
-    totals = np.ones(1)
-    for faces in task.faces:
-        totals = np.convolve(totals, np.full(faces, 1.0 / faces))
+    totals = fair_totals(task)
     fixed = episode.get("target_sum")
     hit = float(totals[fixed - task.n_dice]) if fixed is not None else 1.0 / len(totals)
     return 1.0 - hit if task.target == "avoid_sum" else hit

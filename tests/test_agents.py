@@ -157,3 +157,18 @@ def test_oracle_search_runs_and_scores_the_same_throws():
     noise = score_noise(task, rng, 2, 3)
     first = score(task, obs, actions, noise)
     assert first.shape == (2, 3) and np.array_equal(first, score(task, obs, actions, noise))
+
+
+def test_the_views_size_themselves_to_the_dice(tmp_path):
+    from agents import plots
+    from agents.baselines import task_rule
+    from agents.evaluate import fair_totals, target_values
+
+    two = make_task(num_dice=2, target="sum")
+    assert np.isclose(fair_totals(two).sum(), 1.0) and np.isclose(fair_totals(two)[7 - 2], 1 / 6)
+    assert target_values(two) == list(range(2, 13)) and task_rule(two) is None
+    assert target_values(make_task(die="d20")) == list(range(1, 21))
+    assert task_rule(make_task(num_dice=2, set_dice=True, target="avoid_sum"))[0] == "set"
+    path = plots.confusion(tmp_path / "totals.png", np.array([2, 7, 7]),
+                           {"PPO": np.array([2, 7, 8])}, list(two.totals), "total")
+    assert path.exists()

@@ -115,6 +115,26 @@ def test_train_and_evaluate_write_the_report(trained):
         assert title in report
 
 
+@pytest.mark.slow
+@pytest.mark.parametrize(("env_id", "views", "per_target"), [
+    ("DiceThrowHigh-v0", ("## Strategy", "## Release"), "target 6"),
+    ("DiceThrowD20-v0", ("## Strategy", "## Release"), "target 20"),
+    ("DiceThrowTray2d6Sum-v0", ("## Release",), "target 12"),
+    ("DiceThrowCraps-v0", ("## Release", "## P(7) against the hand's noise"), "target 7"),
+])
+def test_every_named_task_trains_and_reports_for_its_dice(tmp_path, env_id, views, per_target):
+    done = train_py("--env-id", env_id, "--total-timesteps", 64, "--runs", tmp_path, "--name",
+                    "run", *TINY, "--n-envs", "8", "--eval-throws", "16",
+                    "--robustness-throws", "4", "--gifs", "0")
+    assert done.returncode == 0, done.stderr
+    report = (tmp_path / "run" / "report.md").read_text()
+    assert f"PPO on {env_id}" in report and per_target in report
+    for title in views:
+        assert title in report
+    one_die = "Tray" not in env_id and "Craps" not in env_id
+    assert ("## Strategy" in report) == one_die and ("## Success by how far" in report) == one_die
+
+
 def test_replay_writes_a_gif(trained):
     replay = subprocess.run([sys.executable, "-m", "agents.replay", str(trained), "--throws",
                              "1"], cwd=ROOT, env=ENV, capture_output=True, text=True, timeout=120)
