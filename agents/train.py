@@ -9,7 +9,8 @@
     python -m agents.train --help              # every option (agents/config.py)
 
 Each run writes to ``runs/NAME/``: ``config.json`` (with the seed), ``hyperparams.json``,
-``checkpoints/``, ``tb/`` (TensorBoard), ``eval/`` (the success rate during training:
+``checkpoints/``, ``training.jsonl`` (throws, wall-clock and CPU seconds per session),
+``tb/`` (TensorBoard), ``eval/`` (the success rate during training:
 ``evaluations.npz`` and ``start.json``, the policy before PPO's first update), ``model.zip`` and
 the evaluation (``report.md`` and its figures). A group (``--seeds``, ``--sweep``) holds one
 such run per setting and seed and its own ``report.md`` comparing them.
@@ -273,7 +274,7 @@ def _learn(model: PPO, config: Config, run: Path, eval_env: VecEnv, fresh: bool)
     ]
     if config.progress:
         callbacks.append(ProgressBar(end))
-    start = time.perf_counter()
+    start, cpu = time.perf_counter(), time.process_time()
     interrupted = False
     try:
         model.learn(total - model.num_timesteps, callback=CallbackList(callbacks),
@@ -290,7 +291,7 @@ def _learn(model: PPO, config: Config, run: Path, eval_env: VecEnv, fresh: bool)
                     model.save)
         write_saved(run / "model.zip", model.save)
         log = {"throws": model.num_timesteps, "seconds": time.perf_counter() - start,
-               "interrupted": interrupted}
+               "cpu_seconds": time.process_time() - cpu, "interrupted": interrupted}
         with open(run / "training.jsonl", "a") as f:
             f.write(json.dumps(log) + "\n")
     if interrupted:

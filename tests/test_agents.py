@@ -172,3 +172,35 @@ def test_the_views_size_themselves_to_the_dice(tmp_path):
     path = plots.confusion(tmp_path / "totals.png", np.array([2, 7, 7]),
                            {"PPO": np.array([2, 7, 8])}, list(two.totals), "total")
     assert path.exists()
+
+
+def test_the_recipe_rows_give_each_task_s_seeds_mean_and_spread(tmp_path):
+    import json
+
+    from agents.kept import RunError
+    from agents.recipe import main, rows, run_entry
+
+    def run(seed, ppo, oracle, common=True):
+        folder = tmp_path / f"d20_s{seed}"
+        folder.mkdir()
+        Config(env_id="DiceThrowD20-v0", seed=seed, name=folder.name).save(folder / "config.json")
+        (folder / "training.jsonl").write_text(json.dumps(
+            {"throws": 151552, "seconds": 100.0, "cpu_seconds": 150.0}) + "\n")
+        score = {"rate": ppo, "ci": [ppo - 0.05, ppo + 0.05], "n": 1000}
+        (folder / "evaluation.json").write_text(json.dumps({
+            "summary": {"PPO": score}, "oracle_observations": 64,
+            "common": {"PPO": score, "oracle": {**score, "rate": oracle}} if common else {},
+            "differences": {"oracle": {"diff": ppo - oracle, "ci": [-0.1, 0.0]}}}))
+        return folder
+
+    runs = [run(0, 0.45, 0.5), run(1, 0.55, 0.5)]
+    (row,) = rows([run_entry(r) for r in runs])
+    assert row["seeds"] == [0, 1] and row["throws"] == 151552 and row["cpu_seconds"] == 300.0
+    assert np.isclose(row["ratio"]["mean"], 1.0) and np.isclose(row["ratio"]["sd"], 0.1 * 2**0.5)
+    assert row["command"] == "python train.py --env-id DiceThrowD20-v0 --preset quick --seed S"
+    with pytest.raises(RunError, match="without the oracle"):
+        run_entry(run(2, 0.5, 0.5, common=False))
+    out = tmp_path / "learned.json"
+    out.write_text(json.dumps({"tasks": ["kept"]}))
+    assert main([*map(str, runs), "--out", str(out)]) == 0
+    assert json.loads(out.read_text())["tasks"] == ["kept"]
