@@ -189,9 +189,10 @@ def _section_avoided(avoided: dict[str, Any]) -> list[str]:
             r = avoided["throwers"][name]["rows"][i]
             cells.append(f"{r['p']:.3f} [{r['ci'][0]:.3f}, {r['ci'][1]:.3f}] ({r['counted']})")
         lines.append(f"| {noise:g} | " + " | ".join(cells) + " |")
+    largest = {n: avoided["throwers"][n]["largest_noise_below"] for n in names}
     lines += ["", "In brackets the throws counted (not void). The largest noise at which P("
-              f"{total}) is still wholly below fair dice': "
-              + ", ".join(f"{n} {avoided['throwers'][n]['largest_noise_below']}" for n in names)
+              f"{total})'s interval is still wholly below fair dice's: "
+              + ", ".join(f"{n} {'none' if x is None else f'{x:g}'}" for n, x in largest.items())
               + ".", ""]
     return lines
 
