@@ -26,6 +26,7 @@ import numpy as np
 from agents.benchmark import RESULTS
 from agents.config import Config, is_run_folder
 from agents.kept import RunError, read_json, write_json
+from dice_env.provenance import code_version
 
 
 def run_entry(run: Path) -> dict[str, Any]:
@@ -81,7 +82,7 @@ def rows(entries: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
             "oracle": spread([r["on_oracle_throws"]["oracle"]["rate"] for r in runs]),
             "ratio": spread([r["ratio"] for r in runs]),
             "cpu_seconds": float(np.sum([r["cpu_seconds"] for r in runs])),
-            "runs": runs,
+            "runs": runs, "summarised_by": "python -m agents.recipe", "commit": code_version(),
         })
     return out
 

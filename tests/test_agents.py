@@ -204,3 +204,24 @@ def test_the_recipe_rows_give_each_task_s_seeds_mean_and_spread(tmp_path):
     out.write_text(json.dumps({"tasks": ["kept"]}))
     assert main([*map(str, runs), "--out", str(out)]) == 0
     assert json.loads(out.read_text())["tasks"] == ["kept"]
+
+
+def test_sharpness_scores_the_oracle_s_action_as_the_hand_turns(monkeypatch, tmp_path):
+    import json
+
+    import agents.sharpness as sharp
+
+    tiny = CEM(global_candidates=2, restarts=1, iterations=1, population=2, noise_samples=1,
+               finalists=1, validation_samples=2)
+    monkeypatch.setattr(sharp, "search", lambda task, obs, rng: search(task, obs, rng, tiny))
+    monkeypatch.setattr(sharp, "SAMPLES", 2)
+    out = tmp_path / "learned.json"
+    out.write_text(json.dumps({"tasks": ["kept"]}))
+    assert sharp.main(["--tasks", "DiceThrow-v0", "--observations", "2", "--out", str(out)]) == 0
+    kept = json.loads(out.read_text())
+    (row,) = kept["sharpness"]
+    assert kept["tasks"] == ["kept"] and row["task"] == "DiceThrow-v0"
+    assert [t["degrees"] for t in row["turned"]] == list(sharp.ANGLES)
+    assert [m["step"] for m in row["moved"]] == list(sharp.STEPS)
+    assert all(0 <= r["ci"][0] <= r["rate"] <= r["ci"][1] <= 1
+               for r in row["turned"] + row["moved"])
