@@ -11,7 +11,8 @@ evaluation is on the task without them) and the algorithm's keywords, TD3's expl
 * ``"quick"`` and ``"best"``: ``train.py``'s PPO on every named task (``--env-id``). One die:
   warm-started by imitating the hand-written thrower, with the target face's direction as a
   feature (:class:`agents.policy.TargetNormal`); two dice: the benchmark's PPO, warm-started
-  by imitating the set throw where the task has one (craps; :func:`agents.baselines.task_rule`).
+  by imitating the task's rule (:func:`agents.baselines.task_rule`: the tray's total thrower,
+  the craps set throw).
 * ``"scratch"``: plain PPO from scratch, ``MlpPolicy`` on the raw observation (target one-hot
   and hand orientation), no imitation (``train.py --preset scratch``; :data:`PPO_HYPERPARAMS`):
 
@@ -154,20 +155,18 @@ HYPERPARAMS: dict[str, dict[str, dict[str, dict[str, Any]]]] = {
     for env_id in BUDGETS
 }
 # train.py's presets on every named task: the warm start for one die; for two dice (no
-# TargetNormal, a one-die feature) the benchmark's PPO, with ``"best"`` five times its budget
-# and the imitation of the set throw where the task has it (the craps throw).
+# TargetNormal, a one-die feature) the benchmark's PPO warm-started by imitating the task's rule
+# (the tray's total thrower, the craps set throw), with ``"best"`` five times its budget.
 ONE_DIE_TASKS = ("DiceThrow-v0", "DiceThrowHigh-v0", "DiceThrowD20-v0")
 for _id in ONE_DIE_TASKS:
     HYPERPARAMS[_id]["ppo"].update(quick=_WARM_START, best={**_WARM_START, "n_timesteps": 500_000},
                                    scratch=_SCRATCH)
-for _id, _imitation in (("DiceThrowTray2d6Sum-v0", {}),
-                        ("DiceThrowCraps-v0", {"imitation_throws": 20_000,
-                                               "imitation_steps": 1500})):
+for _id in ("DiceThrowTray2d6Sum-v0", "DiceThrowCraps-v0"):
     _plain = HYPERPARAMS[_id]["ppo"][BENCHMARK]
+    _warm = {**_plain, "imitation_throws": 20_000, "imitation_steps": 1500}
     HYPERPARAMS[_id]["ppo"].update(
-        quick={**_plain, **_imitation},
-        best={**_plain, **_imitation, "n_timesteps": 5 * _plain["n_timesteps"]}, scratch=_plain)
-del _id, _imitation, _plain
+        quick=_warm, best={**_warm, "n_timesteps": 5 * _plain["n_timesteps"]}, scratch=_plain)
+del _id, _plain, _warm
 
 # The "scratch" entries by env id: plain PPO as an SB3 user writes it (the README's snippet).
 PPO_HYPERPARAMS: dict[str, dict[str, Any]] = {

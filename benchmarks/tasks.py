@@ -5,12 +5,13 @@
 
 For each id of :data:`dice_env.envs.tasks.TASKS`, made with ``gym.make``, every thrower faces
 the same seeded throws (targets, hands, hand noise: ``agents.evaluate.compare``): uniform random
-actions and a rule (the hand-written thrower for one die; for the set dice of the craps task the
-craps study's throw, ``dice_env.throws.SET_THROW``: the crossed set, against the seven, 2 m/s at
-the back wall with backspin) on ``throws`` throws each, Wilson 95 % intervals; the oracle
-(``agents.oracle``, started from their actions) on the first of those observations, each scored
-on 16 fresh noise draws, its interval Wilson's divided by the observations' design effect
-(``agents.evaluate.clustered``). The oracle's budget is ``agents.oracle.task_budget``'s.
+actions and a rule (the hand-written thrower for one die, and for two dice for a total; for the
+set dice of the craps task the craps study's throw, ``dice_env.throws.SET_THROW``: the crossed
+set, against the seven, 2 m/s at the back wall with backspin) on ``throws`` throws each, Wilson
+95 % intervals; the oracle (``agents.oracle``, started from their actions) on the first of
+those observations, each scored on 16 fresh noise draws, its interval Wilson's divided by the
+observations' design effect (``agents.evaluate.clustered``). The oracle's budget is
+``agents.oracle.task_budget``'s.
 Prints a table and writes ``benchmarks/results/tasks.json``.
 """
 

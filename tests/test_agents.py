@@ -166,7 +166,8 @@ def test_the_views_size_themselves_to_the_dice(tmp_path):
 
     two = make_task(num_dice=2, target="sum")
     assert np.isclose(fair_totals(two).sum(), 1.0) and np.isclose(fair_totals(two)[7 - 2], 1 / 6)
-    assert target_values(two) == list(range(2, 13)) and task_rule(two) is None
+    assert target_values(two) == list(range(2, 13)) and task_rule(two)[0] == "hand-written"
+    assert task_rule(make_task(num_dice=2, target="faces")) is None
     assert target_values(make_task(die="d20")) == list(range(1, 21))
     assert task_rule(make_task(num_dice=2, set_dice=True, target="avoid_sum"))[0] == "set"
     path = plots.confusion(tmp_path / "totals.png", np.array([2, 7, 7]),
@@ -225,3 +226,18 @@ def test_sharpness_scores_the_oracle_s_action_as_the_hand_turns(monkeypatch, tmp
     assert [m["step"] for m in row["moved"]] == list(sharp.STEPS)
     assert all(0 <= r["ci"][0] <= r["rate"] <= r["ci"][1] <= 1
                for r in row["turned"] + row["moved"])
+
+
+def test_the_total_thrower_spins_a_pair_that_makes_the_total_up():
+    from agents.baselines import TotalThrower, spin_up
+
+    task = make_task(num_dice=2, target="sum")
+    identity = np.tile(np.eye(3), (1, 2, 1, 1))  # both dice as placed: faces read alike
+    for total, face in ((12, 6), (2, 1)):  # the only pairs: (6, 6) and (1, 1)
+        obs = task.observe(np.array([total]), identity)
+        assert np.allclose(TotalThrower(task)(obs),
+                           spin_up(task, task.scene.die.reading[face - 1][None]))
+    actions = TotalThrower(task)(task.observe(np.arange(2, 13), np.tile(identity, (11, 1, 1, 1))))
+    assert actions.shape == (11, 6) and np.all(np.abs(actions) <= 1)
+    with pytest.raises(ValueError, match="two dice thrown from one hand for a total"):
+        TotalThrower(make_task())
