@@ -45,7 +45,7 @@ def run_entry(run: Path) -> dict[str, Any]:
                 (run / "training.jsonl").read_text().splitlines() if line.strip()]
     common = evaluation["common"]
     return {
-        "run": str(run), "task": config.env_id, "preset": config.preset, "seed": config.seed,
+        "run": run.name, "task": config.env_id, "preset": config.preset, "seed": config.seed,
         "env": config.env, "throws": sessions[-1]["throws"],
         "cpu_seconds": sum(s.get("cpu_seconds", float("nan")) for s in sessions),
         "seconds": sum(s["seconds"] for s in sessions),
