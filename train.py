@@ -1,4 +1,4 @@
-"""The project's main job: train PPO on DiceThrow-v0, evaluate it and write its report.
+"""The main job: train PPO on a named task (--env-id; DiceThrow-v0 by default), evaluate, report.
 
 A thin entry into :mod:`agents.train`; ``python train.py --help`` lists every option.
 """

@@ -27,6 +27,7 @@ from typing import Any
 
 from agents.hyperparams import HYPERPARAMS, algorithm_kwargs
 from agents.kept import write_json
+from dice_env.envs.throw_task import ThrowTask
 from dice_env.model.die import Die
 
 # train.py's presets of PPO in agents.hyperparams.HYPERPARAMS.
@@ -35,10 +36,11 @@ PRESETS = ("quick", "best", "scratch")
 
 @dataclass
 class Config:
-    """Train PPO to throw a die so that a target face lands up, then evaluate it."""
+    """Train PPO on a named dice task (a target face, or a total of two dice), then evaluate it."""
 
     env_id: str = "DiceThrow-v0"
-    """Gymnasium id of the environment (hyperparameters per id in agents/hyperparams.py)."""
+    """Registered task id (dice_env.envs.tasks.TASKS; hyperparameters per id in
+    agents/hyperparams.py); --env keywords override the id's."""
     preset: str = "quick"
     """Hyperparameter preset (agents/hyperparams.py): "quick" (the README's default, minutes),
     "best" (longer), or "scratch" (plain MlpPolicy PPO, no imitation warm start)."""
@@ -261,20 +263,26 @@ def check_env(config: Config, setting: dict[str, Any] | None = None) -> None:
             env = gym.make(config.env_id, **{**kwargs, **extra})
         except (ValueError, TypeError) as error:
             raise OptionError(option, str(error)) from None
-        dice = env.unwrapped.task.n_dice
+        task = env.unwrapped.task
         env.close()
-        _check_one_die_preset(config, option, dice)
+        _check_preset_fits(config, option, task)
 
 
-def _check_one_die_preset(config: Config, option: str, dice: int) -> None:
-    """Refuse a preset built on one-die constructs for a throw of several dice."""
+def _check_preset_fits(config: Config, option: str, task: ThrowTask) -> None:
+    """Refuse a preset that imitates a rule the task has not, or that is built for one die."""
+    from agents.baselines import task_rule
+
     params = config.hyperparams()
     extractor = params.get("policy_kwargs", {}).get("features_extractor_class")
-    if dice > 1 and (params.get("imitation_steps") or extractor is not None):
-        raise OptionError(option, f"num_dice={dice}: preset {config.preset!r} warm-starts from "
-                          "the hand-written thrower and gives the policy the target face's "
-                          "direction (TargetNormal), both built for one die; use --preset "
-                          "scratch (plain MlpPolicy PPO) for several dice")
+    if task.n_dice > 1 and extractor is not None:
+        raise OptionError(option, f"num_dice={task.n_dice}: preset {config.preset!r} gives the "
+                          "policy the target face's direction (TargetNormal), built for one die; "
+                          "use --preset scratch (plain MlpPolicy PPO) for several dice")
+    if params.get("imitation_steps") and task_rule(task) is None:
+        raise OptionError(option, f"num_dice={task.n_dice}, target={task.target!r}: preset "
+                          f"{config.preset!r} warm-starts by imitating the task's rule, and this "
+                          "throw has none (a rule: one die, or two set dice); use --preset "
+                          "scratch (plain MlpPolicy PPO)")
 
 
 def _check_name(config: Config) -> None:

@@ -74,8 +74,17 @@ class Batch:
 
 
 def make_eval_task(config: Config, **overrides: Any) -> tuple[ThrowTask, dict[str, Any]]:
-    """The run's evaluation task (its ``--env`` keywords, no shaping) and Batch.sample's keys."""
-    kwargs = {**config.env_kwargs(), **config.num_threads_kwargs(), **overrides}
+    """The run's evaluation task and Batch.sample's keys.
+
+    The task is the env id's (its registered keywords) with the run's ``--env`` keywords, no
+    shaping.
+    """
+    import gymnasium as gym
+
+    import dice_env  # noqa: F401  (registers the named tasks)
+
+    kwargs = {**gym.spec(config.env_id).kwargs, **config.env_kwargs(),
+              **config.num_threads_kwargs(), **overrides}
     episode = {k: kwargs.pop(k) for k in (*EPISODE_KEYWORDS, "num_threads") if k in kwargs}
     for key in ("render_mode", "render_width", "render_height"):
         kwargs.pop(key, None)

@@ -2,11 +2,15 @@
 
     python -m agents.evaluate RUN_DIR [--eval-throws 1000] [--oracle-observations 64]
 
-All throwers face the same observations and the same hand noise (common random numbers): on
-``eval_throws`` throws each, and with the oracle on its observations × ``ORACLE_SCORE_SAMPLES``
-fresh throws. Writes into RUN_DIR: ``report.md``, ``evaluation.json``, ``learning.png``,
-``turn.png``, ``strategy.png``, ``confusion.png``, ``outcomes.png``, ``robustness.png`` and a
-few ``throw_*.gif`` (failures first).
+All throwers (PPO, the task's rule where it has one, random) face the same observations and the
+same hand noise (common random numbers): on ``eval_throws`` throws each, and with the oracle on
+its observations × ``ORACLE_SCORE_SAMPLES`` fresh throws. The views size themselves to the task:
+success per face of one die (d6, d20) or per total of two dice; for one die the turn and
+strategy views and the confusion of faces, for a total the confusion of totals, for a total to
+avoid (craps) its probability against the hand's noise (:data:`AVOID_NOISES`). Writes into
+RUN_DIR: ``report.md``, ``evaluation.json``, ``learning.png``, ``outcomes.png``, those views'
+figures (``turn.png``, ``strategy.png``, ``confusion.png``), ``robustness.png`` and a few
+``throw_*.gif`` (failures first).
 """
 
 from __future__ import annotations
@@ -21,11 +25,11 @@ from typing import Any
 
 import numpy as np
 
-from agents.baselines import HandThrower, RandomThrower, Thrower, decode
+from agents.baselines import RandomThrower, Thrower, decode, task_rule
 from agents.config import Config, field_docs
 from agents.episodes import Batch, PolicyThrower, make_eval_task, throw_impacts
 from agents.kept import write_json
-from agents.oracle import CEM, score, score_noise, search
+from agents.oracle import CEM, score, score_noise, search, task_budget
 from agents.progress import bar
 from agents.report import headline_table, verdict, write_report
 from dice_env.envs.throw_task import ThrowTask
@@ -40,6 +44,8 @@ ROBUSTNESS = {  # keyword: multiples of the trained value (1: as trained)
 }
 # How far the target face must turn: its angle from the table normal in the hand (degrees).
 TURN_CLASSES = {"already up": (0.0, 45.0), "on a side": (45.0, 135.0), "down": (135.0, 180.0)}
+# The hand and orientation noise at which a total to avoid (craps' seven) is counted.
+AVOID_NOISES = (0.001, 0.003, 0.01, 0.03, 0.1)
 
 
 def clustered(success: np.ndarray) -> tuple[float, float]:
@@ -240,6 +246,65 @@ def strategy_table(s: dict[str, np.ndarray]) -> dict[str, dict[str, float]]:
             for i, name in enumerate(TURN_CLASSES)}
 
 
+def release(actions: np.ndarray, task: ThrowTask) -> dict[str, float]:
+    """Medians of the intended release: speed, vertical speed, horizontal speed, spin."""
+    velocity = actions[:, :3] * task.max_speed
+    spin = actions[:, 3:6] * task.max_spin
+    return {"speed": float(np.median(np.linalg.norm(velocity, axis=1))),
+            "vz": float(np.median(velocity[:, 2])),
+            "horizontal": float(np.median(np.linalg.norm(velocity[:, :2], axis=1))),
+            "spin": float(np.median(np.linalg.norm(spin, axis=1)))}
+
+
+def total_hits(task: ThrowTask, batch: Batch, thrower: Thrower) -> dict[str, Any]:
+    """How often the dice's total is the batch's target total, among the throws counted.
+
+    ``counted``: throws not void; ``hits``: of them, those whose total is the target; ``p`` and
+    its Wilson 95 % ``ci``.
+    """
+    info = batch.throw(task, thrower)
+    counted = np.asarray(info["void_reason"]) == ""
+    hits = int(np.sum((np.asarray(info["total"]) == batch.targets) & counted))
+    n = int(counted.sum())
+    return {"counted": n, "hits": hits, "p": hits / n if n else float("nan"),
+            "ci": wilson_bounds(hits, n)}
+
+
+def avoided_total(
+    config: Config, throwers: dict[str, Thrower], throws: int, seed: int,
+    noises: Sequence[float] = AVOID_NOISES,
+) -> dict[str, Any]:
+    """P(the total to avoid) of each thrower at each hand and orientation noise in ``noises``.
+
+    Every thrower on the same ``throws`` episodes per noise (:func:`total_hits`); under
+    ``throwers``, per thrower its rows and the largest noise whose interval is still wholly
+    below the fair dice's probability (``fair``).
+    """
+    task, episode = make_eval_task(config)
+    fair = float(fair_totals(task)[int(episode["target_sum"]) - task.n_dice])
+    out: dict[str, Any] = {"noises": list(noises), "throws": throws, "fair": fair,
+                           "total": int(episode["target_sum"])}
+    rows: dict[str, list[dict[str, Any]]] = {name: [] for name in throwers}
+    for noise in noises:
+        noisy, _ = make_eval_task(config, hand_noise=noise, orientation_noise=noise)
+        batch = Batch.sample(noisy, throws, np.random.default_rng(seed), **episode)
+        for name, thrower in throwers.items():
+            rows[name].append({"noise": noise, **total_hits(noisy, batch, thrower)})
+    out["throwers"] = {
+        name: {"rows": per, "largest_noise_below": max(
+            (r["noise"] for r in per if r["ci"][1] < fair), default=None)}
+        for name, per in rows.items()}
+    return out
+
+
+def fair_totals(task: ThrowTask) -> np.ndarray:
+    """The probabilities of the totals N … (the sum of the faces) with fair dice."""
+    totals = np.ones(1)
+    for faces in task.faces:
+        totals = np.convolve(totals, np.full(faces, 1.0 / faces))
+    return totals
+
+
 def learning_curve(run: Path) -> dict[str, Any]:
     """Evaluation success against throws during training (``eval/evaluations.npz``).
 
@@ -281,71 +346,59 @@ def evaluate_run(
     throws, oracle_observations = config.eval_throws, config.oracle_observations
     task, episode = make_eval_task(config)
     model = PPO.load(run / "model.zip", device="cpu")
-    one_die = task.n_dice == 1  # the hand-written rule and the turn/strategy views are one die's
+    rule = task_rule(task)
     throwers: dict[str, Thrower] = {"PPO": PolicyThrower(model)}
-    if one_die:
-        throwers["hand-written"] = HandThrower(task)
+    if rule is not None:
+        throwers[rule[0]] = rule[1]
     else:
-        log(f"{task.n_dice} dice: no hand-written thrower (a one-die rule), no turn, strategy "
-            "or confusion views")
+        log(f"{task.n_dice} dice, target {task.target!r}: no rule to compare with")
     throwers["random"] = RandomThrower(config.seed, model.action_space.shape[0])
     seed = config.seed + 2 * 10**6
     start = time.perf_counter()
     log(f"evaluating {run}: {throws} throws per thrower")
-    result = compare(task, throwers, throws, oracle_observations, seed, episode=episode,
-                     progress=progress, log=log)
-    batch, raw = result["batch"], result["throws"]
-    turn: dict[str, Any] = {}
+    cem = task_budget(task)[1]
+    result = compare(task, throwers, throws, oracle_observations, seed, cem, episode, progress,
+                     log)
+    raw = result["throws"]
     differences: dict[str, Any] = {}
-    if one_die:
-        angle = tilt(batch.observations, task)[0]
-        turn = {name: by_turn(r["is_success"], angle) for name, r in raw.items()}
-        differences["hand-written"] = {
-            **paired_difference(raw["PPO"]["is_success"], raw["hand-written"]["is_success"]),
+    if rule is not None:
+        differences[rule[0]] = {
+            **paired_difference(raw["PPO"]["is_success"], raw[rule[0]]["is_success"]),
             "where": f"the same {throws} throws"}
     above_oracle = []
     if "common" in result:
         common = result["common_success"]
-        m = len(common["oracle"])
-        if one_die:
-            turn["oracle"] = by_turn(common["oracle"], angle[:m])
         differences["oracle"] = {**paired_difference(common["PPO"], common["oracle"]),
-                                 "where": f"the oracle's {m} observations × "
+                                 "where": f"the oracle's {len(common['oracle'])} observations × "
                                           f"{ORACLE_SCORE_SAMPLES} throws"}
-        above_oracle = [n for n in throwers
-                        if common[n].mean() > common["oracle"].mean()]
-    strategies = {name: strategy(batch, raw[name]["action"], task)
-                  for name in ("PPO", "hand-written") if one_die}
+        above_oracle = [n for n in throwers if common[n].mean() > common["oracle"].mean()]
+    views, figures = task_views(run, task, result)
+    if task.target == "avoid_sum" and config.robustness_throws:
+        log(f"P({episode['target_sum']}) against the hand's noise")
+        views["avoided"] = avoided_total(
+            config, {n: t for n, t in throwers.items() if n != "random"},
+            config.robustness_throws, seed + 2)
     log("robustness sweeps")
     sweeps = robustness(config, throwers, config.robustness_throws, seed + 1, progress)
     curve = learning_curve(run)
     levels = {n: s["rate"] for n, s in result["summary"].items() if n != "PPO"}
     if "common" in result:
         levels["oracle"] = result["common"]["oracle"]["rate"]
-    figures = {
-        "learning": plots.learning(run / "learning.png", {"PPO": [curve]}, levels),
-        "outcomes": plots.outcomes(run / "outcomes.png", raw),
-    }
-    if one_die:
-        figures["turn"] = plots.by_turn(run / "turn.png", turn)
-        figures["strategy"] = plots.strategy(run / "strategy.png", strategies,
-                                             {n: raw[n]["is_success"] for n in strategies})
-        figures["confusion"] = plots.confusion(
-            run / "confusion.png", batch.targets,
-            {n: raw[n]["face"] for n in ("PPO", "hand-written")}, task.n_faces)
+    figures["learning"] = plots.learning(run / "learning.png", {"PPO": [curve]}, levels)
+    figures["outcomes"] = plots.outcomes(run / "outcomes.png", raw)
     if sweeps:
         figures["robustness"] = plots.robustness(run / "robustness.png", sweeps,
                                                  trained_values(task))
     log("saving throws as GIFs")
-    gifs = save_throws(run, task, batch, raw["PPO"], "PPO", config.gifs)
+    gifs = save_throws(run, task, result["batch"], raw["PPO"], "PPO", config.gifs)
     evaluation = {
         "throws": throws, "oracle_observations": oracle_observations,
-        "oracle_score_samples": ORACLE_SCORE_SAMPLES, "cem": CEM().__dict__,
+        "oracle_score_samples": ORACLE_SCORE_SAMPLES, "cem": cem.__dict__,
+        "rule": None if rule is None else rule[0],
         "summary": result["summary"], "common": result.get("common", {}),
         "differences": differences, "above_oracle": above_oracle,
-        "oracle_seconds": result.get("oracle_seconds"), "turn": turn,
+        "oracle_seconds": result.get("oracle_seconds"), **views,
         "learning": curve,
-        "strategy": {n: strategy_table(s) for n, s in strategies.items()},
         "outcomes": {n: {"impacts_median": float(np.median(throw_impacts(r))),
                          "rest_time_median": float(np.median(r["rest_time"])),
                          "void": float(np.mean(r["void_reason"] != ""))}
@@ -360,6 +413,50 @@ def evaluate_run(
     log("\n".join(verdict(evaluation)))
     log(headline_table(evaluation.get("common") or evaluation["summary"]))
     return evaluation
+
+
+def task_views(run: Path, task: ThrowTask,
+               result: dict[str, Any]) -> tuple[dict[str, Any], dict[str, Path]]:
+    """The views that fit the task, from :func:`compare`'s ``result``, and their figures.
+
+    Every task: ``release`` (medians of each thrower's intended release; the oracle's on its
+    observations, beside the others' on the same ones). One die: ``turn`` (success by how far
+    the target must turn) and ``strategy`` (:func:`strategy_table` of the throwers but random),
+    with the confusion of faces. A total of several dice: the confusion of totals.
+    """
+    from agents import plots
+
+    batch, raw = result["batch"], result["throws"]
+    m = len(result.get("oracle_actions", ()))
+    first = Batch(batch.targets[:m], batch.hands[:m], batch.observations[:m], batch.noise[:m])
+    actions = {n: np.asarray(r["action"]) for n, r in raw.items()}
+    views: dict[str, Any] = {"release": {n: release(a, task) for n, a in actions.items()}}
+    if m:
+        views["release_on_oracle_observations"] = {
+            n: release(a[:m], task) for n, a in
+            {**actions, "oracle": result["oracle_actions"]}.items()}
+    figures: dict[str, Path] = {}
+    shown = [n for n in raw if n != "random"]
+    if task.n_dice == 1:
+        angle = tilt(batch.observations, task)[0]
+        views["turn"] = {name: by_turn(r["is_success"], angle) for name, r in raw.items()}
+        strategies = {n: strategy(batch, actions[n], task) for n in shown}
+        success = {n: raw[n]["is_success"] for n in shown}
+        if m:
+            views["turn"]["oracle"] = by_turn(result["common_success"]["oracle"], angle[:m])
+            strategies["oracle"] = strategy(first, result["oracle_actions"], task)
+            success["oracle"] = result["common_success"]["oracle"].mean(axis=1)
+        views["strategy"] = {n: strategy_table(s) for n, s in strategies.items()}
+        figures["turn"] = plots.by_turn(run / "turn.png", views["turn"])
+        figures["strategy"] = plots.strategy(run / "strategy.png", strategies, success)
+        figures["confusion"] = plots.confusion(
+            run / "confusion.png", batch.targets, {n: raw[n]["face"] for n in shown},
+            list(range(1, task.n_faces + 1)))
+    elif task.target == "sum":
+        figures["confusion"] = plots.confusion(
+            run / "confusion.png", batch.targets, {n: raw[n]["total"] for n in raw},
+            list(task.totals), "total")
+    return views, figures
 
 
 def main(argv: list[str] | None = None) -> None:

@@ -8,9 +8,11 @@ evaluation is on the task without them) and the algorithm's keywords, TD3's expl
 
 * ``"benchmark"``: every named task with PPO, A2C, SAC and TD3 at the benchmark's budgets
   (``python -m agents.benchmark``; ``python -m agents.zoo`` writes them as rl-zoo3 files).
-* ``"quick"`` and ``"best"``: ``train.py``'s PPO on DiceThrow-v0, warm-started by imitating the
-  hand-written thrower, with the target face's direction as a feature
-  (:class:`agents.policy.TargetNormal`).
+* ``"quick"`` and ``"best"``: ``train.py``'s PPO on every named task (``--env-id``). One die:
+  warm-started by imitating the hand-written thrower, with the target face's direction as a
+  feature (:class:`agents.policy.TargetNormal`); two dice: the benchmark's PPO, warm-started
+  by imitating the task's rule (:func:`agents.baselines.task_rule`: the tray's total thrower,
+  the craps set throw).
 * ``"scratch"``: plain PPO from scratch, ``MlpPolicy`` on the raw observation (target one-hot
   and hand orientation), no imitation (``train.py --preset scratch``; :data:`PPO_HYPERPARAMS`):
 
@@ -25,32 +27,23 @@ evaluation is on the task without them) and the algorithm's keywords, TD3's expl
 
 Where DiceThrow-v0's ``"scratch"`` values come from: ``python benchmarks/learn_from_scratch.py``
 (default task: 1.5 cm release, 5 % hand noise; success of the policy's mean action on fixed
-random throws; one kernel thread and one PyTorch thread). Its learning curve and final success
-with them, against the hand-written thrower on the same throws, are kept in
-``benchmarks/results/learn_from_scratch.json`` and shown in docs/agents.md with the oracle's.
-Variants, each changing one value (``--set KEY=VALUE``), single runs on 512 fixed throws
-(``--eval-throws 512``; this set reads 0.02-0.03 above larger ones near the top), their results
-not kept:
+random throws; one kernel thread and one PyTorch thread), which trains them and variants that
+each change one value (``--set KEY=VALUE``); its kept results
+(``benchmarks/results/learn_from_scratch.json``) are shown in docs/agents.md with the oracle's.
+What the values are:
 
 * Every episode is one throw, so the advantage is the reward minus the value whatever ``gamma``
   and ``gae_lambda`` are; they stay at SB3's defaults.
-* ``log_std_init=-2`` (action noise 0.135): with a constant learning rate of 3e-4, after 150k
-  throws 0.52 at -1, 0.84 at -2, 0.63 at -2.5 (less exploration, a later start).
-* The learning rate decays linearly to 0: a constant 3e-4 peaked at 0.93 after 325k throws and
-  drifted to 0.90-0.92 by 525k; a constant 1e-3 stalled at 0.84 (175k), one decaying from 1e-3
-  over 400k at 0.89 (325k); 20 epochs per update instead of 10: 0.93 after 400k, no better than 10.
+* ``log_std_init=-2``: an initial action noise of e^-2 (0.135) in action units.
+* The learning rate decays linearly from 3e-4 to 0 over the budget (``"lin_3e-4"``).
 * ``shaping=0.5`` (``0.5 n_target . n_table`` added to the reward) and ``until="decided"`` (each
-  throw ends when its face is decided: the same faces, about 3x faster) as agents/train.py
-  trains; not varied here.
+  throw ends when its face is decided: the same faces, fewer steps) as agents/train.py trains.
 * ``n_envs=256`` throws per kernel call, 4 steps per rollout: 1024 throws per update in batches
   of 256.
 
-What limits it is the mapping from the observation to the throw: the target's direction in the
-world is a product of the one-hot and the orientation matrix, which the MLP has to learn; its
-failures are the targets that must turn more than 120 degrees. Given that product as a feature
-(``--set features_extractor_class=agents.policy:TargetNormal --throws 400000``), the same
-hyperparameters reach 0.96 after 150k throws and 0.97 after 400k (0.971 on 1000 throws to rest),
-as the imitation warm start does.
+The plain MLP has to learn the target's direction in the world, a product of the one-hot and
+the orientation matrix; :class:`agents.policy.TargetNormal` hands it that product as a feature
+(``--set features_extractor_class=agents.policy:TargetNormal``), as the warm start's presets do.
 """
 
 from __future__ import annotations
@@ -70,11 +63,9 @@ NON_ALGORITHM_KEYS = ("policy", "n_envs", "n_timesteps", "env_kwargs", "noise_ty
 NON_PPO_KEYS = NON_ALGORITHM_KEYS
 
 # The benchmark (``python -m agents.benchmark``): one budget in throws per named task, the same
-# for every algorithm. DiceThrow-v0's is where the best algorithm (TD3) levels off at the
-# oracle's success (docs/benchmark.md); the others are what two CPU cores train 3 seeds x 4
-# algorithms in about an hour: the one-die tasks run 1,000-3,000 throws/s on one core, two dice
-# in the tray about 100 and the craps throw about 20 (``benchmarks/env.json`` measures the
-# default task).
+# for every algorithm; smaller where a throw costs more to simulate (two dice, the craps table's
+# long roll), so that 3 seeds x 4 algorithms of every task fit one session on two CPU cores
+# (docs/benchmark.md gives each run's CPU time).
 BUDGETS: dict[str, int] = {
     "DiceThrow-v0": 240_000,
     "DiceThrowHigh-v0": 40_000,
@@ -105,7 +96,7 @@ ALGOS = tuple(_ALGORITHMS)
 # The search (``python -m agents.tune``): per algorithm, these changes to its keywords above,
 # each trained once on DiceThrow-v0 for its benchmark budget (seed TUNE_SEED) and scored on
 # throws of their own (``benchmarks/results/tuning.json``); TUNED names the best, which the
-# benchmark trains on every task. SAC's best rate, 1e-2, is the largest in the search.
+# benchmark trains on every task.
 SEARCH: dict[str, dict[str, dict[str, Any]]] = {
     "ppo": {"as above": {}, "lr 1e-3": {"learning_rate": "lin_1e-3"},
             "lr 3e-3": {"learning_rate": "lin_3e-3"},
@@ -139,10 +130,9 @@ def benchmark_entry(algo: str, env_id: str, variant: str | None = None) -> dict[
 # one throw, so the advantage is the reward minus the value (gamma and lambda do not matter);
 # large batches of throws per update, a few epochs, a small initial action noise around the
 # hand-sized throws. Training only: the dense term n_target . n_table at rest speeds learning.
-# Before PPO, the policy's mean imitates the hand-written thrower on ``imitation_throws``
-# observations for ``imitation_steps`` gradient steps: from 5 cm the landing is sharp (a 10%
-# error in spin costs about 0.1 of success), so PPO from scratch found no signal in 40k throws;
-# from the hand's throws it refines them.
+# Before PPO, the policy's mean imitates the task's rule (the hand-written thrower for one die)
+# on ``imitation_throws`` observations for ``imitation_steps`` gradient steps, so that PPO
+# starts from the rule's throws and refines them.
 _WARM_START: dict[str, Any] = {
     "policy": "MlpPolicy", "n_envs": 256, "n_timesteps": 150_000, "env_kwargs": {"shaping": 0.5},
     "n_steps": 8, "batch_size": 512, "n_epochs": 10, "gamma": 0.0, "gae_lambda": 1.0,
@@ -164,8 +154,19 @@ HYPERPARAMS: dict[str, dict[str, dict[str, dict[str, Any]]]] = {
     env_id: {algo: {BENCHMARK: benchmark_entry(algo, env_id)} for algo in ALGOS}
     for env_id in BUDGETS
 }
-HYPERPARAMS["DiceThrow-v0"]["ppo"].update(
-    quick=_WARM_START, best={**_WARM_START, "n_timesteps": 500_000}, scratch=_SCRATCH)
+# train.py's presets on every named task: the warm start for one die; for two dice (no
+# TargetNormal, a one-die feature) the benchmark's PPO warm-started by imitating the task's rule
+# (the tray's total thrower, the craps set throw), with ``"best"`` five times its budget.
+ONE_DIE_TASKS = ("DiceThrow-v0", "DiceThrowHigh-v0", "DiceThrowD20-v0")
+for _id in ONE_DIE_TASKS:
+    HYPERPARAMS[_id]["ppo"].update(quick=_WARM_START, best={**_WARM_START, "n_timesteps": 500_000},
+                                   scratch=_SCRATCH)
+for _id in ("DiceThrowTray2d6Sum-v0", "DiceThrowCraps-v0"):
+    _plain = HYPERPARAMS[_id]["ppo"][BENCHMARK]
+    _warm = {**_plain, "imitation_throws": 20_000, "imitation_steps": 1500}
+    HYPERPARAMS[_id]["ppo"].update(
+        quick=_warm, best={**_warm, "n_timesteps": 5 * _plain["n_timesteps"]}, scratch=_plain)
+del _id, _plain, _warm
 
 # The "scratch" entries by env id: plain PPO as an SB3 user writes it (the README's snippet).
 PPO_HYPERPARAMS: dict[str, dict[str, Any]] = {

@@ -11,7 +11,7 @@ the intended release speed, its vertical part and the spin; for one die, per cla
 target must turn, the push along the roll direction and the spin axis against the target's tilt,
 :func:`agents.evaluate.strategy`); the learned thrower's failures on all the throws (success per
 turn class or per target, void reasons). For the craps task (avoid a seven), P(seven) of the
-learned throw and of the set throw against the hand's noise (:data:`CRAPS_NOISES`), Wilson 95 %
+learned throw and of the set throw against the hand's noise (:data:`AVOID_NOISES`), Wilson 95 %
 intervals, and the largest noise at which the interval is still wholly below 1/6. Writes
 ``benchmarks/results/learned.json`` after each task.
 """
@@ -40,13 +40,22 @@ from agents.benchmark import (
     kept_runs,
 )
 from agents.episodes import Batch, PolicyThrower
-from agents.evaluate import by_turn, compare, paired_difference, strategy, strategy_table, tilt
+from agents.evaluate import (
+    AVOID_NOISES,
+    by_turn,
+    compare,
+    paired_difference,
+    release,
+    strategy,
+    strategy_table,
+    tilt,
+    total_hits,
+)
 from agents.kept import RunError, interrupted, read_json, write_json
 from agents.oracle import CEM, task_budget
 
 SEED = 0  # benchmarks/tasks.py's: the same throws
 CRAPS = "DiceThrowCraps-v0"
-CRAPS_NOISES = (0.001, 0.003, 0.01, 0.03, 0.1)  # hand and orientation noise
 CRAPS_THROWS = 400  # per noise and thrower
 QUICK = {"throws": 16, "observations": 2, "cem": CEM(
     global_candidates=4, restarts=1, iterations=1, population=4, noise_samples=2, finalists=1,
@@ -86,16 +95,6 @@ def model_path(run: dict[str, Any], out: Path = RESULTS) -> Path:
     if progress is None:
         raise RunError(f"{kept.work} holds no model: {rebuild}")
     return kept.work / progress["checkpoint"] / "model.zip"
-
-
-def release(actions: np.ndarray, task: Any) -> dict[str, float]:
-    """Medians of the intended release: speed, vertical speed, horizontal speed, spin."""
-    velocity = actions[:, :3] * task.max_speed
-    spin = actions[:, 3:6] * task.max_spin
-    return {"speed": float(np.median(np.linalg.norm(velocity, axis=1))),
-            "vz": float(np.median(velocity[:, 2])),
-            "horizontal": float(np.median(np.linalg.norm(velocity[:, :2], axis=1))),
-            "spin": float(np.median(np.linalg.norm(spin, axis=1)))}
 
 
 def analyse(task_id: str, out: Path = RESULTS, quick: bool = False) -> dict[str, Any]:
@@ -145,24 +144,17 @@ def analyse(task_id: str, out: Path = RESULTS, quick: bool = False) -> dict[str,
 
 
 def sevens(model: Any, throws: int = CRAPS_THROWS) -> dict[str, Any]:
-    """P(seven) of the learned and the set throw at each of :data:`CRAPS_NOISES`."""
-    from dice_env.intervals import wilson_bounds
-
-    out: dict[str, Any] = {"noises": list(CRAPS_NOISES), "throws": throws}
+    """P(seven) of the learned and the set throw at each of :data:`AVOID_NOISES`."""
+    out: dict[str, Any] = {"noises": list(AVOID_NOISES), "throws": throws}
     for name in ("learned", "set"):
         rows = []
-        for noise in CRAPS_NOISES:
+        for noise in AVOID_NOISES:
             task, batch = evaluation(CRAPS, throws, SEED, hand_noise=noise,
                                      orientation_noise=noise)
             thrower = PolicyThrower(model) if name == "learned" else rule_throwers(task)["set"]
-            info = batch.throw(task, thrower)
-            counted = np.asarray(info["void_reason"]) == ""
-            seven = int(np.sum((np.asarray(info["total"]) == 7) & counted))
-            n = int(counted.sum())
-            low, high = wilson_bounds(seven, n)
-            rows.append({"noise": noise, "counted": n, "sevens": seven,
-                         "p": seven / n if n else float("nan"), "ci": (low, high),
-                         "below": bool(high < 1 / 6)})
+            hits = total_hits(task, batch, thrower)
+            rows.append({"noise": noise, "counted": hits["counted"], "sevens": hits["hits"],
+                         "p": hits["p"], "ci": hits["ci"], "below": bool(hits["ci"][1] < 1 / 6)})
         below = [r["noise"] for r in rows if r["below"]]
         out[name] = {"rows": rows, "largest_noise_below": max(below, default=None)}
     return out

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import itertools
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -15,8 +16,8 @@ import numpy as np
 from agents.episodes import throw_impacts
 from agents.kept import write_saved
 
-COLOURS = {"PPO": "tab:blue", "hand-written": "tab:orange", "random": "tab:gray",
-           "oracle": "tab:green"}
+COLOURS = {"PPO": "tab:blue", "hand-written": "tab:orange", "set": "tab:orange",
+           "random": "tab:gray", "oracle": "tab:green"}
 TILT_BINS = np.linspace(0.0, 180.0, 13)  # degrees, 15° wide
 
 
@@ -134,21 +135,22 @@ def strategy(path: Path, strategies: dict[str, dict[str, np.ndarray]],
 
 
 def confusion(path: Path, targets: np.ndarray, landed: dict[str, np.ndarray],
-              faces: int) -> Path:
-    """Heatmaps of P(landed face | target), one per thrower."""
+              labels: Sequence[int], what: str = "face") -> Path:
+    """Heatmaps of P(landed | target), one per thrower; ``labels``: the faces or totals."""
     fig, axes = plt.subplots(1, len(landed), figsize=(4.2 * len(landed), 3.8), squeeze=False)
-    labels = np.arange(1, faces + 1)
-    for ax, (name, landed_faces) in zip(axes[0], landed.items(), strict=True):
-        counts = np.zeros((faces, faces))
-        np.add.at(counts, (targets - 1, landed_faces - 1), 1)
+    size = len(labels)
+    for ax, (name, values) in zip(axes[0], landed.items(), strict=True):
+        counts = np.array([[np.sum((targets == t) & (values == v)) for v in labels]
+                           for t in labels], dtype=np.float64)
         rates = counts / np.maximum(counts.sum(axis=1, keepdims=True), 1)
         ax.imshow(rates, vmin=0, vmax=1, cmap="viridis")
-        for i in range(faces):
-            for j in range(faces):
-                ax.text(j, i, f"{rates[i, j]:.2f}", ha="center", va="center", fontsize=7,
-                        color="white" if rates[i, j] < 0.5 else "black")
-        ax.set(xticks=range(faces), xticklabels=labels, yticks=range(faces), yticklabels=labels,
-               xlabel="landed face", ylabel="target face", title=name)
+        if size <= 12:  # a d20's 400 cells would be unreadable
+            for i in range(size):
+                for j in range(size):
+                    ax.text(j, i, f"{rates[i, j]:.2f}", ha="center", va="center", fontsize=7,
+                            color="white" if rates[i, j] < 0.5 else "black")
+        ax.set(xticks=range(size), xticklabels=labels, yticks=range(size), yticklabels=labels,
+               xlabel=f"landed {what}", ylabel=f"target {what}", title=name)
     return save(fig, path)
 
 

@@ -1,4 +1,4 @@
-"""The run's report.md: headline, success with the oracle, learning curve, turn, strategy, GIFs."""
+"""The run's report.md: headline, success with the oracle, learning curve, task views, GIFs."""
 
 from __future__ import annotations
 
@@ -44,7 +44,8 @@ def verdict(evaluation: dict[str, Any]) -> list[str]:
     """The report's headline: PPO against the rule and the oracle, on the same throws."""
     lines = []
     diffs = evaluation.get("differences", {})
-    for other, where in (("hand-written", "the hand-written rule"), ("oracle", "the oracle")):
+    rule = evaluation.get("rule")
+    for other, where in ((rule, f"the {rule} rule"), ("oracle", "the oracle")):
         d = diffs.get(other)
         if d is None:
             continue
@@ -111,7 +112,7 @@ def _section_learning(run: Path, evaluation: dict[str, Any], figure: Path) -> li
              f"![learning]({figure.name})", ""]
     start = curve.get("start")
     if start:
-        kind = ("after the warm start (imitation of the hand-written thrower)"
+        kind = (f"after the warm start (imitation of the {evaluation['rule']} throw)"
                 if start.get("warm_start") else "the initial policy (PPO from scratch)")
         lines.append(f"Before PPO's first update, {kind}: {start['success']:.3f} on "
                      f"{start['episodes']} throws.")
@@ -140,8 +141,8 @@ def _section_turn(evaluation: dict[str, Any], figure: Path) -> list[str]:
 
 
 def _section_strategy(evaluation: dict[str, Any], figure: Path) -> list[str]:
-    lines = ["## Strategy: toss, sideways push and spin against the target's tilt (PPO and the "
-             "hand-written rule)", "", f"![strategy]({figure.name})", "",
+    lines = ["## Strategy: toss, sideways push and spin against the target's tilt (PPO, the "
+             "hand-written rule and the oracle)", "", f"![strategy]({figure.name})", "",
              "| thrower | target | median toss v_z (m/s) | median push along the roll (m/s) | "
              "median spin (rad/s) | median cos(spin axis, n_target × up) |",
              "|---|---|---|---|---|---|"]
@@ -149,11 +150,50 @@ def _section_strategy(evaluation: dict[str, Any], figure: Path) -> list[str]:
         lines += [f"| {name} | {c} | {v['vz']:.3f} | {v['push']:.3f} | {v['spin']:.1f} | "
                   f"{v['axis_cosine']:.2f} |" for c, v in per.items()]
     lines += ["", "The intended release (before hand noise) against the target face's angle "
-              "from up in the hand. The hand-written rule spins about `n_target × up` "
+              "from up in the hand (the oracle's on its own observations). The hand-written "
+              "rule spins about `n_target × up` "
               "(cosine 1) at a rate proportional to that angle, with no toss and no push. "
               "A learned policy that tosses upward more, or pushes along the roll direction "
               "(`(n_target × up) × up`, where the die rolls as it turns the target up), the "
               "further the target must turn has found more than the rule.", ""]
+    return lines
+
+
+def _section_release(evaluation: dict[str, Any]) -> list[str]:
+    """Each thrower's intended release; with the oracle, on its observations."""
+    kinds = [("release", f"the {evaluation['throws']} throws")]
+    if "release_on_oracle_observations" in evaluation:
+        kinds.append(("release_on_oracle_observations", "the oracle's observations"))
+    lines = ["## Release: what each thrower does (medians of the intended release, before hand "
+             "noise)", "",
+             "| thrower | on | speed (m/s) | vertical (m/s) | horizontal (m/s) | spin (rad/s) |",
+             "|---|---|---|---|---|---|"]
+    for key, where in kinds:
+        lines += [f"| {name} | {where} | {r['speed']:.3f} | {r['vz']:.3f} | "
+                  f"{r['horizontal']:.3f} | {r['spin']:.1f} |"
+                  for name, r in evaluation[key].items()]
+    return [*lines, ""]
+
+
+def _section_avoided(avoided: dict[str, Any]) -> list[str]:
+    """P(the total to avoid) against the hand's noise, per thrower."""
+    total, fair = avoided["total"], avoided["fair"]
+    names = list(avoided["throwers"])
+    lines = [f"## P({total}) against the hand's noise (hand and orientation noise, "
+             f"{avoided['throws']} throws each; fair dice {fair:.3f})", "",
+             "| noise | " + " | ".join(f"{n} P({total}) [95% CI]" for n in names) + " |",
+             "|---|" + "---|" * len(names)]
+    for i, noise in enumerate(avoided["noises"]):
+        cells = []
+        for name in names:
+            r = avoided["throwers"][name]["rows"][i]
+            cells.append(f"{r['p']:.3f} [{r['ci'][0]:.3f}, {r['ci'][1]:.3f}] ({r['counted']})")
+        lines.append(f"| {noise:g} | " + " | ".join(cells) + " |")
+    largest = {n: avoided["throwers"][n]["largest_noise_below"] for n in names}
+    lines += ["", "In brackets the throws counted (not void). The largest noise at which P("
+              f"{total})'s interval is still wholly below fair dice's: "
+              + ", ".join(f"{n} {'none' if x is None else f'{x:g}'}" for n, x in largest.items())
+              + ".", ""]
     return lines
 
 
@@ -163,8 +203,8 @@ def write_report(run: Path, config: Config, evaluation: dict[str, Any],
     throws, seconds = training_summary(run)
     params = config.hyperparams()
     start = evaluation["learning"].get("start") or {}
-    warm = ("warm-started by imitating the hand-written thrower" if start.get("warm_start")
-            else "from scratch")
+    warm = (f"warm-started by imitating the {evaluation['rule']} throw"
+            if start.get("warm_start") else "from scratch")
     lines = [
         f"# {config.name}: PPO on {config.env_id}", "",
         f"Trained on {throws} throws in {seconds / 60:.1f} min ({warm}; preset "
@@ -175,8 +215,12 @@ def write_report(run: Path, config: Config, evaluation: dict[str, Any],
         *_section_learning(run, evaluation, figures["learning"]),
         *(_section_turn(evaluation, figures["turn"]) if "turn" in figures else []),
         *(_section_strategy(evaluation, figures["strategy"]) if "strategy" in figures else []),
+        *_section_release(evaluation),
+        *(_section_avoided(evaluation["avoided"]) if "avoided" in evaluation else []),
         "## Outcomes", "",
-        *([f"![confusion]({figures['confusion'].name})", ""] if "confusion" in figures else []),
+        *([f"![confusion]({figures['confusion'].name})", "",
+           "P(landed | target) on the throws above, one panel per thrower.", ""]
+          if "confusion" in figures else []),
         f"![outcomes]({figures['outcomes'].name})", "",
         "| thrower | median impacts | median rest time (s) | void throws |", "|---|---|---|---|",
         *[f"| {n} | {o['impacts_median']:.0f} | {o['rest_time_median']:.2f} | {o['void']:.3f} |"

@@ -1,14 +1,16 @@
-"""Train PPO (Stable-Baselines3) on the natively batched DiceThrow env, then evaluate it.
+"""Train PPO (Stable-Baselines3) on a named dice task's natively batched env, then evaluate it.
 
     python -m agents.train                     # quick preset: train, evaluate, write report.md
     python -m agents.train --preset best       # longer run for the best result
+    python -m agents.train --env-id DiceThrowD20-v0  # any registered task (python train.py --help)
     python -m agents.train --seeds 3           # three seeds: mean and spread in one report
     python -m agents.train --sweep release_height=0.015,0.03 hand_noise=0.02,0.05
     python -m agents.train --resume runs/NAME  # continue a run (or group) from its checkpoints
     python -m agents.train --help              # every option (agents/config.py)
 
 Each run writes to ``runs/NAME/``: ``config.json`` (with the seed), ``hyperparams.json``,
-``checkpoints/``, ``tb/`` (TensorBoard), ``eval/`` (the success rate during training:
+``checkpoints/``, ``training.jsonl`` (throws, wall-clock and CPU seconds per session),
+``tb/`` (TensorBoard), ``eval/`` (the success rate during training:
 ``evaluations.npz`` and ``start.json``, the policy before PPO's first update), ``model.zip`` and
 the evaluation (``report.md`` and its figures). A group (``--seeds``, ``--sweep``) holds one
 such run per setting and seed and its own ``report.md`` comparing them.
@@ -111,21 +113,26 @@ class ResumableEval(EvalCallback):
                     self.evaluations_successes = old["successes"].tolist()
 
 
-def imitate(model: PPO, config: Config, throws: int, steps: int, batch: int = 256) -> float:
-    """Warm start: fit the policy's mean action to the hand-written thrower's (MSE).
+def imitate(model: PPO, config: Config, throws: int, steps: int,
+            batch: int = 256) -> tuple[str, float]:
+    """Warm start: fit the policy's mean action to the task's rule (MSE); its name, final loss.
 
-    Observations are drawn as the env draws them (no simulation is needed: the hand-written
-    thrower only reads the observation). Returns the final loss.
+    The rule is :func:`agents.baselines.task_rule`'s (the hand-written thrower for one die).
+    Observations are drawn as the env draws them (no simulation is needed: the rule only reads
+    the observation).
     """
     import torch
 
-    from agents.baselines import HandThrower
+    from agents.baselines import task_rule
     from agents.episodes import Batch, make_eval_task
 
     task, episode = make_eval_task(config)
+    rule = task_rule(task)
+    if rule is None:  # agents.config.check refuses such a preset first
+        raise ValueError(f"{config.env_id} with {config.env_kwargs()} has no rule to imitate")
     data = Batch.sample(task, throws, np.random.default_rng(config.seed + 3 * 10**6), **episode)
     obs = torch.as_tensor(data.observations)
-    actions = torch.as_tensor(HandThrower(task)(data.observations), dtype=torch.float32)
+    actions = torch.as_tensor(rule[1](data.observations), dtype=torch.float32)
     policy = model.policy
     # Its own optimizer: PPO's Adam must not inherit moment estimates of this regression.
     optimizer = torch.optim.Adam(policy.parameters(), lr=1e-3)
@@ -138,7 +145,7 @@ def imitate(model: PPO, config: Config, throws: int, steps: int, batch: int = 25
         optimizer.zero_grad()
         loss.backward()
         optimizer.step()
-    return loss.item()
+    return rule[0], loss.item()
 
 
 def evaluate_start(model: PPO, eval_env: VecEnv, episodes: int, run: Path,
@@ -234,8 +241,9 @@ def train(config: Config, run: Path | None = None) -> Path:
                     device="cpu", verbose=0, **config.ppo_kwargs(env.get_attr("task")[0].scene.die))
         warm = bool(params.get("imitation_steps"))
         if warm:
-            loss = imitate(model, config, params["imitation_throws"], params["imitation_steps"])
-            print(f"warm start: imitated the hand-written thrower, MSE {loss:.2e}")
+            rule, loss = imitate(model, config, params["imitation_throws"],
+                                 params["imitation_steps"])
+            print(f"warm start: imitated the {rule} throw, MSE {loss:.2e}")
         start = evaluate_start(model, eval_env, config.eval_episodes, run, warm)
         print(f"success before PPO's first update: {start:.3f}")
     try:
@@ -266,7 +274,7 @@ def _learn(model: PPO, config: Config, run: Path, eval_env: VecEnv, fresh: bool)
     ]
     if config.progress:
         callbacks.append(ProgressBar(end))
-    start = time.perf_counter()
+    start, cpu = time.perf_counter(), time.process_time()
     interrupted = False
     try:
         model.learn(total - model.num_timesteps, callback=CallbackList(callbacks),
@@ -283,7 +291,7 @@ def _learn(model: PPO, config: Config, run: Path, eval_env: VecEnv, fresh: bool)
                     model.save)
         write_saved(run / "model.zip", model.save)
         log = {"throws": model.num_timesteps, "seconds": time.perf_counter() - start,
-               "interrupted": interrupted}
+               "cpu_seconds": time.process_time() - cpu, "interrupted": interrupted}
         with open(run / "training.jsonl", "a") as f:
             f.write(json.dumps(log) + "\n")
     if interrupted:
@@ -362,7 +370,7 @@ def run_group(config: Config) -> Path:
         else:
             run_one(member)
     if config.evaluate:
-        from agents.group import write_group_report
+        from agents.sweep_report import write_group_report
 
         path = write_group_report(group)
         print(f"wrote {path}")

@@ -5,12 +5,13 @@
 
 For each id of :data:`dice_env.envs.tasks.TASKS`, made with ``gym.make``, every thrower faces
 the same seeded throws (targets, hands, hand noise: ``agents.evaluate.compare``): uniform random
-actions and a rule (the hand-written thrower for one die; for the set dice of the craps task the
-craps study's throw, ``dice_env.throws.SET_THROW``: the crossed set, against the seven, 2 m/s at
-the back wall with backspin) on ``throws`` throws each, Wilson 95 % intervals; the oracle
-(``agents.oracle``, started from their actions) on the first of those observations, each scored
-on 16 fresh noise draws, its interval Wilson's divided by the observations' design effect
-(``agents.evaluate.clustered``). The oracle's budget is ``agents.oracle.task_budget``'s.
+actions and a rule (the hand-written thrower for one die, and for two dice for a total; for the
+set dice of the craps task the craps study's throw, ``dice_env.throws.SET_THROW``: the crossed
+set, against the seven, 2 m/s at the back wall with backspin) on ``throws`` throws each, Wilson
+95 % intervals; the oracle (``agents.oracle``, started from their actions) on the first of
+those observations, each scored on 16 fresh noise draws, its interval Wilson's divided by the
+observations' design effect (``agents.evaluate.clustered``). The oracle's budget is
+``agents.oracle.task_budget``'s.
 Prints a table and writes ``benchmarks/results/tasks.json``.
 """
 
@@ -21,12 +22,11 @@ import os
 import time
 
 import gymnasium as gym
-import numpy as np
 from harness import benchmark_parser, command_line, write_json
 
 from agents.baselines import rule_throwers
 from agents.episodes import EPISODE_KEYWORDS
-from agents.evaluate import ORACLE_SCORE_SAMPLES, compare
+from agents.evaluate import ORACLE_SCORE_SAMPLES, compare, fair_totals
 from agents.oracle import CEM, task_budget
 from dice_env.envs.tasks import TASKS, NamedTask
 from dice_env.envs.throw_task import ThrowTask
@@ -46,9 +46,7 @@ def chance(task: ThrowTask, episode: dict[str, object]) -> float:
     """
     if task.n_dice == 1:
         return 1.0 / task.n_faces
-    totals = np.ones(1)
-    for faces in task.faces:
-        totals = np.convolve(totals, np.full(faces, 1.0 / faces))
+    totals = fair_totals(task)
     fixed = episode.get("target_sum")
     hit = float(totals[fixed - task.n_dice]) if fixed is not None else 1.0 / len(totals)
     return 1.0 - hit if task.target == "avoid_sum" else hit

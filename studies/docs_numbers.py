@@ -110,12 +110,20 @@ def baselines_values(b) -> dict[str, object]:
         for r in b.rows if r.learned)}
 
 
+def recipe_values(learned) -> dict[str, object]:
+    """``benchmarks/results/learned.json``: the recipe's PPO / oracle per task, in one line."""
+    return {"recipe_summary": "; ".join(
+        f"`{r.task}` {r.ratio.mean:.2f} ({r.preset}, {r.throws:,} throws, {len(r.seeds)} "
+        f"seed{'s' if len(r.seeds) > 1 else ''})" for r in learned.recipe)}
+
+
 VALUES: dict[str, Callable[[object], dict[str, object]]] = {
     "benchmarks/results/cold_start.json": cold_start_values,
     "benchmarks/results/physics.json": physics_values,
     QUICK: quick_values,
     "benchmarks/results/tasks.json": tasks_values,
     "benchmarks/results/baselines.json": baselines_values,
+    "benchmarks/results/learned.json": recipe_values,
 }
 
 
@@ -806,3 +814,46 @@ rewards avoiding a seven, so a thrower that has learned anything throws fewer se
 interval stands alone (five noises, no correction for the comparisons): one interval just
 clear of 1/6 among others that hold it is weak evidence.
 """
+
+
+def spread(values, digits: int = 2) -> str:
+    """``mean ± sd`` of a row's seeds; the mean alone for one seed."""
+    return f"{values.mean:.{digits}f}" + (f" ± {values.sd:.{digits}f}" if values.sd else "")
+
+
+@generated("benchmark-recipe", learned=LEARNED)
+def benchmark_recipe(learned) -> str:
+    """The recipe's rows per task and preset, the tasks below 0.9 x the oracle."""
+    first = learned.recipe[0].runs[0]
+    rows = [f"PPO: the policy's mean action on each run's {first.learned.n} throws; on the "
+            f"oracle's throws: PPO and the oracle on the same {first.observations} observations "
+            "× 16 throws; mean ± sd over the seeds; CPU time of the training, all seeds "
+            "together (two shared cores):", "",
+            "| task | preset, budget (throws) | seeds | PPO | on the oracle's throws: PPO / "
+            "oracle | PPO / oracle | training CPU time |", "|---|---|---|---|---|---|---|"]
+    for r in learned.recipe:
+        rows.append(f"| `{r.task}` | {r.preset}, {r.throws:,} | {len(r.seeds)} | "
+                    f"{spread(r.learned)} | {spread(r.ppo_on_oracle_throws)} / "
+                    f"{spread(r.oracle)} | {spread(r.ratio)} | {r.cpu_seconds / 60:.0f} min |")
+    below = ", ".join(f"`{r.task}` ({r.preset}) {r.ratio.mean:.2f}" for r in learned.recipe
+                      if r.ratio.mean < 0.9) or "no task"
+    return "\n".join([*rows, "", f"Below 0.9 × the oracle on its throws: {below}."])
+
+
+@generated("benchmark-sharpness", learned=LEARNED)
+def benchmark_sharpness(learned) -> str:
+    """The oracle's success as the hand turns and as its action moves, per one-die task."""
+    first = learned.sharpness[0]
+    head = ("| task | " + " | ".join(f"hand turned {t.degrees:g}°" for t in first.turned)
+            + " | " + " | ".join(f"action moved {m.step:g}" for m in first.moved) + " |")
+    rows = [f"On {first.observations} observations, {first.samples} noise draws each:", "",
+            head, "|---" * (1 + len(first.turned) + len(first.moved)) + "|"]
+    rows += [f"| `{r.task}` | " + " | ".join(f"{t.rate:.2f}" for t in r.turned) + " | "
+             + " | ".join(f"{m.rate:.2f}" for m in r.moved) + " |" for r in learned.sharpness]
+    kept = "; ".join(
+        f"`{r.task}` keeps {r.turned[3].rate / r.turned[0].rate:.0%} of its oracle's success "
+        f"with the hand turned {r.turned[3].degrees:g}° and "
+        f"{r.moved[1].rate / r.turned[0].rate:.0%} with the action moved {r.moved[1].step:g}"
+        for r in learned.sharpness)
+    return "\n".join([*rows, "", f"{kept}."])
+

@@ -28,6 +28,32 @@ def test_env_keywords_are_literals_not_code(tmp_path):
         Config(env=["friction"]).env_kwargs()
 
 
+def test_train_takes_every_named_task_by_id_and_refuses_an_unknown_one(tmp_path, capsys):
+    from agents.episodes import make_eval_task
+    from agents.hyperparams import HYPERPARAMS
+    from dice_env.envs.tasks import TASKS
+
+    for named in TASKS:
+        config = parse_config(["--env-id", named.id, "--runs", str(tmp_path)])
+        assert config.hyperparams() == HYPERPARAMS[named.id]["ppo"]["quick"]
+        task, episode = make_eval_task(config)  # the id's keywords, as gym.make(id) has them
+        assert task.n_dice == named.keywords.get("num_dice", 1)
+        assert task.scene.die.n_faces == (20 if named.keywords.get("die") == "d20" else 6)
+        assert episode == {k: v for k, v in named.keywords.items() if k == "target_sum"}
+    d20 = parse_config(["--env-id", "DiceThrowD20-v0", "--env", "release_height=0.03",
+                        "--runs", str(tmp_path)])
+    assert make_eval_task(d20)[0].release_height == 0.03  # --env overrides the id's keywords
+    with pytest.raises(SystemExit) as exit_info:
+        parse_config(["--env-id", "DiceThrowD8-v0", "--runs", str(tmp_path)], prog="train.py")
+    assert exit_info.value.code == 2
+    err = capsys.readouterr().err
+    assert f"argument --env-id: must be one of {sorted(t.id for t in TASKS)}" in err
+    with pytest.raises(SystemExit):  # the craps preset imitates the set throw: dice set
+        parse_config(["--env-id", "DiceThrowCraps-v0", "--env", "set_dice=False",
+                      "--runs", str(tmp_path)])
+    assert "has none" in capsys.readouterr().err
+
+
 def test_sweep_and_seeds_expand_into_member_runs():
     config = Config(name="g", runs="r", seeds=2, seed=5,
                     sweep=["release_height=0.015,0.03", "hand_noise=0.02,0.05"])
@@ -131,3 +157,87 @@ def test_oracle_search_runs_and_scores_the_same_throws():
     noise = score_noise(task, rng, 2, 3)
     first = score(task, obs, actions, noise)
     assert first.shape == (2, 3) and np.array_equal(first, score(task, obs, actions, noise))
+
+
+def test_the_views_size_themselves_to_the_dice(tmp_path):
+    from agents import plots
+    from agents.baselines import task_rule
+    from agents.evaluate import fair_totals, target_values
+
+    two = make_task(num_dice=2, target="sum")
+    assert np.isclose(fair_totals(two).sum(), 1.0) and np.isclose(fair_totals(two)[7 - 2], 1 / 6)
+    assert target_values(two) == list(range(2, 13)) and task_rule(two)[0] == "hand-written"
+    assert task_rule(make_task(num_dice=2, target="faces")) is None
+    assert target_values(make_task(die="d20")) == list(range(1, 21))
+    assert task_rule(make_task(num_dice=2, set_dice=True, target="avoid_sum"))[0] == "set"
+    path = plots.confusion(tmp_path / "totals.png", np.array([2, 7, 7]),
+                           {"PPO": np.array([2, 7, 8])}, list(two.totals), "total")
+    assert path.exists()
+
+
+def test_the_recipe_rows_give_each_task_s_seeds_mean_and_spread(tmp_path):
+    import json
+
+    from agents.kept import RunError
+    from agents.recipe import main, rows, run_entry
+
+    def run(seed, ppo, oracle, common=True):
+        folder = tmp_path / f"d20_s{seed}"
+        folder.mkdir()
+        Config(env_id="DiceThrowD20-v0", seed=seed, name=folder.name).save(folder / "config.json")
+        (folder / "training.jsonl").write_text(json.dumps(
+            {"throws": 151552, "seconds": 100.0, "cpu_seconds": 150.0}) + "\n")
+        score = {"rate": ppo, "ci": [ppo - 0.05, ppo + 0.05], "n": 1000}
+        (folder / "evaluation.json").write_text(json.dumps({
+            "summary": {"PPO": score}, "oracle_observations": 64,
+            "common": {"PPO": score, "oracle": {**score, "rate": oracle}} if common else {},
+            "differences": {"oracle": {"diff": ppo - oracle, "ci": [-0.1, 0.0]}}}))
+        return folder
+
+    runs = [run(0, 0.45, 0.5), run(1, 0.55, 0.5)]
+    (row,) = rows([run_entry(r) for r in runs])
+    assert row["seeds"] == [0, 1] and row["throws"] == 151552 and row["cpu_seconds"] == 300.0
+    assert np.isclose(row["ratio"]["mean"], 1.0) and np.isclose(row["ratio"]["sd"], 0.1 * 2**0.5)
+    assert row["command"] == "python train.py --env-id DiceThrowD20-v0 --preset quick --seed S"
+    with pytest.raises(RunError, match="without the oracle"):
+        run_entry(run(2, 0.5, 0.5, common=False))
+    out = tmp_path / "learned.json"
+    out.write_text(json.dumps({"tasks": ["kept"]}))
+    assert main([*map(str, runs), "--out", str(out)]) == 0
+    assert json.loads(out.read_text())["tasks"] == ["kept"]
+
+
+def test_sharpness_scores_the_oracle_s_action_as_the_hand_turns(monkeypatch, tmp_path):
+    import json
+
+    import agents.sharpness as sharp
+
+    tiny = CEM(global_candidates=2, restarts=1, iterations=1, population=2, noise_samples=1,
+               finalists=1, validation_samples=2)
+    monkeypatch.setattr(sharp, "search", lambda task, obs, rng: search(task, obs, rng, tiny))
+    monkeypatch.setattr(sharp, "SAMPLES", 2)
+    out = tmp_path / "learned.json"
+    out.write_text(json.dumps({"tasks": ["kept"]}))
+    assert sharp.main(["--tasks", "DiceThrow-v0", "--observations", "2", "--out", str(out)]) == 0
+    kept = json.loads(out.read_text())
+    (row,) = kept["sharpness"]
+    assert kept["tasks"] == ["kept"] and row["task"] == "DiceThrow-v0"
+    assert [t["degrees"] for t in row["turned"]] == list(sharp.ANGLES)
+    assert [m["step"] for m in row["moved"]] == list(sharp.STEPS)
+    assert all(0 <= r["ci"][0] <= r["rate"] <= r["ci"][1] <= 1
+               for r in row["turned"] + row["moved"])
+
+
+def test_the_total_thrower_spins_a_pair_that_makes_the_total_up():
+    from agents.baselines import TotalThrower, spin_up
+
+    task = make_task(num_dice=2, target="sum")
+    identity = np.tile(np.eye(3), (1, 2, 1, 1))  # both dice as placed: faces read alike
+    for total, face in ((12, 6), (2, 1)):  # the only pairs: (6, 6) and (1, 1)
+        obs = task.observe(np.array([total]), identity)
+        assert np.allclose(TotalThrower(task)(obs),
+                           spin_up(task, task.scene.die.reading[face - 1][None]))
+    actions = TotalThrower(task)(task.observe(np.arange(2, 13), np.tile(identity, (11, 1, 1, 1))))
+    assert actions.shape == (11, 6) and np.all(np.abs(actions) <= 1)
+    with pytest.raises(ValueError, match="two dice thrown from one hand for a total"):
+        TotalThrower(make_task())

@@ -2,6 +2,7 @@
 
 import json
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -113,6 +114,28 @@ def test_train_and_evaluate_write_the_report(trained):
     for title in ("## Headline", "## Learning curve", "## Success by how far the target face",
                   "## Strategy", "## Robustness: success when one keyword departs"):
         assert title in report
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(("env_id", "views", "targets"), [
+    ("DiceThrowHigh-v0", ("## Strategy", "## Release"), range(1, 7)),
+    ("DiceThrowD20-v0", ("## Strategy", "## Release"), range(1, 21)),
+    ("DiceThrowTray2d6Sum-v0", ("## Release",), range(2, 13)),
+    ("DiceThrowCraps-v0", ("## Release", "## P(7) against the hand's noise"), (7,)),
+])
+def test_every_named_task_trains_and_reports_for_its_dice(tmp_path, env_id, views, targets):
+    done = train_py("--env-id", env_id, "--total-timesteps", 64, "--runs", tmp_path, "--name",
+                    "run", *TINY, "--n-envs", "8", "--eval-throws", "16",
+                    "--robustness-throws", "4", "--gifs", "0")
+    assert done.returncode == 0, done.stderr
+    report = (tmp_path / "run" / "report.md").read_text()
+    assert f"PPO on {env_id}" in report
+    columns = {int(t) for t in re.findall(r"\| target (\d+) ", report)}
+    assert columns <= set(targets) and max(columns) > (6 if len(targets) > 6 else 0)
+    for title in views:
+        assert title in report
+    one_die = "Tray" not in env_id and "Craps" not in env_id
+    assert ("## Strategy" in report) == one_die and ("## Success by how far" in report) == one_die
 
 
 def test_replay_writes_a_gif(trained):
