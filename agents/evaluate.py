@@ -378,7 +378,8 @@ def evaluate_run(
         views["avoided"] = avoided_total(
             config, {n: t for n, t in throwers.items() if n != "random"},
             config.robustness_throws, seed + 2)
-    log("robustness sweeps")
+    if config.robustness_throws:
+        log("robustness sweeps")
     sweeps = robustness(config, throwers, config.robustness_throws, seed + 1, progress)
     curve = learning_curve(run)
     levels = {n: s["rate"] for n, s in result["summary"].items() if n != "PPO"}
@@ -389,7 +390,8 @@ def evaluate_run(
     if sweeps:
         figures["robustness"] = plots.robustness(run / "robustness.png", sweeps,
                                                  trained_values(task))
-    log("saving throws as GIFs")
+    if config.gifs:
+        log("saving throws as GIFs")
     gifs = save_throws(run, task, result["batch"], raw["PPO"], "PPO", config.gifs)
     evaluation = {
         "throws": throws, "oracle_observations": oracle_observations,
