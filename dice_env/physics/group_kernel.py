@@ -3,9 +3,7 @@
 The model is ``docs/model.md``'s, the speed ``docs/performance.md``'s ("Several dice").
 :func:`least_overlap` finds a touching pair's normal, :func:`pair_contacts` its contacts and
 forces; :func:`advance_group` steps one throw, each die on the planes as the single die's: at
-the table's step while no pair can meet within it (:func:`out_of_reach`), else the pair's;
-with ``until="decided"``, a die at rest and decided alone, out of every other die's reach,
-sleeps (is not stepped) until one may reach it.
+the table's step while no pair can meet within it (:func:`out_of_reach`), else the pair's.
 """
 
 from __future__ import annotations
@@ -622,12 +620,6 @@ def advance_group(g: int, dice: GroupDice, bodies: Bodies, hulls: Hulls, pair: P
     h_last, moved = fine * dt, 1  # the last move's step, and its steps with its jump
     depths = np.empty((n_dice, n_dice))  # each pair's overlap (< 0: a gap), as pair_depths
     normals, speed = np.empty((n_dice, n_dice, 3)), np.empty(n_dice)
-    asleep = np.zeros(n_dice, np.bool_)  # not stepped until another die may reach it
-    own, own_t = np.zeros(n_dice), np.zeros(n_dice)  # each die's energy, its ties' apart
-    lock_top = np.full(n_dice, -np.inf)  # each die's largest lock (only to decide)
-    for a in range(n_dice):
-        if stops.decide:
-            lock_top[a] = bodies.lock[a].max()
     overlap, abort = out.overlap[g], out.abort
     while step < n_steps:
         passes, end = next_pass(passes, abort)
@@ -637,11 +629,6 @@ def advance_group(g: int, dice: GroupDice, bodies: Bodies, hulls: Hulls, pair: P
         apart = pair_depths(x, q, vertices, n_vertices, r_max, world, placed, axes, directions,
                             separating, depths, normals)  # every pair's bounding spheres apart
         _speeds(u, w, r_max, speed)
-        for a in range(n_dice):  # a sleeping die wakes where another may reach it in a move
-            if asleep[a] and within_reach(a, depths, speed, coarse * dt):
-                asleep[a] = False
-                for k in range(3):  # no kick to extrapolate: it rested
-                    pu[a, k], pw[a, k] = u[a, k], w[a, k]
         moves = min(fine, n_steps - step + 1)  # ``coarse`` while no pair can meet within them
         if coarse > fine and step - 1 + coarse <= n_steps and out_of_reach(depths, speed,
                                                                            coarse * dt):
@@ -651,14 +638,8 @@ def advance_group(g: int, dice: GroupDice, bodies: Bodies, hulls: Hulls, pair: P
             _rescale(u, pu, h / h_last)
             _rescale(w, pw, h / h_last)
         h_last = h
-        checked, tangential, drowsy = 0.0, 0.0, False  # drowsy: a die may be decided alone
+        checked, tangential = 0.0, 0.0
         for a in range(n_dice):
-            if asleep[a]:  # as it fell asleep
-                for k in range(3):
-                    force[a, k], torque[a, k] = 0.0, 0.0
-                checked += own[a]
-                tangential += own_t[a]
-                continue
             u0, u1, u2, w0, w1, w2 = u[a, 0], u[a, 1], u[a, 2], w[a, 0], w[a, 1], w[a, 2]
             cu0, cu1, cu2, cw0, cw1, cw2 = u0, u1, u2, w0, w1, w2
             if midpoint:
@@ -690,10 +671,7 @@ def advance_group(g: int, dice: GroupDice, bodies: Bodies, hulls: Hulls, pair: P
                     touched[g, a, p] = True
             force[a, 0], force[a, 1], force[a, 2] = f0, f1, f2
             torque[a, 0], torque[a, 1], torque[a, 2] = t0, t1, t2
-            own[a], own_t[a] = kinetic[a] + m * g_acc * x2 + spring, spring_t
-            drowsy = drowsy or (own[a] + spring_t < lock_top[a] and touching[a] >= 3
-                                and kinetic[a] < 0.5 * m * v_rest2)
-            checked += own[a]
+            checked += kinetic[a] + m * g_acc * x2 + spring
             tangential += spring_t
         # die against die
         for a in range(n_dice):
@@ -753,22 +731,14 @@ def advance_group(g: int, dice: GroupDice, bodies: Bodies, hulls: Hulls, pair: P
                                    stops.hold_steps, False)
             if end == SETTLED:
                 break
-        if drowsy and _fall_asleep(bodies, q, own, own_t, die_touch, depths, speed,
-                                   coarse * dt, asleep, kinetic, touching, v_rest2):
-            end = DECIDED  # every die decided alone, none within another's reach
-            break
         jump = 1
-        flying = options.flight and apart and moves == coarse  # (near, as stepping would be)
-        for a in range(n_dice):
-            flying = flying and (asleep[a] or touching[a] == 0)
-        if flying:  # no record falls inside a jump: it may end on one
-            jump = min(_group_jump(planes, lowest, asleep, speed, x, u, ang, force, bodies,
+        # (near, as stepping would be) no record falls inside a jump: it may end on one
+        if options.flight and apart and moves == coarse and touching.max() == 0:
+            jump = min(_group_jump(planes, lowest, speed, x, u, ang, force, bodies,
                                    rotation, h, (n_steps - step + 1) // moves),
                        (next_record - step + moves) // moves)
         finite = True
         for a in range(n_dice):
-            if asleep[a]:
-                continue
             dt_m = h / mass[a]
             dv0, dv1, dv2 = force[a, 0] * dt_m, force[a, 1] * dt_m, force[a, 2] * dt_m
             for r in range(3):  # this die's rotation and inertia, as the single die's kernel
@@ -877,37 +847,6 @@ def out_of_reach(depths: np.ndarray, speed: np.ndarray, h: float) -> bool:
 
 
 @njit(cache=True, forceinline=True, _nrt=False)
-def within_reach(a: int, depths: np.ndarray, speed: np.ndarray, h: float) -> bool:
-    """Whether another die may meet die ``a`` within a time ``h`` (as :func:`out_of_reach`)."""
-    for b in range(depths.shape[0]):
-        if b != a and not -depths[min(a, b), max(a, b)] > 2.0 * h * (speed[a] + speed[b]):
-            return True
-    return False
-
-
-@njit(cache=True)
-def _fall_asleep(bodies: Bodies, q: np.ndarray, own: np.ndarray, own_t: np.ndarray,
-                 die_touch: np.ndarray, depths: np.ndarray, speed: np.ndarray, h: float,
-                 asleep: np.ndarray, kinetic: np.ndarray, touching: np.ndarray,
-                 v_rest2: float) -> bool:
-    """Put to sleep each die at rest and decided alone, out of every other die's reach.
-
-    At rest: on three vertices, its ``kinetic`` energy below that of the rest speed (squared,
-    ``v_rest2``); decided: ``own + own_t`` below its lock; out of reach: touching no die, none
-    able to meet it within ``h``. Returns whether every die sleeps.
-    """
-    every = True
-    for a in range(q.shape[0]):
-        if not asleep[a] and not die_touch[a] and touching[a] >= 3 \
-                and kinetic[a] < 0.5 * bodies.mass[a] * v_rest2 \
-                and _decided_alone(bodies, q, a, own[a] + own_t[a], UP) \
-                and not within_reach(a, depths, speed, h):
-            asleep[a] = True
-        every = every and asleep[a]
-    return every
-
-
-@njit(cache=True, forceinline=True, _nrt=False)
 def _rescale(v: np.ndarray, before: np.ndarray, ratio: float) -> None:
     """``before`` moved so that ``v - before``, each die's last change, is ``ratio`` times it."""
     for a in range(v.shape[0]):
@@ -929,21 +868,18 @@ def _place(world: np.ndarray, a: int, vertices: np.ndarray, count: int, x: np.nd
 
 
 @njit(cache=True)
-def _group_jump(planes: np.ndarray, lowest: np.ndarray, asleep: np.ndarray, speed: np.ndarray,
-                x: np.ndarray, u: np.ndarray, ang: np.ndarray, force: np.ndarray,
-                bodies: Bodies, rotation: bool, dt: float, limit: int) -> int:
-    """Flight steps the awake dice take at once (at least 1), each die's as :func:`flight_jump`.
+def _group_jump(planes: np.ndarray, lowest: np.ndarray, speed: np.ndarray, x: np.ndarray,
+                u: np.ndarray, ang: np.ndarray, force: np.ndarray, bodies: Bodies,
+                rotation: bool, dt: float, limit: int) -> int:
+    """Flight steps the whole group takes at once (at least 1), each die's as :func:`flight_jump`.
 
     Every pair stays out of reach (:func:`out_of_reach`, ``speed`` as it takes them) over the
     steps, as stepping would find it: under gravity alone a pair's distance shrinks by
-    ``dt |u_a - u_b|`` a step (toward a die ``asleep``, by the flying die's speed, falling
-    faster), and the reach grows with the speeds.
+    ``dt |u_a - u_b|`` a step, and the reach grows with the speeds.
     """
     n_dice = x.shape[0]
     jump = limit
     for a in range(n_dice):
-        if asleep[a]:
-            continue
         m = bodies.mass[a]
         spin = 0.0
         if rotation:
@@ -953,21 +889,16 @@ def _group_jump(planes: np.ndarray, lowest: np.ndarray, asleep: np.ndarray, spee
         jump = min(jump, flight_jump(planes, lowest, a, (u[a, 0], u[a, 1], u[a, 2]), spin,
                                      bodies.r_max[a], (force[a, 0] * dt_m, force[a, 1] * dt_m,
                                                        force[a, 2] * dt_m), dt, limit))
-        for b in range(n_dice):
-            if b == a or (b < a and not asleep[b]):  # each awake pair once
-                continue
+        for b in range(a + 1, n_dice):
             gap = math.sqrt((x[a, 0] - x[b, 0]) ** 2 + (x[a, 1] - x[b, 1]) ** 2
                             + (x[a, 2] - x[b, 2]) ** 2) - bodies.r_max[a] - bodies.r_max[b] \
                 - 2.0 * dt * (speed[a] + speed[b])
-            kick = dt_m * math.sqrt(force[a, 0] ** 2 + force[a, 1] ** 2 + force[a, 2] ** 2)
-            if asleep[b]:
-                closing, faster = math.sqrt(u[a, 0] ** 2 + u[a, 1] ** 2 + u[a, 2] ** 2), kick
-            else:
-                closing, faster = math.sqrt((u[a, 0] - u[b, 0]) ** 2 + (u[a, 1] - u[b, 1]) ** 2
-                                            + (u[a, 2] - u[b, 2]) ** 2), 0.0
-                kick += dt / bodies.mass[b] * math.sqrt(
-                    force[b, 0] ** 2 + force[b, 1] ** 2 + force[b, 2] ** 2)
-            jump = min(jump, max(1, free_steps(gap, -closing - 2.0 * kick, 0.0, 0.0, -faster, dt,
+            kick = dt_m * math.sqrt(force[a, 0] ** 2 + force[a, 1] ** 2 + force[a, 2] ** 2) \
+                + dt / bodies.mass[b] * math.sqrt(force[b, 0] ** 2 + force[b, 1] ** 2
+                                                  + force[b, 2] ** 2)
+            closing = math.sqrt((u[a, 0] - u[b, 0]) ** 2 + (u[a, 1] - u[b, 1]) ** 2
+                                + (u[a, 2] - u[b, 2]) ** 2)
+            jump = min(jump, max(1, free_steps(gap, -closing - 2.0 * kick, 0.0, 0.0, 0.0, dt,
                                                limit) - 1))  # all but the last free step
     return jump
 
@@ -976,20 +907,15 @@ def _group_jump(planes: np.ndarray, lowest: np.ndarray, asleep: np.ndarray, spee
 def _decided(bodies: Bodies, q: np.ndarray, energy: float, floor_total: float, up: tuple) -> bool:
     """Whether no die can reach its lock: ``energy`` less the other dice's floors is below it."""
     for a in range(q.shape[0]):
-        if not _decided_alone(bodies, q, a, energy - (floor_total - bodies.floor[a]), up):
+        most = energy - (floor_total - bodies.floor[a])
+        lock = bodies.lock[a]
+        if most >= lock.max():
+            return False
+        read = face_read(q[a], bodies.faces[a, :bodies.n_faces[a]], bodies.reads_down[a],
+                         up[0], up[1], up[2])
+        if most >= lock[read]:
             return False
     return True
-
-
-@njit(cache=True)
-def _decided_alone(bodies: Bodies, q: np.ndarray, a: int, energy: float, up: tuple) -> bool:
-    """Whether die ``a`` with ``energy`` keeps its face: below its lock of the face read."""
-    lock = bodies.lock[a]
-    if energy >= lock.max():
-        return False
-    read = face_read(q[a], bodies.faces[a, :bodies.n_faces[a]], bodies.reads_down[a], up[0],
-                     up[1], up[2])
-    return energy < lock[read]
 
 
 @njit(cache=True)
