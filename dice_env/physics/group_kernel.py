@@ -732,7 +732,7 @@ def advance_group(g: int, dice: GroupDice, bodies: Bodies, hulls: Hulls, pair: P
             if end == SETTLED:
                 break
         jump = 1
-        # (near, as stepping would be) no record falls inside a jump: it may end on one
+        # only moves apart jump, as stepping would take them; no record falls inside a jump
         if options.flight and apart and moves == coarse and touching.max() == 0:
             jump = min(_group_jump(planes, lowest, speed, x, u, ang, force, bodies,
                                    rotation, h, (n_steps - step + 1) // moves),
