@@ -17,6 +17,10 @@ shortcut (flights between contacts in one step) and without it (every step, as t
 kernel steps each die), for reference; die-steps count a shortcut flight's steps as taken.
 Prints a table and writes ``benchmarks/results/dice_together.json``.
 
+Then a pair whose dice (almost) never meet: two d6 from the same hand but :data:`APART` apart,
+as a pair (``simulate_group``) and as its two dice thrown alone one after the other
+(``simulate``), on one thread, CPU time: the pair's cost over its dice's.
+
 ``--mujoco 2 12`` adds MuJoCo on the same throws of those groups (``pip install mujoco``): N
 free boxes of the die's size, mass and inertia in the same tray (a plane floor and four plane
 walls), every geom with the table's friction (MuJoCo takes the larger of a pair's), once at
@@ -35,6 +39,7 @@ import math
 import os
 import platform
 import time
+from dataclasses import replace
 
 import numba
 import numpy as np
@@ -47,7 +52,9 @@ from dice_env.model.die import Die
 from dice_env.provenance import code_version
 from dice_env.simulation.group import DieContact, GroupState, group_step, simulate_group
 from dice_env.simulation.simulate import UP, lock_energy
-from dice_env.throws import group_throws, tray_scene
+from dice_env.throws import HAND, group_throws, tray_scene
+
+APART = 0.12  # m between the dice of the pair that never meets
 
 
 def ours_in_tray(n_dice: int, throws: int, repeats: int, seed: int, contact: DieContact) -> tuple:
@@ -84,6 +91,22 @@ def measure(n_dice: int, throws: int, repeats: int, seed: int,
                          "all_read": 1.0, "met": 0.0,
                          "sim_s": float(one.steps.mean() * scene.step)})
     return rows
+
+
+def apart_pair(throws: int, repeats: int, seed: int, contact: DieContact) -> dict:
+    """Two d6 :data:`APART` apart in the tray: as a pair, and as its two dice thrown alone."""
+    scene = tray_scene()
+    dice = (Die(),) * 2
+    state = group_throws(scene, dice, throws, np.random.default_rng(seed),
+                         replace(HAND, spacing=APART))
+    pair_s, pair = timed(lambda: simulate_group(scene, dice, state, until="decided",
+                                                contact=contact, num_threads=1), repeats)
+    alone_s = [timed(lambda i=i: simulate(scene, state.die(i), until="decided", num_threads=1),
+                     repeats)[0] for i in range(2)]
+    return {"throws": throws, "spacing_m": APART, "met": float((pair.overlap > 0).mean()),
+            "pair_cpu_s": pair_s, "alone_cpu_s": alone_s,
+            "pair_per_alone": pair_s / sum(alone_s),
+            "decided": float(pair.decided.mean())}
 
 
 _TRAY_MJCF = """
@@ -226,6 +249,11 @@ def main() -> None:
           f"{base['throws_per_s'] / r['throws_per_s']:.2f}", f"{r['die_steps_per_s']:,.0f}",
           f"{r['decided']:.0%}", f"{r['all_read']:.0%}", f"{r['met']:.0%}", f"{r['sim_s']:.2f}")
          for r in rows)))
+    apart = apart_pair(max(4, math.ceil(args.throws / 2)), args.repeats, args.seed, contact)
+    alone = apart["alone_cpu_s"]
+    print(f"\nTwo d6 {APART * 100:.0f} cm apart (met in {apart['met']:.0%} of "
+          f"{apart['throws']} throws): the pair {apart['pair_cpu_s']:.3f} s, its dice alone "
+          f"{alone[0]:.3f} + {alone[1]:.3f} s: {apart['pair_per_alone']:.2f}x their CPU time")
     mujoco_rows = []
     for n_dice in args.mujoco:
         mujoco_rows.append(compare_mujoco(n_dice, max(4, math.ceil(args.throws / n_dice)),
@@ -242,7 +270,7 @@ def main() -> None:
               f"{o['decided']:.0%}, {d['decided']:.0%}, {c['decided']:.0%}")
              for r in mujoco_rows
              for o, d, c in [(r["ours"], r["mujoco_default"], r["mujoco_bouncing"])])))
-    write_json(args.out, {"mujoco": mujoco_rows,
+    write_json(args.out, {"mujoco": mujoco_rows, "apart_pair": apart,
         "command": "python benchmarks/dice_together.py " + " ".join(
             f"--{k.replace('_', '-')} {' '.join(map(str, v)) if isinstance(v, list) else v}"
             for k, v in vars(args).items() if k != "out"),

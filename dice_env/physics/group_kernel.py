@@ -2,7 +2,8 @@
 
 The model is ``docs/model.md``'s, the speed ``docs/performance.md``'s ("Several dice").
 :func:`least_overlap` finds a touching pair's normal, :func:`pair_contacts` its contacts and
-forces; :func:`advance_group` steps one throw, each die on the planes as the single die's.
+forces; :func:`advance_group` steps one throw, each die on the planes as the single die's: at
+the table's step while no pair can meet within it (:func:`out_of_reach`), else the pair's.
 """
 
 from __future__ import annotations
@@ -33,6 +34,7 @@ from dice_env.physics.kernel import (
     die_on_planes,
     face_read,
     flight_jump,
+    free_steps,
     next_pass,
     relative_rise,
     rest_test,
@@ -103,7 +105,9 @@ class Pair(NamedTuple):
 
     With ``stick``, a corner inside another die feels stick-slip friction (``kt``, ``ct``,
     ``dt_m`` the step over the reduced mass); the rest, regularised Coulomb friction at ``vmin``
-    capped at ``grip |vt|`` (:data:`GRIP` of the reduced mass over the step).
+    capped at ``grip |vt|`` (:data:`GRIP` of the reduced mass over the step). A move takes
+    ``near`` steps (the unit of a throw's steps), ``apart`` while no pair is within reach
+    (:func:`out_of_reach`): the pair's step and the table's.
     """
 
     stiffness: float
@@ -115,6 +119,8 @@ class Pair(NamedTuple):
     kt: float
     ct: float
     dt_m: float
+    near: int
+    apart: int
 
 
 class GroupStops(NamedTuple):
@@ -610,12 +616,28 @@ def advance_group(g: int, dice: GroupDice, bodies: Bodies, hulls: Hulls, pair: P
     n_steps, stride, n_rec = stops.n_steps, records.stride, records.x.shape[1]
     e_start, e_tol, e_max = 0.0, 1.0, -np.inf
     quiet, step, passes, next_record, end = 0, 0, 0, stride, RUNNING
+    fine, coarse = pair.near, pair.apart
+    h_last, moved = fine * dt, 1  # the last move's step, and its steps with its jump
+    depths = np.empty((n_dice, n_dice))  # each pair's overlap (< 0: a gap), as pair_depths
+    normals, speed = np.empty((n_dice, n_dice, 3)), np.empty(n_dice)
     overlap, abort = out.overlap[g], out.abort
     while step < n_steps:
         passes, end = next_pass(passes, abort)
         if end == ABORTED:
             break
         step += 1
+        apart = pair_depths(x, q, vertices, n_vertices, r_max, world, placed, axes, directions,
+                            separating, depths, normals)  # every pair's bounding spheres apart
+        _speeds(u, w, r_max, speed)
+        moves = min(fine, n_steps - step + 1)  # ``coarse`` while no pair can meet within them
+        if coarse > fine and step - 1 + coarse <= n_steps and out_of_reach(depths, speed,
+                                                                           coarse * dt):
+            moves = coarse
+        h = moves * dt
+        if midpoint and h != h_last:  # the last kick, as it would be over this step
+            _rescale(u, pu, h / h_last)
+            _rescale(w, pw, h / h_last)
+        h_last = h
         checked, tangential = 0.0, 0.0
         for a in range(n_dice):
             u0, u1, u2, w0, w1, w2 = u[a, 0], u[a, 1], u[a, 2], w[a, 0], w[a, 1], w[a, 2]
@@ -635,7 +657,7 @@ def advance_group(g: int, dice: GroupDice, bodies: Bodies, hulls: Hulls, pair: P
                 l0 * wl0 + l1 * wl1 + l2 * wl2)
             near[a] = stops.at_rest and kinetic[a] < 0.5 * m * stops.v_rest * stops.v_rest
             x0, x1, x2 = x[a, 0], x[a, 1], x[a, 2]
-            law = (contact_law, stick, vmin, midpoint, rotation, dt, dt / m, m * g_acc)
+            law = (contact_law, stick, vmin, midpoint, rotation, h, h / m, m * g_acc)
             (f0, f1, f2, t0, t1, t2, spring, spring_t, touching[a], approach[a], fastest[a],
              sink) = die_on_planes(
                 a, a * n_v, n_vertices[a], flat, planes, law, contacts,
@@ -647,7 +669,6 @@ def advance_group(g: int, dice: GroupDice, bodies: Bodies, hulls: Hulls, pair: P
             for p in range(n_planes):
                 if lowest[a, p] < 0.0:
                     touched[g, a, p] = True
-            placed[a] = False
             force[a, 0], force[a, 1], force[a, 2] = f0, f1, f2
             torque[a, 0], torque[a, 1], torque[a, 2] = t0, t1, t2
             checked += kinetic[a] + m * g_acc * x2 + spring
@@ -655,27 +676,16 @@ def advance_group(g: int, dice: GroupDice, bodies: Bodies, hulls: Hulls, pair: P
         # die against die
         for a in range(n_dice):
             die_touch[a] = False
-        apart = True  # every pair's bounding spheres apart
         for a in range(n_dice):
             for b in range(a + 1, n_dice):
-                d0, d1, d2 = x[a, 0] - x[b, 0], x[a, 1] - x[b, 1], x[a, 2] - x[b, 2]
-                reach = r_max[a] + r_max[b]
                 touch_ab = False
-                if d0 * d0 + d1 * d1 + d2 * d2 < reach * reach:
-                    apart = False
-                    for c in (a, b):
-                        if not placed[c]:
-                            _place(world, c, n_vertices[c], x, offsets)
-                            placed[c] = True
-                    depth, n, separating[a, b] = least_overlap(
-                        a, b, world, x, q, axes, directions, separating[a, b])
-                    if depth > 0.0:
-                        spring, stored, touch_ab = pair_contacts(
-                            a, b, n, world, x, q, cu, cw, hulls, pair, die_ties,
-                            not met[a, b], seen, force, torque)
-                        checked += spring
-                        tangential += stored
-                        overlap = max(overlap, depth)
+                if depths[a, b] > 0.0:
+                    spring, stored, touch_ab = pair_contacts(
+                        a, b, (normals[a, b, 0], normals[a, b, 1], normals[a, b, 2]), world, x,
+                        q, cu, cw, hulls, pair, die_ties, not met[a, b], seen, force, torque)
+                    checked += spring
+                    tangential += stored
+                    overlap = max(overlap, depths[a, b])
                 if touch_ab and not met[a, b]:
                     s0, s1, s2 = u[a, 0] - u[b, 0], u[a, 1] - u[b, 1], u[a, 2] - u[b, 2]
                     if s0 * s0 + s1 * s1 + s2 * s2 > v_rest2:
@@ -717,17 +727,19 @@ def advance_group(g: int, dice: GroupDice, bodies: Bodies, hulls: Hulls, pair: P
                         and fastest[a] < stops.v_rest * stops.v_rest):
                     quiet_now = False
                     break
-            quiet, end = rest_test(quiet_now, quiet, stops.hold_steps, False)
+            quiet, end = rest_test(quiet_now, quiet + (moved - 1 if quiet > 0 else 0),
+                                   stops.hold_steps, False)
             if end == SETTLED:
                 break
         jump = 1
-        if options.flight and apart and touching.max() == 0:  # no record falls inside a jump:
-            # it may end on one
-            jump = min(_group_jump(planes, lowest, touching, x, u, ang, force, bodies, rotation,
-                                   dt, n_steps - step + 1), next_record - step + 1)
+        # only moves apart jump, as stepping would take them; no record falls inside a jump
+        if options.flight and apart and moves == coarse and touching.max() == 0:
+            jump = min(_group_jump(planes, lowest, speed, x, u, ang, force, bodies,
+                                   rotation, h, (n_steps - step + 1) // moves),
+                       (next_record - step + moves) // moves)
         finite = True
         for a in range(n_dice):
-            dt_m = dt / mass[a]
+            dt_m = h / mass[a]
             dv0, dv1, dv2 = force[a, 0] * dt_m, force[a, 1] * dt_m, force[a, 2] * dt_m
             for r in range(3):  # this die's rotation and inertia, as the single die's kernel
                 for c in range(3):  # takes them
@@ -736,7 +748,7 @@ def advance_group(g: int, dice: GroupDice, bodies: Bodies, hulls: Hulls, pair: P
                 (x[a, 0], x[a, 1], x[a, 2]), (u[a, 0], u[a, 1], u[a, 2]),
                 (ang[a, 0], ang[a, 1], ang[a, 2]), (w[a, 0], w[a, 1], w[a, 2]),
                 (dv0, dv1, dv2), (torque[a, 0], torque[a, 1], torque[a, 2]), qa, inv_a,
-                inv_iso[a], dt, jump, rotation)
+                inv_iso[a], h, jump, rotation)
             if not finite:
                 break
             if midpoint:
@@ -751,10 +763,11 @@ def advance_group(g: int, dice: GroupDice, bodies: Bodies, hulls: Hulls, pair: P
         if not finite:
             end = NONFINITE
             break
-        step += jump - 1
-        if step >= next_record:
-            if step % stride == 0 and step // stride <= n_rec:
-                _record(records, step // stride - 1, g, x, q)
+        moved = moves * jump
+        step += moved - 1
+        if step >= next_record:  # a record inside a move holds the state at its end
+            for j in range(next_record // stride - 1, min(step // stride, n_rec)):
+                _record(records, j, g, x, q)
             next_record = (step // stride + 1) * stride
     step, rest = stopped_at(end, step, quiet)
     for j in range(step // stride, n_rec):  # dice that stopped early stay where they are
@@ -777,32 +790,96 @@ def advance_group(g: int, dice: GroupDice, bodies: Bodies, hulls: Hulls, pair: P
     out.energy_rise[g] = max(out.energy_rise[g], relative_rise(e_max, e_start, e_tol))
 
 
+@njit(cache=True, forceinline=True)
+def pair_depths(x: np.ndarray, q: np.ndarray, vertices: np.ndarray, n_vertices: np.ndarray,
+                r_max: np.ndarray, world: np.ndarray, placed: np.ndarray, axes: np.ndarray,
+                directions: np.ndarray, separating: np.ndarray, depths: np.ndarray,
+                normals: np.ndarray) -> bool:
+    """Each pair's overlap ``depths`` (N, N; < 0: at least that far apart) and its ``normals``.
+
+    Pairs whose bounding spheres meet by :func:`least_overlap` (their dice placed in ``world``,
+    ``placed``), the others by their spheres' gap. Returns whether every pair's spheres are apart.
+    """
+    n_dice = x.shape[0]
+    for a in range(n_dice):
+        placed[a] = False
+    apart = True
+    for a in range(n_dice):
+        for b in range(a + 1, n_dice):
+            d0, d1, d2 = x[a, 0] - x[b, 0], x[a, 1] - x[b, 1], x[a, 2] - x[b, 2]
+            reach = r_max[a] + r_max[b]
+            distance2 = d0 * d0 + d1 * d1 + d2 * d2
+            if distance2 >= reach * reach:
+                depths[a, b] = reach - math.sqrt(distance2)
+                continue
+            apart = False
+            for c in (a, b):
+                if not placed[c]:
+                    _place(world, c, vertices, n_vertices[c], x, q)
+                    placed[c] = True
+            depths[a, b], n, separating[a, b] = least_overlap(a, b, world, x, q, axes, directions,
+                                                             separating[a, b])
+            normals[a, b, 0], normals[a, b, 1], normals[a, b, 2] = n
+    return apart
+
+
 @njit(cache=True, forceinline=True, _nrt=False)
-def _place(world: np.ndarray, a: int, count: int, x: np.ndarray, offsets: np.ndarray) -> None:
-    """Die ``a``'s corners in the world, ``world[a]``, from its vertex offsets this step."""
-    first = a * world.shape[1]
+def _speeds(u: np.ndarray, w: np.ndarray, r_max: np.ndarray, speed: np.ndarray) -> None:
+    """Each die's fastest point's speed bound, ``|u| + r_max |w|``, into ``speed`` (N,)."""
+    for a in range(u.shape[0]):
+        speed[a] = math.sqrt(u[a, 0] ** 2 + u[a, 1] ** 2 + u[a, 2] ** 2) + r_max[a] * math.sqrt(
+            w[a, 0] ** 2 + w[a, 1] ** 2 + w[a, 2] ** 2)
+
+
+@njit(cache=True, forceinline=True, _nrt=False)
+def out_of_reach(depths: np.ndarray, speed: np.ndarray, h: float) -> bool:
+    """Whether no two dice can meet within a time ``h``.
+
+    Each pair's gap, ``-depths`` (:func:`pair_depths`), must exceed twice what the dice may
+    close by at their ``speed`` (:func:`_speeds`): a plane's force changes a velocity over many
+    steps, not within a few.
+    """
+    for a in range(depths.shape[0]):
+        for b in range(a + 1, depths.shape[0]):
+            if not -depths[a, b] > 2.0 * h * (speed[a] + speed[b]):
+                return False
+    return True
+
+
+@njit(cache=True, forceinline=True, _nrt=False)
+def _rescale(v: np.ndarray, before: np.ndarray, ratio: float) -> None:
+    """``before`` moved so that ``v - before``, each die's last change, is ``ratio`` times it."""
+    for a in range(v.shape[0]):
+        for k in range(3):
+            before[a, k] = v[a, k] - ratio * (v[a, k] - before[a, k])
+
+
+@njit(cache=True, forceinline=True, _nrt=False)
+def _place(world: np.ndarray, a: int, vertices: np.ndarray, count: int, x: np.ndarray,
+           q: np.ndarray) -> None:
+    """Die ``a``'s corners in the world, ``world[a]``: ``x[a] + q[a] v`` (as die_on_planes)."""
     for k in range(count):
-        r = first + k
-        world[a, k, 0], world[a, k, 1], world[a, k, 2] = x[a, 0] + offsets[r, 0], \
-            x[a, 1] + offsets[r, 1], x[a, 2] + offsets[r, 2]
+        b0, b1, b2 = vertices[a, k, 0], vertices[a, k, 1], vertices[a, k, 2]
+        for r in range(3):
+            world[a, k, r] = x[a, r] + (q[a, r, 0] * b0 + q[a, r, 1] * b1 + q[a, r, 2] * b2)
     for k in range(count, world.shape[1]):
         world[a, k, 0], world[a, k, 1], world[a, k, 2] = world[a, 0, 0], world[a, 0, 1], \
             world[a, 0, 2]
 
 
 @njit(cache=True)
-def _group_jump(planes: np.ndarray, lowest: np.ndarray, touching: np.ndarray, x: np.ndarray,
+def _group_jump(planes: np.ndarray, lowest: np.ndarray, speed: np.ndarray, x: np.ndarray,
                 u: np.ndarray, ang: np.ndarray, force: np.ndarray, bodies: Bodies,
                 rotation: bool, dt: float, limit: int) -> int:
     """Flight steps the whole group takes at once (at least 1), each die's as :func:`flight_jump`.
 
-    With every pair apart, under gravity alone a pair's distance shrinks by ``dt |u_a - u_b|``.
+    Every pair stays out of reach (:func:`out_of_reach`, ``speed`` as it takes them) over the
+    steps, as stepping would find it: under gravity alone a pair's distance shrinks by
+    ``dt |u_a - u_b|`` a step, and the reach grows with the speeds.
     """
     n_dice = x.shape[0]
     jump = limit
     for a in range(n_dice):
-        if touching[a] > 0:
-            return 1
         m = bodies.mass[a]
         spin = 0.0
         if rotation:
@@ -814,11 +891,15 @@ def _group_jump(planes: np.ndarray, lowest: np.ndarray, touching: np.ndarray, x:
                                                        force[a, 2] * dt_m), dt, limit))
         for b in range(a + 1, n_dice):
             gap = math.sqrt((x[a, 0] - x[b, 0]) ** 2 + (x[a, 1] - x[b, 1]) ** 2
-                            + (x[a, 2] - x[b, 2]) ** 2) - bodies.r_max[a] - bodies.r_max[b]
-            closing = dt * math.sqrt((u[a, 0] - u[b, 0]) ** 2 + (u[a, 1] - u[b, 1]) ** 2
-                                     + (u[a, 2] - u[b, 2]) ** 2)
-            if closing > 0.0 and gap < closing * jump:
-                jump = min(jump, max(1, int(gap / closing)))  # all but the last free step
+                            + (x[a, 2] - x[b, 2]) ** 2) - bodies.r_max[a] - bodies.r_max[b] \
+                - 2.0 * dt * (speed[a] + speed[b])
+            kick = dt_m * math.sqrt(force[a, 0] ** 2 + force[a, 1] ** 2 + force[a, 2] ** 2) \
+                + dt / bodies.mass[b] * math.sqrt(force[b, 0] ** 2 + force[b, 1] ** 2
+                                                  + force[b, 2] ** 2)
+            closing = math.sqrt((u[a, 0] - u[b, 0]) ** 2 + (u[a, 1] - u[b, 1]) ** 2
+                                + (u[a, 2] - u[b, 2]) ** 2)
+            jump = min(jump, max(1, free_steps(gap, -closing - 2.0 * kick, 0.0, 0.0, 0.0, dt,
+                                               limit) - 1))  # all but the last free step
     return jump
 
 

@@ -48,6 +48,8 @@ DIE_FRICTION = 0.4
 MAX_DICE = 64  # dice in one throw: every pair is tested each step
 GROUP_UNTIL = ("rest", "decided", "t_max")  # simulate_group's until (early rest: one die alone)
 TOUCH = 1e-3  # dice released closer than this fraction of the smaller's size touch, not overlap
+MAX_APART = 2**20  # beyond this table's step over the pair's, every move takes the pair's step
+MAX_UNITS = 5  # a move apart takes at most this many units (ratio above 1/5; see moves)
 
 
 @dataclass(frozen=True)
@@ -137,12 +139,29 @@ class GroupResult(RunResult):
 
 
 def group_step(scene: Scene, dice: Sequence[Die], contact: DieContact = DieContact()) -> float:
-    """The throw's step: :meth:`Scene.step_within` the least critical step, pairs' included."""
+    """The unit of a throw's steps (s): :meth:`Scene.step_within` the least critical step.
+
+    Without ``scene.dt``, where the pairs' critical step is the least, a fraction of the table's
+    (:func:`moves`): a move takes the most whole units within the pairs' step, the table's
+    step while no pair is within reach.
+    """
     return _step(scene, _dice(dice), contact)[0]
 
 
-def _step(scene: Scene, dice: tuple[Die, ...], contact: DieContact) -> tuple[float, float]:
-    """:func:`group_step`, and the least reduced effective mass of a pair (kg; inf for one)."""
+def moves(ratio: float) -> tuple[int, int]:
+    """Units of a move near and apart, for the pairs' step ``ratio`` times the table's.
+
+    The ``apart`` up to :data:`MAX_UNITS` with the largest ``near / apart <= ratio`` (the
+    fewest units of equals); below ``1 / MAX_UNITS``, ``near`` is 1.
+    """
+    if ratio * MAX_UNITS < 1:
+        return 1, math.ceil(1 / ratio)
+    return max(((math.floor(apart * ratio), apart) for apart in range(1, MAX_UNITS + 1)),
+               key=lambda pair: (pair[0] / pair[1], -pair[1]))
+
+
+def _step(scene: Scene, dice: tuple[Die, ...], contact: DieContact) -> tuple[float, float, tuple]:
+    """:func:`group_step`, a pair's least reduced mass (kg; inf for one), :func:`moves`."""
     alone = [scene.with_(die=die) for die in dice]
     critical = min(s.critical_dt for s in alone)
     masses = [s.effective_mass for s in alone]
@@ -155,8 +174,12 @@ def _step(scene: Scene, dice: tuple[Die, ...], contact: DieContact) -> tuple[flo
                              f"contact's stiffness {contact.stiffness:g} N/m and damping "
                              f"{contact.damping:g} N s/m (DieContact) on the dice's reduced "
                              f"mass {reduced:.3g} kg: bring them nearer the defaults")
+        if scene.dt is None and pair < critical and critical / pair < MAX_APART:
+            units = moves(pair / critical)
+            return scene.safety * critical / units[1], reduced, units
         critical = min(critical, pair)
-    return scene.step_within(critical, "the dice on the planes and against each other"), reduced
+    return scene.step_within(critical, "the dice on the planes and against each other"), \
+        reduced, (1, 1)
 
 
 def simulate_group(scene: Scene, dice: Sequence[Die], state: GroupState, *,
@@ -177,7 +200,7 @@ def simulate_group(scene: Scene, dice: Sequence[Die], state: GroupState, *,
     check_type("contact", contact, DieContact)
     if state.n_dice != len(dice):
         raise ValueError(f"state holds {state.n_dice} dice per throw, dice {len(dice)}")
-    dt, reduced = _step(scene, dice, contact)
+    dt, reduced, units = _step(scene, dice, contact)
     n_steps = scene.steps_for(t_max, dt)
     out = state.copy()
     b, n = out.batch_size, out.n_dice
@@ -206,7 +229,7 @@ def simulate_group(scene: Scene, dice: Sequence[Die], state: GroupState, *,
         stride=stride, x=np.zeros((b, n_rec, n, 3)),
         orientation=np.zeros((b, n_rec if orientations else 0, n, 3, 3)))
     inputs = (group_kernel.GroupDice(*out._arrays()), bodies, _hulls(dice, bodies),
-              _pair(scene, contact, dt, reduced), contact_planes, options, stops, records)
+              _pair(scene, contact, dt, reduced, units), contact_planes, options, stops, records)
     run_kernel("dice", inputs, outcome, batch=b, threads=threads, work=b * n * n_steps)
     fields = outcome_fields(scene, outcome, size)
     # The kernel checks the centres, velocities and momenta; a rotation that overflows in the
@@ -226,14 +249,19 @@ def simulate_group(scene: Scene, dice: Sequence[Die], state: GroupState, *,
                    {"orientations": records.orientation} if orientations else {}))
 
 
-def _pair(scene: Scene, contact: DieContact, dt: float, reduced: float) -> group_kernel.Pair:
-    """The kernel's die–die contact at the step ``dt`` for the pair's ``reduced`` mass (kg)."""
+def _pair(scene: Scene, contact: DieContact, dt: float, reduced: float,
+          units: tuple[int, int]) -> group_kernel.Pair:
+    """The kernel's die–die contact for the pair's ``reduced`` mass (kg), moves of ``units``.
+
+    ``units``: a move's units of ``dt`` (s) near and apart (:func:`moves`).
+    """
+    near = units[0] * dt
     return group_kernel.Pair(
         float(contact.stiffness), float(contact.damping), float(contact.friction),
-        float(scene.friction_vmin), float(group_kernel.GRIP * reduced / dt),
+        float(scene.friction_vmin), float(group_kernel.GRIP * reduced / near),
         contact.friction_law == FrictionLaw.STICK_SLIP and contact.friction > 0,
         float(contact.tangential * contact.stiffness),
-        float(contact.tangential * contact.damping), float(dt / reduced))
+        float(contact.tangential * contact.damping), float(near / reduced), *map(int, units))
 
 
 def _dice(dice: Sequence[Die]) -> tuple[Die, ...]:
