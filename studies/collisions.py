@@ -27,7 +27,7 @@ from dice_env.simulation.group import (
     DieContact,
     GroupResult,
     GroupState,
-    group_step,
+    pair_step,
     simulate_group,
 )
 from dice_env.throws import HAND, T_TRAY, group_throws, tray_scene
@@ -59,7 +59,7 @@ def pair_scene() -> tuple[Scene, tuple[Die, Die]]:
     """The tray, with the pair's step fixed so that a die alone steps as in the pair."""
     scene = tray_scene()
     dice = (scene.die, scene.die)
-    return scene.with_(dt=group_step(scene, dice)), dice
+    return scene.with_(dt=pair_step(scene, dice)), dice
 
 
 def alone(state: GroupState) -> GroupState:
@@ -344,13 +344,12 @@ def page_data(n: dict, seed: int) -> dict:
             "spin_turn_median")  # the headline's copies
     return json.loads(json.dumps({
         "command": f"python -m studies collisions --throws {thrown}", "seed": seed,
-        "threads": numba.get_num_threads(),
+        "threads": numba.get_num_threads(), "step_us": pair_scene()[0].dt * 1e6,
         **{k: v for k, v in n.items() if k not in left}}))
 
 
 def _page(d: dict) -> dict[str, str]:
     """The page's generated files (``docs/generated/collisions-*.md``) from its numbers ``d``."""
-    scene, _ = pair_scene()
     n, seed, thrown = d, d["seed"], int(d["throws"])
     entropies = markdown_table(
         "case | die 1 entropy | die 1 uniform p | die 2 entropy | die 2 uniform p | pair entropy",
@@ -376,8 +375,8 @@ into the {TRAY[0] * 100:g} x {TRAY[1] * 100:g} cm tray, {HAND.spacing * 100:g} c
 {HAND.speed[0]:g}–{HAND.speed[1]:g} m/s toward the table plus {HAND.noise:g} m/s of noise per
 die and component, each die spinning at {HAND.spin[0]:g}–{HAND.spin[1]:g} rad/s about its
 own uniform axis from its own uniform orientation; until both faces are decided or
-{T_TRAY:g} s. Die 1 is the one at y < 0. The step is the pair's ({scene.dt * 1e6:.2f} µs,
-`group_step`) in every run, so a die thrown **apart** (alone, `simulate_group` with one die)
+{T_TRAY:g} s. Die 1 is the one at y < 0. The step is the pair's ({d['step_us']:.2f} µs,
+`pair_step`) in every run, so a die thrown **apart** (alone, `simulate_group` with one die)
 moves bit for bit as in the pair until the dice first touch
 (`tests/test_group.py::test_a_die_alone_moves_as_in_its_group_until_the_dice_meet`).
 

@@ -14,6 +14,8 @@ import math
 from collections.abc import Callable
 from dataclasses import dataclass
 
+from dice_env.markdown import markdown_table
+
 PHYSICS = "benchmarks/results/physics.json"
 TO_REST = "benchmarks/results/physics.json#throws_to_rest/Scene()"
 STEP_LIMIT = "benchmarks/results/step_limit.json"
@@ -637,21 +639,28 @@ def performance_kernel_ab(single, groups, contact) -> str:
 
 @generated("performance-dice", dice="benchmarks/results/dice_together.json")
 def performance_dice(dice) -> str:
-    """Several dice: a group's throws/s against the single die's."""
-    rows = dice.rows
+    """Several dice: a group's throws/s against the single die's, a pair apart, MuJoCo."""
+    rows, apart = dice.rows, dice.apart_pair
+    table = markdown_table(
+        "dice | ours (throws/s) | MuJoCo, default contact and 2 ms step (throws/s) | ours / MuJoCo",
+        ((m.dice, f"{m.ours.throws_per_s:,.1f}", f"{m.mujoco_default.throws_per_s:,.0f}",
+          f"{m.mujoco_default.ours_vs_mujoco:.2f}") for m in dice.mujoco))
     return f"""\
 A die in a group takes the single die's step on the planes (`kernel.die_on_planes`); around
 it the group keeps per-die arrays and tests its pairs: one die in a group runs at \
 {rows[0].throws_per_s:,.0f} throws/s against `simulate`'s {rows[1].throws_per_s:,.0f} on
 the same throws, to decided faces on one thread (`{dice.command}`, \
-`benchmarks/results/dice_together.json`),
-from the per-die arrays the group keeps. Two d6 into the tray run at \
-{rows[3].throws_per_s:.1f} throws/s, five at
-{rows[4].throws_per_s:.1f} and twelve at {rows[5].throws_per_s:.2f}. The step itself is set by \
-the die–die contact
-(`dice_env.simulation.group.group_step`): the pair's reduced mass makes it shorter than the die \
-alone's
-on the table, and a throw of twelve dice takes tens of thousands of them.
+`benchmarks/results/dice_together.json`). Two d6 into the tray run at \
+{rows[3].throws_per_s:.1f} throws/s, five at {rows[4].throws_per_s:.1f} and twelve at \
+{rows[5].throws_per_s:.2f}. A throw moves at the table's step while no pair of dice can meet \
+within it and at the die–die contact's (`dice_env.simulation.group.pair_step`, shorter: the \
+pair's reduced mass) while one can; every die is stepped until the throw ends. Two d6 \
+{apart.spacing_m * 100:.0f} cm apart (they met in {apart.met:.0%} of {apart.throws} throws) \
+cost {apart.pair_per_alone:.1f}× the CPU time of their two dice thrown alone.
+
+Against MuJoCo on the same releases into the tray, one thread, CPU time, to decided faces:
+
+{table}
 """
 
 

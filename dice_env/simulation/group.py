@@ -148,6 +148,12 @@ def group_step(scene: Scene, dice: Sequence[Die], contact: DieContact = DieConta
     return _step(scene, _dice(dice), contact)[0]
 
 
+def pair_step(scene: Scene, dice: Sequence[Die], contact: DieContact = DieContact()) -> float:
+    """The step of a move with dice within reach (s): :func:`group_step` times the units near."""
+    dt, _, units = _step(scene, _dice(dice), contact)
+    return units[0] * dt
+
+
 def moves(ratio: float) -> tuple[int, int]:
     """Units of a move near and apart, for the pairs' step ``ratio`` times the table's.
 
