@@ -365,3 +365,16 @@ def test_train_runs_end_to_end_with_two_dice(tmp_path):
     run = next(tmp_path.iterdir())
     report = (run / "report.md").read_text()
     assert "oracle" in report and len(list(run.glob("throw_*.gif"))) == 1
+
+
+def test_the_step_limit_counts_moves_near_another_die_not_units():
+    """A throw's limit of ENV_MAX_STEPS bounds its moves at the die–die contact's step."""
+    from dice_env.envs.keywords import ENV_MAX_STEPS
+    from dice_env.simulation.group import group_step, pair_step
+
+    scene = make_task(num_dice=2).scene
+    near, unit = pair_step(scene, (Die(),) * 2), group_step(scene, (Die(),) * 2)
+    assert near > 2 * unit  # a move near another die is several units
+    make_task(num_dice=2, t_max=0.99 * ENV_MAX_STEPS * near)  # more units than the limit
+    with pytest.raises(ValueError, match="t_max must be at most"):
+        make_task(num_dice=2, t_max=1.01 * ENV_MAX_STEPS * near)

@@ -27,7 +27,13 @@ from dice_env.model.checks import as_floats, check_choice, check_int, check_nonn
 from dice_env.model.die import Die
 from dice_env.model.rotations import orthonormality_error
 from dice_env.model.scene import Scene
-from dice_env.simulation.group import GroupResult, GroupState, group_step, simulate_group
+from dice_env.simulation.group import (
+    GroupResult,
+    GroupState,
+    group_step,
+    pair_step,
+    simulate_group,
+)
 from dice_env.simulation.simulate import (
     LOCK_MARGIN,
     UP,
@@ -84,11 +90,12 @@ class ThrowTask:
                              "bound decides the face on a slope); use until='rest'")
         for scene in self.die_scenes:
             check_scene(scene, self.release_height)
-        if self.scene.t_max / self.step > ENV_MAX_STEPS:
+        near = pair_step(self.scene, self.dice)  # a move with dice within reach: the shortest
+        if self.scene.t_max / near > ENV_MAX_STEPS:
             raise ValueError(
                 f"t_max must be at most {ENV_MAX_STEPS:.0e} steps: t_max={self.scene.t_max:g} s "
-                f"over the {self.n_dice} dice's step of {self.step:.3g} s is "
-                f"{self.scene.t_max / self.step:.3g} steps; lower t_max or num_dice")
+                f"over the {self.n_dice} dice's step of {near:.3g} s is "
+                f"{self.scene.t_max / near:.3g} steps; lower t_max or num_dice")
         hand.check_walls()
 
     def _check_dice(self) -> None:

@@ -148,6 +148,23 @@ def group_step(scene: Scene, dice: Sequence[Die], contact: DieContact = DieConta
     return _step(scene, _dice(dice), contact)[0]
 
 
+def group_steps(scene: Scene, dice: Sequence[Die], t_max: float | None = None,
+                contact: DieContact = DieContact()) -> tuple[float, int]:
+    """:func:`group_step` and its count to ``t_max`` (default the scene's).
+
+    The scene's :data:`~dice_env.model.scene.MAX_STEPS` bounds the moves near another die
+    (:func:`pair_step`), the most a throw can take, not the units.
+    """
+    dt, _, units = _step(scene, _dice(dice), contact)
+    return dt, _units_to(scene, t_max, dt, units[0])
+
+
+def _units_to(scene: Scene, t_max: float | None, dt: float, near: int) -> int:
+    """Units of ``dt`` to ``t_max``; refused beyond ``MAX_STEPS`` moves of ``near`` units."""
+    scene.steps_for(t_max, near * dt)
+    return max(1, round((scene.t_max if t_max is None else t_max) / dt))
+
+
 def pair_step(scene: Scene, dice: Sequence[Die], contact: DieContact = DieContact()) -> float:
     """The step of a move with dice within reach (s): :func:`group_step` times the units near."""
     dt, _, units = _step(scene, _dice(dice), contact)
@@ -207,7 +224,7 @@ def simulate_group(scene: Scene, dice: Sequence[Die], state: GroupState, *,
     if state.n_dice != len(dice):
         raise ValueError(f"state holds {state.n_dice} dice per throw, dice {len(dice)}")
     dt, reduced, units = _step(scene, dice, contact)
-    n_steps = scene.steps_for(t_max, dt)
+    n_steps = _units_to(scene, t_max, dt, units[0])
     out = state.copy()
     b, n = out.batch_size, out.n_dice
     _check_apart(dice, out)

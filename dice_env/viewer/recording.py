@@ -24,7 +24,7 @@ from dice_env.simulation.group import (
     GROUP_UNTIL,
     DieContact,
     GroupState,
-    group_step,
+    group_steps,
     simulate_group,
 )
 from dice_env.simulation.simulate import (
@@ -249,10 +249,9 @@ def as_data(recordings: Recording | Sequence[Recording]) -> list[dict[str, Any]]
 def run_plan(scene: Scene, dice: Sequence[Die], contact: DieContact, fps: object,
              t_max: float | None) -> tuple[float, int, int]:
     """The step (s), the steps a frame and the steps to the time limit of a recorded run."""
-    dt = group_step(scene, dice, contact)
-    limit = scene.t_max if t_max is None else t_max
-    fps = check_fps(fps, limit)
-    return dt, max(1, round(1.0 / (fps * dt))), scene.steps_for(limit, dt)
+    fps = check_fps(fps, scene.t_max if t_max is None else t_max)
+    dt, n_steps = group_steps(scene, dice, t_max, contact)
+    return dt, max(1, round(1.0 / (fps * dt))), n_steps
 
 
 def _simulate(scene: Scene, dice: tuple[Die, ...], release: GroupState, contact: DieContact,
