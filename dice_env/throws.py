@@ -12,7 +12,7 @@ extra brings it).
 from __future__ import annotations
 
 import math
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -29,6 +29,7 @@ from dice_env.simulation.simulate import DiceArrays, Result, State, simulate
 BATCH = 2048  # dice per kernel call
 T_TRAY = 10.0  # s: the limit of a throw into the tray; a throw not decided by then is voided
 T_THROW = 4.0  # s: the most a throw whose face is compared runs (all settle sooner)
+PER_ROW = 4  # dice per row in a hand
 
 
 @dataclass(frozen=True)
@@ -128,13 +129,13 @@ def hand_throws(scene: Scene, n: int, rng: np.random.Generator,
 class Hand:
     """A hand that throws several dice at once (docs/pairs.md); metres, m/s, rad/s.
 
-    Dice in rows of ``per_row`` along y, ``spacing`` apart, ``clearance`` above touching; one
+    Dice held as :func:`layout` holds them, ``clearance`` above touching; one
     velocity ``speed`` toward the table plus each die's normal ``noise``; each die its own
     ``spin`` and orientation. Ranges are drawn uniformly per throw.
     """
 
     spacing: float = 0.03
-    per_row: int = 4
+    per_row: int = PER_ROW
     clearance: tuple[float, float] = (0.08, 0.32)
     speed: tuple[float, float] = (0.48, 2.4)
     noise: float = 0.1
@@ -149,16 +150,24 @@ def tray_scene() -> Scene:
     return Scene(walls=tray(), t_max=T_TRAY)
 
 
-def layout(n_dice: int, hand: Hand = HAND) -> np.ndarray:
-    """Horizontal offsets (n_dice, 3) of the dice in the hand, centred on the origin."""
+def layout(n_dice: int, spacing: float, normal: Sequence[float] = (0.0, 0.0, 1.0),
+           per_row: int = PER_ROW) -> np.ndarray:
+    """Offsets (n_dice, 3) of dice held ``spacing`` apart, centred on the hand's centre.
+
+    Rows of ``per_row`` across the throw (along y), each row centred, the rows along x; all in
+    the plane across ``normal`` (the table's). The env's hand and :class:`Hand` both hold dice so.
+    """
     if not isinstance(n_dice, int) or isinstance(n_dice, bool) or n_dice < 1:
         raise ValueError(f"n_dice must be an int >= 1, got {n_dice!r}")
-    row, column = divmod(np.arange(n_dice), hand.per_row)
-    rows, columns = row.max() + 1, min(n_dice, hand.per_row)
-    offsets = np.zeros((n_dice, 3))
-    offsets[:, 0] = (row - (rows - 1) / 2) * hand.spacing
-    offsets[:, 1] = (column - (columns - 1) / 2) * hand.spacing
-    return offsets
+    normal = np.asarray(normal, dtype=np.float64)
+    x_axis = np.cross([0.0, 1.0, 0.0], normal)
+    x_axis /= np.linalg.norm(x_axis)
+    y_axis = np.cross(normal, x_axis)
+    rows = -(-n_dice // per_row)
+    row, column = np.divmod(np.arange(n_dice), per_row)
+    in_row = np.minimum(per_row, n_dice - row * per_row)
+    return spacing * ((row - (rows - 1) / 2)[:, None] * x_axis
+                      + (column - (in_row - 1) / 2)[:, None] * y_axis)
 
 
 def group_throws(scene: Scene, dice: tuple[Die, ...], n: int, rng: np.random.Generator,
@@ -169,7 +178,8 @@ def group_throws(scene: Scene, dice: tuple[Die, ...], n: int, rng: np.random.Gen
     velocity = (toward_table(scene, random_directions(rng, n))
                 * rng.uniform(*hand.speed, n)[:, None])
     states = []
-    for die, offset in zip(dice, layout(len(dice), hand), strict=True):
+    offsets = layout(len(dice), hand.spacing, scene.ground.normal, hand.per_row)
+    for die, offset in zip(dice, offsets, strict=True):
         position = offset + height[:, None] * np.asarray(scene.ground.normal)
         spin = random_directions(rng, n) * rng.uniform(*hand.spin, n)[:, None]
         states.append(State.release(scene.with_(die=die), position,

@@ -123,7 +123,9 @@ LAYERS = {
     # the chunked runner: the top of the simulation, its default draw the hand of the throws
     "dice_env.simulation.runner": {"dice_env.model", "dice_env.simulation", "dice_env.throws",
                                    "dice_env.disk"},
-    "dice_env.envs": {"dice_env.model", "dice_env.simulation", "dice_env.disk"},
+    # the env's hand holds its dice as the throws' hands do (dice_env.throws.layout)
+    "dice_env.envs": {"dice_env.model", "dice_env.simulation", "dice_env.throws",
+                      "dice_env.disk"},
     "dice_env.viewer": {"dice_env", "dice_env.model", "dice_env.simulation", "dice_env.envs",
                         "dice_env.disk"},
 }

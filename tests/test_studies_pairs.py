@@ -70,9 +70,9 @@ def test_independence_leaves_out_empty_rows_and_refuses_a_single_row():
 
 
 def test_the_hand_holds_the_dice_in_rows_apart_with_one_velocity():
-    two = throws.layout(2)
+    two = throws.layout(2, throws.HAND.spacing)
     np.testing.assert_allclose(two, [[0, -0.015, 0], [0, 0.015, 0]], atol=1e-15)
-    twelve = throws.layout(12)
+    twelve = throws.layout(12, throws.HAND.spacing)
     assert np.unique(twelve[:, 0]).size == 3 and np.unique(twelve[:, 1]).size == 4
     np.testing.assert_allclose(twelve.mean(axis=0), 0.0, atol=1e-15)
     scene = Scene(walls=tray())
@@ -84,7 +84,7 @@ def test_the_hand_holds_the_dice_in_rows_apart_with_one_velocity():
     np.testing.assert_allclose(spread, np.sqrt(2) * throws.HAND.noise, rtol=0.15)
     assert not np.allclose(state.orientation[:, 0], state.orientation[:, 1])
     with pytest.raises(ValueError, match="n_dice"):
-        throws.layout(0)
+        throws.layout(0, throws.HAND.spacing)
 
 
 def test_a_mixed_set_of_twelve_dice_leaves_the_hand_apart():

@@ -1,8 +1,8 @@
 """The hand: how actions become releases of the dice (geometry, hand noise, set dice).
 
-World frame, z up. The dice sit in rows of :data:`HAND_ROW` across the throw, the hand's centre
-``release_height`` along the table normal; an action is the hand's velocity and spin, and with
-``set_dice`` a turn of each die before the throw.
+World frame, z up. The dice sit in rows across the throw (:func:`~dice_env.throws.layout`), the
+hand's centre ``release_height`` along the table normal; an action is the hand's velocity and
+spin, and with ``set_dice`` a turn of each die before the throw.
 """
 
 from __future__ import annotations
@@ -20,6 +20,7 @@ from dice_env.model.rotations import quaternion_to_matrix, uniform_rotations, up
 from dice_env.model.scene import Scene
 from dice_env.simulation.group import GroupState
 from dice_env.simulation.simulate import State
+from dice_env.throws import layout
 
 ACTION_DIM = 6  # release velocity (3) + angular velocity (3), world frame, in [-1, 1]
 NOISE_DIM = 9  # standard normals: velocity (3), spin (3), orientation rotation vector (3)
@@ -28,7 +29,6 @@ ORIENTATION_MODES = ("uniform", "flat", "identity")
 # that reaches further is released higher by default, with the same gap.
 RELEASE_HEIGHT = 0.015
 RELEASE_GAP = RELEASE_HEIGHT - math.sqrt(3.0) * 0.008
-HAND_ROW = 4  # dice per row in the hand
 HAND_GAP = 0.002  # m: the least gap between neighbours in the hand, in any orientations
 SET_ANGLE = math.pi  # rad: a dice-setting action of 1 turns its die by this much
 
@@ -110,17 +110,8 @@ class TaskHand:
 
     @property
     def offsets(self) -> np.ndarray:
-        """Each die's centre in the hand relative to :attr:`centre`, (N, 3) m."""
-        normal = np.asarray(self.scenes[0].ground.normal)
-        x_axis = np.cross([0.0, 1.0, 0.0], normal)
-        x_axis /= np.linalg.norm(x_axis)
-        y_axis = np.cross(normal, x_axis)
-        n = len(self.scenes)
-        rows = -(-n // HAND_ROW)
-        row, column = np.divmod(np.arange(n), HAND_ROW)
-        in_row = np.minimum(HAND_ROW, n - row * HAND_ROW)
-        return self.spacing * ((row - (rows - 1) / 2)[:, None] * x_axis
-                               + (column - (in_row - 1) / 2)[:, None] * y_axis)
+        """Each die's centre in the hand relative to :attr:`centre`, (N, 3) m (:func:`layout`)."""
+        return layout(len(self.scenes), self.spacing, self.scenes[0].ground.normal)
 
     @property
     def positions(self) -> np.ndarray:
