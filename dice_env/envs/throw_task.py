@@ -137,7 +137,7 @@ class ThrowTask:
 
     @cached_property
     def step(self) -> float:
-        """The integration step of a throw (s): the dice's, die against die included."""
+        """The unit of a throw's steps (s): one die's step; for several, :func:`group_step`."""
         return group_step(self.scene, self.dice)
 
     @property
