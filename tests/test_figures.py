@@ -8,6 +8,7 @@ tested in ``test_render.py``.
 from __future__ import annotations
 
 import json
+import re
 from collections.abc import Callable
 from pathlib import Path
 
@@ -100,3 +101,14 @@ def test_every_figure_of_the_docs_is_redrawn_by_a_test():
     covered = {*STUDY_FIGURES, *README_FIGURES, "viewer"}
     covered |= {path.stem for path, _, _ in AGENT_FIGURES.values()}
     assert {p.stem for p in DOCS.rglob("*.png")} <= covered
+
+
+@pytest.mark.parametrize("page", [ROOT / "README.md", *sorted(DOCS.glob("*.md"))],
+                         ids=lambda p: p.name)
+def test_every_figure_names_its_command(page):
+    """An image's alt text or the lines just below it give the command that draws it."""
+    lines = page.read_text().splitlines()
+    for i, line in enumerate(lines):
+        for alt in re.findall(r"!\[([^\]]*)\]\([^)]+\.png\)", line):
+            near = " ".join([alt, *lines[i + 1:i + 5]])
+            assert "python -m " in near, f"{page.name}:{i + 1}: no command beside the figure"
