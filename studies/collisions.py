@@ -244,6 +244,11 @@ def run(out: Path = DOCS, quick: bool = False, throws: int | None = None,
     return {k: v for k, v in numbers.items() if isinstance(v, float)}
 
 
+def _cdf(x: np.ndarray) -> list[float]:
+    """The quantiles of ``x`` at :data:`CDF_LEVELS` to 4 significant digits: a figure's curve."""
+    return [float(f"{q:.4g}") for q in np.quantile(x, CDF_LEVELS)]
+
+
 def _rate(hits: np.ndarray) -> tuple[float, float, float, int, int]:
     """Share of ``hits``, its 95% Wilson interval, the hits and the trials."""
     lo, hi = wilson(int(hits.sum()), len(hits))
@@ -283,9 +288,7 @@ def _numbers(study: Collisions, seconds: float, cpu: float,
     for case in ("together", "apart"):
         for key, _, _ in MEASURES:
             n[f"{case}_{key}"] = [quantile_interval(first[case][key], q) for q in QUANTILES]
-        n[f"{case}_cdf"] = {key: [float(f"{x:.4g}") for x in np.quantile(first[case][key],
-                                                                           CDF_LEVELS)]
-                            for key, _, _ in MEASURES}
+        n[f"{case}_cdf"] = {key: _cdf(first[case][key]) for key, _, _ in MEASURES}
         n[f"{case}_dice"] = int(first[case][MEASURES[0][0]].size)
         f = faces[case]
         n[f"{case}_face_shares"] = (np.bincount(f.ravel() - 1, minlength=6) / f.size).tolist()
