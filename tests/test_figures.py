@@ -16,7 +16,6 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from agents import benchmark, controllability
 from dice_env.viewer import browser
 from dice_env.viewer.__main__ import main as viewer_main
 from studies.figures import figures
@@ -34,18 +33,26 @@ def _read(path: Path) -> dict:
     return json.loads(path.read_text())
 
 
+def _baselines(path: Path) -> None:
+    from agents import benchmark  # SB3 and torch: only where the slow test runs
+
+    benchmark.figure(_read(benchmark.RESULTS / "baselines.json"), path)
+
+
+def _controllability(path: Path) -> None:
+    from agents import controllability
+
+    controllability.figure(_read(DOCS / "controllability.json"), path)
+
+
 # The agents' figures: (committed PNG, redraw into a path, the command that draws it).
-AGENT_FIGURES: dict[str, tuple[Path, Callable[[Path], object], str]] = {
-    "baselines": (DOCS / "figures" / "baselines.png",
-                  lambda path: benchmark.figure(_read(benchmark.RESULTS / "baselines.json"), path),
+AGENT_FIGURES: dict[str, tuple[Path, Callable[[Path], None], str]] = {
+    "baselines": (DOCS / "figures" / "baselines.png", _baselines,
                   "python -m agents.benchmark --table"),
-    "controllability": (DOCS / "controllability.png",
-                        lambda path: controllability.figure(
-                            _read(DOCS / "controllability.json"), path),
+    "controllability": (DOCS / "controllability.png", _controllability,
                         "python -m agents.controllability --run RUN --out docs")}
 
-
-# docs/figures/viewer.png, as docs/viewer.md gives its command (the picture into OUT).
+# docs/figures/viewer.png: docs/viewer.md's command, its page and picture written elsewhere.
 VIEWER = ["--num-dice", "2", "--walls", "tray", "--seed", "1", "--at", "0.12", "--force"]
 # Chromium draws the viewer's page in software (SwiftShader), the same picture on one machine
 # from run to run; another CPU may round an edge's shading otherwise: so much may differ.
