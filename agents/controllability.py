@@ -4,7 +4,8 @@ For the hand-written thrower, the oracle and (optionally) a trained PPO policy:
 
     python -m agents.controllability [--run RUN_DIR] [--die d6] [--out docs]
 
-Writes ``controllability.md`` and ``controllability.png`` into ``--out``. The noise level sets
+Writes ``controllability.json`` (the map), ``controllability.md`` and ``controllability.png``
+(drawn from the JSON: :func:`figure`) into ``--out``. The noise level sets
 both ``hand_noise`` (fraction of each action range) and ``orientation_noise`` (rad). Release
 heights below the die's lowest (its default, :class:`dice_env.envs.throw_task.ThrowTask`) are raised
 to it.
@@ -22,7 +23,7 @@ import numpy as np
 from agents.baselines import HandThrower, Thrower
 from agents.episodes import Batch, PolicyThrower
 from agents.evaluate import clustered
-from agents.kept import write_text
+from agents.kept import write_json, write_text
 from agents.oracle import CEM, score, score_noise, search
 from dice_env.envs.throw_task import ThrowTask, make_task
 from dice_env.intervals import wilson_bounds
@@ -92,6 +93,20 @@ def plot(path: Path, maps: dict[str, np.ndarray], heights: tuple[float, ...],
     return save(fig, path)
 
 
+def map_data(maps: dict[str, np.ndarray], heights: tuple[float, ...],
+             noises: tuple[float, ...], faces: int, command: str, seconds: float) -> dict:
+    """The map and how it was made, JSON-ready: kept as ``controllability.json``."""
+    return {"command": command, "seconds": seconds, "heights": list(heights),
+            "noises": list(noises), "faces": faces,
+            "maps": {name: m.tolist() for name, m in maps.items()}}
+
+
+def figure(data: dict, path: Path) -> Path:
+    """Draw ``controllability.png`` from the map's JSON ``data`` (:func:`map_data`)."""
+    maps = {name: np.array(m) for name, m in data["maps"].items()}
+    return plot(path, maps, tuple(data["heights"]), tuple(data["noises"]), data["faces"])
+
+
 def write_markdown(path: Path, maps: dict[str, np.ndarray], heights: tuple[float, ...],
                    noises: tuple[float, ...], task: ThrowTask, command: str,
                    seconds: float) -> Path:
@@ -105,7 +120,9 @@ def write_markdown(path: Path, maps: dict[str, np.ndarray], heights: tuple[float
              f"{100 * reach:.2g} cm from its centre) and the hand-noise level (`hand_noise` = "
              f"`orientation_noise`). Chance is 1/{faces} ≈ {1 / faces:.3f}. Other keywords at "
              "DiceThrow-v0's defaults.", "",
-             f"![controllability]({path.with_suffix('.png').name})", ""]
+             f"![controllability]({path.with_suffix('.png').name})", "",
+             f"Drawn by `{command}` from `{path.with_suffix('.json').name}` (the tables below).",
+             ""]
     for name, m in maps.items():
         lines += [f"## {name}", "", "| height (cm) | " + " | ".join(
             f"noise {n:g}" for n in noises) + " |", "|---|" + "---|" * len(noises)]
@@ -163,13 +180,15 @@ def main(argv: list[str] | None = None) -> None:
     start = time.perf_counter()
     maps = controllability(heights, throws=args.throws, ppo=ppo, seed=args.seed, die=args.die,
                            oracle_observations=args.oracle_observations)
-    args.out.mkdir(parents=True, exist_ok=True)
-    png = plot(args.out / "controllability.png", maps, heights, NOISES, task.n_faces)
+    seconds = time.perf_counter() - start
     command = " ".join(["python -m agents.controllability",
                         *(sys.argv[1:] if argv is None else argv)])
-    md = write_markdown(png.with_suffix(".md"), maps, heights, NOISES, task, command,
-                        time.perf_counter() - start)
-    print(f"wrote {md} and {png}")
+    data = map_data(maps, heights, NOISES, task.n_faces, command, seconds)
+    args.out.mkdir(parents=True, exist_ok=True)
+    write_json(args.out / "controllability.json", data)
+    png = figure(data, args.out / "controllability.png")
+    md = write_markdown(png.with_suffix(".md"), maps, heights, NOISES, task, command, seconds)
+    print(f"wrote {md}, {png} and controllability.json")
 
 
 if __name__ == "__main__":

@@ -1,7 +1,9 @@
 """Studies that regenerate ``docs/``: ``python -m studies NAME [--quick] [--out DIR]``.
 
 Each entry of :data:`STUDIES` names a module with ``run(out: Path, quick: bool) -> dict``
-that writes its markdown and figures under ``out`` and returns its headline numbers. Those in
+that writes its markdown and figures under ``out`` and returns its headline numbers; a module's
+``FIGURES`` (name: ``draw(numbers, path)``) draws its figures from the numbers its page keeps
+(:mod:`studies.figures` draws them again from the JSON alone). Those in
 :data:`SIZED` also take ``throws`` (the sample size per die or per point), those in
 :data:`CHUNKED` ``faces_of`` (their throws run elsewhere: ``--ray ADDRESS``), those in
 :data:`KEPT` ``keep`` (a folder keeping their throws' chunks: ``--chunks DIR``).

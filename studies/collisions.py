@@ -31,7 +31,15 @@ from dice_env.simulation.group import (
     simulate_group,
 )
 from dice_env.throws import HAND, T_TRAY, group_throws, tray_scene
-from studies.common import DOCS, SEED, checked_throws, progress, save_figure, write_text
+from studies.common import (
+    DOCS,
+    SEED,
+    checked_throws,
+    draw_figures,
+    progress,
+    save_figure,
+    write_text,
+)
 from studies.docs_numbers import generated
 from studies.pairs import not_void, simulate_in_batches, void_reasons
 from studies.templates import write_study
@@ -47,6 +55,7 @@ FLIGHT = False
 FULL, QUICK, MIN_THROWS = 2400, 24, 20  # throws of the pair: full run, quick run, the fewest
 PERTURBATION = 1e-6  # m/s added to die 1's release velocity along x in the perturbed throws
 QUANTILES = (0.05, 0.25, 0.5, 0.75, 0.95)
+CDF_LEVELS = np.linspace(0.0, 1.0, 101)  # the figure's cumulative curves, kept in the JSON
 BOOTSTRAP = 2000  # bootstrap resamples of the entropy's interval
 # The first collision's measures: (key, label, unit).
 MEASURES = (("spin_change", "change of |angular velocity|", "rad/s"),
@@ -227,12 +236,17 @@ def run(out: Path = DOCS, quick: bool = False, throws: int | None = None,
     seconds, cpu = time.perf_counter() - start, time.process_time() - cpu
     bar.close()
     numbers = _numbers(study, seconds, cpu, np.random.default_rng(seed))
-    _plot(study, numbers, out / "figures" / "collisions.png")
     data = page_data(numbers, seed)
+    draw_figures(FIGURES, data, out)
     out.mkdir(parents=True, exist_ok=True)
     write_text(out / "collisions.json", json.dumps(data, indent=1) + "\n")
     write_study(out, "collisions", list(FILES), {"d": data})
     return {k: v for k, v in numbers.items() if isinstance(v, float)}
+
+
+def _cdf(x: np.ndarray) -> list[float]:
+    """The quantiles of ``x`` at :data:`CDF_LEVELS` to 4 significant digits: a figure's curve."""
+    return [float(f"{q:.4g}") for q in np.quantile(x, CDF_LEVELS)]
 
 
 def _rate(hits: np.ndarray) -> tuple[float, float, float, int, int]:
@@ -274,7 +288,10 @@ def _numbers(study: Collisions, seconds: float, cpu: float,
     for case in ("together", "apart"):
         for key, _, _ in MEASURES:
             n[f"{case}_{key}"] = [quantile_interval(first[case][key], q) for q in QUANTILES]
+        n[f"{case}_cdf"] = {key: _cdf(first[case][key]) for key, _, _ in MEASURES}
+        n[f"{case}_dice"] = int(first[case][MEASURES[0][0]].size)
         f = faces[case]
+        n[f"{case}_face_shares"] = (np.bincount(f.ravel() - 1, minlength=6) / f.size).tolist()
         for die in range(2):
             counts = np.bincount(f[:, die] - 1, minlength=6)
             n[f"{case}_entropy{die + 1}"] = entropy_estimate(f[:, die] - 1, 6, rng)
@@ -286,19 +303,24 @@ def _numbers(study: Collisions, seconds: float, cpu: float,
     return n
 
 
-def _plot(study: Collisions, n: dict, path: Path) -> None:
-    first = study.first_contact
+def figure(n: dict, path: Path) -> None:
+    """Draw ``figures/collisions.png`` from the page's numbers ``n`` (``collisions.json``)."""
     fig, axes = plt.subplots(2, 3, figsize=(15, 8.5), layout="constrained")
     for ax, (key, label, unit) in zip(axes.ravel()[:4], MEASURES, strict=True):
         for case, colour in (("together", "C3"), ("apart", "C0")):
-            x = np.sort(first[case][key].ravel())
-            ax.plot(x, np.arange(1, len(x) + 1) / len(x), color=colour,
-                    label=f"{case} ({len(x)} dice)")
+            ax.plot(n[f"{case}_cdf"][key], CDF_LEVELS, color=colour,
+                    label=f"{case} ({n[f'{case}_dice']} dice)")
         ax.set(xlabel=f"{label} ({unit})", ylabel="share of dice (cumulative)")
         ax.grid(alpha=0.3)
         ax.legend(fontsize=8)
     axes[0, 0].set_title("across the first die–die contact, and the same steps alone", fontsize=9)
-    ax = axes[1, 1]
+    _plot_changes(axes[1, 1], n)
+    _plot_faces(axes[1, 2], n)
+    save_figure(fig, path)
+
+
+def _plot_changes(ax: plt.Axes, n: dict) -> None:
+    """Bars: the share of throws whose face the :data:`PERTURBATION` changed."""
     bars = [("together: die 1", n["change_together"]), ("together: die 2", n["change_die2"]),
             ("together: either", n["change_either"]), ("apart: die 1", n["change_apart"]),
             ("never met: die 1", n["change_quiet"])]
@@ -309,19 +331,22 @@ def _plot(study: Collisions, n: dict, path: Path) -> None:
     ax.set_ylabel("share of throws whose face changed")
     ax.set_title(f"die 1 released {PERTURBATION:g} m/s faster along x (95% intervals)",
                  fontsize=9)
-    ax = axes[1, 2]
-    faces = study.faces()
+
+
+def _plot_faces(ax: plt.Axes, n: dict) -> None:
+    """Bars: the faces of the met throws, together and apart, with their entropies."""
     for offset, (case, colour) in zip((-0.2, 0.2), (("together", "C3"), ("apart", "C0")),
                                       strict=True):
-        share = np.bincount(faces[case].ravel() - 1, minlength=6) / faces[case].size
-        ax.bar(np.arange(1, 7) + offset, share, width=0.4, color=colour,
+        ax.bar(np.arange(1, 7) + offset, n[f"{case}_face_shares"], width=0.4, color=colour,
                label=f"{case}: {n[f'{case}_entropy1'][0]:.3f} / "
                f"{n[f'{case}_entropy2'][0]:.3f} bits")
     ax.axhline(1 / 6, color="k", ls="--", lw=1)
     ax.set(xlabel="face (both dice)", ylabel="share")
     ax.set_title(f"faces of the met throws (max entropy {np.log2(6):.3f} bits)", fontsize=9)
     ax.legend(fontsize=8)
-    save_figure(fig, path)
+
+
+FIGURES = {"collisions": figure}  # the page's figure, drawn by run from its numbers
 
 
 def _quantile_rows(n: dict) -> str:

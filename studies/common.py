@@ -30,6 +30,16 @@ def save_figure(fig: plt.Figure, path: Path) -> None:
     plt.close(fig)
 
 
+def draw_figures(figures: dict[str, Callable[[dict, Path], None]], data: dict,
+                 out: Path) -> None:
+    """Draw each of a study's ``figures`` (name: draw) from its page's numbers ``data``.
+
+    Each lands as ``out/figures/<name>.png``; ``data`` is what the study keeps as its JSON.
+    """
+    for name, draw in figures.items():
+        draw(data, out / "figures" / f"{name}.png")
+
+
 def write_text(path: Path, text: str) -> None:
     """Write a page or JSON ``text`` to ``path``, whole or not at all."""
     write_atomically(path, text.encode())

@@ -28,7 +28,7 @@ from dice_env.throws import (
     Release,
     face_agreement,
 )
-from studies.common import SEED, progress, write_text
+from studies.common import SEED, draw_figures, progress, save_figure, write_text
 from studies.docs_numbers import generated
 from studies.templates import write_study
 
@@ -234,12 +234,14 @@ def trajectory_start(scene: Scene, n: int, rng: np.random.Generator) -> State:
 
 
 def _save(fig: plt.Figure, path: Path) -> None:
+    """Lay ``fig`` out tightly and write it (:func:`studies.common.save_figure`)."""
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    save_figure(fig, path)
 
 
-def _plot_work_precision(curves: dict[str, dict[str, np.ndarray]], path: Path) -> None:
+def figure_work_precision(d: dict, path: Path) -> None:
+    """Draw ``figures/error-vs-runtime.png``: error against step and against CPU time."""
+    curves = {name: {k: np.array(v) for k, v in c.items()} for name, c in d["curves"].items()}
     fig, (left, right) = plt.subplots(1, 2, figsize=(11, 4.2))
     for name, c in curves.items():
         left.loglog(c["dt"], 1e3 * c["position"], "o-", label=name)
@@ -257,16 +259,16 @@ def _plot_work_precision(curves: dict[str, dict[str, np.ndarray]], path: Path) -
     _save(fig, path)
 
 
-def _plot_agreement(height: np.ndarray, agreement: dict[str, dict[str, np.ndarray]],
-                    path: Path) -> None:
+def figure_agreement(d: dict, path: Path) -> None:
+    """Draw ``figures/face-agreement.png``: the per-throw face agreement by throw energy."""
     fig, ax = plt.subplots(figsize=(7.5, 4.2))
     labels = _bin_labels(">")
     x = np.arange(len(labels))
     shift = -0.15
-    for scene_label, result in agreement.items():
+    for scene_label, result in d["agreement"]["scenes"].items():
         for key, label, marker in (("step", "dt vs dt/4", "o"),
                                    ("floor", "chaos floor (spin + 1e-9 rad/s)", "s")):
-            frac, err, _ = binned(height, result[key])
+            frac, err = np.array(result[key]).T
             ax.errorbar(x + shift, 100 * frac, 200 * err, fmt=marker, capsize=3,
                         label=f"{scene_label}: {label}")
             shift += 0.1
@@ -278,11 +280,12 @@ def _plot_agreement(height: np.ndarray, agreement: dict[str, dict[str, np.ndarra
     _save(fig, path)
 
 
-def _plot_outcomes(outcomes: dict[str, dict[str, object]], path: Path) -> None:
+def figure_outcomes(d: dict, path: Path) -> None:
+    """Draw ``figures/outcome-statistics.png``: the default scene's faces at dt and dt/4."""
+    outcomes = d["outcomes"]["default"]
     fig, axes = plt.subplots(1, len(outcomes), figsize=(11, 3.4), sharey=True)
     for ax, (name, o) in zip(axes, outcomes.items(), strict=True):
-        n = o["counts"].sum(1, keepdims=True)
-        freq = o["counts"] / n
+        freq, n = np.array(o["shares"]), np.array(o["counted"])[:, None]
         err = 2 * np.sqrt(freq * (1 - freq) / n)
         faces = np.arange(1, 7)
         ax.bar(faces - 0.2, 100 * freq[0], 0.4, yerr=100 * err[0], capsize=2, label="dt")
@@ -291,6 +294,11 @@ def _plot_outcomes(outcomes: dict[str, dict[str, object]], path: Path) -> None:
     axes[0].set_ylabel("frequency (%), ±2 s.e.")
     axes[0].legend()
     _save(fig, path)
+
+
+# The page's figures (name: draw from the page's numbers), drawn by write_report.
+FIGURES = {"error-vs-runtime": figure_work_precision, "face-agreement": figure_agreement,
+           "outcome-statistics": figure_outcomes}
 
 
 def _ratio_at_equal_error(slow: dict[str, np.ndarray], fast: dict[str, np.ndarray],
@@ -305,14 +313,8 @@ def _ratio_at_equal_error(slow: dict[str, np.ndarray], fast: dict[str, np.ndarra
 
 def write_report(out: Path, numbers: dict[str, object], quick: bool) -> dict[str, float]:
     """Write the markdown and PNGs under ``out``; return the headline numbers."""
-    figures = out / "figures"
-    figures.mkdir(parents=True, exist_ok=True)
-    scene, curves, outcomes, agreement, gentle, gentle_steps, height = (numbers[k] for k in (
-        "scene", "curves", "outcomes", "agreement", "gentle", "gentle_steps", "height"))
-    _plot_work_precision(curves, figures / "error-vs-runtime.png")
-    _plot_agreement(height, agreement, figures / "face-agreement.png")
-    _plot_outcomes(outcomes["default"], figures / "outcome-statistics.png")
-
+    scene, curves, outcomes, agreement, gentle, gentle_steps = (numbers[k] for k in (
+        "scene", "curves", "outcomes", "agreement", "gentle", "gentle_steps"))
     ratio = _ratio_at_equal_error(curves[LISTING], curves[DEFAULT], SAFETIES.index(scene.safety))
     orders = {name: observed_order(c["dt"][-4:], c["position"][-4:]) for name, c in curves.items()}
     pen = agreement["default"]["penetration"] / scene.die.size
@@ -322,6 +324,7 @@ def write_report(out: Path, numbers: dict[str, object], quick: bool) -> dict[str
         verdicts[label] = {"gentle": float(gentle[name]["step"].mean()), "order": orders[name],
                            "p_min": min(min(o["p_faces"], o["p_success"]) for o in per.values())}
     data = page_data(numbers, quick, ratio, orders, pen, verdicts)
+    draw_figures(FIGURES, data, out)
     write_text(out / "error-vs-runtime.json", json.dumps(data, indent=1) + "\n")
     write_study(out, "error-vs-runtime", list(FILES), {"d": json.loads(json.dumps(data))})
     return {"cpu_ratio_at_equal_error": ratio, "order_default": orders[DEFAULT],
@@ -345,6 +348,7 @@ def page_data(numbers: dict, quick: bool, ratio: float, orders: dict, pen: np.nd
     def outcome(o: dict) -> dict:
         counts = np.asarray(o["counts"])
         return {"shares": (counts / counts.sum(1, keepdims=True))[:2].tolist(),
+                "counted": counts.sum(1)[:2].tolist(),
                 "success": [float(x) for x in o["success"][:2]],
                 **{k: float(o[k]) for k in ("se", "p_faces", "p_success", "settled", "cpu",
                                             "cpu_fine")}}

@@ -33,6 +33,7 @@ from studies.common import (
     DOCS,
     SEED,
     checked_throws,
+    draw_figures,
     error_bars,
     progress,
     save_figure,
@@ -129,8 +130,8 @@ def run(out: Path = DOCS, quick: bool = False, throws: int | None = None,
             r = cells[(noise, speed, "random")]
             table = [[c["sevens"], c["n"] - c["sevens"]], [r["sevens"], r["n"] - r["sevens"]]]
             c["fisher_p"] = float(stats.fisher_exact(table).pvalue)
-    _plot(cells, noises, speeds, out / "figures" / "craps.png")
     data = page_data(cells, noises, speeds, n, seconds, cpu, seed)
+    draw_figures(FIGURES, data, out)
     out.mkdir(parents=True, exist_ok=True)
     write_text(out / "craps.json", json.dumps(data, indent=1) + "\n")
     write_study(out, "craps", list(FILES), {"d": json.loads(json.dumps(data))})
@@ -139,7 +140,10 @@ def run(out: Path = DOCS, quick: bool = False, throws: int | None = None,
             "voided": sum(c["thrown"] - c["n"] for c in cells.values()) / (n * len(cells))}
 
 
-def _plot(cells: dict, noises: tuple, speeds: tuple, path: Path) -> None:
+def figure(d: dict, path: Path) -> None:
+    """Draw ``figures/craps.png`` from the page's numbers ``d`` (``craps.json``)."""
+    cells = {(c["noise"], c["speed"], c["way"]): c for c in d["cells"]}
+    noises, speeds = d["noises"], d["speeds"]
     fig, axes = plt.subplots(1, 2, figsize=(13, 4.8), layout="constrained")
     ax = axes[0]
     for i, speed in enumerate(speeds):
@@ -158,13 +162,17 @@ def _plot(cells: dict, noises: tuple, speeds: tuple, path: Path) -> None:
     for j, (noise, label) in enumerate(((noises[0], "least"), (noises[-1], "most"))):
         for i, speed in enumerate(speeds):
             c = cells[(noise, speed, "set")]
-            ax.bar(TOTALS + (2 * j + i - len(speeds) + 0.5) * width, c["totals"] / c["n"],
-                   width=width, label=f"set, noise {noise:g} ({label}), {speed:g} m/s")
+            ax.bar(TOTALS + (2 * j + i - len(speeds) + 0.5) * width,
+                   np.array(c["totals"]) / c["n"], width=width,
+                   label=f"set, noise {noise:g} ({label}), {speed:g} m/s")
     ax.plot(TOTALS, triangle(), "o--", color="k", label="2d6")
     ax.set(xticks=TOTALS, xlabel="total of the two dice", ylabel="share of counted throws")
     ax.set_title("totals of the set dice", fontsize=10)
     ax.legend(fontsize=7)
     save_figure(fig, path)
+
+
+FIGURES = {"craps": figure}  # the page's figure, drawn by run from its numbers
 
 
 def page_data(cells: dict, noises: tuple, speeds: tuple, n: int, seconds: float, cpu: float,
@@ -179,7 +187,8 @@ def page_data(cells: dict, noises: tuple, speeds: tuple, n: int, seconds: float,
                        "thrown": int(c["thrown"]), "sevens": int(c["sevens"]),
                        "p7": float(c["p7"]), "ci": [float(x) for x in c["ci"]],
                        "binom_p": c["binom_p"], "fisher_p": c.get("fisher_p"),
-                       "met": c["met"]} for (noise, speed, way), c in cells.items()]}
+                       "met": c["met"], "totals": [int(t) for t in c["totals"]]}
+                      for (noise, speed, way), c in cells.items()]}
 
 
 @generated("craps-intro", COMMAND, d=JSON)

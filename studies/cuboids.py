@@ -22,7 +22,15 @@ from dice_env.model.defaults import DIE_EDGE, DIE_MASS, RESTITUTION, damping_for
 from dice_env.model.die import Die
 from dice_env.model.scene import Ground, Scene
 from dice_env.throws import VIGOROUS, Vigour, hand_throws, throw_faces
-from studies.common import DOCS, SEED, checked_throws, progress, save_figure, write_text
+from studies.common import (
+    DOCS,
+    SEED,
+    checked_throws,
+    draw_figures,
+    progress,
+    save_figure,
+    write_text,
+)
 from studies.docs_numbers import generated
 from studies.templates import expand, write_study
 
@@ -81,8 +89,8 @@ def run(out: Path = DOCS, quick: bool = False, seed: int = SEED,
             hits = int(sum(faces.counts[f - 1] for f in SQUARE_FACES))  # on a square face
             table[label, ratio] = (faces, hits / faces.ended, wilson(hits, faces.ended))
     bar.close()
-    _plot(table, ratios, n, out / "figures" / "cuboids.png")
     data = page_data(table, ratios, n, seed, quick, throws)
+    draw_figures(FIGURES, data, out)
     out.mkdir(parents=True, exist_ok=True)
     write_text(out / "cuboids.json", json.dumps(data, indent=1) + "\n")
     write_study(out, "cuboids", list(FILES), {"d": json.loads(json.dumps(data))})
@@ -122,16 +130,17 @@ def read_page(path: Path) -> Page:
     return Page(head.group(1), int(head.group(2)), int(head.group(3)), table)
 
 
-def _plot(table: dict, ratios: tuple[float, ...], n: int, path: Path) -> None:
+def figure(d: dict, path: Path) -> None:
+    """Draw ``figures/cuboids.png`` from the page's numbers ``d`` (``cuboids.json``)."""
+    ratios = d["ratios"]
     fig, ax = plt.subplots(figsize=(8, 5), layout="constrained")
     fine = np.geomspace(ratios[0], ratios[-1], 200)
     ax.plot(fine, [solid_angle_share(r) for r in fine], color="0.5", ls="--", lw=1,
             label="solid-angle share (naive reference)")
-    for k, (label, _, _) in enumerate(CONDITIONS):
-        p = np.array([table[label, r][1] for r in ratios])
-        ci = np.array([table[label, r][2] for r in ratios])
+    for k, (label, shares) in enumerate(d["shares"].items()):
+        p, lo, hi = np.array(shares).T
         ax.plot(ratios, p, "o-", color=f"C{k}", ms=4, label=label)
-        ax.fill_between(ratios, ci[:, 0], ci[:, 1], color=f"C{k}", alpha=0.2, lw=0)
+        ax.fill_between(ratios, lo, hi, color=f"C{k}", alpha=0.2, lw=0)
     ax.axhline(1 / 3, color="k", ls=":", lw=1)
     ax.axvline(1.0, color="k", ls=":", lw=1)
     ax.set_xscale("log")
@@ -140,9 +149,13 @@ def _plot(table: dict, ratios: tuple[float, ...], n: int, path: Path) -> None:
     ax.minorticks_off()
     ax.set(xlabel="x / y (height along the square faces' normal / side of the square)",
            ylabel="P(lands on a square face), 95% band", ylim=(0, 1),
-           title=f"Square-cuboid dice, {n} throws per point (prediction, nothing fitted)")
+           title=f"Square-cuboid dice, {d['throws']} throws per point "
+           "(prediction, nothing fitted)")
     ax.legend(fontsize=8)
     save_figure(fig, path)
+
+
+FIGURES = {"cuboids": figure}  # the page's figure, drawn by run from its numbers
 
 
 def page_data(table: dict, ratios: tuple[float, ...], n: int, seed: int, quick: bool,

@@ -28,7 +28,16 @@ from dice_env.throws import (
     energy_throws,
     vigorous_throws,
 )
-from studies.common import DOCS, SEED, error_bars, join, progress, save_figure, write_text
+from studies.common import (
+    DOCS,
+    SEED,
+    draw_figures,
+    error_bars,
+    join,
+    progress,
+    save_figure,
+    write_text,
+)
 from studies.docs_numbers import generated
 from studies.templates import write_study
 
@@ -109,8 +118,6 @@ def run(out: Path = DOCS, quick: bool = False, seed: int = SEED) -> dict[str, fl
     memory_result = throw_batches(scene, memory_state, bar)
     bar.close()
     memory = _memory_table(scene, memory_state, memory_result, bins=5 if quick else 10)
-    _plot_faces(fair, loaded, out / "figures" / "fairness_faces.png")
-    _plot_memory(memory, out / "figures" / "fairness_memory_vs_energy.png")
     numbers = {
         "fair_throws": fair.total, "fair_unsettled": fair.unsettled, "fair_chi2": fair.chi2,
         "fair_p": fair.p_value,
@@ -124,6 +131,7 @@ def run(out: Path = DOCS, quick: bool = False, seed: int = SEED) -> dict[str, fl
         "fair_energy_median": float(np.median(throw_energy(scene, fair_state))),
     }
     data = page_data(fair, loaded, memory, numbers, sizes, seed)
+    draw_figures(FIGURES, data, out)
     out.mkdir(parents=True, exist_ok=True)
     write_text(out / "fairness.json", json.dumps(data, indent=1) + "\n")
     write_study(out, "fairness", list(FILES), {"d": json.loads(json.dumps(data))})
@@ -194,7 +202,9 @@ def _vigorous_sentence(m: dict) -> str:
                "their orientation in flight; we have not traced its cause."))
 
 
-def _plot_faces(fair: FaceCounts, loaded: FaceCounts, path: Path) -> None:
+def figure_faces(d: dict, path: Path) -> None:
+    """Draw ``figures/fairness_faces.png`` from the page's numbers ``d`` (``fairness.json``)."""
+    fair, loaded = _faces(d["fair"]), _faces(d["loaded"])
     fig, axes = plt.subplots(1, 2, figsize=(11, 4), layout="constrained")
     faces = np.arange(1, 7)
     for ax, counts, title in ((axes[0], fair, "fair die"), (axes[1], loaded,
@@ -212,7 +222,9 @@ def _plot_faces(fair: FaceCounts, loaded: FaceCounts, path: Path) -> None:
     save_figure(fig, path)
 
 
-def _plot_memory(m: dict, path: Path) -> None:
+def figure_memory(d: dict, path: Path) -> None:
+    """Draw ``figures/fairness_memory_vs_energy.png`` from the page's numbers ``d``."""
+    m = _memory(d["memory"]["bins"])
     fig, ax = plt.subplots(figsize=(7, 4.5), layout="constrained")
     for key, label, color in (("down", "rests on the face down at release", "C3"),
                               ("up", "rests on the face up at release", "C0")):
@@ -268,6 +280,10 @@ def _memory(bins: list[dict]) -> dict:
         hits = np.array([b[key] for b in bins])
         m[f"p_{key}"], m[f"ci_{key}"] = hits / n, wilson(hits, n)
     return m | {"n": n}
+
+
+# The page's figures (name: draw from the page's numbers), drawn by run.
+FIGURES = {"fairness_faces": figure_faces, "fairness_memory_vs_energy": figure_memory}
 
 
 def _page(d: dict) -> dict[str, str]:

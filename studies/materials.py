@@ -22,7 +22,16 @@ from dice_env.model import materials
 from dice_env.simulation.calibration import measured_restitution
 from dice_env.simulation.simulate import UP, State, simulate
 from dice_env.throws import BATCH, VIGOROUS, Faces, Vigour, batches, counted, vigorous_throws
-from studies.common import DOCS, SEED, checked_throws, progress, save_figure, write_text
+from studies.common import (
+    DOCS,
+    SEED,
+    checked_throws,
+    draw_figures,
+    error_bars,
+    progress,
+    save_figure,
+    write_text,
+)
 from studies.cuboids import GENTLE
 from studies.docs_numbers import generated
 from studies.fairness import T_MAX, throw_energy
@@ -99,8 +108,8 @@ def run(out: Path = DOCS, quick: bool = False, throws: int | None = None,
     seconds = time.perf_counter() - start
     energy = {label: float(np.median(throw_energy(base, state)))
               for label, state in releases.items()}
-    _plot(results, out / "figures" / "materials.png")
     data = page_data(results, restitution, energy, sizes, seconds, seed)
+    draw_figures(FIGURES, data, out)
     out.mkdir(parents=True, exist_ok=True)
     write_text(out / "materials.json", json.dumps(data, indent=1) + "\n")
     write_study(out, "materials", list(FILES), {"d": json.loads(json.dumps(data))})
@@ -121,24 +130,25 @@ def memory_differs(results: dict, label: str, which: str = "down") -> float:
     return float(stats.chi2_contingency(np.stack([hits, ended - hits]))[1])
 
 
-def _plot(results: dict, path: Path) -> None:
-    names = list(results)
+def figure(d: dict, path: Path) -> None:
+    """Draw ``figures/materials.png`` from the page's numbers ``d`` (``materials.json``)."""
+    rows = {(r["throws"], r["preset"]): r for r in d["rows"]}
+    names = list(d["restitution"])
     x = np.arange(len(names))
     fig, axes = plt.subplots(1, 3, figsize=(14, 4), layout="constrained")
     for k, (label, _) in enumerate(KINDS):
         shift = (k - 0.5) * 0.3
-        axes[0].bar(x + shift, [results[n][label].impacts.mean() for n in names], 0.3, label=label)
+        axes[0].bar(x + shift, [rows[label, n]["impacts"] for n in names], 0.3, label=label)
         for which, marker in (("down", "o"), ("up", "s")):
-            p, ci = zip(*(results[n][label].memory(which) for n in names), strict=True)
-            p, ci = np.array(p), np.array(ci)
-            axes[1].errorbar(x + shift, p, yerr=np.clip([p - ci[:, 0], ci[:, 1] - p], 0, None),
+            p, lo, hi = np.array([rows[label, n][which] for n in names]).T
+            axes[1].errorbar(x + shift, p, yerr=error_bars(p, np.stack([lo, hi], axis=1)),
                              fmt=marker, capsize=3, color=f"C{k}",
                              label=f"{label}: rests on release-{which} face")
     for k, name in enumerate(names):
-        faces = results[name]["vigorous"].faces
-        axes[2].errorbar(np.arange(1, 7) + (k - 1.5) * 0.15, faces.shares,
-                         yerr=np.clip([faces.shares - faces.intervals[:, 0],
-                                       faces.intervals[:, 1] - faces.shares], 0, None),
+        row = rows["vigorous", name]
+        shares = np.array(row["counts"]) / row["counted"]
+        axes[2].errorbar(np.arange(1, 7) + (k - 1.5) * 0.15, shares,
+                         yerr=error_bars(shares, wilson(np.array(row["counts"]), row["counted"])),
                          fmt="o", capsize=2, label=name)
     axes[0].set_ylabel("mean impacts to the decision")
     axes[1].set_ylabel("probability (95% interval)")
@@ -150,6 +160,9 @@ def _plot(results: dict, path: Path) -> None:
     axes[2].set(xlabel="face up (vigorous throws)", ylabel="share (95% interval)")
     axes[2].legend(fontsize=8)
     save_figure(fig, path)
+
+
+FIGURES = {"materials": figure}  # the page's figure, drawn by run from its numbers
 
 
 def _hand(v: Vigour) -> str:
@@ -197,6 +210,7 @@ def _row(label: str, name: str, r: MaterialThrows) -> dict:
     down, up = r.memory("down"), r.memory("up")
     return {"throws": label, "preset": name, "counted": int(f.ended),
             "undecided": int(f.undecided), "shares": [float(s) for s in f.shares],
+            "counts": [int(c) for c in f.counts],
             "chi2": float(f.chi2), "p": float(f.p_value), "impacts": float(r.impacts.mean()),
             "time": [float(r.time.mean()), float(np.median(r.time))],
             "sink_mm": [float(np.quantile(r.sink, 0.99) * 1e3), float(r.sink.max() * 1e3)],

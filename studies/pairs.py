@@ -40,6 +40,8 @@ from studies.common import (
     DOCS,
     SEED,
     checked_throws,
+    draw_figures,
+    error_bars,
     join,
     kept_chunks,
     progress,
@@ -76,6 +78,12 @@ def independence(table: np.ndarray) -> tuple[float, float, int]:
     return float(chi2), float(p), int(dof)
 
 
+def total_test(totals: np.ndarray) -> tuple[float, float]:
+    """Chi-square of ``totals`` (11,) of 2..12 against :func:`triangle` (10 dof): (chi2, p)."""
+    chi2, p = stats.chisquare(totals, np.sum(totals) * triangle())
+    return float(chi2), float(p)
+
+
 @dataclass
 class Pairs:
     """The outcome of a set of two-dice throws.
@@ -108,8 +116,7 @@ class Pairs:
 
     def total_test(self) -> tuple[float, float]:
         """Chi-square of the totals against :func:`triangle` (10 dof): (chi2, p)."""
-        chi2, p = stats.chisquare(self.totals, self.n * triangle())
-        return float(chi2), float(p)
+        return total_test(self.totals)
 
     def uniformity(self, die: int) -> tuple[float, float]:
         """Chi-square of die ``die``'s (0 or 1) faces against uniform (5 dof): (chi2, p)."""
@@ -213,9 +220,9 @@ def run(out: Path = DOCS, quick: bool = False, throws: int | None = None,
     bar = progress(n, "two-dice throws", "throw")
     pairs, seconds, cpu = chunked_pairs(scene, dice, n, seed, keep, bar)
     bar.close()
-    _plot(pairs, out / "figures" / "pairs.png")
     numbers = _numbers(pairs, seconds, cpu)
     data = page_data(pairs, numbers, seed)
+    draw_figures(FIGURES, data, out)
     out.mkdir(parents=True, exist_ok=True)
     write_text(out / "pairs.json", json.dumps(data, indent=1) + "\n")
     write_study(out, "pairs", list(FILES), {"d": json.loads(json.dumps(data))})
@@ -242,31 +249,34 @@ def _numbers(pairs: Pairs, seconds: float, cpu: float) -> dict[str, float]:
     }
 
 
-def _plot(pairs: Pairs, path: Path) -> None:
+def figure(d: dict, path: Path) -> None:
+    """Draw ``figures/pairs.png`` from the page's numbers ``d`` (``pairs.json``)."""
+    table, totals, n = _counts(d)
     fig, axes = plt.subplots(1, 2, figsize=(12, 4.5), layout="constrained")
-    share = pairs.totals / pairs.n
-    ci = wilson(pairs.totals, pairs.n)
+    share = totals / n
+    ci = wilson(totals, n)
     ax = axes[0]
     ax.bar(TOTALS, share, color="C0", label="simulated (95% interval)")
-    ax.errorbar(TOTALS, share, yerr=np.clip([share - ci[:, 0], ci[:, 1] - share], 0, None),
-                fmt="none", color="k", capsize=3)
+    ax.errorbar(TOTALS, share, yerr=error_bars(share, ci), fmt="none", color="k", capsize=3)
     ax.plot(TOTALS, triangle(), "o--", color="C3", label="2d6: (6 - |k - 7|) / 36")
     ax.set(xticks=TOTALS, xlabel="total of the two dice", ylabel="share of counted throws")
-    ax.set_title(f"{pairs.n} counted throws, chi-square p = {pairs.total_test()[1]:.3g}",
-                 fontsize=10)
+    ax.set_title(f"{n} counted throws, chi-square p = {total_test(totals)[1]:.3g}", fontsize=10)
     ax.legend(fontsize=8)
-    expected = np.outer(pairs.table.sum(axis=1), pairs.table.sum(axis=0)) / pairs.n
-    residual = (pairs.table - expected) / np.sqrt(expected)
+    expected = np.outer(table.sum(axis=1), table.sum(axis=0)) / n
+    residual = (table - expected) / np.sqrt(expected)
     ax = axes[1]
     image = ax.imshow(residual, cmap="RdBu_r", vmin=-3, vmax=3, origin="lower",
                       extent=(0.5, 6.5, 0.5, 6.5))
-    for (i, j), count in np.ndenumerate(pairs.table):
+    for (i, j), count in np.ndenumerate(table):
         ax.text(j + 1, i + 1, str(count), ha="center", va="center", fontsize=8)
     ax.set(xlabel="die 2 face", ylabel="die 1 face")
     ax.set_title(f"(die 1, die 2) counts; colour: (observed - expected) / sqrt(expected), "
-                 f"independence p = {independence(pairs.table)[1]:.3g}", fontsize=9)
+                 f"independence p = {independence(table)[1]:.3g}", fontsize=9)
     fig.colorbar(image, ax=ax, shrink=0.8)
     save_figure(fig, path)
+
+
+FIGURES = {"pairs": figure}  # the page's figure, drawn by run from its numbers
 
 
 def _half_width(n: int) -> float:

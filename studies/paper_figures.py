@@ -131,6 +131,17 @@ def fit_exponent(stiffness: np.ndarray, steps: np.ndarray) -> float:
     return float(np.polyfit(np.log(stiffness), np.log(steps), 1)[0])
 
 
+def real_throws() -> dict[ContactLaw, PaperRun]:
+    """Figures 4–5's real throw (seed :data:`THROW_SEED`) under the paper's and the gated law."""
+    return {law: real_throw_cube(seed=THROW_SEED, contact_law=law, record_nodes=True)
+            for law in (ContactLaw.PAPER, ContactLaw.GATED)}
+
+
+def variant_runs() -> dict[str, PaperRun]:
+    """Figures 6–12's ground-cube runs, one per :data:`VARIANTS` key."""
+    return {key: ground_cube(**kw) for key, (_, kw) in VARIANTS.items()}
+
+
 def run(out: Path = DOCS, quick: bool = False) -> dict[str, float]:
     """Regenerate ``paper.json``, the page's files and the figures under ``out``.
 
@@ -140,13 +151,8 @@ def run(out: Path = DOCS, quick: bool = False) -> dict[str, float]:
     stiffnesses = np.logspace(3, 6, 4) if quick else np.logspace(1, 8, 15)
     points = 60 if quick else 200
     bar = progress(2 + len(VARIANTS) + len(stiffnesses), "paper figures")
-    throws, runs = {}, {}
-    for law in (ContactLaw.PAPER, ContactLaw.GATED):
-        throws[law] = real_throw_cube(seed=THROW_SEED, contact_law=law, record_nodes=True)
-        bar.update()
-    for key, (_, kw) in VARIANTS.items():
-        runs[key] = ground_cube(**kw)
-        bar.update()
+    throws, runs = real_throws(), variant_runs()
+    bar.update(2 + len(VARIANTS))
     search = {name: [] for name in CRITERIA}
     for s in stiffnesses:
         grid = search_grid(s, points)
@@ -159,9 +165,9 @@ def run(out: Path = DOCS, quick: bool = False) -> dict[str, float]:
     figs = out / "figures"
     _plot_throw(throws, figs / "paper_fig4_5_real_throw.png")
     _plot_variants(runs, figs / "paper_fig6_12_ground_cube.png")
-    _plot_search(stiffnesses, search, figs / "paper_fig13_steps_vs_stiffness.png")
     numbers = _numbers(throws, runs, stiffnesses, search)
     data = page_data(numbers, throws, stiffnesses, search)
+    figure_search(data, figs / "paper_fig13_steps_vs_stiffness.png")
     out.mkdir(parents=True, exist_ok=True)
     write_text(out / "paper.json", json.dumps(data, indent=1) + "\n")
     write_study(out, "paper", list(FILES), {"d": json.loads(json.dumps(data))})
@@ -231,7 +237,10 @@ def _plot_variants(runs: dict, path: Path) -> None:
     save_figure(fig, path)
 
 
-def _plot_search(stiffnesses: np.ndarray, search: dict[str, np.ndarray], path: Path) -> None:
+def figure_search(d: dict, path: Path) -> None:
+    """Draw Figure 13 (steps needed against stiffness) from the page's numbers ``d``."""
+    stiffnesses = np.array(d["stiffnesses"])
+    search = {name: np.array(steps) for name, steps in d["search"].items()}
     fig, ax = plt.subplots(figsize=(7, 5))
     fine = np.logspace(np.log10(stiffnesses[0]), np.log10(stiffnesses[-1]), 200)
     ax.loglog(fine, theory_steps(fine, node_mass=False), "k-",
@@ -243,6 +252,13 @@ def _plot_search(stiffnesses: np.ndarray, search: dict[str, np.ndarray], path: P
            title="Figure 13: steps needed against stiffness (paper law)")
     ax.legend()
     save_figure(fig, path)
+
+
+# The page's figures (name: draw), drawn by run; Figures 4–12 simulate their runs again (a
+# trajectory each, deterministic), Figure 13 is drawn from the page's numbers.
+FIGURES = {"paper_fig4_5_real_throw": lambda d, path: _plot_throw(real_throws(), path),
+           "paper_fig6_12_ground_cube": lambda d, path: _plot_variants(variant_runs(), path),
+           "paper_fig13_steps_vs_stiffness": figure_search}
 
 
 def _verdict(ok: bool | str) -> str:

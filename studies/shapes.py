@@ -26,7 +26,16 @@ from dice_env.throws import (
     random_orientations,
     throw_faces,
 )
-from studies.common import DOCS, SEED, checked_throws, progress, save_figure, write_text
+from studies.common import (
+    DOCS,
+    SEED,
+    checked_throws,
+    draw_figures,
+    error_bars,
+    progress,
+    save_figure,
+    write_text,
+)
 from studies.docs_numbers import generated
 from studies.templates import write_study
 
@@ -173,7 +182,6 @@ def run(out: Path = DOCS, quick: bool = False, seed: int = SEED, throws: int | N
     bar.close()
     flight = {name: (free_flight(die), free_flight(die, step_by_step=True))
               for name, die in flight_dice().items()}
-    _plot(fair, loaded, out / "figures" / "shapes_faces.png")
     numbers = {}
     for name in DICE:
         numbers[f"{name}_p"] = fair[name].p_value
@@ -182,31 +190,36 @@ def run(out: Path = DOCS, quick: bool = False, seed: int = SEED, throws: int | N
     for q in ("velocity", "momentum", "energy"):
         numbers[f"flight_{q}"] = max(f[k][q] for f in flight.values() for k in (0, 1))
     data = page_data(fair, loaded, flight, sizes, seed, quick, throws, faces_of is not None)
+    draw_figures(FIGURES, data, out)
     out.mkdir(parents=True, exist_ok=True)
     write_text(out / "shapes.json", json.dumps(data, indent=1) + "\n")
     write_study(out, "shapes", list(FILES), {"d": json.loads(json.dumps(data))})
     return numbers
 
 
-def _plot(fair: dict[str, Faces], loaded: dict[str, Loaded], path: Path) -> None:
+def figure(d: dict, path: Path) -> None:
+    """Draw ``figures/shapes_faces.png`` from the page's numbers ``d`` (``shapes.json``)."""
     fig, axes = plt.subplots(2, 3, figsize=(13, 7), layout="constrained")
     for ax, name in zip(axes.ravel(), DICE, strict=True):
-        f, heavy = fair[name], loaded[name]
+        fair, heavy = d["fair"][name], d["loaded"][name]
+        f = Faces.of(np.array(fair["counts"]), fair["counted"] + fair["undecided"])
+        loaded = Faces.of(np.array(heavy["counts"]), d["sizes"]["loaded"])
         n = f.counts.size
         labels = np.arange(1, n + 1)
         for faces, offset, color, label in ((f, -0.18, "C0", "fair"),
-                                            (heavy.faces, 0.18, "C1", "loaded toward 1")):
+                                            (loaded, 0.18, "C1", "loaded toward 1")):
             ratio = faces.shares * n
-            ci = faces.intervals * n
-            ax.errorbar(labels + offset, ratio, yerr=np.clip(np.stack(
-                [ratio - ci[:, 0], ci[:, 1] - ratio]), 0, None), fmt="o", ms=3, color=color,
-                capsize=2, label=label)
+            ax.errorbar(labels + offset, ratio, yerr=error_bars(ratio, faces.intervals * n),
+                        fmt="o", ms=3, color=color, capsize=2, label=label)
         ax.axhline(1.0, color="k", ls=":", lw=1)
-        ax.axvline(heavy.favoured, color="C1", lw=6, alpha=0.15)
+        ax.axvline(heavy["favoured"], color="C1", lw=6, alpha=0.15)
         ax.set(xticks=labels, xlabel="face read", ylabel="share × n (95% interval)")
         ax.set_title(f"{name}: fair p = {f.p_value:.2g} ({f.ended} throws)", fontsize=10)
     axes[0, 0].legend(fontsize=8)
     save_figure(fig, path)
+
+
+FIGURES = {"shapes_faces": figure}  # the page's figure, drawn by run from its numbers
 
 
 def page_data(fair: dict[str, Faces], loaded: dict[str, Loaded], flight: dict,
@@ -217,10 +230,12 @@ def page_data(fair: dict[str, Faces], loaded: dict[str, Loaded], flight: dict,
             f" --throws {throws}" if throws is not None else "") + (
             " --chunks DIR" if chunked else ""),
         "seed": seed, "sizes": sizes, "chunked": chunked,
-        "fair": {name: {"counted": int(f.ended), "undecided": int(f.undecided),
+        "fair": {name: {"counts": [int(c) for c in f.counts],
+                        "counted": int(f.ended), "undecided": int(f.undecided),
                         "chi2": float(f.chi2), "p": float(f.p_value),
                         "max_deviation": float(f.max_deviation)} for name, f in fair.items()},
         "loaded": {name: {"com_offset": float(np.linalg.norm(h.die.com) / h.die.size),
+                          "counts": [int(c) for c in h.faces.counts],
                           "favoured": int(h.favoured), "counted": int(h.faces.ended),
                           "share": h.share, "interval": [float(x) for x in h.interval],
                           "most_frequent": int(h.most_frequent), "p": float(h.faces.p_value)}

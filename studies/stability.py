@@ -22,7 +22,7 @@ from dice_env.model.scene import MAX_STEPS, ContactLaw, Ground, Scene
 from dice_env.simulation.paper import paper_scene
 from dice_env.simulation.simulate import Result, State, simulate
 from dice_env.throws import Vigour, vigorous_throws
-from studies.common import DOCS, progress, save_figure, write_text
+from studies.common import DOCS, draw_figures, progress, save_figure, write_text
 from studies.docs_numbers import generated
 from studies.templates import write_study
 
@@ -177,7 +177,6 @@ def run(out: Path = DOCS, quick: bool = False, seed: int = 7) -> dict[str, float
     sweep = safety_sweep(sweep_cases, SAFETIES, throws, seed)
     bar.update()
     bar.close()
-    _plot_maps(stiffnesses, ratios, maps, out / "figures" / "stability_map.png")
     numbers = {}
     for law in laws:
         name = law.name.lower()
@@ -188,7 +187,8 @@ def run(out: Path = DOCS, quick: bool = False, seed: int = 7) -> dict[str, float
         numbers[f"{name}_first_blowup"] = _first_ratio(maps[law] == BLOWUP, ratios)
     numbers["extreme_any_nan"] = float(any(r["nan"] for _, r in rows))
     numbers["automatic_step_flagged_cases"] = float(sum(r["unstable"] > 0 for _, r in rows))
-    data = page_data(stiffnesses, ratios, rows, throws, numbers, sweep_cases, sweep, seed)
+    data = page_data(stiffnesses, ratios, maps, rows, throws, numbers, sweep_cases, sweep, seed)
+    draw_figures(FIGURES, data, out)
     out.mkdir(parents=True, exist_ok=True)
     write_text(out / "stability.json", json.dumps(data, indent=1) + "\n")
     write_study(out, "stability", list(FILES), {"d": json.loads(json.dumps(data))})
@@ -201,7 +201,13 @@ def _first_ratio(mask: np.ndarray, ratios: np.ndarray) -> float:
     return float(ratios[rows[0]]) if len(rows) else float("inf")
 
 
-def _plot_maps(stiffnesses: np.ndarray, ratios: np.ndarray, maps: dict, path: Path) -> None:
+def figure(data: dict, path: Path) -> None:
+    """Draw ``figures/stability_map.png`` from the page's numbers ``data`` (``stability.json``).
+
+    ``data["maps"][law]``: a string per ratio, a digit per stiffness, the class of
+    :func:`stability_map` (0 stable, 1 drifting, 2 blowing up).
+    """
+    stiffnesses, ratios = np.array(data["stiffnesses"]), np.array(data["ratios"])
     fig, axes = plt.subplots(1, 2, figsize=(13, 5), sharey=True, layout="constrained")
     cmap = ListedColormap(["#4caf50", "#ffc107", "#e53935"])
     scenes = [paper_scene(S=s, dt=None) for s in stiffnesses]
@@ -209,22 +215,26 @@ def _plot_maps(stiffnesses: np.ndarray, ratios: np.ndarray, maps: dict, path: Pa
     d = np.array([scene.ground.damping for scene in scenes])
     m = np.array([scene.die.mass / 8 for scene in scenes])  # one node's mass
     node = (np.sqrt(d * d + 4 * stiffnesses * m) - d) / stiffnesses
-    for ax, (law, classes) in zip(axes, maps.items(), strict=True):
+    for ax, (law, rows) in zip(axes, data["maps"].items(), strict=True):
+        classes = np.array([[int(c) for c in row] for row in rows])
         dts = ratios[:, None] * bounds[None, :]
         ax.scatter(np.broadcast_to(stiffnesses, dts.shape), dts, c=classes, cmap=cmap, vmin=0,
                    vmax=2, marker="s", s=18)
         ax.loglog(stiffnesses, bounds, "k-", label="Scene.critical_dt (effective mass m/6)")
         ax.loglog(stiffnesses, node, "k--", label="node mass m/8")
         ax.set_xlabel("stiffness S")
-        ax.set_title(f"{law.name.lower()} law: green stable, amber drifting, red blowing up",
+        ax.set_title(f"{law} law: green stable, amber drifting, red blowing up",
                      fontsize=10)
         ax.legend(loc="lower left", fontsize=8)
     axes[0].set_ylabel("step dt")
     save_figure(fig, path)
 
 
-def page_data(stiffnesses: np.ndarray, ratios: np.ndarray, rows: list, throws: int,
-              n: dict[str, float], sweep_cases: list[Case], sweep: np.ndarray,
+FIGURES = {"stability_map": figure}  # the page's figure, drawn by run from its numbers
+
+
+def page_data(stiffnesses: np.ndarray, ratios: np.ndarray, maps: dict, rows: list,
+              throws: int, n: dict[str, float], sweep_cases: list[Case], sweep: np.ndarray,
               seed: int) -> dict:
     """Every number of the page (JSON-ready), kept as ``stability.json``.
 
@@ -237,6 +247,8 @@ def page_data(stiffnesses: np.ndarray, ratios: np.ndarray, rows: list, throws: i
 
     return {"seed": seed, "stiffnesses": [float(x) for x in stiffnesses],
             "ratios": [float(x) for x in ratios], "numbers": n, "throws": throws,
+            "maps": {law.name.lower(): ["".join(map(str, row)) for row in classes]
+                     for law, classes in maps.items()},
             "cases": [row(c, r) for c, r in rows], "safeties": list(SAFETIES),
             "sweep": [{"group": c.group, "label": c.label,
                        "drift": [float(x) for x in sweep[i, :, 0]],

@@ -33,6 +33,7 @@ from studies.common import (
     DOCS,
     SEED,
     checked_throws,
+    draw_figures,
     kept_chunks,
     progress,
     save_figure,
@@ -389,7 +390,7 @@ def run(out: Path = DOCS, quick: bool = False, seed: int = SEED,
                        "seconds_alone": alone_seconds, "quick": quick}
     out.mkdir(parents=True, exist_ok=True)
     write_text(out / "weldon.json", json.dumps(numbers, indent=1) + "\n")
-    _plot(numbers, out / "figures" / "weldon.png")
+    draw_figures(FIGURES, json.loads(json.dumps(numbers)), out)
     write_study(out, "weldon", list(FILES), {"n": json.loads(json.dumps(numbers))})
     return {"together_p": numbers["together"]["p"], "alone_p": numbers["alone"]["drilled16"]["p"],
             "together_throws": float(together.successes.size),
@@ -646,7 +647,8 @@ def _distribution_text(t: dict) -> str:
         f"error is about {math.sqrt(2 / (t['counted'] - 1)):.2f}).")
 
 
-def _plot(n: dict, path: Path) -> None:
+def figure(n: dict, path: Path) -> None:
+    """Draw ``figures/weldon.png`` from the page's numbers ``n`` (``weldon.json``)."""
     fig, axes = plt.subplots(1, 2, figsize=(12, 4.5), layout="constrained")
     k = np.arange(DICE + 1)
     weldon = np.array(n["weldon"]["counts"], float)
@@ -672,3 +674,6 @@ def _plot(n: dict, path: Path) -> None:
     axes[1].invert_yaxis()
     axes[1].set_xlabel("p(5 or 6), 95% interval")
     save_figure(fig, path)
+
+
+FIGURES = {"weldon": figure}  # the page's figure, drawn by run from its numbers
