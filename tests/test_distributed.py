@@ -167,7 +167,7 @@ def test_the_shapes_study_throws_through_faces_of(tmp_path, monkeypatch):
         return hands.Faces.of(np.full(scene.die.n_faces, n // scene.die.n_faces), n)
 
     monkeypatch.setattr(sh, "free_flight", lambda *a, **k: dict.fromkeys(sh.FLIGHT_COLUMNS, 0.0))
-    monkeypatch.setattr(sh, "_plot", lambda *a: None)
+    monkeypatch.setitem(sh.FIGURES, "shapes_faces", lambda *a: None)
     run_study("shapes", tmp_path, quick=True, faces_of=faces_of)
     assert len(calls) == 2 * len(sh.DICE) == len(set(calls))  # one seed per die, fair and loaded
     page = (tmp_path / "shapes.md").read_text()
