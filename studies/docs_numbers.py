@@ -623,15 +623,14 @@ def median(values: list[float]) -> float:
 
 @generated("performance-kernel-ab", single="benchmarks/results/kernel_ab.json",
            groups="benchmarks/results/kernel_ab_groups.json",
-           contact="benchmarks/results/kernel_ab_groups_contact.json",
-           sleep="benchmarks/results/kernel_ab_groups_sleep.json")
-def performance_kernel_ab(single, groups, contact, sleep) -> str:
+           contact="benchmarks/results/kernel_ab_groups_contact.json")
+def performance_kernel_ab(single, groups, contact) -> str:
     """Each A/B run of the kernel: a figure's median, base and this, and each round's ratio."""
     lines = ["| run | figure | base | this | this / base, per round |", "|---|---|---|---|---|"]
-    for run in (single, groups, contact, sleep):
+    for run in (single, groups, contact):
         for key, f in run.figures.items():
             same = run.same_faces if "same_faces" in run else run.bit_identical[key]
-            outcomes = "same outcomes" if same is True else "outcomes differ"
+            outcomes = "same outcomes" if same is True else "outcomes at round-off"
             ratios = ", ".join(f"{x:.3f}" for x in f.ratios)
             lines.append(f"| `{run.command}`, {run.base_commit} → {run.commit}, {outcomes} | "
                          f"{key} | {median(f.base):,.4g} | {median(f.this):,.4g} | {ratios} |")
