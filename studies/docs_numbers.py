@@ -654,8 +654,7 @@ the same throws, to decided faces on one thread (`{dice.command}`, \
 {rows[3].throws_per_s:.1f} throws/s, five at {rows[4].throws_per_s:.1f} and twelve at \
 {rows[5].throws_per_s:.2f}. A throw moves at the table's step while no pair of dice can meet \
 within it and at the die–die contact's (`dice_env.simulation.group.pair_step`, shorter: the \
-pair's reduced mass) while one can; to a decided face, a die decided on its own, at rest \
-and out of every other die's reach sleeps (is not stepped) until another may reach it. Two d6 \
+pair's reduced mass) while one can; every die is stepped until the throw ends. Two d6 \
 {apart.spacing_m * 100:.0f} cm apart (they met in {apart.met:.0%} of {apart.throws} throws) \
 cost {apart.pair_per_alone:.1f}× the CPU time of their two dice thrown alone.
 
