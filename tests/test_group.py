@@ -362,16 +362,3 @@ def test_records_fall_on_the_same_steps_with_free_flight():
     np.testing.assert_array_equal(runs[0].t, runs[1].t)
     np.testing.assert_allclose(runs[0].x_cm, runs[1].x_cm, rtol=0, atol=1e-9)
     assert (runs[0].x_cm[:, :, :, 2] < 0.3).all()  # the dice fell: every record written
-
-
-def test_a_die_asleep_on_the_table_wakes_when_another_reaches_it():
-    # die 0 lies still, decided on its own and out of reach: it sleeps until die 1 slides in
-    scene = Scene(t_max=2.0)
-    still = State.release(scene, [0.0, 0.0, EDGE / 2], [0.0, 0.0, 0.0])
-    coming = State.release(scene, [-0.08, 0.0, EDGE / 2 + 0.002], [1.2, 0.0, 0.0])
-    result = simulate_group(scene, (DIE, DIE), GroupState.of([still, coming]),
-                            until="decided")
-    assert (result.die_impacts[0] >= 1).all() and result.meet_dice[0].tolist() == [0, 1]
-    assert abs(result.final.position[0, 0, 0]) > 0.002  # knocked along x
-    assert result.overlap[0] < 0.05 * EDGE and not result.unstable.any()
-    assert result.decided.all()

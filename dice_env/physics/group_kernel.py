@@ -3,9 +3,7 @@
 The model is ``docs/model.md``'s, the speed ``docs/performance.md``'s ("Several dice").
 :func:`least_overlap` finds a touching pair's normal, :func:`pair_contacts` its contacts and
 forces; :func:`advance_group` steps one throw, each die on the planes as the single die's: at
-the table's step while no pair can meet within it (:func:`out_of_reach`), else the pair's. To a
-decided face, a die decided on its own, at rest and out of every other die's reach sleeps
-(:func:`_fall_asleep`: it is not stepped) until another die may reach it (:func:`_wake`).
+the table's step while no pair can meet within it (:func:`out_of_reach`), else the pair's.
 """
 
 from __future__ import annotations
@@ -623,8 +621,6 @@ def advance_group(g: int, dice: GroupDice, bodies: Bodies, hulls: Hulls, pair: P
     depths = np.empty((n_dice, n_dice))  # each pair's overlap (< 0: a gap), as pair_depths
     normals, speed = np.empty((n_dice, n_dice, 3)), np.empty(n_dice)
     overlap, abort = out.overlap[g], out.abort
-    asleep, kept = np.zeros(n_dice, np.bool_), np.zeros(n_dice)  # and each sleeper's energy
-    sleepers, own = 0, np.empty(n_dice)  # how many sleep; each die's energy on the planes
     while step < n_steps:
         passes, end = next_pass(passes, abort)
         if end == ABORTED:
@@ -633,8 +629,6 @@ def advance_group(g: int, dice: GroupDice, bodies: Bodies, hulls: Hulls, pair: P
         apart = pair_depths(x, q, vertices, n_vertices, r_max, world, placed, axes, directions,
                             separating, depths, normals)  # every pair's bounding spheres apart
         _speeds(u, w, r_max, speed)
-        if sleepers:  # a sleeper wakes where another die may reach it within the longest move
-            sleepers = _wake(asleep, depths, speed, coarse * dt)
         moves = min(fine, n_steps - step + 1)  # ``coarse`` while no pair can meet within them
         if coarse > fine and step - 1 + coarse <= n_steps and out_of_reach(depths, speed,
                                                                            coarse * dt):
@@ -646,12 +640,6 @@ def advance_group(g: int, dice: GroupDice, bodies: Bodies, hulls: Hulls, pair: P
         h_last = h
         checked, tangential = 0.0, 0.0
         for a in range(n_dice):
-            if asleep[a]:  # as it fell asleep: at rest on the planes, no force, its energy kept
-                near[a], fastest[a], approach[a] = True, 0.0, 0.0
-                for k in range(3):
-                    force[a, k], torque[a, k] = 0.0, 0.0
-                checked += kept[a]
-                continue
             u0, u1, u2, w0, w1, w2 = u[a, 0], u[a, 1], u[a, 2], w[a, 0], w[a, 1], w[a, 2]
             cu0, cu1, cu2, cw0, cw1, cw2 = u0, u1, u2, w0, w1, w2
             if midpoint:
@@ -683,10 +671,8 @@ def advance_group(g: int, dice: GroupDice, bodies: Bodies, hulls: Hulls, pair: P
                     touched[g, a, p] = True
             force[a, 0], force[a, 1], force[a, 2] = f0, f1, f2
             torque[a, 0], torque[a, 1], torque[a, 2] = t0, t1, t2
-            own[a] = kinetic[a] + m * g_acc * x2 + spring
-            checked += own[a]
+            checked += kinetic[a] + m * g_acc * x2 + spring
             tangential += spring_t
-            own[a] += spring_t
         # die against die
         for a in range(n_dice):
             die_touch[a] = False
@@ -745,19 +731,14 @@ def advance_group(g: int, dice: GroupDice, bodies: Bodies, hulls: Hulls, pair: P
                                    stops.hold_steps, False)
             if end == SETTLED:
                 break
-        if stops.decide:
-            sleepers += _fall_asleep(asleep, kept, own, touching, die_touch, kinetic, fastest,
-                                     bodies, q, depths, speed, h, v_rest2)
         jump = 1
         # only moves apart jump, as stepping would take them; no record falls inside a jump
-        if options.flight and apart and moves == coarse and _in_flight(touching, asleep):
-            jump = min(_group_jump(planes, lowest, speed, x, u, ang, force, bodies, asleep,
+        if options.flight and apart and moves == coarse and touching.max() == 0:
+            jump = min(_group_jump(planes, lowest, speed, x, u, ang, force, bodies,
                                    rotation, h, (n_steps - step + 1) // moves),
                        (next_record - step + moves) // moves)
         finite = True
         for a in range(n_dice):
-            if asleep[a]:
-                continue
             dt_m = h / mass[a]
             dv0, dv1, dv2 = force[a, 0] * dt_m, force[a, 1] * dt_m, force[a, 2] * dt_m
             for r in range(3):  # this die's rotation and inertia, as the single die's kernel
@@ -889,7 +870,7 @@ def _place(world: np.ndarray, a: int, vertices: np.ndarray, count: int, x: np.nd
 @njit(cache=True)
 def _group_jump(planes: np.ndarray, lowest: np.ndarray, speed: np.ndarray, x: np.ndarray,
                 u: np.ndarray, ang: np.ndarray, force: np.ndarray, bodies: Bodies,
-                asleep: np.ndarray, rotation: bool, dt: float, limit: int) -> int:
+                rotation: bool, dt: float, limit: int) -> int:
     """Flight steps the whole group takes at once (at least 1), each die's as :func:`flight_jump`.
 
     Every pair stays out of reach (:func:`out_of_reach`, ``speed`` as it takes them) over the
@@ -905,11 +886,9 @@ def _group_jump(planes: np.ndarray, lowest: np.ndarray, speed: np.ndarray, x: np
             spin = math.sqrt(ang[a, 0] ** 2 + ang[a, 1] ** 2 + ang[a, 2] ** 2) \
                 * bodies.inv_i_min[a]
         dt_m = dt / m
-        if not asleep[a]:  # a sleeper stays where it lies
-            jump = min(jump, flight_jump(planes, lowest, a, (u[a, 0], u[a, 1], u[a, 2]), spin,
-                                         bodies.r_max[a], (force[a, 0] * dt_m,
-                                                           force[a, 1] * dt_m,
-                                                           force[a, 2] * dt_m), dt, limit))
+        jump = min(jump, flight_jump(planes, lowest, a, (u[a, 0], u[a, 1], u[a, 2]), spin,
+                                     bodies.r_max[a], (force[a, 0] * dt_m, force[a, 1] * dt_m,
+                                                       force[a, 2] * dt_m), dt, limit))
         for b in range(a + 1, n_dice):
             gap = math.sqrt((x[a, 0] - x[b, 0]) ** 2 + (x[a, 1] - x[b, 1]) ** 2
                             + (x[a, 2] - x[b, 2]) ** 2) - bodies.r_max[a] - bodies.r_max[b] \
@@ -922,60 +901,6 @@ def _group_jump(planes: np.ndarray, lowest: np.ndarray, speed: np.ndarray, x: np
             jump = min(jump, max(1, free_steps(gap, -closing - 2.0 * kick, 0.0, 0.0, 0.0, dt,
                                                limit) - 1))  # all but the last free step
     return jump
-
-
-@njit(cache=True, inline="always")
-def _in_flight(touching: np.ndarray, asleep: np.ndarray) -> bool:
-    """Whether every die awake is clear of the planes."""
-    for a in range(touching.shape[0]):
-        if touching[a] > 0 and not asleep[a]:
-            return False
-    return True
-
-
-@njit(cache=True)
-def _wake(asleep: np.ndarray, depths: np.ndarray, speed: np.ndarray, h: float) -> int:
-    """Wake each sleeper another die may reach within a move ``h``; returns the sleepers left."""
-    sleepers = 0
-    for a in range(asleep.shape[0]):
-        if asleep[a]:
-            asleep[a] = _clear(a, depths, speed, h)
-            sleepers += asleep[a]
-    return sleepers
-
-
-@njit(cache=True, inline="always")
-def _clear(a: int, depths: np.ndarray, speed: np.ndarray, h: float) -> bool:
-    """Whether no other die can reach die ``a`` within ``h`` (:func:`out_of_reach`'s test)."""
-    for b in range(depths.shape[0]):
-        if b != a and not -depths[min(a, b), max(a, b)] > 2.0 * h * (speed[a] + speed[b]):
-            return False
-    return True
-
-
-@njit(cache=True)
-def _fall_asleep(asleep: np.ndarray, kept: np.ndarray, own: np.ndarray, touching: np.ndarray,
-                 die_touch: np.ndarray, kinetic: np.ndarray, fastest: np.ndarray,
-                 bodies: Bodies, q: np.ndarray, depths: np.ndarray, speed: np.ndarray,
-                 h: float, v_rest2: float) -> int:
-    """Put to sleep each die decided on its own and at rest that no other die can reach.
-
-    Decided on its own: its ``own`` energy below the lock of the face it reads; at rest: on
-    three corners or more, its kinetic energy and fastest corner below the rest speed's (the
-    rest test's); out of reach within a move ``h``. It keeps its state and its energy in the
-    throw's until :func:`_wake`. Returns how many fell asleep.
-    """
-    fell = 0
-    for a in range(asleep.shape[0]):
-        if asleep[a] or touching[a] < 3 or die_touch[a] or fastest[a] >= v_rest2 \
-                or kinetic[a] >= 0.5 * bodies.mass[a] * v_rest2:
-            continue
-        read = face_read(q[a], bodies.faces[a, :bodies.n_faces[a]], bodies.reads_down[a],
-                         UP[0], UP[1], UP[2])
-        if own[a] < bodies.lock[a, read] and _clear(a, depths, speed, h):
-            asleep[a], kept[a] = True, own[a]
-            fell += 1
-    return fell
 
 
 @njit(cache=True)
