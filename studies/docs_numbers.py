@@ -630,7 +630,7 @@ def performance_kernel_ab(single, groups, contact) -> str:
     for run in (single, groups, contact):
         for key, f in run.figures.items():
             same = run.same_faces if "same_faces" in run else run.bit_identical[key]
-            outcomes = "same outcomes" if same is True else "outcomes at round-off"
+            outcomes = "same outcomes" if same is True else "outcomes differ"
             ratios = ", ".join(f"{x:.3f}" for x in f.ratios)
             lines.append(f"| `{run.command}`, {run.base_commit} → {run.commit}, {outcomes} | "
                          f"{key} | {median(f.base):,.4g} | {median(f.this):,.4g} | {ratios} |")
