@@ -203,8 +203,18 @@ def test_the_recipe_rows_give_each_task_s_seeds_mean_and_spread(tmp_path):
         run_entry(run(2, 0.5, 0.5, common=False))
     out = tmp_path / "learned.json"
     out.write_text(json.dumps({"tasks": ["kept"]}))
+    kept_row = {**row, "task": "DiceThrowHigh-v0"}
+    out.write_text(json.dumps({"tasks": ["kept"], "recipe": [kept_row, {**row, "seeds": [9]}]}))
     assert main([*map(str, runs), "--out", str(out)]) == 0
-    assert json.loads(out.read_text())["tasks"] == ["kept"]
+    written = json.loads(out.read_text())
+    assert written["tasks"] == ["kept"]
+    # The same task, preset and budget replaced; another task's row kept, in the tasks' order.
+    assert [(r["task"], r["seeds"]) for r in written["recipe"]] == [
+        ("DiceThrowHigh-v0", [0, 1]), ("DiceThrowD20-v0", [0, 1])]
+    config = Config.load(runs[0] / "config.json")
+    config.oracle_observations = 12
+    config.save(runs[0] / "config.json")
+    assert rows([run_entry(runs[0])])[0]["command"].endswith("--seed S --oracle-observations 12")
 
 
 def test_sharpness_scores_the_oracle_s_action_as_the_hand_turns(monkeypatch, tmp_path):
