@@ -115,7 +115,7 @@ def baselines_values(b) -> dict[str, object]:
 def recipe_values(learned) -> dict[str, object]:
     """``benchmarks/results/learned.json``: the recipe's PPO / oracle per task, in one line."""
     return {"recipe_summary": "; ".join(
-        f"`{r.task}` {r.ratio.mean:.2f} ({r.preset}, {r.throws:,} throws, {len(r.seeds)} "
+        f"`{r.task}` {r.ratio.mean:.2f} ({_method(r)}, {r.throws:,} throws, {len(r.seeds)} "
         f"seed{'s' if len(r.seeds) > 1 else ''})" for r in learned.recipe)}
 
 
@@ -832,21 +832,32 @@ def spread(values, digits: int = 2) -> str:
 
 @generated("benchmark-recipe", learned=LEARNED)
 def benchmark_recipe(learned) -> str:
-    """The recipe's rows per task and preset, the tasks below 0.9 x the oracle."""
+    """The recipe's rows per task, preset and method, their commands, those below 0.9 x oracle."""
     first = learned.recipe[0].runs[0]
     rows = [f"PPO: the policy's mean action on each run's {first.learned.n} throws; on the "
-            f"oracle's throws: PPO and the oracle on the same {first.observations} observations "
-            "× 16 throws; mean ± sd over the seeds; CPU time of the training, all seeds "
-            "together (two shared cores):", "",
-            "| task | preset, budget (throws) | seeds | PPO | on the oracle's throws: PPO / "
-            "oracle | PPO / oracle | training CPU time |", "|---|---|---|---|---|---|---|"]
+            "oracle's throws: PPO and the oracle on the same observations (the number in the "
+            "column) × 16 throws each; mean ± sd over the seeds; CPU time of the training "
+            "(for expert iteration also its searches and cloning), all seeds together (two "
+            "shared cores); the budget counts every simulated throw of the training:", "",
+            "| task | method, preset, budget (throws) | seeds | PPO | on the oracle's throws: "
+            "PPO / oracle (observations) | PPO / oracle | training CPU time |",
+            "|---|---|---|---|---|---|---|"]
     for r in learned.recipe:
-        rows.append(f"| `{r.task}` | {r.preset}, {r.throws:,} | {len(r.seeds)} | "
+        rows.append(f"| `{r.task}` | {_method(r)}, {r.throws:,} | {len(r.seeds)} | "
                     f"{spread(r.learned)} | {spread(r.ppo_on_oracle_throws)} / "
-                    f"{spread(r.oracle)} | {spread(r.ratio)} | {r.cpu_seconds / 60:.0f} min |")
-    below = ", ".join(f"`{r.task}` ({r.preset}) {r.ratio.mean:.2f}" for r in learned.recipe
+                    f"{spread(r.oracle)} ({r.runs[0].observations}) | {spread(r.ratio)} | "
+                    f"{r.cpu_seconds / 60:.0f} min |")
+    commands = [f"- `{r.task}`, {_method(r)}: `{r.command}`" for r in learned.recipe]
+    below = ", ".join(f"`{r.task}` ({_method(r)}) {r.ratio.mean:.2f}" for r in learned.recipe
                       if r.ratio.mean < 0.9) or "no task"
-    return "\n".join([*rows, "", f"Below 0.9 × the oracle on its throws: {below}."])
+    return "\n".join([*rows, "", "Each row's command (S: the seed):", "", *commands, "",
+                      f"Below 0.9 × the oracle on its throws: {below}."])
+
+
+def _method(row) -> str:
+    """A recipe row's preset, with its method where it is not the plain recipe."""
+    method = getattr(row, "method", "recipe")
+    return row.preset if method == "recipe" else f"{row.preset} + {method}"
 
 
 @generated("benchmark-sharpness", learned=LEARNED)
