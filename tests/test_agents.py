@@ -251,3 +251,22 @@ def test_the_total_thrower_spins_a_pair_that_makes_the_total_up():
     assert actions.shape == (11, 6) and np.all(np.abs(actions) <= 1)
     with pytest.raises(ValueError, match="two dice thrown from one hand for a total"):
         TotalThrower(make_task())
+
+
+def test_pair_normal_hands_the_policy_the_direction_the_tray_s_rule_spins_up():
+    import gymnasium as gym
+    import torch
+
+    from agents.baselines import TotalThrower, spin_up
+    from agents.episodes import Batch
+    from agents.policy import PairNormal
+
+    task = make_task(num_dice=2, target="sum")
+    batch = Batch.sample(task, 64, np.random.default_rng(0))
+    features = PairNormal(gym.spaces.Box(-1, 1, (task.obs_dim,)))(
+        torch.as_tensor(batch.observations)).numpy()
+    assert np.allclose(features[:, :-3], batch.observations)
+    assert np.allclose(spin_up(task, features[:, -3:].astype(np.float64)),
+                       TotalThrower(task)(batch.observations), atol=1e-5)
+    with pytest.raises(ValueError, match="not a total of two dice"):
+        PairNormal(gym.spaces.Box(-1, 1, (15,)))
