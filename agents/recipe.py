@@ -63,6 +63,10 @@ def run_entry(run: Path) -> dict[str, Any]:
         "on_oracle_throws": {name: {k: common[name][k] for k in ("rate", "ci")}
                              for name in ("PPO", "oracle")},
         "ratio": common["PPO"]["rate"] / common["oracle"]["rate"],
+        # The task's rule and random actions on the same throws, as fractions of the oracle.
+        "baseline_ratios": {("rule" if name == evaluation.get("rule") else name):
+                            common[name]["rate"] / common["oracle"]["rate"]
+                            for name in common if name not in ("PPO", "oracle")},
         "learned_minus_oracle": evaluation["differences"]["oracle"],
         "observations": evaluation["oracle_observations"],
     }
@@ -107,6 +111,9 @@ def rows(entries: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
             "ppo_on_oracle_throws": spread([r["on_oracle_throws"]["PPO"]["rate"] for r in runs]),
             "oracle": spread([r["on_oracle_throws"]["oracle"]["rate"] for r in runs]),
             "ratio": spread([r["ratio"] for r in runs]),
+            "baseline_ratios": {name: spread([r["baseline_ratios"][name] for r in runs])
+                                for name in runs[0].get("baseline_ratios", {})
+                                if all(name in r.get("baseline_ratios", {}) for r in runs)},
             "cpu_seconds": float(np.sum([r["cpu_seconds"] for r in runs])),
             "runs": runs, "summarised_by": "python -m agents.recipe", "commit": code_version(),
         })

@@ -838,15 +838,21 @@ def benchmark_recipe(learned) -> str:
             "oracle's throws: PPO and the oracle on the same observations (the number in the "
             "column) × 16 throws each; mean ± sd over the seeds; CPU time of the training "
             "(for expert iteration also its searches and cloning), all seeds together (two "
-            "shared cores); the budget counts every simulated throw of the training:", "",
+            "shared cores); the budget counts every simulated throw of the training; the task's "
+            "rule and random actions on the oracle's throws as fractions of the oracle's "
+            "success (means over the seeds; – where the row's runs did not keep them):", "",
             "| task | method, preset, budget (throws) | seeds | PPO | on the oracle's throws: "
-            "PPO / oracle (observations) | PPO / oracle | training CPU time |",
-            "|---|---|---|---|---|---|---|"]
+            "PPO / oracle (observations) | PPO / oracle | rule, random / oracle | "
+            "training CPU time |",
+            "|---|---|---|---|---|---|---|---|"]
     for r in learned.recipe:
+        base = getattr(r, "baseline_ratios", None)
+        others = (", ".join(f"{getattr(base, name).mean:.2f}" if hasattr(base, name) else "–"
+                            for name in ("rule", "random")) if base is not None else "–")
         rows.append(f"| `{r.task}` | {_method(r)}, {r.throws:,} | {len(r.seeds)} | "
                     f"{spread(r.learned)} | {spread(r.ppo_on_oracle_throws)} / "
                     f"{spread(r.oracle)} ({r.runs[0].observations}) | {spread(r.ratio)} | "
-                    f"{r.cpu_seconds / 60:.0f} min |")
+                    f"{others} | {r.cpu_seconds / 60:.0f} min |")
     commands = [f"- `{r.task}`, {_method(r)}: `{r.command}`" for r in learned.recipe]
     below = "; ".join(
         f"`{r.task}` ({_method(r)}) {r.ratio.mean:.2f}, PPO − oracle "
