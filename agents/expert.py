@@ -10,8 +10,9 @@ From a trained ``train.py`` run, each of ``--iterations`` rounds (DAgger-style):
    (:func:`agents.oracle.search` with :data:`LABEL_CEM`, a cheaper search than the
    evaluation's) started from the current policy's action and the task's rule; where the search
    finds nothing better on its validation draws, the label is the policy's own action;
-2. **clone**: the policy's mean action is fitted to every label gathered so far (MSE, Adam,
-   ``--steps`` batches of 256), starting from the current policy;
+2. **clone**: the policy's mean action is fitted to every label gathered so far and to its own
+   current actions on ``--anchors`` fresh observations (which keep it where no label says
+   otherwise), MSE, Adam, ``--steps`` batches of 256, starting from the current policy;
 
 then the new policy labels the next round's observations (the search starts from it). The
 result is a run folder of its own (``--runs``/``--name``): the source's config (same task,
@@ -88,13 +89,13 @@ def clone(model: Any, observations: np.ndarray, labels: np.ndarray, steps: int, 
 
 
 def expert_iteration(source: Path, out: Path, observations: int, iterations: int, steps: int,
-                     lr: float, cem: CEM = LABEL_CEM, evaluate: bool = True,
+                     lr: float, anchors: int = 0, cem: CEM = LABEL_CEM, evaluate: bool = True,
                      progress: bool = False) -> dict[str, Any]:
     """Label, clone and (``evaluate``) evaluate; the run folder ``out`` holds the result."""
     import torch
     from stable_baselines3 import PPO
 
-    from agents.episodes import make_eval_task
+    from agents.episodes import Batch, PolicyThrower, make_eval_task
     from agents.oracle import score, score_noise
 
     config = Config.load(source / "config.json")
@@ -121,8 +122,14 @@ def expert_iteration(source: Path, out: Path, observations: int, iterations: int
         label_rate = float(score(task, obs, labels, noise).mean())
         all_obs.append(obs)
         all_labels.append(labels)
-        loss = clone(model, np.concatenate(all_obs), np.concatenate(all_labels), steps, lr,
-                     config.seed + k)
+        # Anchors: the current policy's own actions on fresh observations, so that the
+        # cloning moves the policy where the labels say and keeps it elsewhere.
+        anchor, anchor_actions = obs[:0], labels[:0]
+        if anchors:
+            anchor = Batch.sample(task, anchors, rng, **episode).observations
+            anchor_actions = np.asarray(PolicyThrower(model)(anchor), np.float64)
+        loss = clone(model, np.concatenate([*all_obs, anchor]),
+                     np.concatenate([*all_labels, anchor_actions]), steps, lr, config.seed + k)
         moved = float(np.mean(np.linalg.norm(labels - own, axis=1) > 1e-9))
         rounds.append({"observations": len(obs), "labels_moved": moved,
                        "policy_on_fresh_draws": own_rate, "labels_on_fresh_draws": label_rate,
@@ -130,7 +137,8 @@ def expert_iteration(source: Path, out: Path, observations: int, iterations: int
         print(f"round {k + 1}/{iterations}: {len(obs)} labels ({moved:.0%} moved from the "
               f"policy's action); on 8 fresh draws each: policy {own_rate:.3f}, labels "
               f"{label_rate:.3f}; clone MSE {loss:.2e}", flush=True)
-    searched = iterations * observations * cem.throws_per_observation(2)
+    starts = 2 if task.n_dice == 1 else 1  # the policy, and the hand-written thrower for one die
+    searched = iterations * observations * cem.throws_per_observation(starts)
     scored = iterations * observations * 8 * 2
     model.num_timesteps = sessions[-1]["throws"]
     write_saved(out / "model.zip", model.save)
@@ -142,13 +150,14 @@ def expert_iteration(source: Path, out: Path, observations: int, iterations: int
         for s in [*sessions, session]:
             f.write(json.dumps(s) + "\n")
     info = {"source": source.name, "iterations": iterations, "observations": observations,
-            "steps": steps, "lr": lr, "cem": asdict(cem), "label_seed": LABEL_SEED,
+            "anchors": anchors, "steps": steps, "lr": lr, "cem": asdict(cem),
+            "label_seed": LABEL_SEED,
             "simulated_throws": searched + scored, "rounds": rounds,
             "torch_threads": torch.get_num_threads(),
             "command": "python -m agents.expert SOURCE " + " ".join(
                 f"--{k} {v}" for k, v in (("observations", observations),
-                                          ("iterations", iterations), ("steps", steps),
-                                          ("lr", lr)))}
+                                          ("iterations", iterations), ("anchors", anchors),
+                                          ("steps", steps), ("lr", lr)))}
     write_json(out / "expert.json", info, indent=2)
     print(f"expert iteration: {session['cpu_seconds']:.0f} CPU s, {searched + scored:,} "
           f"throws simulated; wrote {out}", flush=True)
@@ -170,13 +179,18 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--observations", type=int, default=1000,
                         help="observations labelled per round (default 1000)")
     parser.add_argument("--iterations", type=int, default=1, help="rounds (default 1)")
-    parser.add_argument("--steps", type=int, default=1000,
-                        help="cloning steps per round, batches of 256 (default 1000)")
+    parser.add_argument("--anchors", type=int, default=2000,
+                        help="fresh observations per round whose target is the policy's own "
+                             "action (default 2000)")
+    parser.add_argument("--steps", type=int, default=500,
+                        help="cloning steps per round, batches of 256 (default 500)")
     parser.add_argument("--lr", type=float, default=3e-4, help="cloning's Adam rate")
     parser.add_argument("--torch-threads", type=int, default=None, help="PyTorch's threads")
     parser.add_argument("--no-evaluate", dest="evaluate", action="store_false",
                         help="skip the evaluation")
     args = parser.parse_args(argv)
+    if args.anchors < 0:
+        parser.error(f"argument --anchors: must be >= 0, got {args.anchors}")
     for key in ("observations", "iterations", "steps"):
         if getattr(args, key) < 1:
             parser.error(f"argument --{key}: must be >= 1, got {getattr(args, key)}")
@@ -191,7 +205,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         torch.set_num_threads(args.torch_threads)
     try:
         expert_iteration(args.source, out, args.observations, args.iterations, args.steps,
-                         args.lr, evaluate=args.evaluate)
+                         args.lr, args.anchors, evaluate=args.evaluate)
     except RunError as error:
         parser.error(str(error))
     return 0
