@@ -51,6 +51,7 @@ from agents.oracle import CEM, search
 # evaluation's oracle (agents.oracle.CEM()), so that a thousand labels cost minutes.
 LABEL_CEM = CEM(global_candidates=16, restarts=1, iterations=3, population=16, noise_samples=8,
                 finalists=2, validation_samples=32, chunk=32)
+SEARCHES = {"label": LABEL_CEM, "oracle": CEM()}
 LABEL_SEED = 4 * 10**6  # offset of the labels' observations from the run's seed
 
 
@@ -157,7 +158,9 @@ def expert_iteration(source: Path, out: Path, observations: int, iterations: int
             "command": "python -m agents.expert SOURCE " + " ".join(
                 f"--{k} {v}" for k, v in (("observations", observations),
                                           ("iterations", iterations), ("anchors", anchors),
-                                          ("steps", steps), ("lr", lr)))}
+                                          ("steps", steps), ("lr", lr)))
+            + ("" if cem == LABEL_CEM else " --search oracle" if cem == CEM() else
+               " (a search of its own: see cem)")}
     write_json(out / "expert.json", info, indent=2)
     print(f"expert iteration: {session['cpu_seconds']:.0f} CPU s, {searched + scored:,} "
           f"throws simulated; wrote {out}", flush=True)
@@ -185,6 +188,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--steps", type=int, default=500,
                         help="cloning steps per round, batches of 256 (default 500)")
     parser.add_argument("--lr", type=float, default=3e-4, help="cloning's Adam rate")
+    parser.add_argument("--search", choices=sorted(SEARCHES), default="label",
+                        help="the labelling search: 'label' (LABEL_CEM, default) or 'oracle' "
+                             "(the evaluation's oracle, CEM(): about 7 times the throws)")
     parser.add_argument("--torch-threads", type=int, default=None, help="PyTorch's threads")
     parser.add_argument("--no-evaluate", dest="evaluate", action="store_false",
                         help="skip the evaluation")
@@ -205,7 +211,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         torch.set_num_threads(args.torch_threads)
     try:
         expert_iteration(args.source, out, args.observations, args.iterations, args.steps,
-                         args.lr, args.anchors, evaluate=args.evaluate)
+                         args.lr, args.anchors, SEARCHES[args.search], evaluate=args.evaluate)
     except RunError as error:
         parser.error(str(error))
     return 0

@@ -54,7 +54,8 @@ def run_entry(run: Path) -> dict[str, Any]:
         if getattr(config, key) != getattr(defaults, key))
     return {
         "run": run.name, "task": config.env_id, "preset": config.preset, "seed": config.seed,
-        "method": "recipe" if expert is None else "expert iteration",
+        "method": "recipe" if expert is None else "expert iteration" + (
+            " (the oracle's search)" if "--search oracle" in expert["command"] else ""),
         "evaluation_options": evaluation_options, "expert": expert,
         "env": config.env, "throws": sessions[-1]["throws"],
         "cpu_seconds": sum(s.get("cpu_seconds", float("nan")) for s in sessions),
@@ -99,7 +100,7 @@ def rows(entries: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
         seeds = [r["seed"] for r in runs]
         options = "".join(f" --env {e}" for e in env)
         command = f"python train.py --env-id {task} --preset {preset}{options} --seed S"
-        if method == "expert iteration":
+        if method.startswith("expert iteration"):
             command = (command.replace(" --seed S", " --seed S --no-evaluate") + "; "
                        + runs[0]["expert"]["command"].replace("SOURCE", "RUN") + evaluation)
         else:
