@@ -858,9 +858,27 @@ def benchmark_recipe(learned) -> str:
         f"`{r.task}` ({_method(r)}) {r.ratio.mean:.2f}, PPO − oracle "
         f"{sum(run.learned_minus_oracle.diff for run in r.runs) / len(r.runs):+.3f}"
         for r in learned.recipe if r.ratio.mean < 0.9) or "no task"
+    labels = [
+        f"`{r.task}` ({_method(r)}): labels "
+        f"{_mean(run.expert.rounds[-1].labels_on_fresh_draws for run in r.runs):.3f} against "
+        f"the policy's {_mean(run.expert.rounds[-1].policy_on_fresh_draws for run in r.runs):.3f}"
+        f" ({r.runs[0].expert.rounds[-1].observations} observations per seed, "
+        f"{_mean(run.expert.rounds[-1].labels_moved for run in r.runs):.0%} of the labels moved "
+        "from the policy's action)"
+        for r in learned.recipe if getattr(r, "method", "recipe") != "recipe"]
+    searched = ([f"Expert iteration's labels against the policy they were searched from, on 8 "
+                 f"fresh throws of each labelled observation (the last round, mean over the "
+                 f"seeds): {'; '.join(labels)}.", ""] if labels else [])
     return "\n".join([*rows, "", "Each row's command (S: the seed):", "", *commands, "",
+                      *searched,
                       "Below 0.9 × the oracle on its throws (PPO / oracle, and the paired "
                       f"difference in success on the same throws, mean over the seeds): {below}."])
+
+
+def _mean(values) -> float:
+    """The mean of an iterable of numbers."""
+    values = list(values)
+    return sum(values) / len(values)
 
 
 def _method(row) -> str:
