@@ -115,8 +115,9 @@ def baselines_values(b) -> dict[str, object]:
 def recipe_values(learned) -> dict[str, object]:
     """``benchmarks/results/learned.json``: the recipe's PPO / oracle per task, in one line."""
     return {"recipe_summary": "; ".join(
-        f"`{r.task}` {r.ratio.mean:.2f} ({_method(r)}, {r.throws:,} throws, {len(r.seeds)} "
-        f"seed{'s' if len(r.seeds) > 1 else ''})" for r in learned.recipe)}
+        f"`{r.task}` {spread(r.ratio)} ({_method(r)}, {r.throws:,} throws, {len(r.seeds)} "
+        f"seed{'s' if len(r.seeds) > 1 else ''}, {r.cpu_seconds / 60:.0f} min CPU)"
+        for r in learned.recipe)}
 
 
 VALUES: dict[str, Callable[[object], dict[str, object]]] = {
