@@ -274,10 +274,15 @@ def _check_preset_fits(config: Config, option: str, task: ThrowTask) -> None:
 
     params = config.hyperparams()
     extractor = params.get("policy_kwargs", {}).get("features_extractor_class")
-    if task.n_dice > 1 and extractor is not None:
+    pair = str(extractor).endswith(":PairNormal")
+    if task.n_dice > 1 and extractor is not None and not pair:
         raise OptionError(option, f"num_dice={task.n_dice}: preset {config.preset!r} gives the "
                           "policy the target face's direction (TargetNormal), built for one die; "
                           "use --preset scratch (plain MlpPolicy PPO) for several dice")
+    if pair and (task.n_dice != 2 or task.target != "sum" or task.set_dice):
+        raise OptionError(option, f"num_dice={task.n_dice}, target={task.target!r}: preset "
+                          f"{config.preset!r} gives the policy the direction of the pair of "
+                          "faces making a total of two dice (PairNormal); use --preset scratch")
     if params.get("imitation_steps") and task_rule(task) is None:
         raise OptionError(option, f"num_dice={task.n_dice}, target={task.target!r}: preset "
                           f"{config.preset!r} warm-starts by imitating the task's rule, and this "

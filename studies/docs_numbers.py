@@ -115,8 +115,9 @@ def baselines_values(b) -> dict[str, object]:
 def recipe_values(learned) -> dict[str, object]:
     """``benchmarks/results/learned.json``: the recipe's PPO / oracle per task, in one line."""
     return {"recipe_summary": "; ".join(
-        f"`{r.task}` {r.ratio.mean:.2f} ({r.preset}, {r.throws:,} throws, {len(r.seeds)} "
-        f"seed{'s' if len(r.seeds) > 1 else ''})" for r in learned.recipe)}
+        f"`{r.task}` {spread(r.ratio)} ({_method(r)}, {r.throws:,} throws, {len(r.seeds)} "
+        f"seed{'s' if len(r.seeds) > 1 else ''}, {r.cpu_seconds / 60:.0f} min CPU)"
+        for r in learned.recipe)}
 
 
 VALUES: dict[str, Callable[[object], dict[str, object]]] = {
@@ -832,21 +833,59 @@ def spread(values, digits: int = 2) -> str:
 
 @generated("benchmark-recipe", learned=LEARNED)
 def benchmark_recipe(learned) -> str:
-    """The recipe's rows per task and preset, the tasks below 0.9 x the oracle."""
+    """The recipe's rows per task, preset and method, their commands, those below 0.9 x oracle."""
     first = learned.recipe[0].runs[0]
     rows = [f"PPO: the policy's mean action on each run's {first.learned.n} throws; on the "
-            f"oracle's throws: PPO and the oracle on the same {first.observations} observations "
-            "× 16 throws; mean ± sd over the seeds; CPU time of the training, all seeds "
-            "together (two shared cores):", "",
-            "| task | preset, budget (throws) | seeds | PPO | on the oracle's throws: PPO / "
-            "oracle | PPO / oracle | training CPU time |", "|---|---|---|---|---|---|---|"]
+            "oracle's throws: PPO and the oracle on the same observations (the number in the "
+            "column) × 16 throws each; mean ± sd over the seeds; CPU time of the training "
+            "(for expert iteration also its searches and cloning), all seeds together (two "
+            "shared cores); the budget counts every simulated throw of the training; the task's "
+            "rule and random actions on the oracle's throws as fractions of the oracle's "
+            "success (means over the seeds; – where the row's runs did not keep them):", "",
+            "| task | method, preset, budget (throws) | seeds | PPO | on the oracle's throws: "
+            "PPO / oracle (observations) | PPO / oracle | rule, random / oracle | "
+            "training CPU time |",
+            "|---|---|---|---|---|---|---|---|"]
     for r in learned.recipe:
-        rows.append(f"| `{r.task}` | {r.preset}, {r.throws:,} | {len(r.seeds)} | "
+        base = getattr(r, "baseline_ratios", None)
+        others = (", ".join(f"{getattr(base, name).mean:.2f}" if hasattr(base, name) else "–"
+                            for name in ("rule", "random")) if base is not None else "–")
+        rows.append(f"| `{r.task}` | {_method(r)}, {r.throws:,} | {len(r.seeds)} | "
                     f"{spread(r.learned)} | {spread(r.ppo_on_oracle_throws)} / "
-                    f"{spread(r.oracle)} | {spread(r.ratio)} | {r.cpu_seconds / 60:.0f} min |")
-    below = ", ".join(f"`{r.task}` ({r.preset}) {r.ratio.mean:.2f}" for r in learned.recipe
-                      if r.ratio.mean < 0.9) or "no task"
-    return "\n".join([*rows, "", f"Below 0.9 × the oracle on its throws: {below}."])
+                    f"{spread(r.oracle)} ({r.runs[0].observations}) | {spread(r.ratio)} | "
+                    f"{others} | {r.cpu_seconds / 60:.0f} min |")
+    commands = [f"- `{r.task}`, {_method(r)}: `{r.command}`" for r in learned.recipe]
+    below = "; ".join(
+        f"`{r.task}` ({_method(r)}) {r.ratio.mean:.2f}, PPO − oracle "
+        f"{sum(run.learned_minus_oracle.diff for run in r.runs) / len(r.runs):+.3f}"
+        for r in learned.recipe if r.ratio.mean < 0.9) or "no task"
+    labels = [
+        f"`{r.task}` ({_method(r)}): labels "
+        f"{_mean(run.expert.rounds[-1].labels_on_fresh_draws for run in r.runs):.3f} against "
+        f"the policy's {_mean(run.expert.rounds[-1].policy_on_fresh_draws for run in r.runs):.3f}"
+        f" ({r.runs[0].expert.rounds[-1].observations} observations per seed, "
+        f"{_mean(run.expert.rounds[-1].labels_moved for run in r.runs):.0%} of the labels moved "
+        "from the policy's action)"
+        for r in learned.recipe if getattr(r, "method", "recipe") != "recipe"]
+    searched = ([f"Expert iteration's labels against the policy they were searched from, on 8 "
+                 f"fresh throws of each labelled observation (the last round, mean over the "
+                 f"seeds): {'; '.join(labels)}.", ""] if labels else [])
+    return "\n".join([*rows, "", "Each row's command (S: the seed):", "", *commands, "",
+                      *searched,
+                      "Below 0.9 × the oracle on its throws (PPO / oracle, and the paired "
+                      f"difference in success on the same throws, mean over the seeds): {below}."])
+
+
+def _mean(values) -> float:
+    """The mean of an iterable of numbers."""
+    values = list(values)
+    return sum(values) / len(values)
+
+
+def _method(row) -> str:
+    """A recipe row's preset, with its method where it is not the plain recipe."""
+    method = getattr(row, "method", "recipe")
+    return row.preset if method == "recipe" else f"{row.preset} + {method}"
 
 
 @generated("benchmark-sharpness", learned=LEARNED)

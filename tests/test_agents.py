@@ -203,8 +203,18 @@ def test_the_recipe_rows_give_each_task_s_seeds_mean_and_spread(tmp_path):
         run_entry(run(2, 0.5, 0.5, common=False))
     out = tmp_path / "learned.json"
     out.write_text(json.dumps({"tasks": ["kept"]}))
+    kept_row = {**row, "task": "DiceThrowHigh-v0"}
+    out.write_text(json.dumps({"tasks": ["kept"], "recipe": [kept_row, {**row, "seeds": [9]}]}))
     assert main([*map(str, runs), "--out", str(out)]) == 0
-    assert json.loads(out.read_text())["tasks"] == ["kept"]
+    written = json.loads(out.read_text())
+    assert written["tasks"] == ["kept"]
+    # The same task, preset and budget replaced; another task's row kept, in the tasks' order.
+    assert [(r["task"], r["seeds"]) for r in written["recipe"]] == [
+        ("DiceThrowHigh-v0", [0, 1]), ("DiceThrowD20-v0", [0, 1])]
+    config = Config.load(runs[0] / "config.json")
+    config.oracle_observations = 12
+    config.save(runs[0] / "config.json")
+    assert rows([run_entry(runs[0])])[0]["command"].endswith("--seed S --oracle-observations 12")
 
 
 def test_sharpness_scores_the_oracle_s_action_as_the_hand_turns(monkeypatch, tmp_path):
@@ -241,3 +251,22 @@ def test_the_total_thrower_spins_a_pair_that_makes_the_total_up():
     assert actions.shape == (11, 6) and np.all(np.abs(actions) <= 1)
     with pytest.raises(ValueError, match="two dice thrown from one hand for a total"):
         TotalThrower(make_task())
+
+
+def test_pair_normal_hands_the_policy_the_direction_the_tray_s_rule_spins_up():
+    import gymnasium as gym
+    import torch
+
+    from agents.baselines import TotalThrower, spin_up
+    from agents.episodes import Batch
+    from agents.policy import PairNormal
+
+    task = make_task(num_dice=2, target="sum")
+    batch = Batch.sample(task, 64, np.random.default_rng(0))
+    features = PairNormal(gym.spaces.Box(-1, 1, (task.obs_dim,)))(
+        torch.as_tensor(batch.observations)).numpy()
+    assert np.allclose(features[:, :-3], batch.observations)
+    assert np.allclose(spin_up(task, features[:, -3:].astype(np.float64)),
+                       TotalThrower(task)(batch.observations), atol=1e-5)
+    with pytest.raises(ValueError, match="not a total of two dice"):
+        PairNormal(gym.spaces.Box(-1, 1, (15,)))

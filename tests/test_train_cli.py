@@ -196,3 +196,25 @@ def test_seeds_write_one_table_with_mean_and_spread(tmp_path):
     assert len(setting["rates"]["PPO"]) == 2 and summary["config"]["seeds"] == 2
     for seed in (0, 1):
         assert (tmp_path / "group" / f"seed{seed}" / "report.md").exists()
+
+
+def test_expert_iteration_clones_the_oracle_s_labels_into_a_run_of_its_own(trained, tmp_path):
+    from agents.recipe import rows, run_entry
+
+    cmd = [sys.executable, "-m", "agents.expert", str(trained), "--runs", str(tmp_path),
+           "--name", "expert", "--observations", "3", "--steps", "4", "--iterations", "2"]
+    done = subprocess.run(cmd, cwd=ROOT, env=ENV, capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    run = tmp_path / "expert"
+    for name in ("model.zip", "report.md", "evaluation.json", "expert.json",
+                 "eval/evaluations.npz"):
+        assert (run / name).exists(), name
+    expert = json.loads((run / "expert.json").read_text())
+    assert len(expert["rounds"]) == 2 and expert["simulated_throws"] > 0
+    sessions = [json.loads(s) for s in (run / "training.jsonl").read_text().splitlines()]
+    assert sessions[-1]["throws"] == sessions[-2]["throws"] + expert["simulated_throws"]
+    (row,) = rows([run_entry(run)])
+    assert row["method"] == "expert iteration" and "python -m agents.expert RUN" in row["command"]
+    assert "--oracle-observations 1" in row["command"]
+    again = subprocess.run(cmd, cwd=ROOT, env=ENV, capture_output=True, text=True, timeout=60)
+    assert again.returncode == 2 and "exists" in again.stderr
