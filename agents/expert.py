@@ -32,7 +32,6 @@ import os
 os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
 
 import argparse
-import json
 import shutil
 import sys
 import time
@@ -44,7 +43,7 @@ from typing import Any
 import numpy as np
 
 from agents.config import Config, is_run_folder
-from agents.kept import RunError, write_json, write_saved
+from agents.kept import RunError, read_sessions, write_json, write_saved, write_sessions
 from agents.oracle import CEM, search
 
 # The labelling search: one restart from the best start, fewer candidates and draws than the
@@ -100,8 +99,7 @@ def expert_iteration(source: Path, out: Path, observations: int, iterations: int
     from agents.oracle import score, score_noise
 
     config = Config.load(source / "config.json")
-    sessions = [json.loads(line) for line in
-                (source / "training.jsonl").read_text().splitlines() if line.strip()]
+    sessions = read_sessions(source)
     out.mkdir(parents=True)
     config.name, config.runs = out.name, str(out.parent)
     config.save(out / "config.json")
@@ -147,9 +145,7 @@ def expert_iteration(source: Path, out: Path, observations: int, iterations: int
                "seconds": time.perf_counter() - start,
                "cpu_seconds": time.process_time() - cpu, "interrupted": False,
                "stage": "expert iteration"}
-    with open(out / "training.jsonl", "w") as f:
-        for s in [*sessions, session]:
-            f.write(json.dumps(s) + "\n")
+    write_sessions(out, [*sessions, session])
     info = {"source": source.name, "iterations": iterations, "observations": observations,
             "anchors": anchors, "steps": steps, "lr": lr, "cem": asdict(cem),
             "label_seed": LABEL_SEED,

@@ -59,6 +59,19 @@ def interrupted(what_is_kept: str) -> int:
     return INTERRUPTED
 
 
+def read_sessions(run: Path) -> list[dict[str, Any]]:
+    """The training sessions a run keeps, one per line of ``training.jsonl`` (none if absent)."""
+    path = Path(run) / "training.jsonl"
+    if not path.exists():
+        return []
+    return [json.loads(line) for line in path.read_text().splitlines() if line.strip()]
+
+
+def write_sessions(run: Path, sessions: list[dict[str, Any]]) -> Path:
+    """``sessions`` written whole as the run's ``training.jsonl``."""
+    return write_text(Path(run) / "training.jsonl", "".join(json.dumps(s) + "\n" for s in sessions))
+
+
 def write_text(path: Path, text: str) -> Path:
     """``text`` (UTF-8) written whole to ``path``."""
     write_atomically(Path(path), text.encode())

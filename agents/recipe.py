@@ -18,7 +18,6 @@ keys are kept.
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 from collections.abc import Sequence
 from pathlib import Path
@@ -28,7 +27,7 @@ import numpy as np
 
 from agents.benchmark import RESULTS
 from agents.config import Config, is_run_folder
-from agents.kept import RunError, read_json, write_json
+from agents.kept import RunError, read_json, read_sessions, write_json
 from dice_env.provenance import code_version
 
 
@@ -44,8 +43,7 @@ def run_entry(run: Path) -> dict[str, Any]:
     if not evaluation.get("common"):
         raise RunError(f"{run} was evaluated without the oracle: python -m agents.evaluate {run} "
                        "--oracle-observations 64")
-    sessions = [json.loads(line) for line in
-                (run / "training.jsonl").read_text().splitlines() if line.strip()]
+    sessions = read_sessions(run)
     common = evaluation["common"]
     expert = read_json(run / "expert.json", "") if (run / "expert.json").exists() else None
     defaults = Config()

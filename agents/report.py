@@ -2,20 +2,16 @@
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 from typing import Any
 
 from agents.config import Config
-from agents.kept import write_text
+from agents.kept import read_sessions, write_text
 
 
 def training_summary(run: Path) -> tuple[int, float]:
     """Throws trained and wall-clock seconds, summed over the run's sessions (resumes)."""
-    path = run / "training.jsonl"
-    if not path.exists():
-        return 0, 0.0
-    sessions = [json.loads(line) for line in path.read_text().splitlines() if line.strip()]
+    sessions = read_sessions(run)
     return (sessions[-1]["throws"] if sessions else 0,
             sum(s["seconds"] for s in sessions))
 
