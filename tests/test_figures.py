@@ -23,10 +23,6 @@ from studies.figures import figures
 ROOT = Path(__file__).resolve().parents[1]
 DOCS = ROOT / "docs"
 STUDY_FIGURES = figures()
-# Study figures whose committed JSON does not hold yet what they are drawn from, and why.
-NOT_YET = {"shapes_faces": "docs/shapes.json keeps no face counts until `python -m studies "
-                           "shapes --chunks DIR` runs again (720,000 throws: over an hour on "
-                           "2 cores)"}
 
 
 def _read(path: Path) -> dict:
@@ -70,8 +66,6 @@ def differing_pixels(drawn: Path, committed: Path, by: int = 0) -> float:
 @pytest.mark.parametrize("name", sorted(STUDY_FIGURES))
 def test_a_study_figure_is_what_its_json_draws(name, tmp_path):
     """``python -m studies.figures NAME`` redraws docs/figures/NAME.png pixel for pixel."""
-    if name in NOT_YET:
-        pytest.skip(NOT_YET[name])
     STUDY_FIGURES[name].redraw(tmp_path / f"{name}.png")
     differ = differing_pixels(tmp_path / f"{name}.png", DOCS / "figures" / f"{name}.png")
     assert differ == 0.0, f"{name}: {differ:.1%} of the pixels differ; redraw it with " \
