@@ -790,7 +790,7 @@ def advance_group(g: int, dice: GroupDice, bodies: Bodies, hulls: Hulls, pair: P
     out.energy_rise[g] = max(out.energy_rise[g], relative_rise(e_max, e_start, e_tol))
 
 
-@njit(cache=True, forceinline=True)
+@njit(cache=True, forceinline=True, _nrt=False)
 def pair_depths(x: np.ndarray, q: np.ndarray, vertices: np.ndarray, n_vertices: np.ndarray,
                 r_max: np.ndarray, world: np.ndarray, placed: np.ndarray, axes: np.ndarray,
                 directions: np.ndarray, separating: np.ndarray, depths: np.ndarray,
@@ -867,7 +867,7 @@ def _place(world: np.ndarray, a: int, vertices: np.ndarray, count: int, x: np.nd
             world[a, 0, 2]
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _group_jump(planes: np.ndarray, lowest: np.ndarray, speed: np.ndarray, x: np.ndarray,
                 u: np.ndarray, ang: np.ndarray, force: np.ndarray, bodies: Bodies,
                 rotation: bool, dt: float, limit: int) -> int:
