@@ -660,8 +660,8 @@ def advance_group(g: int, dice: GroupDice, bodies: Bodies, hulls: Hulls, pair: P
             x0, x1, x2 = x[a, 0], x[a, 1], x[a, 2]
             law = (contact_law, stick, vmin, midpoint, rotation, h, h / m, m * g_acc)
             (f0, f1, f2, t0, t1, t2, spring, spring_t, touching[a], approach[a], fastest[a],
-             sink) = die_on_planes(
-                a, a * n_v, n_vertices[a], flat, planes, law, contacts,
+             sink) = die_on_planes(  # unsigned rows: indexed with no look for a negative
+                a, np.uint64(a * n_v), np.uint64(n_vertices[a]), flat, planes, law, contacts,
                 (q[a, 0, 0], q[a, 0, 1], q[a, 0, 2], q[a, 1, 0], q[a, 1, 1], q[a, 1, 2],
                  q[a, 2, 0], q[a, 2, 1], q[a, 2, 2]),
                 ((x0, x1, x2), (u0, u1, u2), (w0, w1, w2), (cu0, cu1, cu2), (cw0, cw1, cw2)),
