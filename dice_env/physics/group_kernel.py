@@ -619,7 +619,8 @@ def advance_group(g: int, dice: GroupDice, bodies: Bodies, hulls: Hulls, pair: P
     fine, coarse = pair.near, pair.apart
     h_last, moved = fine * dt, 1  # the last move's step, and its steps with its jump
     depths = np.empty((n_dice, n_dice))  # each pair's overlap (< 0: a gap), as pair_depths
-    normals, speed = np.empty((n_dice, n_dice, 3)), np.empty(n_dice)
+    gaps2, normals = np.empty((n_dice, n_dice)), np.empty((n_dice, n_dice, 3))
+    speed = np.empty(n_dice)  # each die's speed bound, taken as needed (_speed)
     overlap, abort = out.overlap[g], out.abort
     while step < n_steps:
         passes, end = next_pass(passes, abort)
@@ -627,11 +628,12 @@ def advance_group(g: int, dice: GroupDice, bodies: Bodies, hulls: Hulls, pair: P
             break
         step += 1
         apart = pair_depths(x, q, vertices, n_vertices, r_max, world, placed, axes, directions,
-                            separating, depths, normals)  # every pair's bounding spheres apart
-        _speeds(u, w, r_max, speed)
+                            separating, depths, gaps2, normals)  # every pair's spheres apart
+        for a in range(n_dice):
+            speed[a] = np.nan
         moves = min(fine, n_steps - step + 1)  # ``coarse`` while no pair can meet within them
-        if coarse > fine and step - 1 + coarse <= n_steps and out_of_reach(depths, speed,
-                                                                           coarse * dt):
+        if coarse > fine and step - 1 + coarse <= n_steps and out_of_reach(
+                depths, gaps2, r_max, u, w, speed, coarse * dt):
             moves = coarse
         h = moves * dt
         if midpoint and h != h_last:  # the last kick, as it would be over this step
@@ -648,9 +650,8 @@ def advance_group(g: int, dice: GroupDice, bodies: Bodies, hulls: Hulls, pair: P
             cu[a, 0], cu[a, 1], cu[a, 2], cw[a, 0], cw[a, 1], cw[a, 2] = cu0, cu1, cu2, cw0, cw1, \
                 cw2
             l0, l1, l2 = ang[a, 0], ang[a, 1], ang[a, 2]
-            for r in range(3):  # this die's rotation and inertia, as the single die's kernel
-                for c in range(3):  # takes them (a view of q[a] costs a reference count)
-                    qa[r, c], inv_a[r, c] = q[a, r, c], inv_inertia[a, r, c]
+            if not inv_iso[a] > 0.0:  # else angular_velocity reads neither
+                _take(a, q, inv_inertia, inv_iso, qa, inv_a)
             wl0, wl1, wl2 = angular_velocity(qa, inv_a, inv_iso[a], l0, l1, l2)
             m = mass[a]
             kinetic[a] = 0.5 * m * (u0 * u0 + u1 * u1 + u2 * u2) + 0.5 * (
@@ -659,8 +660,8 @@ def advance_group(g: int, dice: GroupDice, bodies: Bodies, hulls: Hulls, pair: P
             x0, x1, x2 = x[a, 0], x[a, 1], x[a, 2]
             law = (contact_law, stick, vmin, midpoint, rotation, h, h / m, m * g_acc)
             (f0, f1, f2, t0, t1, t2, spring, spring_t, touching[a], approach[a], fastest[a],
-             sink) = die_on_planes(
-                a, a * n_v, n_vertices[a], flat, planes, law, contacts,
+             sink) = die_on_planes(  # unsigned rows: indexed with no look for a negative
+                a, np.uint64(a * n_v), np.uint64(n_vertices[a]), flat, planes, law, contacts,
                 (q[a, 0, 0], q[a, 0, 1], q[a, 0, 2], q[a, 1, 0], q[a, 1, 1], q[a, 1, 2],
                  q[a, 2, 0], q[a, 2, 1], q[a, 2, 2]),
                 ((x0, x1, x2), (u0, u1, u2), (w0, w1, w2), (cu0, cu1, cu2), (cw0, cw1, cw2)),
@@ -734,6 +735,8 @@ def advance_group(g: int, dice: GroupDice, bodies: Bodies, hulls: Hulls, pair: P
         jump = 1
         # only moves apart jump, as stepping would take them; no record falls inside a jump
         if options.flight and apart and moves == coarse and touching.max() == 0:
+            for a in range(n_dice):
+                _speed(a, u, w, r_max, speed)
             jump = min(_group_jump(planes, lowest, speed, x, u, ang, force, bodies,
                                    rotation, h, (n_steps - step + 1) // moves),
                        (next_record - step + moves) // moves)
@@ -741,9 +744,7 @@ def advance_group(g: int, dice: GroupDice, bodies: Bodies, hulls: Hulls, pair: P
         for a in range(n_dice):
             dt_m = h / mass[a]
             dv0, dv1, dv2 = force[a, 0] * dt_m, force[a, 1] * dt_m, force[a, 2] * dt_m
-            for r in range(3):  # this die's rotation and inertia, as the single die's kernel
-                for c in range(3):  # takes them
-                    qa[r, c], inv_a[r, c] = q[a, r, c], inv_inertia[a, r, c]
+            _take(a, q, inv_inertia, inv_iso, qa, inv_a)
             finite, (x0, x1, x2), (nu0, nu1, nu2), (l0, l1, l2), (w0, w1, w2) = die_move(
                 (x[a, 0], x[a, 1], x[a, 2]), (u[a, 0], u[a, 1], u[a, 2]),
                 (ang[a, 0], ang[a, 1], ang[a, 2]), (w[a, 0], w[a, 1], w[a, 2]),
@@ -790,15 +791,17 @@ def advance_group(g: int, dice: GroupDice, bodies: Bodies, hulls: Hulls, pair: P
     out.energy_rise[g] = max(out.energy_rise[g], relative_rise(e_max, e_start, e_tol))
 
 
-@njit(cache=True, forceinline=True)
+@njit(cache=True, forceinline=True, _nrt=False)
 def pair_depths(x: np.ndarray, q: np.ndarray, vertices: np.ndarray, n_vertices: np.ndarray,
                 r_max: np.ndarray, world: np.ndarray, placed: np.ndarray, axes: np.ndarray,
                 directions: np.ndarray, separating: np.ndarray, depths: np.ndarray,
-                normals: np.ndarray) -> bool:
+                gaps2: np.ndarray, normals: np.ndarray) -> bool:
     """Each pair's overlap ``depths`` (N, N; < 0: at least that far apart) and its ``normals``.
 
     Pairs whose bounding spheres meet by :func:`least_overlap` (their dice placed in ``world``,
-    ``placed``), the others by their spheres' gap. Returns whether every pair's spheres are apart.
+    ``placed``; ``gaps2`` -1), the others' depth ``-inf`` and their centres' squared distance in
+    ``gaps2`` (the gap for :func:`out_of_reach`, taken only as needed). Returns whether every
+    pair's spheres are apart.
     """
     n_dice = x.shape[0]
     for a in range(n_dice):
@@ -810,9 +813,9 @@ def pair_depths(x: np.ndarray, q: np.ndarray, vertices: np.ndarray, n_vertices: 
             reach = r_max[a] + r_max[b]
             distance2 = d0 * d0 + d1 * d1 + d2 * d2
             if distance2 >= reach * reach:
-                depths[a, b] = reach - math.sqrt(distance2)
+                depths[a, b], gaps2[a, b] = -np.inf, distance2
                 continue
-            apart = False
+            apart, gaps2[a, b] = False, -1.0
             for c in (a, b):
                 if not placed[c]:
                     _place(world, c, vertices, n_vertices[c], x, q)
@@ -824,26 +827,48 @@ def pair_depths(x: np.ndarray, q: np.ndarray, vertices: np.ndarray, n_vertices: 
 
 
 @njit(cache=True, forceinline=True, _nrt=False)
-def _speeds(u: np.ndarray, w: np.ndarray, r_max: np.ndarray, speed: np.ndarray) -> None:
-    """Each die's fastest point's speed bound, ``|u| + r_max |w|``, into ``speed`` (N,)."""
-    for a in range(u.shape[0]):
+def _speed(a: int, u: np.ndarray, w: np.ndarray, r_max: np.ndarray, speed: np.ndarray) -> float:
+    """Die ``a``'s speed bound, ``|u| + r_max |w|``, kept in ``speed`` (NaN: not yet taken)."""
+    if math.isnan(speed[a]):
         speed[a] = math.sqrt(u[a, 0] ** 2 + u[a, 1] ** 2 + u[a, 2] ** 2) + r_max[a] * math.sqrt(
             w[a, 0] ** 2 + w[a, 1] ** 2 + w[a, 2] ** 2)
+    return speed[a]
 
 
 @njit(cache=True, forceinline=True, _nrt=False)
-def out_of_reach(depths: np.ndarray, speed: np.ndarray, h: float) -> bool:
+def out_of_reach(depths: np.ndarray, gaps2: np.ndarray, r_max: np.ndarray, u: np.ndarray,
+                 w: np.ndarray, speed: np.ndarray, h: float) -> bool:
     """Whether no two dice can meet within a time ``h``.
 
-    Each pair's gap, ``-depths`` (:func:`pair_depths`), must exceed twice what the dice may
-    close by at their ``speed`` (:func:`_speeds`): a plane's force changes a velocity over many
-    steps, not within a few.
+    Each pair's gap, ``-depths`` or its spheres' (``gaps2``, :func:`pair_depths`), must exceed
+    twice what the dice may close by at their speed (:func:`_speed`): a plane's force changes
+    a velocity over many steps, not within a few.
     """
     for a in range(depths.shape[0]):
         for b in range(a + 1, depths.shape[0]):
-            if not -depths[a, b] > 2.0 * h * (speed[a] + speed[b]):
+            depth = depths[a, b]
+            if gaps2[a, b] >= 0.0:
+                depth = r_max[a] + r_max[b] - math.sqrt(gaps2[a, b])
+            if not -depth > 2.0 * h * (_speed(a, u, w, r_max, speed)
+                                       + _speed(b, u, w, r_max, speed)):
                 return False
     return True
+
+
+@njit(cache=True, forceinline=True, _nrt=False)
+def _take(a: int, q: np.ndarray, inv_inertia: np.ndarray, inv_iso: np.ndarray, qa: np.ndarray,
+          inv_a: np.ndarray) -> None:
+    """Die ``a``'s rotation into ``qa``, its inertia into ``inv_a`` unless isotropic (unread).
+
+    As the single die's kernel takes them: a view of ``q[a]`` costs a reference count.
+    """
+    for r in range(3):
+        for c in range(3):
+            qa[r, c] = q[a, r, c]
+    if not inv_iso[a] > 0.0:  # angular_velocity reads it
+        for r in range(3):
+            for c in range(3):
+                inv_a[r, c] = inv_inertia[a, r, c]
 
 
 @njit(cache=True, forceinline=True, _nrt=False)
@@ -867,13 +892,13 @@ def _place(world: np.ndarray, a: int, vertices: np.ndarray, count: int, x: np.nd
             world[a, 0, 2]
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _group_jump(planes: np.ndarray, lowest: np.ndarray, speed: np.ndarray, x: np.ndarray,
                 u: np.ndarray, ang: np.ndarray, force: np.ndarray, bodies: Bodies,
                 rotation: bool, dt: float, limit: int) -> int:
     """Flight steps the whole group takes at once (at least 1), each die's as :func:`flight_jump`.
 
-    Every pair stays out of reach (:func:`out_of_reach`, ``speed`` as it takes them) over the
+    Every pair stays out of reach (:func:`out_of_reach`, ``speed`` as :func:`_speed`) over the
     steps, as stepping would find it: under gravity alone a pair's distance shrinks by
     ``dt |u_a - u_b|`` a step, and the reach grows with the speeds.
     """
