@@ -73,15 +73,6 @@ def test_report_written_by_the_cli(tmp_path):
 
 
 @pytest.mark.slow
-def test_default_is_ten_times_cheaper_than_stepping_at_the_same_error():
-    scene = Scene()
-    start = cv.trajectory_start(scene, 64, np.random.default_rng(4))
-    stepped = cv.run_at(scene, start, cv.HORIZON, scene.step, free_flight=False)
-    jumped = cv.run_at(scene, start, cv.HORIZON, scene.step)
-    assert stepped[1] > 10 * jumped[1]
-
-
-@pytest.mark.slow
 def test_vigorous_outcome_statistics_agree_between_dt_and_dt_over_4():
     result = cv.outcome_test(Scene(), throws.RELEASES[2], 3000, np.random.default_rng(5))
     assert result["p_faces"] > 0.001 and result["p_success"] > 0.001
