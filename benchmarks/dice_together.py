@@ -1,6 +1,6 @@
-"""Cost of a throw against the number of dice thrown together: groups of 1, 2, 5 and 12 d6.
+"""Cost of a throw against the number of dice thrown together: groups of 1, 2, 6 and 12 d6.
 
-    python benchmarks/dice_together.py                  # 1, 2, 5, 12 dice, about 3 minutes
+    python benchmarks/dice_together.py                  # 1, 2, 6, 12 dice, about 3 minutes
     python benchmarks/dice_together.py --dice 1 2 --throws 256 --repeats 3
     python benchmarks/dice_together.py --throws 240 --mujoco 2 12 --die-friction regularized
 
@@ -21,16 +21,19 @@ Then a pair whose dice (almost) never meet: two d6 from the same hand but :data:
 as a pair (``simulate_group``) and as its two dice thrown alone one after the other
 (``simulate``), on one thread, CPU time: the pair's cost over its dice's.
 
-``--mujoco 2 12`` adds MuJoCo on the same throws of those groups (``pip install mujoco``): N
+``--mujoco 2 6 12`` adds MuJoCo on the same throws of those groups (``pip install mujoco``): N
 free boxes of the die's size, mass and inertia in the same tray (a plane floor and four plane
 walls), every geom with the table's friction (MuJoCo takes the larger of a pair's), once at
 its default contact and 2 ms step, once with a contact that bounces like the table's (the
 ``solref`` time constant and damping ratio of our landing's spring, at a quarter of that time
-constant as its step, as ``benchmarks/step_limit.py`` found it needs). Each throw runs until
-the group rule of ``dice_env.physics.group_kernel`` holds on MuJoCo's energies (no energy left in
-the throw can change any die's face: the total less the other dice's resting energy below each
-die's lock), checked every millisecond of simulated time, or 10 s; timed as the CPU time of
-its ``mj_step`` calls.
+constant as its step, as ``benchmarks/step_limit.py`` found it needs). Each group runs twice
+on both sides: to decided faces, until the group rule of ``dice_env.physics.group_kernel`` holds
+on MuJoCo's energies (no energy left in the throw can change any die's face: the total less the
+other dice's resting energy below each die's lock); and to rest, until every corner of every
+die has stayed slower than the scene's rest speed, and each die's kinetic energy below
+``0.5 m v_rest**2``, for the rest hold (ours also asks three corners of each die in contact;
+MuJoCo's contacts are not counted). MuJoCo's rule is checked every millisecond of simulated
+time, for at most 10 s; timed as the CPU time of its ``mj_step`` calls.
 """
 
 from __future__ import annotations
@@ -57,12 +60,16 @@ from dice_env.throws import HAND, group_throws, tray_scene
 APART = 0.12  # m between the dice of the pair that never meets
 
 
-def ours_in_tray(n_dice: int, throws: int, repeats: int, seed: int, contact: DieContact) -> tuple:
+UNTIL = ("decided", "rest")  # the two ends of a throw compared with MuJoCo
+
+
+def ours_in_tray(n_dice: int, throws: int, repeats: int, seed: int, contact: DieContact,
+                 until: str = "decided") -> tuple:
     """The tray, ``n_dice`` d6, their seeded throws, our least CPU time and the result."""
     scene = tray_scene()
     dice = (Die(),) * n_dice
     state = group_throws(scene, dice, throws, np.random.default_rng(seed))
-    seconds, res = timed(lambda: simulate_group(scene, dice, state, until="decided",
+    seconds, res = timed(lambda: simulate_group(scene, dice, state, until=until,
                                                    contact=contact, num_threads=1), repeats)
     return scene, dice, state, seconds, res
 
@@ -153,20 +160,62 @@ def bouncing_contact(scene: Scene) -> tuple[str, float]:
     return f'solref="{time_constant:.6g} {zeta:.6g}"', time_constant / 4
 
 
-def mujoco_decided(scene: Scene, state: GroupState, model) -> dict:
-    """MuJoCo on the throws ``state`` until each throw is decided by the group rule."""
+class _Decided:
+    """The group rule on MuJoCo's energies: no energy left can change any die's face."""
+
+    def __init__(self, scene: Scene, n: int) -> None:
+        die = scene.die
+        self.lock, self.weight, self.n = lock_energy(scene), die.mass * scene.gravity, n
+        self.floor = self.weight * float(die.resting_heights.min())  # a die's least energy
+        self.inertia, self.die = np.diag(die.inertia_body), die
+
+    def __call__(self, data, t: float) -> bool:
+        n, die = self.n, self.die
+        vel = data.qvel.reshape(n, 6)
+        energy = float(0.5 * die.mass * (vel[:, :3] ** 2).sum()
+                       + 0.5 * (self.inertia * vel[:, 3:] ** 2).sum()
+                       + self.weight * data.qpos.reshape(n, 7)[:, 2].sum())
+        read = die.face_read(data.xmat[1:].reshape(n, 3, 3), UP)
+        return bool(np.all(energy - (n - 1) * self.floor < self.lock[read - 1]))
+
+
+class _AtRest:
+    """Every corner slower than the rest speed, and the kinetic energy low, for the hold."""
+
+    def __init__(self, scene: Scene, n: int) -> None:
+        self.corners, self.n, self.rest = scene.die.vertices_body, n, scene.rest
+        self.mass, self.inertia = scene.die.mass, np.diag(scene.die.inertia_body)
+        self.quiet_since: float | None = None
+
+    def __call__(self, data, t: float) -> bool:
+        vel = data.qvel.reshape(self.n, 6)
+        rot = data.xmat[1:].reshape(self.n, 3, 3)
+        # a corner's velocity: v + R (w_body x r_body); the free joint's spin is in body axes
+        corner = vel[:, None, :3] + np.einsum("nij,nkj->nki", rot,
+                                              np.cross(vel[:, None, 3:], self.corners))
+        v2 = self.rest.speed ** 2
+        kinetic = 0.5 * (self.mass * (vel[:, :3] ** 2).sum(axis=1)
+                         + (self.inertia * vel[:, 3:] ** 2).sum(axis=1))
+        if (corner ** 2).sum(axis=2).max() >= v2 or kinetic.max() >= 0.5 * self.mass * v2:
+            self.quiet_since = None
+            return False
+        self.quiet_since = t if self.quiet_since is None else self.quiet_since
+        return t - self.quiet_since >= self.rest.hold
+
+
+STOPS = {"decided": _Decided, "rest": _AtRest}
+
+
+def mujoco_run(scene: Scene, state: GroupState, model, until: str) -> dict:
+    """MuJoCo on the throws ``state`` until each throw ends by ``until`` (:data:`STOPS`)."""
     import mujoco
 
     die = scene.die
     b, n = state.batch_size, state.n_dice
     data = mujoco.MjData(model)
-    lock = lock_energy(scene)
-    weight = die.mass * scene.gravity
-    floor = weight * float(die.resting_heights.min())  # each die's least energy, at rest
-    inertia = np.diag(die.inertia_body)
     block = max(1, round(CHECK_EVERY / model.opt.timestep))
     n_blocks = math.ceil(scene.t_max / (block * model.opt.timestep))
-    cpu, steps, decided, faces = 0.0, np.zeros(b, np.int64), np.zeros(b, bool), []
+    cpu, steps, ended, faces = 0.0, np.zeros(b, np.int64), np.zeros(b, bool), []
     for k in range(b):
         mujoco.mj_resetData(model, data)
         for i in range(n):
@@ -175,51 +224,48 @@ def mujoco_decided(scene: Scene, state: GroupState, model) -> dict:
             mujoco.mju_mat2Quat(data.qpos[7 * i + 3:7 * i + 7], q.ravel())
             data.qvel[6 * i:6 * i + 6] = np.concatenate(
                 [state.velocity[k, i], q.T @ state.angular_velocity[k, i]])
+        stop = STOPS[until](scene, n)
         for _ in range(n_blocks):
             begin = time.thread_time()
             mujoco.mj_step(model, data, nstep=block)
             cpu += time.thread_time() - begin
             steps[k] += block
-            rot = data.xmat[1:].reshape(n, 3, 3)
-            vel = data.qvel.reshape(n, 6)
-            energy = float(0.5 * die.mass * (vel[:, :3] ** 2).sum()
-                           + 0.5 * (inertia * vel[:, 3:] ** 2).sum()
-                           + weight * data.qpos.reshape(n, 7)[:, 2].sum())
-            read = die.face_read(rot, UP)
-            if np.all(energy - (n - 1) * floor < lock[read - 1]):
-                decided[k] = True
+            if stop(data, steps[k] * model.opt.timestep):
+                ended[k] = True
                 break
         faces.append(die.face_read(data.xmat[1:].reshape(n, 3, 3), UP))
     return {"version": mujoco.__version__, "dt_s": model.opt.timestep, "throws": b,
-            "cpu_s": cpu, "throws_per_s": b / cpu, "decided": float(decided.mean()),
+            "cpu_s": cpu, "throws_per_s": b / cpu, "ended": float(ended.mean()),
             "sim_s": float(steps.mean() * model.opt.timestep),
             "face_counts": np.bincount(np.concatenate(faces), minlength=7)[1:].tolist()}
 
 
-def compare_mujoco(n_dice: int, throws: int, seed: int, contact: DieContact) -> dict:
-    """Ours and MuJoCo (default and bouncing contact) on the same ``throws`` of ``n_dice``."""
-    scene, dice, state, seconds, ours = ours_in_tray(n_dice, throws, 1, seed, contact)
+def compare_mujoco(n_dice: int, throws: int, seed: int, contact: DieContact,
+                   until: str) -> dict:
+    """Ours and MuJoCo (default and bouncing contact) on the same ``throws``, to ``until``."""
+    scene, dice, state, seconds, ours = ours_in_tray(n_dice, throws, 1, seed, contact, until)
     bounce, dt = bouncing_contact(scene)
     rows = {"ours": {"throws_per_s": throws / seconds, "cpu_s": seconds,
-                     "decided": float(ours.decided.mean()),
+                     "ended": float((ours.settled | (ours.decided & (until == "decided"))
+                                     ).mean()),
                      "sim_s": float(ours.steps.mean() * group_step(scene, dice))},
-            "mujoco_default": mujoco_decided(scene, state, mujoco_tray(scene, n_dice, 0.002)),
-            "mujoco_bouncing": mujoco_decided(scene, state,
-                                              mujoco_tray(scene, n_dice, dt, bounce))}
+            "mujoco_default": mujoco_run(scene, state, mujoco_tray(scene, n_dice, 0.002), until),
+            "mujoco_bouncing": mujoco_run(scene, state,
+                                          mujoco_tray(scene, n_dice, dt, bounce), until)}
     for name in ("mujoco_default", "mujoco_bouncing"):
         rows[name]["ours_vs_mujoco"] = rows["ours"]["throws_per_s"] / rows[name]["throws_per_s"]
-    return {"dice": n_dice, "throws": throws, **rows}
+    return {"dice": n_dice, "until": until, "throws": throws, **rows}
 
 
 def main() -> None:
     parser = benchmark_parser(__doc__, "dice_together")
-    parser.add_argument("--dice", type=int, nargs="+", default=[1, 2, 5, 12])
+    parser.add_argument("--dice", type=int, nargs="+", default=[1, 2, 6, 12])
     parser.add_argument("--throws", type=int, default=96,
                         help="throws of the single die (a group of N gets throws / N)")
     parser.add_argument("--repeats", type=int, default=1)
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--mujoco", type=int, nargs="*", default=[],
-                        help="groups to run through MuJoCo as well, e.g. 2 12")
+                        help="groups to run through MuJoCo as well, e.g. 2 6 12")
     parser.add_argument("--die-friction", choices=["stick_slip", "regularized"],
                         default=DieContact().friction_law.name.lower(),
                         help="the die–die friction law (DieContact.friction_law)")
@@ -255,19 +301,20 @@ def main() -> None:
           f"{apart['throws']} throws): the pair {apart['pair_cpu_s']:.3f} s, its dice alone "
           f"{alone[0]:.3f} + {alone[1]:.3f} s: {apart['pair_per_alone']:.2f}x their CPU time")
     mujoco_rows = []
-    for n_dice in args.mujoco:
-        mujoco_rows.append(compare_mujoco(n_dice, max(4, math.ceil(args.throws / n_dice)),
-                                          args.seed, contact))
+    for until in UNTIL:
+        mujoco_rows += [compare_mujoco(n_dice, max(4, math.ceil(args.throws / n_dice)),
+                                       args.seed, contact, until) for n_dice in args.mujoco]
     if mujoco_rows:
-        print("\nThe same throws in MuJoCo, one thread, CPU time, to decided faces:\n")
+        print("\nThe same throws in MuJoCo, one thread, CPU time:\n")
         print(markdown_table(
-            "dice | throws | ours throws/s | MuJoCo default (2 ms) throws/s | ours / it | "
+            "dice | to | throws | ours throws/s | MuJoCo default (2 ms) throws/s | ours / it | "
             "MuJoCo bouncing (step) throws/s | ours / it | simulated s: ours, default, bouncing | "
-            "decided: ours, default, bouncing",
-            ((r["dice"], r["throws"], f"{o['throws_per_s']:.2f}", f"{d['throws_per_s']:.2f}",
-              f"{d['ours_vs_mujoco']:.3f}", f"{c['throws_per_s']:.2f} ({c['dt_s'] * 1e6:.0f} us)",
+            "ended: ours, default, bouncing",
+            ((r["dice"], r["until"], r["throws"], f"{o['throws_per_s']:.2f}",
+              f"{d['throws_per_s']:.2f}", f"{d['ours_vs_mujoco']:.3f}",
+              f"{c['throws_per_s']:.2f} ({c['dt_s'] * 1e6:.0f} us)",
               f"{c['ours_vs_mujoco']:.2f}", f"{o['sim_s']:.2f}, {d['sim_s']:.2f}, {c['sim_s']:.2f}",
-              f"{o['decided']:.0%}, {d['decided']:.0%}, {c['decided']:.0%}")
+              f"{o['ended']:.0%}, {d['ended']:.0%}, {c['ended']:.0%}")
              for r in mujoco_rows
              for o, d, c in [(r["ours"], r["mujoco_default"], r["mujoco_bouncing"])])))
     write_json(args.out, {"mujoco": mujoco_rows, "apart_pair": apart,
