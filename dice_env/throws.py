@@ -20,7 +20,7 @@ import numpy as np
 from dice_env.intervals import wilson
 from dice_env.model.defaults import DIE_EDGE
 from dice_env.model.die import Die
-from dice_env.model.rotations import axis_angle, quaternion_to_matrix
+from dice_env.model.rotations import axis_angle, rotation_vector_to_matrix
 from dice_env.model.scene import Scene
 from dice_env.model.surroundings import tray
 from dice_env.simulation.group import GroupState
@@ -255,7 +255,8 @@ class Release:
         velocity = np.array(self.velocity) + self.sigma_velocity * rng.normal(size=(n, 3))
         spin = np.array(self.spin) + self.sigma_spin * rng.normal(size=(n, 3))
         noise = self.sigma_angle * rng.normal(size=(n, 3))
-        orientation = _rotation(noise) @ _rotation(np.array(self.tilt))
+        tilt = rotation_vector_to_matrix(np.array(self.tilt))
+        orientation = rotation_vector_to_matrix(noise) @ tilt
         return State.release(scene, position, velocity, spin, orientation)
 
 
@@ -267,14 +268,6 @@ RELEASES = (
     Release("vigorous", 0.25, (1.0, 0.2, -0.5), (25.0, -15.0, 10.0), (0.0, 0.0, 0.0),
             0.01, 0.2, 5.0, 0.2),
 )
-
-
-def _rotation(vector: np.ndarray) -> np.ndarray:
-    """Rotation matrices (..., 3, 3) of rotation vectors (..., 3)."""
-    angle = np.linalg.norm(vector, axis=-1, keepdims=True)
-    axis = np.divide(vector, angle, out=np.zeros_like(vector), where=angle > 0)
-    quat = np.concatenate([np.cos(angle / 2), np.sin(angle / 2) * axis], axis=-1)
-    return quaternion_to_matrix(quat)
 
 
 @dataclass(frozen=True)

@@ -4,7 +4,12 @@ import numpy as np
 import pytest
 
 from dice_env import ContactLaw, Die, FrictionLaw, Ground, Scene, Scheme, State, simulate
-from dice_env.model.rotations import axis_angle, matrix_to_rotation_vector, random_rotations
+from dice_env.model.rotations import (
+    axis_angle,
+    matrix_to_rotation_vector,
+    random_rotations,
+    rotation_vector_to_matrix,
+)
 
 
 def random_throws(scene: Scene, n: int, seed: int = 0, height: float = 0.1) -> State:
@@ -309,3 +314,13 @@ def test_rotation_vectors_invert_axis_angle():
     assert np.allclose(vectors / angles[:, None], axes / np.linalg.norm(axes, axis=1)[:, None],
                        atol=1e-9)
     assert np.array_equal(matrix_to_rotation_vector(np.eye(3)), np.zeros(3))
+
+
+def test_rotation_vectors_become_the_rotations_they_name():
+    rng = np.random.default_rng(4)
+    rot = random_rotations(rng, 50)
+    vectors = matrix_to_rotation_vector(rot)
+    assert np.allclose(rotation_vector_to_matrix(vectors), rot, atol=1e-12)
+    assert np.allclose(rotation_vector_to_matrix(vectors.reshape(5, 10, 3)),
+                       rot.reshape(5, 10, 3, 3), atol=1e-12)
+    assert np.array_equal(rotation_vector_to_matrix(np.zeros(3)), np.eye(3))

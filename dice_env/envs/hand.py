@@ -16,7 +16,7 @@ import numpy as np
 from dice_env.envs.keywords import check_face
 from dice_env.model.checks import as_batch, as_floats, check_nonnegative, check_positive
 from dice_env.model.die import Die
-from dice_env.model.rotations import quaternion_to_matrix, uniform_rotations, up_rotation
+from dice_env.model.rotations import rotation_vector_to_matrix, uniform_rotations, up_rotation
 from dice_env.model.scene import Scene
 from dice_env.simulation.group import GroupState
 from dice_env.simulation.simulate import State
@@ -170,9 +170,9 @@ class TaskHand:
         velocity = noisy[..., :3] * self.max_speed + np.cross(spin, self.offsets)
         hands = np.asarray(hands, dtype=np.float64).reshape(n, dice, 3, 3)
         if self.set_dice:
-            hands = _rotation_matrices(SET_ANGLE * actions[:, ACTION_DIM:].reshape(n, dice, 3)) \
-                @ hands
-        orientation = _rotation_matrices(self.orientation_noise * noise[..., 6:]) @ hands
+            turns = SET_ANGLE * actions[:, ACTION_DIM:].reshape(n, dice, 3)
+            hands = rotation_vector_to_matrix(turns) @ hands
+        orientation = rotation_vector_to_matrix(self.orientation_noise * noise[..., 6:]) @ hands
         positions = self.positions
         states = [State.release(scene, positions[i], velocity[:, i], spin[:, i], orientation[:, i])
                   for i, scene in enumerate(self.scenes)]
@@ -182,15 +182,6 @@ class TaskHand:
 def face_up_rotation(die: Die, face: int) -> np.ndarray:
     """An orientation (body to world, 3x3) in which ``die`` reads ``face``: its reading up."""
     return up_rotation(die.reading[check_face("face", face, die.n_faces) - 1])
-
-
-def _rotation_matrices(vectors: np.ndarray) -> np.ndarray:
-    """Rotation matrices (..., 3, 3) of rotation vectors (..., 3)."""
-    flat = np.reshape(vectors, (-1, 3))
-    angle = np.linalg.norm(flat, axis=1, keepdims=True)
-    safe = np.where(angle > 0, angle, 1.0)
-    quaternions = np.hstack([np.cos(angle / 2), np.sin(angle / 2) * flat / safe])
-    return quaternion_to_matrix(quaternions).reshape(*np.shape(vectors)[:-1], 3, 3)
 
 
 def _orientations(mode: str, draws: np.ndarray, die: Die) -> np.ndarray:

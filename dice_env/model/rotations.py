@@ -61,6 +61,15 @@ def matrix_to_rotation_vector(rot: np.ndarray) -> np.ndarray:
     return 2.0 * half * axis
 
 
+def rotation_vector_to_matrix(vectors: np.ndarray) -> np.ndarray:
+    """Rotation matrices (..., 3, 3) of rotation vectors (..., 3): axis times angle (rad)."""
+    flat = np.reshape(vectors, (-1, 3))
+    angle = np.linalg.norm(flat, axis=1, keepdims=True)
+    safe = np.where(angle > 0, angle, 1.0)
+    quaternions = np.hstack([np.cos(angle / 2), np.sin(angle / 2) * flat / safe])
+    return quaternion_to_matrix(quaternions).reshape(*np.shape(vectors)[:-1], 3, 3)
+
+
 def axis_angle(axis: np.ndarray, angle: float) -> np.ndarray:
     """Rotation by ``angle`` (rad) about ``axis`` (any non-zero length), shape (3, 3)."""
     k = np.asarray(axis, dtype=np.float64)
