@@ -22,7 +22,7 @@ MAX_FRAME_BYTES = 2**30  # the frames one throw may keep in "rgb_array_list" mod
 
 def observation_space(task: ThrowTask) -> spaces.Box:
     """The target's encoding in [0, 1], then each die's orientation in [-1, 1] (9 per die)."""
-    low = np.r_[np.zeros(task.target_dim),
+    low = np.r_[np.zeros(task.goal.dim),
                 -np.ones(ORIENTATION_DIM * task.n_dice)].astype(np.float32)
     return spaces.Box(low, np.ones(task.obs_dim, np.float32), dtype=np.float32)
 
@@ -115,7 +115,7 @@ def episode_hand(task: ThrowTask, settings: EnvSettings, rng: np.random.Generato
     target, hand = task.sample_hand(rng, fixed,
                                     options.get("orientation_mode", settings.orientation_mode))
     if "orientation" in options:
-        hand = check_rotation("options['orientation']", options["orientation"], task.die_shape)
+        hand = check_rotation("options['orientation']", options["orientation"], task.hand.die_shape)
     return target, hand
 
 
