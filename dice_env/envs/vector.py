@@ -23,26 +23,6 @@ from dice_env.model.checks import check_choice, check_int
 MAX_NUM_ENVS = 2**20  # about 1 kB per env in the kernel's and the env's arrays
 
 
-def as_autoreset_mode(value: object) -> AutoresetMode:
-    """``value`` as an :class:`~gymnasium.vector.AutoresetMode`: a member or its value."""
-    if isinstance(value, AutoresetMode):
-        return value
-    check_choice("autoreset_mode", value, [mode.value for mode in AutoresetMode],
-                 also=" or a gymnasium.vector.AutoresetMode")
-    return AutoresetMode(value)
-
-
-def as_reset_mask(value: object, num_envs: int) -> np.ndarray:
-    """``options["reset_mask"]``: a bool array over the envs, one True at least (None: all)."""
-    if value is None:
-        return np.ones(num_envs, np.bool_)
-    if (not isinstance(value, np.ndarray) or value.dtype != np.bool_
-            or value.shape != (num_envs,) or not value.any()):
-        raise ValueError(f"options['reset_mask'] must be a numpy bool array of shape "
-                         f"({num_envs},) with a True, got {value!r}")
-    return value
-
-
 class DiceThrowVectorEnv(VectorEnv):
     """``num_envs`` DiceThrow-v0 envs stepped together (``gym.make_vec("DiceThrow-v0", n)``).
 
@@ -70,7 +50,10 @@ class DiceThrowVectorEnv(VectorEnv):
                  autoreset_mode: AutoresetMode | str = AutoresetMode.SAME_STEP,
                  **keywords: Any) -> None:
         check_int("num_envs", num_envs, 1, MAX_NUM_ENVS)
-        self.autoreset_mode = as_autoreset_mode(autoreset_mode)
+        if not isinstance(autoreset_mode, AutoresetMode):  # or its value
+            check_choice("autoreset_mode", autoreset_mode, [mode.value for mode in AutoresetMode],
+                         also=" or a gymnasium.vector.AutoresetMode")
+        self.autoreset_mode = AutoresetMode(autoreset_mode)
         self.metadata = {**self.metadata, "autoreset_mode": self.autoreset_mode}
         self.task, self.settings = configure(("rgb_array",), render_mode, **keywords)
         self.render_mode = self.settings.render_mode
@@ -100,7 +83,11 @@ class DiceThrowVectorEnv(VectorEnv):
             raise ValueError(f"options must be None or a dict with keys among {RESET_OPTIONS}, "
                              f"got {options!r}")
         options = dict(options or {})
-        mask = as_reset_mask(options.pop("reset_mask", None), self.num_envs)
+        mask = options.pop("reset_mask", None)  # None: all
+        if mask is not None and (not isinstance(mask, np.ndarray) or mask.dtype != np.bool_
+                                 or mask.shape != (self.num_envs,) or not mask.any()):
+            raise ValueError(f"options['reset_mask'] must be a numpy bool array of shape "
+                             f"({self.num_envs},) with a True, got {mask!r}")
         return self.reset_envs(seeds, [options] * self.num_envs, mask), {}
 
     def reset_envs(self, seeds: Sequence[int | None], options: Sequence[dict[str, Any] | None],
