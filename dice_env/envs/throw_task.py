@@ -179,17 +179,9 @@ class ThrowTask:
         """The dice's centres in the hand as a pose's position: (3,) for one die, (N, 3)."""
         return self.hand.positions.reshape(*self.hand.die_shape, 3)
 
-    def fixed_target(self, target_face: object = None, target_sum: object = None) -> Any:
-        """The episode keywords ``target_face``/``target_sum`` as a fixed target (None: drawn)."""
-        return self.goal.fix(target_face, target_sum)
-
     def sample_hand(self, rng: np.random.Generator, target: Any = None,
                     orientation_mode: str = "uniform") -> tuple[Any, np.ndarray]:
-        """One episode's context: the target and the hand (3, 3), or hands (N, 3, 3).
-
-        ``orientation_mode``: "uniform" (all rotations), "flat" (a uniform face up and turn) or
-        "identity".
-        """
+        """One episode's target and hand (3, 3), or hands (N, 3, 3), as :meth:`sample_hands`."""
         targets, hands = self.sample_hands([rng], target, orientation_mode)
         return targets[0].tolist() if targets.ndim == 1 else targets[0], hands[0]
 
@@ -197,8 +189,9 @@ class ThrowTask:
                      orientation_mode: str = "uniform") -> tuple[np.ndarray, np.ndarray]:
         """One context per generator: targets (n, :attr:`target_shape`), hands (n, N, 3, 3).
 
-        ``target``: fixed, as :meth:`fixed_target` returns it, or None (drawn uniformly). Each
-        generator draws the target, then each die's orientation in turn.
+        ``target``: fixed (as :attr:`goal`'s ``fix`` returns it) or None (drawn uniformly);
+        ``orientation_mode``: "uniform" (all rotations), "flat" (a uniform face up and turn) or
+        "identity". Each generator draws the target, then each die's orientation in turn.
         """
         check_choice("orientation_mode", orientation_mode, ORIENTATION_MODES)
         n = len(rngs)
@@ -207,9 +200,9 @@ class ThrowTask:
         for i, rng in enumerate(rngs):
             targets[i] = self.goal.draw(rng) if target is None else target
             draws[i] = self.hand.draw(rng, orientation_mode)
-        hands = self.hand.orientations(orientation_mode, draws).reshape(n, *self.hand.die_shape,
-                                                                        3, 3)
-        return targets.reshape(n, *self.target_shape), hands
+        hands = self.hand.orientations(orientation_mode, draws)
+        return (targets.reshape(n, *self.target_shape),
+                hands.reshape(n, *self.hand.die_shape, 3, 3))
 
     def sample_noise(self, rng: np.random.Generator, n: int = 1) -> np.ndarray:
         """Hand noise for ``n`` throws: standard normals (n, the hand's ``noise_dim``)."""
@@ -430,23 +423,18 @@ def make_task(*, num_dice: int | None = None, scene: Scene | None = None,
     """
     check_task_keywords(keywords)
     fields_given = {name: keywords.pop(name) for name in TASK_KEYWORDS if name in keywords}
-    dice = check_num_dice(num_dice, keywords.pop("die", None))
-    scenes = [SceneKeywords(die=die, **keywords).build(scene) for die in dice]
-    return ThrowTask(scene=scenes[0], dice=tuple(s.die for s in scenes), **fields_given)
-
-
-def check_num_dice(num_dice: object, die: object) -> tuple[Any, ...]:
-    """The ``die`` keyword per die: ``num_dice`` copies of it, or its entries if a tuple."""
+    die = keywords.pop("die", None)
     if num_dice is not None:
         check_int("num_dice", num_dice, 1, MAX_NUM_DICE)
     if not isinstance(die, (tuple, list)):
-        return (die,) * (1 if num_dice is None else int(num_dice))
-    if not 1 <= len(die) <= MAX_NUM_DICE:
+        die = (die,) * (1 if num_dice is None else int(num_dice))
+    elif not 1 <= len(die) <= MAX_NUM_DICE:
         raise ValueError(f"die must be a name, a Die, or a tuple of 1 to {MAX_NUM_DICE} of "
                          f"them, got {len(die)} entries")
-    if num_dice is not None and len(die) != num_dice:
+    elif num_dice is not None and len(die) != num_dice:
         raise ValueError(f"die must hold num_dice={num_dice} dice, got {len(die)}: {die!r}")
-    return tuple(die)
+    scenes = [SceneKeywords(die=one, **keywords).build(scene) for one in die]
+    return ThrowTask(scene=scenes[0], dice=tuple(s.die for s in scenes), **fields_given)
 
 
 def task_keywords() -> set[str]:

@@ -27,18 +27,13 @@ class DiceThrowVectorEnv(VectorEnv):
     """``num_envs`` DiceThrow-v0 envs stepped together (``gym.make_vec("DiceThrow-v0", n)``).
 
     Takes :class:`~dice_env.envs.dice_throw.DiceThrowEnv`'s keywords. Every step ends every
-    episode; ``autoreset_mode`` (an :class:`~gymnasium.vector.AutoresetMode` or its value):
-
-    - ``SAME_STEP`` (the default): ``step`` returns the *next* episodes' observations, the
-      throw's own in ``info["final_obs"]`` and ``info["final_info"]``;
-    - ``NEXT_STEP``: ``step`` returns the throw's observations and info; the step after it
-      starts the next episodes (actions ignored, rewards 0), as Gymnasium's vector wrappers
-      expect;
-    - ``DISABLED``: as ``NEXT_STEP``, but ``reset`` (all envs, or ``options["reset_mask"]``)
-      must start the next episodes.
-
-    Env ``i`` draws from its generator (seeded ``seed + i`` or ``seed[i]``) exactly as a single
-    env reset with that seed, so every mode throws the same throws.
+    episode; ``autoreset_mode`` (an :class:`~gymnasium.vector.AutoresetMode` or its value) starts
+    the next ones in the same step (``SAME_STEP``, the default: the throw's own observations and
+    info in ``info["final_obs"]`` and ``info["final_info"]``), at the next step (``NEXT_STEP``:
+    actions ignored, rewards 0, as Gymnasium's vector wrappers expect) or at ``reset``
+    (``DISABLED``: all envs, or ``options["reset_mask"]``). Env ``i`` draws from its generator
+    (seeded ``seed + i`` or ``seed[i]``) as a single env reset with that seed, so every mode
+    throws the same throws.
     """
 
     metadata: ClassVar[dict[str, Any]] = {
@@ -144,10 +139,10 @@ class DiceThrowVectorEnv(VectorEnv):
 
     def _next_hands(self) -> tuple[np.ndarray, np.ndarray]:
         """The next episodes' targets and hands, drawn from each env's generator."""
+        settings = self.settings
         return self.task.sample_hands(
-            self._rngs, self.task.fixed_target(self.settings.target_face,
-                                               self.settings.target_sum),
-            self.settings.orientation_mode)
+            self._rngs, self.task.goal.fix(settings.target_face, settings.target_sum),
+            settings.orientation_mode)
 
     def _start_next(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict]:
         """NEXT_STEP's step after a throw: the next episodes, no throw; refused elsewhere."""
