@@ -341,9 +341,9 @@ def _box(points: np.ndarray, lines: _Lines, xs: np.ndarray,
 def _draw_die(image: np.ndarray, depth: np.ndarray, nearest: np.ndarray,
               pose: tuple[Die, np.ndarray, np.ndarray], camera: _Lines, xs: np.ndarray,
               ys: np.ndarray, scale: float, light: np.ndarray) -> None:
-    """Draw ``pose`` (die, offset, orientation) into ``image`` where no drawn die is nearer.
+    """Draw ``pose`` (die, offset, orientation) where no die in ``nearest`` (depths) is nearer.
 
-    A nearer board stays in front, translucent; ``nearest``: the depths of the dice drawn so far.
+    A nearer board (``depth``) stays in front, translucent.
     """
     die, offset, orientation = pose
     rows, cols = _box(np.asarray(die.vertices) @ orientation.T + offset, camera, xs, ys)

@@ -66,9 +66,9 @@ class DiceThrowVectorEnv(VectorEnv):
 
     def reset(self, *, seed: int | list[int | None] | None = None,
               options: dict[str, Any] | None = None) -> tuple[np.ndarray, dict[str, Any]]:
-        """Seed (``seed + i`` per env, or a list) and reset every env with ``options``.
+        """Seed (``seed + i`` per env, or a list) and reset every env, or ``reset_mask``'s ones.
 
-        ``options["reset_mask"]`` (a bool array over the envs) resets only those envs.
+        ``options``: as a single env's, and ``"reset_mask"``, a bool array over the envs.
         """
         if seed is None or isinstance(seed, (int, np.integer)):
             seeds = [None if seed is None else int(seed) + i for i in range(self.num_envs)]
@@ -113,10 +113,7 @@ class DiceThrowVectorEnv(VectorEnv):
 
     def step(self, actions: np.ndarray,
              ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
-        """Throw all N dice in one kernel call, then start the next episodes as ``autoreset_mode``.
-
-        NEXT_STEP: the step after a throw only starts them.
-        """
+        """Throw all N dice in one kernel call; NEXT_STEP's step after a throw only starts anew."""
         if not self._rngs:
             raise RuntimeError("call reset() before step()")
         if self._ended.any():
