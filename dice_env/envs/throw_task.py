@@ -368,8 +368,14 @@ def judge(scene: Scene, dice: Sequence[Die], result: Result | GroupResult, until
     ``""`` or the first of "foul", "unstable", "sunk", :data:`UNTIL`'s reason, "leaning" and
     "not_decided" (a face :func:`decided_reads` does not read).
     """
-    if until == "early_rest":
-        result = _held_within_t_max(result, scene, t_max)
+    if until == "early_rest":  # not settled where the hold (its quiet steps) ends after t_max
+        dt = scene.step
+        n_steps = max(1, round((scene.t_max if t_max is None else t_max) / dt))
+        late = result.settled & (np.rint(result.rest_time / dt) + 1
+                                 + math.ceil(scene.rest.hold / dt) > n_steps)
+        if late.any():
+            result = replace(result, settled=result.settled & ~late,
+                             rest_time=np.where(late, n_steps * dt, result.rest_time))
     n = len(result.unstable)
     fair = np.ones(n, np.bool_) if fair is None else fair
     sunk = result.sunk.reshape(n, -1).any(axis=1)
@@ -452,18 +458,3 @@ def check_task_keywords(keywords: dict[str, object]) -> dict[str, object]:
                          "orientation_mode, render_mode, render_width, render_height, "
                          "num_threads, device")
     return keywords
-
-
-def _held_within_t_max(result: Result, scene: Scene, t_max: float | None = None) -> Result:
-    """``result`` of an early-rest run, not ``settled`` where the hold would end after ``t_max``.
-
-    The hold is ``ceil(hold / dt)`` quiet steps; ``t_max`` defaults to the scene's.
-    """
-    dt = scene.step
-    hold_steps = math.ceil(scene.rest.hold / dt)
-    n_steps = max(1, round((scene.t_max if t_max is None else t_max) / dt))
-    late = result.settled & (np.rint(result.rest_time / dt) + 1 + hold_steps > n_steps)
-    if not late.any():
-        return result
-    return replace(result, settled=result.settled & ~late,
-                   rest_time=np.where(late, n_steps * dt, result.rest_time))
