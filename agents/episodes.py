@@ -49,7 +49,7 @@ class Batch:
     def sample(cls, task: ThrowTask, n: int, rng: np.random.Generator,
                num_threads: int | None = None, **episode: Any) -> Batch:
         """Draw ``n`` episodes as the env does (:data:`EPISODE_KEYWORDS`)."""
-        fixed = task.fixed_target(episode.get("target_face"), episode.get("target_sum"))
+        fixed = task.goal.fix(episode.get("target_face"), episode.get("target_sum"))
         pairs = [task.sample_hand(rng, fixed, episode.get("orientation_mode", "uniform"))
                  for _ in range(n)]
         targets = np.array([t for t, _ in pairs])

@@ -44,7 +44,7 @@ def measure(until: str, n: int, repeats: int, n_single: int,
         _, _, _, _, info = venv.step(actions)
         vector_s.append(time.perf_counter() - start)
         final = info["final_info"]
-        state = State.release(task.scene, task.release_position, final["release_velocity"],
+        state = State.release(task.scene, task.hand.centre, final["release_velocity"],
                               final["release_spin"], final["release_orientation"])
         start = time.perf_counter()
         result = simulate(task.scene, state, until=task.run_until)  # as ThrowTask.throw

@@ -84,7 +84,7 @@ def throw_cell(noise: float, speed: float, set_hand: bool, n: int, rng: np.rando
     hands = (np.broadcast_to(sevens_set(), (n, 2, 3, 3)) if set_hand
              else random_orientations(rng, 2 * n).reshape(n, 2, 3, 3))
     state, _ = task.release(np.tile(SET_THROW.action(speed), (n, 1)), hands,
-                            rng.standard_normal((n, task.noise_dim)))
+                            task.sample_noise(rng, n))
     return simulate_in_batches(task.scene, task.dice, state, bar, until="decided")
 
 

@@ -174,7 +174,7 @@ def test_rest_hold_decides_which_throws_settle_within_t_max():
     task = venv.unwrapped.task
     release = task.scene.die, info["release_velocity"], info["release_spin"]
     assert release[0] == Die()
-    state = dice_env.State.release(task.scene, task.release_position, info["release_velocity"],
+    state = dice_env.State.release(task.scene, task.hand.centre, info["release_velocity"],
                                    info["release_spin"], info["release_orientation"])
     waited = simulate(task.scene, state)  # the hold waited out
     np.testing.assert_array_equal(info["settled"], waited.settled)

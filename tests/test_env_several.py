@@ -78,16 +78,16 @@ def test_hand_holds_the_dice_in_rows_of_four_centred_on_the_release_point():
     task = make_task(num_dice=2)
     reach = np.linalg.norm(Die().vertices_body, axis=1).max()
     spacing = 2 * reach + HAND_GAP
-    assert task.hand_spacing == pytest.approx(spacing)
-    np.testing.assert_allclose(task.hand_offsets, [[0, -spacing / 2, 0], [0, spacing / 2, 0]])
-    np.testing.assert_allclose(task.release_positions[:, 2], task.release_height)
-    five = make_task(num_dice=5).hand_offsets
+    assert task.hand.spacing == pytest.approx(spacing)
+    np.testing.assert_allclose(task.hand.offsets, [[0, -spacing / 2, 0], [0, spacing / 2, 0]])
+    np.testing.assert_allclose(task.hand.positions[:, 2], task.release_height)
+    five = make_task(num_dice=5).hand.offsets
     np.testing.assert_allclose(five[:4, 0], -spacing / 2)  # the first row of four
     np.testing.assert_allclose(five[:4, 1], spacing * np.array([-1.5, -0.5, 0.5, 1.5]))
     np.testing.assert_allclose(five[4], [spacing / 2, 0, 0])  # the fifth, centred behind
     mixed = make_task(die=("d6", "d20"))
     d20 = np.linalg.norm(Die.standard("d20").vertices_body, axis=1).max()
-    assert mixed.hand_spacing == pytest.approx(2 * max(reach, d20) + HAND_GAP)
+    assert mixed.hand.spacing == pytest.approx(2 * max(reach, d20) + HAND_GAP)
     assert mixed.release_height > d20
 
 
@@ -97,10 +97,10 @@ def test_the_hand_is_rigid_and_each_die_has_its_own_noise():
     hands = np.tile(np.eye(3), (1, 3, 1, 1))
     state, _ = task.release(action, hands, np.zeros((1, 27)))
     v, w = action[0, :3] * task.max_speed, action[0, 3:] * task.max_spin
-    for i, r in enumerate(task.hand_offsets):
+    for i, r in enumerate(task.hand.offsets):
         np.testing.assert_allclose(state.velocity[0, i], v + np.cross(w, r))
         np.testing.assert_allclose(state.angular_velocity[0, i], w)
-        np.testing.assert_allclose(state.position[0, i], task.release_position + r)
+        np.testing.assert_allclose(state.position[0, i], task.hand.centre + r)
     assert task.sample_noise(np.random.default_rng(0), 4).shape == (4, 27)
     noise = np.zeros((1, 27))
     noise[0, 9:18] = 1.0  # die 1's own draws only

@@ -22,7 +22,7 @@ MAX_FRAME_BYTES = 2**30  # the frames one throw may keep in "rgb_array_list" mod
 
 def observation_space(task: ThrowTask) -> spaces.Box:
     """The target's encoding in [0, 1], then each die's orientation in [-1, 1] (9 per die)."""
-    low = np.r_[np.zeros(task.target_dim),
+    low = np.r_[np.zeros(task.goal.dim),
                 -np.ones(ORIENTATION_DIM * task.n_dice)].astype(np.float32)
     return spaces.Box(low, np.ones(task.obs_dim, np.float32), dtype=np.float32)
 
@@ -76,7 +76,7 @@ class EnvSettings:
                 f"render_mode='rgb_array_list' at {self.render_width}x{self.render_height} (at "
                 f"most 1 GiB of frames), got t_max={t_max:g} s ({size / 2**30:.3g} GiB); lower "
                 "t_max or the render size")
-        task.fixed_target(self.target_face, self.target_sum)
+        task.goal.fix(self.target_face, self.target_sum)
         check_choice("orientation_mode", self.orientation_mode, ORIENTATION_MODES)
         thread_count(self.num_threads)  # refuses a count numba does not have
         require_device(self.device)
@@ -110,12 +110,12 @@ def episode_hand(task: ThrowTask, settings: EnvSettings, rng: np.random.Generato
     if not isinstance(options, dict) or set(options) - set(RESET_OPTIONS):
         raise ValueError(f"options must be None or a dict with keys among {RESET_OPTIONS}, "
                          f"got {options!r}")
-    fixed = task.fixed_target(options.get("target_face", settings.target_face),
-                              options.get("target_sum", settings.target_sum))
+    fixed = task.goal.fix(options.get("target_face", settings.target_face),
+                          options.get("target_sum", settings.target_sum))
     target, hand = task.sample_hand(rng, fixed,
                                     options.get("orientation_mode", settings.orientation_mode))
     if "orientation" in options:
-        hand = check_rotation("options['orientation']", options["orientation"], task.die_shape)
+        hand = check_rotation("options['orientation']", options["orientation"], task.hand.die_shape)
     return target, hand
 
 

@@ -134,21 +134,13 @@ class TaskHand:
 
     def orientations(self, mode: str, draws: np.ndarray) -> np.ndarray:
         """The hands (n, N, 3, 3) of :meth:`draw`'s draws (n, N, 3) in ``mode``."""
-        return np.stack([_orientations(mode, draws[:, j], die)
-                         for j, die in enumerate(self.dice)], axis=1)
-
-    def check_actions(self, actions: np.ndarray, action_shape: tuple[int, ...] | None = None,
-                      ) -> tuple[np.ndarray, np.ndarray]:
-        """``actions`` (n, :attr:`action_dim`) clipped to [-1, 1], and which were clipped (n,).
-
-        NaN/inf, or another shape than ``action_shape`` (if given), raise ``ValueError``.
-        """
-        actions = as_floats("action", actions)
-        if action_shape is not None and actions.shape != action_shape:
-            raise ValueError(f"action{'s' if len(action_shape) > 1 else ''} must have shape "
-                             f"{action_shape}, got {actions.shape}")
-        actions = as_batch("action", actions, (self.action_dim,))
-        return np.clip(actions, -1.0, 1.0), np.any(np.abs(actions) > 1.0, axis=1)
+        if mode == "identity":
+            return np.tile(np.eye(3), (len(draws), len(self.scenes), 1, 1))
+        if mode == "uniform":
+            return np.stack([uniform_rotations(draws[:, j].T) for j in range(len(self.scenes))],
+                            axis=1)
+        return np.stack([[_z_turn(turn) @ face_up_rotation(die, int(f) + 1) for f, turn, _ in
+                          draws[:, j]] for j, die in enumerate(self.dice)], axis=1)
 
     def release(self, actions: np.ndarray, hands: np.ndarray,
                 noise: np.ndarray | Sequence[np.random.Generator], *,
@@ -157,10 +149,16 @@ class TaskHand:
         """Releases for ``actions`` (n, :attr:`action_dim`), ``hands`` (n, [N,] 3, 3), ``noise``.
 
         ``noise``: (n, :attr:`noise_dim`) standard normals, or one generator per throw (drawn
-        once the actions are checked, :meth:`check_actions`). Returns the State or GroupState,
-        and which actions were clipped to [-1, 1] (n,).
+        once the actions are checked). Actions are clipped to [-1, 1]; NaN/inf, or another shape
+        than ``action_shape`` (if given), raise ``ValueError``. Returns the State or GroupState,
+        and which actions were clipped (n,).
         """
-        actions, clipped = self.check_actions(actions, action_shape)
+        actions = as_floats("action", actions)
+        if action_shape is not None and actions.shape != action_shape:
+            raise ValueError(f"action{'s' if len(action_shape) > 1 else ''} must have shape "
+                             f"{action_shape}, got {actions.shape}")
+        actions = as_batch("action", actions, (self.action_dim,))
+        actions, clipped = np.clip(actions, -1.0, 1.0), np.any(np.abs(actions) > 1.0, axis=1)
         if len(noise) and isinstance(noise[0], np.random.Generator):
             noise = np.concatenate([self.sample_noise(rng) for rng in noise])
         n, dice = len(actions), len(self.scenes)
@@ -182,15 +180,6 @@ class TaskHand:
 def face_up_rotation(die: Die, face: int) -> np.ndarray:
     """An orientation (body to world, 3x3) in which ``die`` reads ``face``: its reading up."""
     return up_rotation(die.reading[check_face("face", face, die.n_faces) - 1])
-
-
-def _orientations(mode: str, draws: np.ndarray, die: Die) -> np.ndarray:
-    """Hand orientations (n, 3, 3) of ``die`` from :meth:`TaskHand.draw`'s draws (n, 3)."""
-    if mode == "uniform":
-        return uniform_rotations(draws.T)
-    if mode == "flat":
-        return np.stack([_z_turn(turn) @ face_up_rotation(die, int(f) + 1) for f, turn, _ in draws])
-    return np.tile(np.eye(3), (len(draws), 1, 1))
 
 
 def _z_turn(angle: float) -> np.ndarray:

@@ -163,7 +163,16 @@ def check_scene(scene: Scene, release_height: float) -> None:
             f"the die's weight would press a flat face's corners {sink:.3g} m into the table, "
             f"more than {MAX_SINK} of its size ({die.size:g} m): mass={die.mass:g} kg, "
             f"gravity={scene.gravity:g} m/s^2, stiffness={ground.stiffness:g} N/m")
-    _check_steps(scene)
+    step = scene.step  # the Scene checked the step itself
+    for name, value in (("t_max", scene.t_max), ("rest_hold", scene.rest.hold)):
+        if value / step > ENV_MAX_STEPS:
+            origin = (f"dt={scene.dt:g}" if scene.dt is not None else
+                      f"safety={scene.safety:g} times the critical step of "
+                      f"{scene.stiffest_plane()}, mass={scene.die.mass:g}")
+            raise ValueError(
+                f"{name} must be at most {ENV_MAX_STEPS:.0e} steps: {name}={value:g} s over a step "
+                f"of {step:.3g} s is {value / step:.3g} steps ({origin}); lower {name}, or make "
+                "the step longer")
     if not (ground.contact_law == ContactLaw.PAPER and ground.damping > 0):
         return
     g = scene.gravity * ground.normal[2]
@@ -177,20 +186,6 @@ def check_scene(scene: Scene, release_height: float) -> None:
         f"falls at most m g / (8 D) = {weight / (8.0 * damping):.3g} m/s (a drop from "
         f"release_height={release_height:g} m reaches {drop_speed:.3g} m/s; gravity="
         f"{scene.gravity:g} m/s^2). Use contact_law='gated' (the default) or a damping that small")
-
-
-def _check_steps(scene: Scene) -> None:
-    """A throw may take at most :data:`ENV_MAX_STEPS` steps (the Scene checked the step)."""
-    step = scene.step
-    for name, value in (("t_max", scene.t_max), ("rest_hold", scene.rest.hold)):
-        if value / step > ENV_MAX_STEPS:
-            origin = (f"dt={scene.dt:g}" if scene.dt is not None else
-                      f"safety={scene.safety:g} times the critical step of "
-                      f"{scene.stiffest_plane()}, mass={scene.die.mass:g}")
-            raise ValueError(
-                f"{name} must be at most {ENV_MAX_STEPS:.0e} steps: {name}={value:g} s over a step "
-                f"of {step:.3g} s is {value / step:.3g} steps ({origin}); lower {name}, or make "
-                "the step longer")
 
 
 def _base_die(base: Die, die: str | Die | None) -> Die:

@@ -62,27 +62,23 @@ def _arc(cx: float, cy: float, rx: float, ry: float, start: float, stop: float,
     return np.stack([cx + rx * np.cos(angle), cy + ry * np.sin(angle)], axis=1)
 
 
-def _glyphs() -> dict[str, tuple[np.ndarray, ...]]:
-    """The digits as polylines in their box (x in [0, 0.6], y in [0, 1], y up)."""
-    six = (np.vstack([_arc(0.62, 0.32, 0.62, 0.68, 100, 180, 6),
-                      _arc(0.3, 0.3, 0.3, 0.3, 180, -180, 20)]),)
-    return {
-        "0": (_arc(0.3, 0.5, 0.3, 0.5, 0, 360, 24),),
-        "1": (np.array([(0.1, 0.78), (0.32, 1.0), (0.32, 0.0)]),),
-        "2": (np.vstack([_arc(0.3, 0.7, 0.28, 0.3, 165, -30, 10), [(0, 0), (0.6, 0)]]),),
-        "3": (np.vstack([_arc(0.3, 0.76, 0.26, 0.24, 150, -90, 10),
-                         _arc(0.3, 0.27, 0.3, 0.27, 90, -150, 12)]),),
-        "4": (np.array([(0.45, 0.0), (0.45, 1.0), (0.0, 0.32), (0.6, 0.32)]),),
-        "5": (np.vstack([[(0.55, 1.0), (0.1, 1.0), (0.06, 0.56)],
-                         _arc(0.3, 0.32, 0.3, 0.32, 135, -140, 12)]),),
-        "6": six,
-        "7": (np.array([(0.0, 1.0), (0.6, 1.0), (0.18, 0.0)]),),
-        "8": (_arc(0.3, 0.76, 0.24, 0.24, 0, 360, 16), _arc(0.3, 0.27, 0.3, 0.27, 0, 360, 20)),
-        "9": tuple((0.6, 1.0) - line for line in six),
-    }
-
-
-GLYPHS = _glyphs()
+_SIX = (np.vstack([_arc(0.62, 0.32, 0.62, 0.68, 100, 180, 6),
+                   _arc(0.3, 0.3, 0.3, 0.3, 180, -180, 20)]),)
+# The digits as polylines in their box (x in [0, 0.6], y in [0, 1], y up).
+GLYPHS = {
+    "0": (_arc(0.3, 0.5, 0.3, 0.5, 0, 360, 24),),
+    "1": (np.array([(0.1, 0.78), (0.32, 1.0), (0.32, 0.0)]),),
+    "2": (np.vstack([_arc(0.3, 0.7, 0.28, 0.3, 165, -30, 10), [(0, 0), (0.6, 0)]]),),
+    "3": (np.vstack([_arc(0.3, 0.76, 0.26, 0.24, 150, -90, 10),
+                     _arc(0.3, 0.27, 0.3, 0.27, 90, -150, 12)]),),
+    "4": (np.array([(0.45, 0.0), (0.45, 1.0), (0.0, 0.32), (0.6, 0.32)]),),
+    "5": (np.vstack([[(0.55, 1.0), (0.1, 1.0), (0.06, 0.56)],
+                     _arc(0.3, 0.32, 0.3, 0.32, 135, -140, 12)]),),
+    "6": _SIX,
+    "7": (np.array([(0.0, 1.0), (0.6, 1.0), (0.18, 0.0)]),),
+    "8": (_arc(0.3, 0.76, 0.24, 0.24, 0, 360, 16), _arc(0.3, 0.27, 0.3, 0.27, 0, 360, 20)),
+    "9": tuple((0.6, 1.0) - line for line in _SIX),
+}
 
 
 @dataclass(frozen=True)
@@ -136,7 +132,8 @@ def render_die(scene: Scene, position: np.ndarray, orientation: np.ndarray,
     camera's keywords (:class:`View`).
     """
     camera = View(**view)
-    position, orientation = _check_pose(position, orientation)
+    position = as_shaped("position", position, (3,))
+    orientation = as_shaped("orientation", orientation, (3, 3))
     die = scene.die
     centre = position - orientation @ np.asarray(die.com)  # geometric centre, camera target
     return _render(scene, [(die, np.zeros(3), orientation)], centre,
@@ -151,13 +148,8 @@ def render_dice(scene: Scene, dice: tuple[Die, ...], positions: np.ndarray,
     middle of the dice; the image is ``view_edges`` largest dice wide, or wider to show all.
     """
     camera = View(**view)
-    positions = np.asarray(positions, dtype=np.float64)
-    orientations = np.asarray(orientations, dtype=np.float64)
-    if positions.ndim != 2 or len(positions) != len(dice) or len(orientations) != len(dice):
-        raise ValueError(f"positions and orientations must hold one row per die ({len(dice)}), "
-                         f"got {positions.shape} and {orientations.shape}")
-    for p, q in zip(positions, orientations, strict=True):
-        _check_pose(p, q)
+    positions = as_shaped("positions", positions, (len(dice), 3))  # a row per die
+    orientations = as_shaped("orientations", orientations, (len(dice), 3, 3))
     centres = positions - np.einsum("nij,nj->ni", orientations, [d.com for d in dice])
     centre = (centres.min(axis=0) + centres.max(axis=0)) / 2
     largest = max(d.size for d in dice)
@@ -349,9 +341,9 @@ def _box(points: np.ndarray, lines: _Lines, xs: np.ndarray,
 def _draw_die(image: np.ndarray, depth: np.ndarray, nearest: np.ndarray,
               pose: tuple[Die, np.ndarray, np.ndarray], camera: _Lines, xs: np.ndarray,
               ys: np.ndarray, scale: float, light: np.ndarray) -> None:
-    """Draw ``pose`` (die, offset, orientation) into ``image`` where no drawn die is nearer.
+    """Draw ``pose`` (die, offset, orientation) where no die in ``nearest`` (depths) is nearer.
 
-    A nearer board stays in front, translucent; ``nearest``: the depths of the dice drawn so far.
+    A nearer board (``depth``) stays in front, translucent.
     """
     die, offset, orientation = pose
     rows, cols = _box(np.asarray(die.vertices) @ orientation.T + offset, camera, xs, ys)
@@ -433,8 +425,12 @@ def face_art(die: Die) -> tuple[FaceArt, ...]:
     for text, polygon, normal in zip(texts, polygons, die.face_normals, strict=True):
         centre, axes = _numeral_frame(polygon, normal)
         flat = (polygon - centre) @ axes.T
-        if die.reads_down:
-            placed = _corner_placements(die, texts, polygon, flat)
+        if die.reads_down:  # a d4: near each corner, upright towards it, read with that corner up
+            placed = []
+            for corner, spot in zip(polygon, flat, strict=True):
+                reach = float(np.linalg.norm(spot))
+                label = int(np.argmax(die.reading @ _unit(corner)))
+                placed.append((texts[label], D4_PLACE * spot, spot / reach, D4_HEIGHT * reach))
         else:
             inradius = float(-_edge_lines(flat)[:, 2].max())  # about the face's origin
             placed = [(text, np.zeros(2), np.array([0.0, 1.0]), NUMERAL_FILL * inradius / fit)]
@@ -476,17 +472,6 @@ def _underlined(text: str, texts: list[str]) -> bool:
     return text in ("6", "9") or (turned != text and turned in texts)
 
 
-def _corner_placements(die: Die, texts: list[str], polygon: np.ndarray,
-                       flat: np.ndarray) -> list[tuple[str, np.ndarray, np.ndarray, float]]:
-    """A d4's face: near each corner, upright towards it, the text read with that corner up."""
-    placed = []
-    for corner, spot in zip(polygon, flat, strict=True):
-        label = int(np.argmax(die.reading @ _unit(corner)))
-        reach = float(np.linalg.norm(spot))
-        placed.append((texts[label], D4_PLACE * spot, spot / reach, D4_HEIGHT * reach))
-    return placed
-
-
 def _text_radius(text: str, texts: list[str]) -> float:
     """Half the diagonal of ``text``'s box (strokes and underline included), glyph units."""
     width = ADVANCE * (len(text) - 1) + 0.6 + 2 * STROKE
@@ -522,11 +507,7 @@ def _text_strokes(text: str, underline: bool) -> np.ndarray:
     return segments - (width / 2, (1 + low) / 2)
 
 
-# --- input and poses ----------------------------------------------------------------------
-
-def _check_pose(position: np.ndarray, orientation: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    return as_shaped("position", position, (3,)), as_shaped("orientation", orientation, (3, 3))
-
+# --- poses and the window -----------------------------------------------------------------
 
 def resting(die: Die, label: int, at: tuple[float, float] = (0.0, 0.0),
             turn: float = 0.0) -> tuple[np.ndarray, np.ndarray]:

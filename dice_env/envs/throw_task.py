@@ -1,12 +1,9 @@
 """The DiceThrow task over a batch: a hand, a target, a judged landing, a reward.
 
-As dm_control's tasks: the :class:`~dice_env.envs.hand.TaskHand` turns actions into releases, the
-kernel runs them, :func:`judge` says which throws count, the task's
-:class:`~dice_env.envs.targets.Target` scores the landing (:meth:`ThrowTask.reward`) and
-:meth:`ThrowTask.info` reports it. The single env, the vector env, the SB3 adapter and the oracle
-share this code path: a context from :meth:`ThrowTask.sample_hand`, then
-:meth:`ThrowTask.throw`. Execution settings (threads) belong to the caller: the env passes its
-own. World frame, z up.
+The :class:`~dice_env.envs.hand.TaskHand` turns actions into releases, the kernel runs them,
+:func:`judge` says which throws count and the :class:`~dice_env.envs.targets.Target` scores them.
+Every env and the oracle share this path (:meth:`ThrowTask.sample_hand`, then
+:meth:`ThrowTask.throw`). World frame, z up.
 """
 
 from __future__ import annotations
@@ -146,11 +143,6 @@ class ThrowTask:
         return len(self.dice)
 
     @property
-    def die_shape(self) -> tuple[int, ...]:
-        """The die axis of per-die arrays: () for one die, (N,) for several."""
-        return self.hand.die_shape
-
-    @property
     def faces(self) -> tuple[int, ...]:
         """Faces of each die."""
         return tuple(die.n_faces for die in self.dice)
@@ -169,13 +161,8 @@ class ThrowTask:
 
     @property
     def target_shape(self) -> tuple[int, ...]:
-        """One throw's target: a face per die (:attr:`die_shape`) or a total (())."""
+        """One throw's target: a face per die (the hand's ``die_shape``) or a total (())."""
         return self.goal.shape
-
-    @property
-    def target_dim(self) -> int:
-        """One one-hot per die ("faces") or one over :attr:`totals` (a total's targets)."""
-        return self.goal.dim
 
     @property
     def action_dim(self) -> int:
@@ -183,55 +170,18 @@ class ThrowTask:
         return self.hand.action_dim
 
     @property
-    def noise_dim(self) -> int:
-        """Hand noise per throw: 9 standard normals per die."""
-        return self.hand.noise_dim
-
-    @property
     def obs_dim(self) -> int:
         """Observation size: the target's encoding and each die's orientation (9 per die)."""
-        return self.target_dim + ORIENTATION_DIM * self.n_dice
-
-    @property
-    def release_position(self) -> np.ndarray:
-        """The hand's centre at release (3,): ``release_height`` along the table normal."""
-        return self.hand.centre
-
-    @property
-    def hand_spacing(self) -> float:
-        """Distance (m) between neighbours' centres in the hand."""
-        return self.hand.spacing
-
-    @property
-    def hand_offsets(self) -> np.ndarray:
-        """Each die's centre in the hand relative to :attr:`release_position`, (N, 3) m."""
-        return self.hand.offsets
-
-    @property
-    def release_positions(self) -> np.ndarray:
-        """Each die's centre at release, (N, 3) m."""
-        return self.hand.positions
+        return self.goal.dim + ORIENTATION_DIM * self.n_dice
 
     @property
     def hand_position(self) -> np.ndarray:
         """The dice's centres in the hand as a pose's position: (3,) for one die, (N, 3)."""
-        return self.release_positions.reshape(*self.die_shape, 3)
-
-    def fixed_target(self, target_face: object = None, target_sum: object = None) -> Any:
-        """The episode keywords ``target_face``/``target_sum`` as a fixed target (None: drawn).
-
-        "faces": ``target_face``, a face (one die) or a sequence of N faces; "sum" and
-        "avoid_sum": ``target_sum``, an int in :attr:`totals`. The other is refused.
-        """
-        return self.goal.fix(target_face, target_sum)
+        return self.hand.positions.reshape(*self.hand.die_shape, 3)
 
     def sample_hand(self, rng: np.random.Generator, target: Any = None,
                     orientation_mode: str = "uniform") -> tuple[Any, np.ndarray]:
-        """One episode's context: the target and the hand (3, 3), or hands (N, 3, 3).
-
-        ``orientation_mode``: "uniform" (all rotations), "flat" (a uniform face up and turn) or
-        "identity".
-        """
+        """One episode's target and hand (3, 3), or hands (N, 3, 3), as :meth:`sample_hands`."""
         targets, hands = self.sample_hands([rng], target, orientation_mode)
         return targets[0].tolist() if targets.ndim == 1 else targets[0], hands[0]
 
@@ -239,8 +189,9 @@ class ThrowTask:
                      orientation_mode: str = "uniform") -> tuple[np.ndarray, np.ndarray]:
         """One context per generator: targets (n, :attr:`target_shape`), hands (n, N, 3, 3).
 
-        ``target``: fixed, as :meth:`fixed_target` returns it, or None (drawn uniformly). Each
-        generator draws the target, then each die's orientation in turn.
+        ``target``: fixed (as :attr:`goal`'s ``fix`` returns it) or None (drawn uniformly);
+        ``orientation_mode``: "uniform" (all rotations), "flat" (a uniform face up and turn) or
+        "identity". Each generator draws the target, then each die's orientation in turn.
         """
         check_choice("orientation_mode", orientation_mode, ORIENTATION_MODES)
         n = len(rngs)
@@ -250,7 +201,8 @@ class ThrowTask:
             targets[i] = self.goal.draw(rng) if target is None else target
             draws[i] = self.hand.draw(rng, orientation_mode)
         hands = self.hand.orientations(orientation_mode, draws)
-        return (targets.reshape(n, *self.target_shape), hands.reshape(n, *self.die_shape, 3, 3))
+        return (targets.reshape(n, *self.target_shape),
+                hands.reshape(n, *self.hand.die_shape, 3, 3))
 
     def sample_noise(self, rng: np.random.Generator, n: int = 1) -> np.ndarray:
         """Hand noise for ``n`` throws: standard normals (n, the hand's ``noise_dim``)."""
@@ -262,7 +214,7 @@ class ThrowTask:
         n = len(orientations)
         obs = np.zeros((n, self.obs_dim), np.float32)
         obs[np.arange(n)[:, None], self.goal.columns(targets)] = 1.0
-        obs[:, self.target_dim:] = np.clip(orientations, -1.0, 1.0)
+        obs[:, self.goal.dim:] = np.clip(orientations, -1.0, 1.0)
         return obs
 
     def decode(self, observations: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -271,9 +223,9 @@ class ThrowTask:
         if observations.shape[1] != self.obs_dim:
             raise ValueError(f"observations must have {self.obs_dim} columns, got "
                              f"{observations.shape[1]}")
-        u, _, vt = np.linalg.svd(observations[:, self.target_dim:].reshape(-1, 3, 3))
-        return (self.goal.decode(observations[:, :self.target_dim]),
-                (u @ vt).reshape(len(observations), *self.die_shape, 3, 3))
+        u, _, vt = np.linalg.svd(observations[:, self.goal.dim:].reshape(-1, 3, 3))
+        return (self.goal.decode(observations[:, :self.goal.dim]),
+                (u @ vt).reshape(len(observations), *self.hand.die_shape, 3, 3))
 
     def release(self, actions: np.ndarray, hands: np.ndarray,
                 noise: np.ndarray | Sequence[np.random.Generator], *,
@@ -282,24 +234,29 @@ class ThrowTask:
         """The hand's releases: :meth:`TaskHand.release <dice_env.envs.hand.TaskHand.release>`."""
         return self.hand.release(actions, hands, noise, action_shape=action_shape)
 
-    def fair(self, state: State | GroupState) -> np.ndarray:
-        """Whether each release (n,) is within ``min_speed`` and ``min_spin``, every die's."""
-        n = np.size(state.velocity) // (3 * self.n_dice)
-        speed = np.linalg.norm(state.velocity, axis=-1).reshape(n, -1)
-        spin = np.linalg.norm(state.angular_velocity, axis=-1).reshape(n, -1)
-        return np.all((speed >= self.min_speed) & (spin >= self.min_spin), axis=1)
-
     def land(self, state: State | GroupState, targets: np.ndarray, *, record_every: int = 0,
              num_threads: int | None = None, device: str = "cpu") -> Landing:
         """Simulate the released dice (:attr:`run_until`) and judge each throw (:func:`judge`).
 
         ``targets`` (n, :attr:`target_shape`); ``num_threads``: the kernel's threads (None:
         all); ``device``: ``simulate``'s (one die only); ``record_every`` > 0 records the centres
-        and orientations every that many steps.
+        and orientations every that many steps. A throw is fair if every die's release is within
+        ``min_speed`` and ``min_spin``.
         """
-        fair = self.fair(state)
-        targets = np.array(targets, dtype=np.int64).reshape(len(fair), *self.target_shape)
-        run = self._simulate(state, record_every, num_threads, device)
+        n = np.size(state.velocity) // (3 * self.n_dice)
+        speed = np.linalg.norm(state.velocity, axis=-1).reshape(n, -1)
+        spin = np.linalg.norm(state.angular_velocity, axis=-1).reshape(n, -1)
+        fair = np.all((speed >= self.min_speed) & (spin >= self.min_spin), axis=1)  # every die's
+        targets = np.array(targets, dtype=np.int64).reshape(n, *self.target_shape)
+        if isinstance(state, GroupState):
+            check_choice("device", device, ("cpu",))  # several dice: the CPU's kernel only
+            run = simulate_group(self.scene, self.dice, state, until=self.run_until,
+                                 record_every=record_every, orientations=bool(record_every),
+                                 num_threads=num_threads)
+        else:
+            run = simulate(self.scene, state, until=self.run_until, record_every=record_every,
+                           record=("orientations",) if record_every else ("energy",),
+                           num_threads=num_threads, device=device)
         result, void = judge(self.scene, self.dice, run, self.run_until, fair=fair)
         return Landing(targets, result, void, fair)
 
@@ -309,8 +266,9 @@ class ThrowTask:
 
     def reward(self, landing: Landing) -> Reward:
         """Each throw's reward, in its terms: success (1 or 0) and shaping at rest."""
+        orientation = landing.result.final.orientation.reshape(len(landing.void), -1, 3, 3)
         alignment = self.goal.alignment(self.dice, np.asarray(self.scene.ground.normal),
-                                        landing.orientation, landing.targets)
+                                        orientation, landing.targets)
         return Reward(self.success(landing).astype(np.float64),
                       np.where(landing.void == "", self.shaping * alignment, 0.0))
 
@@ -348,23 +306,8 @@ class ThrowTask:
 
     @property
     def run_until(self) -> str:
-        """The kernel's ``until`` of a throw: ``until``, but ``"early_rest"`` for one die to rest.
-
-        Early rest gives the same face, rest time and impacts, faster (docs/performance.md).
-        """
+        """The kernel's ``until``: ``"early_rest"`` for one die to rest (the same face, faster)."""
         return "early_rest" if self.until == "rest" and self.n_dice == 1 else self.until
-
-    def _simulate(self, state: State | GroupState, record_every: int,
-                  num_threads: int | None, device: str) -> Result | GroupResult:
-        """The kernel's run of the released dice (:attr:`run_until`): one die's, or the group's."""
-        if isinstance(state, GroupState):
-            check_choice("device", device, ("cpu",))  # several dice: the CPU's kernel only
-            return simulate_group(self.scene, self.dice, state, until=self.run_until,
-                                  record_every=record_every, orientations=bool(record_every),
-                                  num_threads=num_threads)
-        return simulate(self.scene, state, until=self.run_until, record_every=record_every,
-                        record=("orientations",) if record_every else ("energy",),
-                        num_threads=num_threads, device=device)
 
 
 @dataclass(frozen=True)
@@ -384,11 +327,6 @@ class Landing:
     def faces(self) -> np.ndarray:
         """The face each die reads, (n, N)."""
         return self.result.face.reshape(len(self.void), -1)
-
-    @property
-    def orientation(self) -> np.ndarray:
-        """Each die's orientation at the end, (n, N, 3, 3)."""
-        return self.result.final.orientation.reshape(len(self.void), -1, 3, 3)
 
 
 @dataclass(frozen=True)
@@ -426,13 +364,18 @@ def judge(scene: Scene, dice: Sequence[Die], result: Result | GroupResult, until
     ``result``: a run of ``dice`` in ``scene`` to ``until`` (a kernel ending of
     :data:`~dice_env.simulation.simulate.ENDINGS`; ``t_max`` overrides the scene's), ``fair``
     (n,): releases within the task's speed and spin (default all). Returns ``result`` (an early
-    rest's ``settled`` as if the hold were waited out) and why each throw does not count, (n,)
-    strings, ``""`` where it counts; the first of "foul", "unstable", "sunk", "not_settled"
-    (``"not_decided"`` for ``until="decided"``), "leaning", and "not_decided" for a face that
-    :func:`decided_reads` does not read.
+    rest's ``settled`` as if the hold were waited out) and why each throw does not count, (n,):
+    ``""`` or the first of "foul", "unstable", "sunk", :data:`UNTIL`'s reason, "leaning" and
+    "not_decided" (a face :func:`decided_reads` does not read).
     """
-    if until == "early_rest":
-        result = _held_within_t_max(result, scene, t_max)
+    if until == "early_rest":  # not settled where the hold (its quiet steps) ends after t_max
+        dt = scene.step
+        n_steps = max(1, round((scene.t_max if t_max is None else t_max) / dt))
+        late = result.settled & (np.rint(result.rest_time / dt) + 1
+                                 + math.ceil(scene.rest.hold / dt) > n_steps)
+        if late.any():
+            result = replace(result, settled=result.settled & ~late,
+                             rest_time=np.where(late, n_steps * dt, result.rest_time))
     n = len(result.unstable)
     fair = np.ones(n, np.bool_) if fair is None else fair
     sunk = result.sunk.reshape(n, -1).any(axis=1)
@@ -448,10 +391,9 @@ def judge(scene: Scene, dice: Sequence[Die], result: Result | GroupResult, until
 def decided_reads(dice: Sequence[Die], orientation: np.ndarray) -> np.ndarray:
     """Whether each die's face is read beyond doubt in ``orientation`` (n, N, 3, 3): (n, N).
 
-    Its reading direction must beat every other face's along up (against gravity, as faces are
-    read) by :data:`~dice_env.simulation.simulate.LOCK_MARGIN` of what it beats its nearest
-    neighbour's by when read straight up: the share of the way to a tie that the decided-face
-    rule keeps. A die resting on a steep table or cocked against a wall may fall short.
+    Its reading direction must beat every other face's along up by
+    :data:`~dice_env.simulation.simulate.LOCK_MARGIN` of what it beats its nearest neighbour's by
+    when read straight up (a die on a steep table or cocked against a wall may fall short).
     """
     decided = np.empty(orientation.shape[:2], np.bool_)
     for i, die in enumerate(dice):
@@ -487,23 +429,18 @@ def make_task(*, num_dice: int | None = None, scene: Scene | None = None,
     """
     check_task_keywords(keywords)
     fields_given = {name: keywords.pop(name) for name in TASK_KEYWORDS if name in keywords}
-    dice = check_num_dice(num_dice, keywords.pop("die", None))
-    scenes = [SceneKeywords(die=die, **keywords).build(scene) for die in dice]
-    return ThrowTask(scene=scenes[0], dice=tuple(s.die for s in scenes), **fields_given)
-
-
-def check_num_dice(num_dice: object, die: object) -> tuple[Any, ...]:
-    """The ``die`` keyword per die: ``num_dice`` copies of it, or its entries if a tuple."""
+    die = keywords.pop("die", None)
     if num_dice is not None:
         check_int("num_dice", num_dice, 1, MAX_NUM_DICE)
     if not isinstance(die, (tuple, list)):
-        return (die,) * (1 if num_dice is None else int(num_dice))
-    if not 1 <= len(die) <= MAX_NUM_DICE:
+        die = (die,) * (1 if num_dice is None else int(num_dice))
+    elif not 1 <= len(die) <= MAX_NUM_DICE:
         raise ValueError(f"die must be a name, a Die, or a tuple of 1 to {MAX_NUM_DICE} of "
                          f"them, got {len(die)} entries")
-    if num_dice is not None and len(die) != num_dice:
+    elif num_dice is not None and len(die) != num_dice:
         raise ValueError(f"die must hold num_dice={num_dice} dice, got {len(die)}: {die!r}")
-    return tuple(die)
+    scenes = [SceneKeywords(die=one, **keywords).build(scene) for one in die]
+    return ThrowTask(scene=scenes[0], dice=tuple(s.die for s in scenes), **fields_given)
 
 
 def task_keywords() -> set[str]:
@@ -521,19 +458,3 @@ def check_task_keywords(keywords: dict[str, object]) -> dict[str, object]:
                          "orientation_mode, render_mode, render_width, render_height, "
                          "num_threads, device")
     return keywords
-
-
-def _held_within_t_max(result: Result, scene: Scene, t_max: float | None = None) -> Result:
-    """``result`` of an early-rest run, ``settled`` as if the rest hold had been waited out.
-
-    A die whose hold (``ceil(hold / dt)`` quiet steps) ends after ``t_max`` (default the
-    scene's) is not settled.
-    """
-    dt = scene.step
-    hold_steps = math.ceil(scene.rest.hold / dt)
-    n_steps = max(1, round((scene.t_max if t_max is None else t_max) / dt))
-    late = result.settled & (np.rint(result.rest_time / dt) + 1 + hold_steps > n_steps)
-    if not late.any():
-        return result
-    return replace(result, settled=result.settled & ~late,
-                   rest_time=np.where(late, n_steps * dt, result.rest_time))

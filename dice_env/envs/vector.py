@@ -23,42 +23,17 @@ from dice_env.model.checks import check_choice, check_int
 MAX_NUM_ENVS = 2**20  # about 1 kB per env in the kernel's and the env's arrays
 
 
-def as_autoreset_mode(value: object) -> AutoresetMode:
-    """``value`` as an :class:`~gymnasium.vector.AutoresetMode`: a member or its value."""
-    if isinstance(value, AutoresetMode):
-        return value
-    check_choice("autoreset_mode", value, [mode.value for mode in AutoresetMode],
-                 also=" or a gymnasium.vector.AutoresetMode")
-    return AutoresetMode(value)
-
-
-def as_reset_mask(value: object, num_envs: int) -> np.ndarray:
-    """``options["reset_mask"]``: a bool array over the envs, one True at least (None: all)."""
-    if value is None:
-        return np.ones(num_envs, np.bool_)
-    if (not isinstance(value, np.ndarray) or value.dtype != np.bool_
-            or value.shape != (num_envs,) or not value.any()):
-        raise ValueError(f"options['reset_mask'] must be a numpy bool array of shape "
-                         f"({num_envs},) with a True, got {value!r}")
-    return value
-
-
 class DiceThrowVectorEnv(VectorEnv):
     """``num_envs`` DiceThrow-v0 envs stepped together (``gym.make_vec("DiceThrow-v0", n)``).
 
     Takes :class:`~dice_env.envs.dice_throw.DiceThrowEnv`'s keywords. Every step ends every
-    episode; ``autoreset_mode`` (an :class:`~gymnasium.vector.AutoresetMode` or its value):
-
-    - ``SAME_STEP`` (the default): ``step`` returns the *next* episodes' observations, the
-      throw's own in ``info["final_obs"]`` and ``info["final_info"]``;
-    - ``NEXT_STEP``: ``step`` returns the throw's observations and info; the step after it
-      starts the next episodes (actions ignored, rewards 0), as Gymnasium's vector wrappers
-      expect;
-    - ``DISABLED``: as ``NEXT_STEP``, but ``reset`` (all envs, or ``options["reset_mask"]``)
-      must start the next episodes.
-
-    Env ``i`` draws from its generator (seeded ``seed + i`` or ``seed[i]``) exactly as a single
-    env reset with that seed, so every mode throws the same throws.
+    episode; ``autoreset_mode`` (an :class:`~gymnasium.vector.AutoresetMode` or its value) starts
+    the next ones in the same step (``SAME_STEP``, the default: the throw's own observations and
+    info in ``info["final_obs"]`` and ``info["final_info"]``), at the next step (``NEXT_STEP``:
+    actions ignored, rewards 0, as Gymnasium's vector wrappers expect) or at ``reset``
+    (``DISABLED``: all envs, or ``options["reset_mask"]``). Env ``i`` draws from its generator
+    (seeded ``seed + i`` or ``seed[i]``) as a single env reset with that seed, so every mode
+    throws the same throws.
     """
 
     metadata: ClassVar[dict[str, Any]] = {
@@ -70,7 +45,10 @@ class DiceThrowVectorEnv(VectorEnv):
                  autoreset_mode: AutoresetMode | str = AutoresetMode.SAME_STEP,
                  **keywords: Any) -> None:
         check_int("num_envs", num_envs, 1, MAX_NUM_ENVS)
-        self.autoreset_mode = as_autoreset_mode(autoreset_mode)
+        if not isinstance(autoreset_mode, AutoresetMode):  # or its value
+            check_choice("autoreset_mode", autoreset_mode, [mode.value for mode in AutoresetMode],
+                         also=" or a gymnasium.vector.AutoresetMode")
+        self.autoreset_mode = AutoresetMode(autoreset_mode)
         self.metadata = {**self.metadata, "autoreset_mode": self.autoreset_mode}
         self.task, self.settings = configure(("rgb_array",), render_mode, **keywords)
         self.render_mode = self.settings.render_mode
@@ -88,9 +66,9 @@ class DiceThrowVectorEnv(VectorEnv):
 
     def reset(self, *, seed: int | list[int | None] | None = None,
               options: dict[str, Any] | None = None) -> tuple[np.ndarray, dict[str, Any]]:
-        """Seed (``seed + i`` per env, or a list) and reset every env with ``options``.
+        """Seed (``seed + i`` per env, or a list) and reset every env, or ``reset_mask``'s ones.
 
-        ``options["reset_mask"]`` (a bool array over the envs) resets only those envs.
+        ``options``: as a single env's, and ``"reset_mask"``, a bool array over the envs.
         """
         if seed is None or isinstance(seed, (int, np.integer)):
             seeds = [None if seed is None else int(seed) + i for i in range(self.num_envs)]
@@ -100,7 +78,11 @@ class DiceThrowVectorEnv(VectorEnv):
             raise ValueError(f"options must be None or a dict with keys among {RESET_OPTIONS}, "
                              f"got {options!r}")
         options = dict(options or {})
-        mask = as_reset_mask(options.pop("reset_mask", None), self.num_envs)
+        mask = options.pop("reset_mask", None)  # None: all
+        if mask is not None and (not isinstance(mask, np.ndarray) or mask.dtype != np.bool_
+                                 or mask.shape != (self.num_envs,) or not mask.any()):
+            raise ValueError(f"options['reset_mask'] must be a numpy bool array of shape "
+                             f"({self.num_envs},) with a True, got {mask!r}")
         return self.reset_envs(seeds, [options] * self.num_envs, mask), {}
 
     def reset_envs(self, seeds: Sequence[int | None], options: Sequence[dict[str, Any] | None],
@@ -131,10 +113,7 @@ class DiceThrowVectorEnv(VectorEnv):
 
     def step(self, actions: np.ndarray,
              ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
-        """Throw all N dice in one kernel call, then start the next episodes as ``autoreset_mode``.
-
-        NEXT_STEP: the step after a throw only starts them.
-        """
+        """Throw all N dice in one kernel call; NEXT_STEP's step after a throw only starts anew."""
         if not self._rngs:
             raise RuntimeError("call reset() before step()")
         if self._ended.any():
@@ -157,10 +136,10 @@ class DiceThrowVectorEnv(VectorEnv):
 
     def _next_hands(self) -> tuple[np.ndarray, np.ndarray]:
         """The next episodes' targets and hands, drawn from each env's generator."""
+        settings = self.settings
         return self.task.sample_hands(
-            self._rngs, self.task.fixed_target(self.settings.target_face,
-                                               self.settings.target_sum),
-            self.settings.orientation_mode)
+            self._rngs, self.task.goal.fix(settings.target_face, settings.target_sum),
+            settings.orientation_mode)
 
     def _start_next(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict]:
         """NEXT_STEP's step after a throw: the next episodes, no throw; refused elsewhere."""
