@@ -170,7 +170,7 @@ def check_fps(fps: object, limit: float | None = None) -> float:
             or not low <= fps <= high):
         also = f" (at least one frame by t_max = {limit:g} s)" if short else ""
         raise ValueError(f"fps must be in [{low:g}, {high:g}] frames per simulated second"
-                         f"{also}, got {fps!r}")
+                         f"{also}, got {fps!r:.80}")
     return float(fps)
 
 
