@@ -12,12 +12,27 @@ import numpy as np
 
 from dice_env.markdown import markdown_table
 from dice_env.model.die import Die
-from dice_env.model.pips import DRILLINGS, SOURCES, Pips, cap_properties
+from dice_env.model.pips import DRILLINGS, Pips, cap_properties
 from studies.common import DOCS
 from studies.docs_numbers import generated
 from studies.templates import write_study
 
 COMMAND = "python -m studies pips"
+# The sources of the pips layout and of the presets of dice_env.model.pips.DRILLINGS.
+SOURCES = (
+    "dice-play.com, \"Casino Dice\": http://dice-play.com/DiceCasino.htm (the 2 and 3 "
+    "diagonals)",
+    "Michigan Admin. Code R 432.1814, Dice specifications: "
+    "https://www.law.cornell.edu/regulations/michigan/Mich-Admin-Code-R-432-1814",
+    "Maryland COMAR 36.05.02.12, Dice: https://casetext.com/regulation/maryland-administrative-"
+    "code/title-36-maryland-state-lottery-and-gaming-control-agency/subtitle-05-table-games/"
+    "chapter-360502-table-game-equipment/section-36050212-dice",
+    "AZoM, \"Cellulose Acetate\" (Plascams): https://www.azom.com/article.aspx?ArticleID=383",
+    "Thingiverse thing 3493901, dice-v4.scad (as archived in github.com/uwplse/szalinski, "
+    "inputs/thingiverse/thing-3493901/files/dice-v4.scad)",
+    "irasohn.blogspot.com, \"Initial die calculation results\" (2010): "
+    "http://irasohn.blogspot.com/2010/04/initial-die-calculation-results.html",
+)
 FILES = ("pips-presets", "pips-masses", "pips-sources")  # docs/generated/, included by pips.md
 
 
@@ -68,7 +83,7 @@ def masses_table() -> str:
 
 @generated("pips-sources", COMMAND)
 def sources_list() -> str:
-    """The presets' sources (``dice_env.model.pips.SOURCES``)."""
+    """The presets' sources (:data:`SOURCES`)."""
     return "\n".join(f"- {source}" for source in SOURCES)
 
 

@@ -38,19 +38,6 @@ STANDARD_SIZES = {"d4": 0.014, "d6": DIE_EDGE, "d8": 0.014, "d10": 0.014, "d12":
 ARC_STEP = 1.0 / (2000.0 * math.sqrt(2.0))
 
 
-def paper_side_length(r: float) -> float:
-    """The paper's side length for corner distance ``r``: ``s = -sqrt(2) + 2*sqrt(0.5 + r^2)``.
-
-    Paper mode only: its corners lie at ``s*sqrt(3)/2`` from the centre, not at ``r``.
-    """
-    return -math.sqrt(2.0) + 2.0 * math.sqrt(0.5 + r * r)
-
-
-def solid_cube_inertia(mass: float, edge: float) -> np.ndarray:
-    """Inertia tensor of a uniform solid cube about its centre: ``(1/6) m s^2`` times identity."""
-    return np.eye(3) * (mass * edge * edge / 6.0)
-
-
 @dataclass(frozen=True, init=False, repr=False)
 class Die:
     """A convex polyhedral die; its corners are the contact nodes.
@@ -155,9 +142,12 @@ class Die:
 
     @classmethod
     def paper(cls, r: float = 1.0, mass: float = 1.0) -> Die:
-        """The paper's cube: side from :func:`paper_side_length`, solid-cube inertia."""
+        """The paper's cube for corner distance ``r``, solid-cube inertia.
+
+        Its side ``s = -sqrt(2) + 2 sqrt(0.5 + r^2)`` puts the corners at ``s sqrt(3)/2``, not r.
+        """
         check_positive("r", r)
-        return cls(edge=paper_side_length(r), mass=mass)
+        return cls(edge=-math.sqrt(2.0) + 2.0 * math.sqrt(0.5 + r * r), mass=mass)
 
     @classmethod
     def loaded(cls, face: int = 6, fraction: float = 0.1, depth: float = 0.8,
@@ -434,8 +424,8 @@ def _solid_inertia(name: str, vertices: np.ndarray, faces: tuple[tuple[int, ...]
 
     Entries below 1e-12 of the trace become 0, moments equal to 1e-12 exactly isotropic.
     """
-    if name == "d6":
-        return solid_cube_inertia(mass, size)
+    if name == "d6":  # the solid cube's (1/6) m s^2 times identity
+        return np.eye(3) * (mass * size * size / 6.0)
     per_mass = polyhedra.mass_properties(vertices, faces)[2]
     scale = np.trace(per_mass)
     per_mass = np.where(np.abs(per_mass) <= 1e-12 * scale, 0.0, per_mass)

@@ -49,15 +49,10 @@ MATERIALS: dict[str, Material] = {
 }
 
 
-def preset(name: str) -> Material:
-    """The :class:`Material` called ``name`` (a key of :data:`MATERIALS`)."""
-    check_choice("name", name, MATERIALS)
-    return MATERIALS[name]
-
-
 def ground(name: str, die: Die | None = None) -> Ground:
     """The ground of preset ``name``, damped to its restitution for ``die`` (default: ``Die()``)."""
-    material = preset(name)
+    check_choice("name", name, MATERIALS)
+    material = MATERIALS[name]
     mass = (Die() if die is None else die).mass
     return Ground(stiffness=material.stiffness, friction=material.friction,
                   damping=damping_for_restitution(material.restitution, material.stiffness,

@@ -188,19 +188,3 @@ def drill(size: float, mass: float, pips: Pips) -> tuple[np.ndarray, np.ndarray]
                     + change * (volume * sum(point_inertia(c) for c in centroids)
                                 + transverse * (n * np.eye(3) - along) + axial * along))
     return com, about_centre - mass * point_inertia(com)
-
-
-SOURCES = (
-    "dice-play.com, \"Casino Dice\": http://dice-play.com/DiceCasino.htm (the 2 and 3 "
-    "diagonals)",
-    "Michigan Admin. Code R 432.1814, Dice specifications: "
-    "https://www.law.cornell.edu/regulations/michigan/Mich-Admin-Code-R-432-1814",
-    "Maryland COMAR 36.05.02.12, Dice: https://casetext.com/regulation/maryland-administrative-"
-    "code/title-36-maryland-state-lottery-and-gaming-control-agency/subtitle-05-table-games/"
-    "chapter-360502-table-game-equipment/section-36050212-dice",
-    "AZoM, \"Cellulose Acetate\" (Plascams): https://www.azom.com/article.aspx?ArticleID=383",
-    "Thingiverse thing 3493901, dice-v4.scad (as archived in github.com/uwplse/szalinski, "
-    "inputs/thingiverse/thing-3493901/files/dice-v4.scad)",
-    "irasohn.blogspot.com, \"Initial die calculation results\" (2010): "
-    "http://irasohn.blogspot.com/2010/04/initial-die-calculation-results.html",
-)

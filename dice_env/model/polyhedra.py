@@ -25,9 +25,24 @@ def convex_faces(points: np.ndarray, name: str = "vertices") -> tuple[tuple[int,
     naming ``name`` unless the points are 4 to :data:`MAX_VERTICES` finite, distinct points,
     not all in one plane, each a corner of the hull.
     """
-    points = checked_points(points, name)
-    diameter = _diameter(points)
+    points = np.asarray(points, dtype=np.float64)
+    if points.ndim != 2 or points.shape[1] != 3:
+        raise ValueError(f"{name} must have shape (N, 3), got {points.shape}")
+    if not 4 <= len(points) <= MAX_VERTICES:
+        raise ValueError(f"{name} must hold 4 to {MAX_VERTICES} points (a solid needs 4), "
+                         f"got {len(points)}")
+    check_finite(name, points)
+    diameter = float(np.ptp(points, axis=0).max())
     tol = TOLERANCE * diameter
+    gaps = np.linalg.norm(points[:, None] - points[None], axis=-1)
+    i, j = np.nonzero(np.triu(gaps <= tol, 1))
+    if len(i):
+        raise ValueError(f"{name} must be distinct points: {name}[{i[0]}] and {name}[{j[0]}] "
+                         "coincide")
+    centred = points - points.mean(axis=0)
+    normal = np.linalg.svd(centred)[2][-1]
+    if np.abs(centred @ normal).max() <= tol:
+        raise ValueError(f"{name} must not all lie in one plane (a solid needs volume)")
     on_face = np.zeros(len(points), dtype=bool)
     faces = []
     for indices, normal in _supporting_planes(points, tol, diameter).items():
@@ -41,28 +56,6 @@ def convex_faces(points: np.ndarray, name: str = "vertices") -> tuple[tuple[int,
         raise ValueError(f"{name} are too close to degenerate to tell the faces apart "
                          f"(coplanar within {TOLERANCE:g} of their extent)")
     return tuple(sorted(faces, key=sorted))
-
-
-def checked_points(points: np.ndarray, name: str = "vertices") -> np.ndarray:
-    """``points`` as a float64 (N, 3) array of distinct points not all in one plane, or raise."""
-    points = np.asarray(points, dtype=np.float64)
-    if points.ndim != 2 or points.shape[1] != 3:
-        raise ValueError(f"{name} must have shape (N, 3), got {points.shape}")
-    if not 4 <= len(points) <= MAX_VERTICES:
-        raise ValueError(f"{name} must hold 4 to {MAX_VERTICES} points (a solid needs 4), "
-                         f"got {len(points)}")
-    check_finite(name, points)
-    tol = TOLERANCE * _diameter(points)
-    gaps = np.linalg.norm(points[:, None] - points[None], axis=-1)
-    i, j = np.nonzero(np.triu(gaps <= tol, 1))
-    if len(i):
-        raise ValueError(f"{name} must be distinct points: {name}[{i[0]}] and {name}[{j[0]}] "
-                         "coincide")
-    centred = points - points.mean(axis=0)
-    normal = np.linalg.svd(centred)[2][-1]
-    if np.abs(centred @ normal).max() <= tol:
-        raise ValueError(f"{name} must not all lie in one plane (a solid needs volume)")
-    return points
 
 
 def face_normals(points: np.ndarray, faces: tuple[tuple[int, ...], ...]) -> np.ndarray:
@@ -152,10 +145,6 @@ def pentagonal_trapezohedron(apex: float = 1.0 + math.cos(math.pi / 5)) -> np.nd
                              np.full(5, z0)])
     lower = np.column_stack([np.cos(angles), np.sin(angles), np.full(5, -z0)])
     return np.vstack([[[0.0, 0.0, apex], [0.0, 0.0, -apex]], upper, lower])
-
-
-def _diameter(points: np.ndarray) -> float:
-    return float(np.ptp(points, axis=0).max())
 
 
 def _outer(v: np.ndarray) -> np.ndarray:

@@ -16,12 +16,8 @@ CRAPS = (1.0, 0.6)  # a craps table's throw, scaled: 1 m to the back wall, sides
 def tray(length: float = TRAY[0], width: float = TRAY[1], **material: float) -> tuple[Wall, ...]:
     """Four walls around the origin: ``length`` (m) along x by ``width`` (m) along y."""
     check_positive("length", length)
-    check_positive("width", width)
-    x, y = length / 2, width / 2
-    return (Wall.through((x, 0, 0), (-1, 0, 0), **material),
-            Wall.through((-x, 0, 0), (1, 0, 0), **material),
-            Wall.through((0, y, 0), (0, -1, 0), **material),
-            Wall.through((0, -y, 0), (0, 1, 0), **material))
+    back, *sides = craps(length / 2, width, **material)
+    return back, Wall.through((-length / 2, 0, 0), (1, 0, 0), **material), *sides
 
 
 def craps(distance: float = CRAPS[0], width: float = CRAPS[1],

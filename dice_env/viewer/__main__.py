@@ -100,8 +100,18 @@ def _check(parser: argparse.ArgumentParser, args: argparse.Namespace) -> ThrowTa
                      f"got {args.at:g}" + ("" if args.screenshot else " without it"))
     for name, path, suffix in (("out", args.out, ".html"), ("glb", args.glb, ".glb"),
                                ("screenshot", args.screenshot, ".png")):
-        if path is not None:
-            _check_output(parser, name, path, suffix, args.force)
+        if path is None:
+            continue
+        if path.suffix.lower() != suffix:
+            parser.error(f"argument --{name}: must end in {suffix}, got {path.name!r}")
+        if not path.parent.is_dir():
+            parser.error(f"argument --{name}: no folder {str(path.parent)!r} to write "
+                         f"{path.name!r} in")
+        if path.is_dir():
+            parser.error(f"argument --{name}: {str(path)!r} is a folder: give a file's path")
+        if path.exists() and not args.force:
+            parser.error(f"argument --{name}: {str(path)!r} exists: pass --force to overwrite "
+                         "it, or another path")
     if args.glb is not None and importlib.util.find_spec("pygltflib") is None:
         parser.error("argument --glb: needs pygltflib (pip install 'dice_env[gltf]')")
     if args.screenshot is not None:
@@ -110,20 +120,6 @@ def _check(parser: argparse.ArgumentParser, args: argparse.Namespace) -> ThrowTa
         if missing():
             parser.error(f"argument --screenshot: {missing()}")
     return task
-
-
-def _check_output(parser: argparse.ArgumentParser, name: str, path: Path, suffix: str,
-                  force: bool) -> None:
-    """A usage error unless ``path`` ends in ``suffix``, in a folder, new or ``force``-d."""
-    if path.suffix.lower() != suffix:
-        parser.error(f"argument --{name}: must end in {suffix}, got {path.name!r}")
-    if not path.parent.is_dir():
-        parser.error(f"argument --{name}: no folder {str(path.parent)!r} to write {path.name!r} in")
-    if path.is_dir():
-        parser.error(f"argument --{name}: {str(path)!r} is a folder: give a file's path")
-    if path.exists() and not force:
-        parser.error(f"argument --{name}: {str(path)!r} exists: pass --force to overwrite it, "
-                     "or another path")
 
 
 def _replay(parser: argparse.ArgumentParser, path: Path) -> int:

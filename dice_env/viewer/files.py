@@ -12,7 +12,6 @@ import json
 import math
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Any
 
 from dice_env.disk import parse_json, write_atomically
 from dice_env.envs.keywords import ENV_MAX_STEPS
@@ -46,7 +45,13 @@ def load(path: str | Path) -> list[Recording]:
     if suffix not in (".html", ".htm", ".glb", ".json"):
         raise RecordingError(f"path must end in .html, .glb or .json, got {path.name!r}")
     try:
-        data = _read(path, suffix)
+        if suffix == ".glb":
+            from dice_env.viewer.gltf import read_glb
+
+            data = read_glb(path)
+        else:
+            data = (parse_json(path.read_text(encoding="utf-8")) if suffix == ".json"
+                    else read_html(path))
     except (OSError, UnicodeDecodeError, ValueError, RecursionError) as error:
         raise RecordingError(f"{path}: {_line(error)}") from None
     if not isinstance(data, list) or not data:
@@ -75,12 +80,8 @@ def replay(source: Recording | Sequence[Recording] | str | Path) -> list[Recordi
     ``ENV_MAX_STEPS`` steps. :class:`RecordingError` names a throw that cannot be thrown again;
     :class:`ReplayError` each throw whose faces differ.
     """
-    if isinstance(source, (str, Path)):
-        recorded = load(source)
-    elif isinstance(source, Recording):
-        recorded = [source]
-    else:
-        recorded = list(source)
+    recorded = (load(source) if isinstance(source, (str, Path))
+                else [source] if isinstance(source, Recording) else list(source))
     again, wrong = [], []
     for k, old in enumerate(recorded):
         try:
@@ -94,17 +95,6 @@ def replay(source: Recording | Sequence[Recording] | str | Path) -> list[Recordi
     if wrong:
         raise ReplayError("the replay landed other faces: " + "; ".join(wrong))
     return again
-
-
-def _read(path: Path, suffix: str) -> Any:
-    """The JSON data of the recordings in the file at ``path``."""
-    if suffix == ".glb":
-        from dice_env.viewer.gltf import read_glb
-
-        return read_glb(path)
-    if suffix == ".json":
-        return parse_json(path.read_text(encoding="utf-8"))
-    return read_html(path)
 
 
 def _throw_again(old: Recording) -> Recording:

@@ -22,6 +22,7 @@ import pygltflib as gl
 
 from dice_env.disk import parse_json, write_atomically
 from dice_env.envs.render import TABLE_COLOUR, WALL_COLOUR, _plane_axes, _unit
+from dice_env.model.checks import check_type
 from dice_env.model.die import Die
 from dice_env.model.rotations import matrix_to_quaternion
 from dice_env.viewer.recording import Recording, library_version
@@ -39,8 +40,7 @@ _TYPES = {1: gl.SCALAR, 2: gl.VEC2, 3: gl.VEC3, 4: gl.VEC4}
 
 def write_glb(recording: Recording, path: str | os.PathLike[str]) -> Path:
     """Write ``recording`` as a binary glTF to ``path`` (ending in ``.glb``); returns the path."""
-    if not isinstance(recording, Recording):
-        raise TypeError(f"recording must be a Recording, got {type(recording).__name__}")
+    check_type("recording", recording, Recording)
     path = _glb_path(path)
     gltf = gl.GLTF2(asset=gl.Asset(generator=f"dice_env {library_version()}",
                                    extras={EXTRAS: json.dumps([recording.to_data()])}),

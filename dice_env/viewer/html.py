@@ -63,12 +63,16 @@ def write_html(recordings: Recording | Sequence[Recording], path: str | Path, *,
         raise ValueError(f"recordings must hold finite numbers only: {error}") from None
     # JSON strings may hold "<" only as an escape: no "</script>" or "<!--" ends the script.
     text = text.replace("<", "\\u003c")
+    bundle = files("dice_env.viewer").joinpath("viewer.bundle.js").read_text(encoding="utf-8")
+    if re.search(r"</script|<!--", bundle, re.I):
+        raise RuntimeError("viewer.bundle.js holds '</script' or '<!--', which would end or "
+                           "break its script in the page")
     write_atomically(path, (
         "<!doctype html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n"
         "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n"
         f"<title>{html.escape(title)}</title>\n</head>\n<body>\n"
         f"<script type=\"application/json\" id=\"{DATA_ID}\">{text}</script>\n"
-        f"<script>\n{_bundle()}\n</script>\n</body>\n</html>\n").encode())
+        f"<script>\n{bundle}\n</script>\n</body>\n</html>\n").encode())
     return path
 
 
@@ -83,15 +87,6 @@ def read_html(path: str | Path) -> list[dict[str, Any]]:
     if not isinstance(data, dict) or "recordings" not in data:
         raise ValueError(f"path {str(path)!r}: its script {DATA_ID!r} holds no 'recordings'")
     return data["recordings"]
-
-
-def _bundle() -> str:
-    """The viewer's script (three.js in it), checked to be safe inside a ``<script>``."""
-    text = files("dice_env.viewer").joinpath("viewer.bundle.js").read_text(encoding="utf-8")
-    if re.search(r"</script|<!--", text, re.I):
-        raise RuntimeError("viewer.bundle.js holds '</script' or '<!--', which would end or "
-                           "break its script in the page")
-    return text
 
 
 def _shape(die: Die) -> dict[str, Any]:

@@ -86,11 +86,30 @@ class Recording:
             raise TypeError(f"dice must be a non-empty tuple of Die, got {self.dice!r:.80}")
         for name in ("title", "version"):
             check_type(name, getattr(self, name), str)
-        _check_run(self.run, self.n_dice)
-        check_fps(self.fps)
-        _check_release(self.release, self.n_dice)
-        check_frames(self.t, self.position, self.orientation, self.n_dice)
-        _check_outcome(self.outcome, self.n_dice)
+        n, run, outcome = self.n_dice, self.run, self.outcome
+        if not isinstance(run, dict) or set(run) != {"t_max", "until"}:
+            raise ValueError(f"run must be {{'t_max': ..., 'until': ...}}, got {run!r:.80}")
+        t_max = run["t_max"]
+        if t_max is not None and (not isinstance(t_max, (int, float)) or isinstance(t_max, bool)
+                                  or not 0 < t_max < math.inf):
+            raise ValueError(f"run's t_max must be None or a finite time > 0 (s), got {t_max!r}")
+        check_choice("run's until", run["until"], tuple(ENDINGS) if n == 1 else GROUP_UNTIL)
+        object.__setattr__(self, "fps", check_fps(self.fps))
+        check_type("release", self.release, GroupState)
+        for name in STATE_FIELDS:
+            array = getattr(self.release, name)
+            tail = (3, 3) if name == "orientation" else (3,)
+            if array.shape != (1, n, *tail) or not np.all(np.isfinite(array)):
+                raise ValueError(f"release {name} must be finite, shape {(1, n, *tail)} for "
+                                 f"{n} dice, got shape {array.shape}")
+        check_frames(self.t, self.position, self.orientation, n)
+        check_type("outcome", outcome, dict)
+        faces = outcome.get("faces")
+        if (not isinstance(faces, list) or len(faces) != n
+                or not all(type(face) is int for face in faces)):
+            raise ValueError(f"outcome's faces must be a list of {n} ints (one a die), got "
+                             f"{faces!r:.80}")
+        check_type("outcome's void", outcome.get("void"), str)
 
     @property
     def n_dice(self) -> int:
@@ -132,7 +151,7 @@ class Recording:
                              f"{quaternion.shape}")
         return cls(scene=from_data(data["scene"]), dice=from_data(data["dice"]),
                    contact=from_data(data["contact"]), release=release,
-                   run=_run_keywords(data["run"]), fps=_number("fps", data["fps"]),
+                   run=_run_keywords(data["run"]), fps=data["fps"],
                    t=_floats("t", data["t"]), position=_floats("position", data["position"]),
                    orientation=quaternion_to_matrix(quaternion),
                    outcome=dict(data["outcome"]) if isinstance(data["outcome"], dict)
@@ -151,7 +170,7 @@ def check_fps(fps: object, limit: float | None = None) -> float:
             or not low <= fps <= high):
         also = f" (at least one frame by t_max = {limit:g} s)" if short else ""
         raise ValueError(f"fps must be in [{low:g}, {high:g}] frames per simulated second"
-                         f"{also}, got {fps!r}")
+                         f"{also}, got {fps!r:.80}")
     return float(fps)
 
 
@@ -213,23 +232,39 @@ def record(scene: Scene, dice: Die | Sequence[Die], state: State | GroupState, *
     if n_steps // stride * len(dice) > MAX_FRAMES:
         raise ValueError(f"t_max={n_steps * dt:g} s at fps={fps:g} records more than "
                          f"{MAX_FRAMES} die frames a throw: lower fps or t_max")
-    run = {"t_max": t_max, "until": until}
-    result, outcomes = _simulate(scene, dice, release, contact, stride, run)
     count = release.batch_size
     titles = [""] * count if titles is None else list(titles)
     voids = [""] * count if voids is None else list(voids)
     if len(titles) != count or len(voids) != count:
         raise ValueError(f"titles and voids must hold one entry per throw ({count}), got "
                          f"{len(titles)} and {len(voids)}")
+    if len(dice) == 1:
+        own = scene.with_(die=dice[0])  # the scene the run has
+        result = simulate(own, release.die(0), t_max=t_max, until=until, record_every=stride,
+                          record=("orientations",))
+        faces, read = result.face[:, None], np.ones((len(result.face), 1), bool)
+        sunk = result.sunk[:, None]
+    else:
+        own = scene
+        result = simulate_group(scene, dice, release, contact=contact, t_max=t_max, until=until,
+                                record_every=stride, orientations=True)
+        faces, read, sunk = result.face, result.read, result.sunk
+    result, own_voids = judge(own, dice, result, until, t_max=t_max)
     recordings = []
     for b in range(count):
         frames = min(result.x_cm.shape[1], -(-int(result.steps[b]) // stride))
         shape = (frames, len(dice), 3)  # one die's frames get their die axis
-        outcome = outcomes[b] | ({"void": voids[b]} if voids[b] else {})
+        outcome = {
+            "faces": faces[b].tolist(), "read": read[b].tolist(),
+            "settled": bool(result.settled[b]), "decided": bool(result.decided[b]),
+            "unstable": bool(result.unstable[b]), "sunk": bool(sunk[b].any()),
+            "time": float(result.steps[b] * (result.t[0] / stride)),
+            "void": voids[b] or str(own_voids[b])}
         recordings.append(Recording(
-            scene=scene.with_(die=dice[0]) if single else scene, dice=dice, contact=contact,
+            scene=own if single else scene, dice=dice, contact=contact,
             release=GroupState(*(getattr(release, name)[b:b + 1] for name in STATE_FIELDS)),
-            run=run, fps=float(fps), t=np.arange(frames + 1) * (stride * dt),
+            run={"t_max": t_max, "until": until}, fps=fps,
+            t=np.arange(frames + 1) * (stride * dt),
             position=np.concatenate([release.position[b:b + 1],
                                      result.x_cm[b, :frames].reshape(shape)]),
             orientation=np.concatenate([release.orientation[b:b + 1],
@@ -254,28 +289,6 @@ def run_plan(scene: Scene, dice: Sequence[Die], contact: DieContact, fps: object
     return dt, max(1, round(1.0 / (fps * dt))), n_steps
 
 
-def _simulate(scene: Scene, dice: tuple[Die, ...], release: GroupState, contact: DieContact,
-              stride: int, run: dict[str, Any]) -> tuple[Any, list[dict[str, Any]]]:
-    """The recorded run and each throw's outcome."""
-    if len(dice) == 1:
-        result = simulate(scene.with_(die=dice[0]), release.die(0), t_max=run["t_max"],
-                          until=run["until"], record_every=stride, record=("orientations",))
-        faces, read, sunk = result.face[:, None], np.ones((len(result.face), 1), bool), \
-            result.sunk[:, None]
-    else:
-        result = simulate_group(scene, dice, release, contact=contact, t_max=run["t_max"],
-                                until=run["until"], record_every=stride, orientations=True)
-        faces, read, sunk = result.face, result.read, result.sunk
-    own = scene.with_(die=dice[0]) if len(dice) == 1 else scene  # the scene the run had
-    result, voids = judge(own, dice, result, run["until"], t_max=run["t_max"])
-    return result, [{
-        "faces": faces[b].tolist(), "read": read[b].tolist(),
-        "settled": bool(result.settled[b]), "decided": bool(result.decided[b]),
-        "unstable": bool(result.unstable[b]), "sunk": bool(sunk[b].any()),
-        "time": float(result.steps[b] * (result.t[0] / stride)), "void": str(voids[b]),
-    } for b in range(len(faces))]
-
-
 def _run_keywords(run: dict[str, Any]) -> dict[str, Any]:
     """A recording's run keywords, those of a file from before ``until`` converted to it."""
     if not isinstance(run, dict):
@@ -286,40 +299,6 @@ def _run_keywords(run: dict[str, Any]) -> dict[str, Any]:
     until = ("decided" if run["stop_when_decided"] else
              "early_rest" if run["early_rest"] else "rest")
     return {"t_max": run["t_max"], "until": until}
-
-
-def _check_run(run: object, n_dice: int) -> None:
-    """``run``: ``{"t_max": None or a time (s) > 0, "until": one of the dice count's}``."""
-    if not isinstance(run, dict) or set(run) != {"t_max", "until"}:
-        raise ValueError(f"run must be {{'t_max': ..., 'until': ...}}, got {run!r:.80}")
-    t_max = run["t_max"]
-    if t_max is not None and (not isinstance(t_max, (int, float)) or isinstance(t_max, bool)
-                              or not 0 < t_max < math.inf):
-        raise ValueError(f"run's t_max must be None or a finite time > 0 (s), got {t_max!r}")
-    check_choice("run's until", run["until"], tuple(ENDINGS) if n_dice == 1 else GROUP_UNTIL)
-
-
-def _check_release(release: object, n_dice: int) -> None:
-    """``release``: one throw's finite :class:`GroupState` of ``n_dice`` dice."""
-    check_type("release", release, GroupState)
-    for name in STATE_FIELDS:
-        array = getattr(release, name)
-        tail = (3, 3) if name == "orientation" else (3,)
-        if array.shape != (1, n_dice, *tail) or not np.all(np.isfinite(array)):
-            raise ValueError(f"release {name} must be finite, shape {(1, n_dice, *tail)} for "
-                             f"{n_dice} dice, got shape {array.shape}")
-
-
-def _check_outcome(outcome: object, n_dice: int) -> None:
-    """``outcome``: a dict whose ``faces`` are ``n_dice`` ints and ``void`` a str."""
-    if not isinstance(outcome, dict):
-        raise TypeError(f"outcome must be a dict, got {type(outcome).__name__}")
-    faces, void = outcome.get("faces"), outcome.get("void")
-    if (not isinstance(faces, list) or len(faces) != n_dice
-            or not all(type(face) is int for face in faces)):
-        raise ValueError(f"outcome's faces must be a list of {n_dice} ints (one a die), got "
-                         f"{faces!r:.80}")
-    check_type("outcome's void", void, str)
 
 
 def _check_keys(what: str, data: object, keys: Sequence[str]) -> None:
@@ -337,13 +316,3 @@ def _floats(name: str, value: object) -> np.ndarray:
         return np.array(value, dtype=np.float64)
     except (TypeError, ValueError, OverflowError) as error:
         raise ValueError(f"{name} must be an array of numbers ({error})") from None
-
-
-def _number(name: str, value: object) -> float:
-    """``value`` as a float when it is a JSON number, else an error naming ``name``."""
-    if not isinstance(value, (int, float)) or isinstance(value, bool):
-        raise TypeError(f"{name} must be a number, got {type(value).__name__}")
-    try:
-        return float(value)
-    except OverflowError:
-        raise ValueError(f"{name} must be a finite number, got an int beyond floats") from None

@@ -9,7 +9,7 @@ from functools import lru_cache
 import numpy as np
 
 from dice_env.envs.render import FACE_COLOUR, RIM_WIDTH, face_art, face_colour
-from dice_env.model.checks import check_int
+from dice_env.model.checks import check_int, check_type
 from dice_env.model.die import Die
 
 SUPERSAMPLE = 3  # subpixels a side averaged into one texture pixel (antialiasing)
@@ -26,8 +26,7 @@ def face_atlas(die: Die, pixels: int = 128) -> tuple[np.ndarray, np.ndarray]:
     texture coordinate (origin top left, v down) of corner ``die.faces[k][i]``, NaN past a
     face's corners. Cached, both read-only.
     """
-    if not isinstance(die, Die):
-        raise TypeError(f"die must be a Die, got {type(die).__name__}")
+    check_type("die", die, Die)
     check_int("pixels", pixels, 8)
     arts, vertices = face_art(die), np.asarray(die.vertices)
     columns = math.ceil(math.sqrt(len(arts)))
