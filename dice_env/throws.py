@@ -1,12 +1,7 @@
 """Throws: the hands that draw releases, and the faces the releases show.
 
-One home for the throw distributions that the studies (``studies/``), the agents and the
-benchmarks share: one die from a :class:`Vigour` (:func:`vigorous_throws`, :func:`hand_throws`,
-:func:`energy_throws`), several dice from one :class:`Hand` (:func:`group_throws`) or a
-:class:`Cup` (:func:`cup_throws`), the nominal :data:`RELEASES` with their hand noise, and the
-craps :class:`SetThrow`; then the faces they show (:func:`throw_faces`, :class:`Faces`). The
-uniform orientations and the chi-square use scipy, imported when called (the ``studies``
-extra brings it).
+The one home of the throw distributions the studies, the agents and the benchmarks share. The
+uniform orientations and the chi-square use scipy (the ``studies`` extra), imported when called.
 """
 
 from __future__ import annotations
@@ -18,6 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from dice_env.intervals import wilson
+from dice_env.model.checks import check_int
 from dice_env.model.defaults import DIE_EDGE
 from dice_env.model.die import Die
 from dice_env.model.rotations import axis_angle, rotation_vector_to_matrix
@@ -157,8 +153,7 @@ def layout(n_dice: int, spacing: float, normal: Sequence[float] = (0.0, 0.0, 1.0
     Rows of ``per_row`` across the throw (along y), each row centred, the rows along x; all in
     the plane across ``normal`` (the table's). The env's hand and :class:`Hand` both hold dice so.
     """
-    if not isinstance(n_dice, int) or isinstance(n_dice, bool) or n_dice < 1:
-        raise ValueError(f"n_dice must be an int >= 1, got {n_dice!r}")
+    check_int("n_dice", n_dice, 1)
     normal = np.asarray(normal, dtype=np.float64)
     x_axis = np.cross([0.0, 1.0, 0.0], normal)
     x_axis /= np.linalg.norm(x_axis)

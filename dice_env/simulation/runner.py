@@ -165,9 +165,7 @@ class Tally:
             raise ValueError("tallies must hold at least one Tally, got none")
         added = {f.name: sum(getattr(p, f.name) for p in parts)
                  for f in dataclasses.fields(cls) if f.name != "sums"}
-        sums = np.array([[math.fsum(p.sums[i, j] for p in parts) for j in range(2)]
-                         for i in range(len(MOMENTS))])
-        return cls(**added, sums=sums)
+        return cls(**added, sums=np.apply_along_axis(math.fsum, 0, [p.sums for p in parts]))
 
     @property
     def faces(self) -> Faces:
