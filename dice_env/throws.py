@@ -98,17 +98,15 @@ def energy_throws(scene: Scene, excess: np.ndarray, rng: np.random.Generator) ->
     """
     die, g = scene.die, scene.gravity
     n = len(excess)
-    unit = die.mass * g * die.size
-    parts = rng.dirichlet(np.ones(3), n) * (excess * unit)[:, None]
+    parts = rng.dirichlet(np.ones(3), n) * (excess * (die.mass * g * die.size))[:, None]
     orientation = random_orientations(rng, n)
-    normal = np.asarray(scene.ground.normal)
     direction = toward_table(scene, random_directions(rng, n))
     velocity = direction * np.sqrt(2 * parts[:, 1] / die.mass)[:, None]
     axis = random_directions(rng, n)
     body_axis = np.einsum("bji,bj->bi", orientation, axis)
     inertia_along = np.einsum("bi,ij,bj->b", body_axis, die.inertia_body, body_axis)
     spin = axis * np.sqrt(2 * parts[:, 2] / inertia_along)[:, None]
-    clearance = parts[:, 0] / (die.mass * g * normal[2])
+    clearance = parts[:, 0] / (die.mass * g * scene.ground.normal[2])
     return release_state(scene, orientation, clearance, velocity, spin)
 
 
@@ -249,10 +247,9 @@ class Release:
         position = np.array([0.0, 0.0, self.height]) + self.sigma_position * rng.normal(size=(n, 3))
         velocity = np.array(self.velocity) + self.sigma_velocity * rng.normal(size=(n, 3))
         spin = np.array(self.spin) + self.sigma_spin * rng.normal(size=(n, 3))
-        noise = self.sigma_angle * rng.normal(size=(n, 3))
+        noise = rotation_vector_to_matrix(self.sigma_angle * rng.normal(size=(n, 3)))
         tilt = rotation_vector_to_matrix(np.array(self.tilt))
-        orientation = rotation_vector_to_matrix(noise) @ tilt
-        return State.release(scene, position, velocity, spin, orientation)
+        return State.release(scene, position, velocity, spin, noise @ tilt)
 
 
 RELEASES = (

@@ -412,10 +412,7 @@ def _record_names(record: object) -> tuple[str, ...]:
 
 
 def require_device(device: str) -> ModuleType | None:
-    """The CUDA kernel's module for ``"cuda"`` (a GPU or its simulator there), None for ``"cpu"``.
-
-    Refused: a ``device`` not in :data:`DEVICES`, ``"cuda"`` without numba-cuda or a GPU.
-    """
+    """The CUDA kernel's module for ``"cuda"`` (refused without numba-cuda and a GPU), else None."""
     check_choice("device", device, DEVICES)
     if device == "cpu":
         return None
