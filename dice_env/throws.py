@@ -166,8 +166,7 @@ def layout(n_dice: int, spacing: float, normal: Sequence[float] = (0.0, 0.0, 1.0
 def group_throws(scene: Scene, dice: tuple[Die, ...], n: int, rng: np.random.Generator,
                  hand: Hand = HAND) -> GroupState:
     """``n`` throws of ``dice`` from one ``hand`` (see :class:`Hand`) in ``scene``."""
-    reach = max(d.reach for d in dice)
-    height = rng.uniform(*hand.clearance, n) + reach
+    height = rng.uniform(*hand.clearance, n) + max(d.reach for d in dice)
     velocity = (toward_table(scene, random_directions(rng, n))
                 * rng.uniform(*hand.speed, n)[:, None])
     states = []

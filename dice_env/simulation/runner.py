@@ -24,7 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from dice_env.disk import write_atomically
-from dice_env.model.checks import check_int
+from dice_env.model.checks import check_choice, check_int
 from dice_env.model.die import STANDARD_SIZES, Die
 from dice_env.model.scene import Scene
 from dice_env.simulation.chunks import FolderError, identity, load, prepare
@@ -188,8 +188,7 @@ class Tally:
 
 
 def _moment(name: str) -> int:
-    if name not in MOMENTS:
-        raise ValueError(f"name must be one of {MOMENTS}, got {name!r}")
+    check_choice("name", name, MOMENTS)
     return MOMENTS.index(name)
 
 
