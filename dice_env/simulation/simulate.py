@@ -486,15 +486,8 @@ def _run_interruptibly(run: Callable, args: tuple, abort: np.ndarray, threads: i
         raise failure[0]
 
 
-def _packed_scene(scene: Scene) -> tuple[kernel.Body, kernel.Contact]:
-    """:func:`pack_scene`, computed once per (frozen, hashable) scene."""
-    try:
-        return _cached_pack(scene)
-    except TypeError:  # a scene holding something unhashable
-        return pack_scene(scene)
-
-
-_cached_pack = functools.lru_cache(maxsize=64)(pack_scene)
+# pack_scene once per scene: every field of a Scene is checked to be frozen and hashable
+_packed_scene = functools.lru_cache(maxsize=64)(pack_scene)
 
 
 def _rest_energy(scene: Scene, early_rest: bool) -> tuple[float, float]:
