@@ -1,12 +1,7 @@
 """Throws: the hands that draw releases, and the faces the releases show.
 
-One home for the throw distributions that the studies (``studies/``), the agents and the
-benchmarks share: one die from a :class:`Vigour` (:func:`vigorous_throws`, :func:`hand_throws`,
-:func:`energy_throws`), several dice from one :class:`Hand` (:func:`group_throws`) or a
-:class:`Cup` (:func:`cup_throws`), the nominal :data:`RELEASES` with their hand noise, and the
-craps :class:`SetThrow`; then the faces they show (:func:`throw_faces`, :class:`Faces`). The
-uniform orientations and the chi-square use scipy, imported when called (the ``studies``
-extra brings it).
+The one home of the throw distributions the studies, the agents and the benchmarks share. The
+uniform orientations and the chi-square use scipy (the ``studies`` extra), imported when called.
 """
 
 from __future__ import annotations
@@ -18,6 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from dice_env.intervals import wilson
+from dice_env.model.checks import check_int
 from dice_env.model.defaults import DIE_EDGE
 from dice_env.model.die import Die
 from dice_env.model.rotations import axis_angle, rotation_vector_to_matrix
@@ -102,17 +98,15 @@ def energy_throws(scene: Scene, excess: np.ndarray, rng: np.random.Generator) ->
     """
     die, g = scene.die, scene.gravity
     n = len(excess)
-    unit = die.mass * g * die.size
-    parts = rng.dirichlet(np.ones(3), n) * (excess * unit)[:, None]
+    parts = rng.dirichlet(np.ones(3), n) * (excess * (die.mass * g * die.size))[:, None]
     orientation = random_orientations(rng, n)
-    normal = np.asarray(scene.ground.normal)
     direction = toward_table(scene, random_directions(rng, n))
     velocity = direction * np.sqrt(2 * parts[:, 1] / die.mass)[:, None]
     axis = random_directions(rng, n)
     body_axis = np.einsum("bji,bj->bi", orientation, axis)
     inertia_along = np.einsum("bi,ij,bj->b", body_axis, die.inertia_body, body_axis)
     spin = axis * np.sqrt(2 * parts[:, 2] / inertia_along)[:, None]
-    clearance = parts[:, 0] / (die.mass * g * normal[2])
+    clearance = parts[:, 0] / (die.mass * g * scene.ground.normal[2])
     return release_state(scene, orientation, clearance, velocity, spin)
 
 
@@ -157,8 +151,7 @@ def layout(n_dice: int, spacing: float, normal: Sequence[float] = (0.0, 0.0, 1.0
     Rows of ``per_row`` across the throw (along y), each row centred, the rows along x; all in
     the plane across ``normal`` (the table's). The env's hand and :class:`Hand` both hold dice so.
     """
-    if not isinstance(n_dice, int) or isinstance(n_dice, bool) or n_dice < 1:
-        raise ValueError(f"n_dice must be an int >= 1, got {n_dice!r}")
+    check_int("n_dice", n_dice, 1)
     normal = np.asarray(normal, dtype=np.float64)
     x_axis = np.cross([0.0, 1.0, 0.0], normal)
     x_axis /= np.linalg.norm(x_axis)
@@ -173,8 +166,7 @@ def layout(n_dice: int, spacing: float, normal: Sequence[float] = (0.0, 0.0, 1.0
 def group_throws(scene: Scene, dice: tuple[Die, ...], n: int, rng: np.random.Generator,
                  hand: Hand = HAND) -> GroupState:
     """``n`` throws of ``dice`` from one ``hand`` (see :class:`Hand`) in ``scene``."""
-    reach = max(d.reach for d in dice)
-    height = rng.uniform(*hand.clearance, n) + reach
+    height = rng.uniform(*hand.clearance, n) + max(d.reach for d in dice)
     velocity = (toward_table(scene, random_directions(rng, n))
                 * rng.uniform(*hand.speed, n)[:, None])
     states = []
@@ -254,10 +246,9 @@ class Release:
         position = np.array([0.0, 0.0, self.height]) + self.sigma_position * rng.normal(size=(n, 3))
         velocity = np.array(self.velocity) + self.sigma_velocity * rng.normal(size=(n, 3))
         spin = np.array(self.spin) + self.sigma_spin * rng.normal(size=(n, 3))
-        noise = self.sigma_angle * rng.normal(size=(n, 3))
+        noise = rotation_vector_to_matrix(self.sigma_angle * rng.normal(size=(n, 3)))
         tilt = rotation_vector_to_matrix(np.array(self.tilt))
-        orientation = rotation_vector_to_matrix(noise) @ tilt
-        return State.release(scene, position, velocity, spin, orientation)
+        return State.release(scene, position, velocity, spin, noise @ tilt)
 
 
 RELEASES = (

@@ -59,17 +59,13 @@ def ready(dispatcher: object, args: tuple) -> bool:
     if key not in _types:
         _types[key] = tuple(dispatcher.typeof_pyval(a) for a in args)
     types = _types[key]  # a run compiles them, or loads them from the cache, into overloads
-    return types in dispatcher.overloads or _cached(dispatcher, types)
-
-
-def _cached(dispatcher: object, types: tuple) -> bool:
-    """Whether numba's on-disk cache holds a current compilation of ``dispatcher`` for ``types``."""
-    cache = getattr(dispatcher, "_cache", None)
-    index = getattr(cache, "_cache_file", None)
+    if types in dispatcher.overloads:
+        return True
+    index = getattr(getattr(dispatcher, "_cache", None), "_cache_file", None)
     if index is None:  # not cached on disk: every process compiles it
         return False
-    try:
-        return any(key[0] == types for key in index._load_index())
+    try:  # numba's on-disk cache holds a current compilation for these types
+        return any(entry[0] == types for entry in index._load_index())
     except (OSError, EOFError, pickle.UnpicklingError):  # numba recompiles: the notice is right
         return False
 
@@ -84,11 +80,8 @@ def cache_hint(dispatcher: object) -> Iterator[None]:
         yield
     except (pickle.UnpicklingError, EOFError) as error:
         folder = getattr(getattr(dispatcher, "_cache", None), "_cache_path", "numba's cache")
-        raise RuntimeError(f"numba could not read its cached {_name(dispatcher)} ({error}): a "
+        name = getattr(getattr(dispatcher, "py_func", None), "__qualname__", "kernel")
+        raise RuntimeError(f"numba could not read its cached {name} ({error}): a "
                            f"cache file is cut short or damaged; delete the folder {folder} "
                            "(or its files for this kernel) and run again to compile it "
                            "afresh") from error
-
-
-def _name(dispatcher: object) -> str:
-    return getattr(getattr(dispatcher, "py_func", None), "__qualname__", "kernel")

@@ -274,10 +274,7 @@ def simulate_group(scene: Scene, dice: Sequence[Die], state: GroupState, *,
 
 def _pair(scene: Scene, contact: DieContact, dt: float, reduced: float,
           units: tuple[int, int]) -> group_kernel.Pair:
-    """The kernel's die–die contact for the pair's ``reduced`` mass (kg), moves of ``units``.
-
-    ``units``: a move's units of ``dt`` (s) near and apart (:func:`moves`).
-    """
+    """The kernel's die–die contact: the pair's ``reduced`` mass (kg), :func:`moves` of ``dt``."""
     near = units[0] * dt
     return group_kernel.Pair(
         float(contact.stiffness), float(contact.damping), float(contact.friction),

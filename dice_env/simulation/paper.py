@@ -19,10 +19,7 @@ from dice_env.simulation.simulate import Result, State, simulate
 
 @dataclass
 class PaperRun:
-    """Per-step records of one paper script: ``t``, ``x_cm``, ``energy``, ``nodes`` or None.
-
-    Over the clockmax steps; ``L0`` used; ``result`` the full :class:`Result`.
-    """
+    """A paper script's run: per-step ``t``, ``x_cm``, ``energy``, ``nodes`` (or None); ``L0``."""
 
     t: np.ndarray
     x_cm: np.ndarray

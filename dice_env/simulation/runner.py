@@ -24,7 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from dice_env.disk import write_atomically
-from dice_env.model.checks import check_int
+from dice_env.model.checks import check_choice, check_int
 from dice_env.model.die import STANDARD_SIZES, Die
 from dice_env.model.scene import Scene
 from dice_env.simulation.chunks import FolderError, identity, load, prepare
@@ -39,7 +39,6 @@ MOMENTS = ("steps", "time", "impacts")  # outcomes summarised by their sum and s
 # Histogram bins: time to the end over [0, t_max]; impacts 0, 1, ... (the last: that or more)
 TIME_BINS, IMPACT_BINS = 50, 32
 CHUNK = 10_000  # throws per chunk by default: seconds of work for one thread
-INSTALL_RAY = "pip install 'dice_env[ray]'"
 
 Draw = Callable[[Scene, int, np.random.Generator], State]
 
@@ -165,9 +164,7 @@ class Tally:
             raise ValueError("tallies must hold at least one Tally, got none")
         added = {f.name: sum(getattr(p, f.name) for p in parts)
                  for f in dataclasses.fields(cls) if f.name != "sums"}
-        sums = np.array([[math.fsum(p.sums[i, j] for p in parts) for j in range(2)]
-                         for i in range(len(MOMENTS))])
-        return cls(**added, sums=sums)
+        return cls(**added, sums=np.apply_along_axis(math.fsum, 0, [p.sums for p in parts]))
 
     @property
     def faces(self) -> Faces:
@@ -191,8 +188,7 @@ class Tally:
 
 
 def _moment(name: str) -> int:
-    if name not in MOMENTS:
-        raise ValueError(f"name must be one of {MOMENTS}, got {name!r}")
+    check_choice("name", name, MOMENTS)
     return MOMENTS.index(name)
 
 
@@ -263,7 +259,7 @@ def connected(address: str) -> Iterator[types.ModuleType]:
     try:
         import ray
     except ImportError as error:
-        raise ImportError(f"ray={address!r} needs Ray: {INSTALL_RAY}") from error
+        raise ImportError(f"ray={address!r} needs Ray: pip install 'dice_env[ray]'") from error
     started = not ray.is_initialized()
     if started:
         ray.init(address=address, **({"include_dashboard": False} if address == "local"
@@ -332,18 +328,16 @@ def _read_chunk(path: Path, spec: Spec, index: int) -> dict[str, np.ndarray]:
                           f"{asked[k]!r} here" for k in differ)
         raise FolderError(f"{str(path)!r} is not chunk {index} of this run ({shown}): delete "
                           "it to throw it again, or pass another folder")
-    if sorted(saved) != sorted(OUTCOMES) or \
-            any(saved[name].shape != (asked["throws"],) for name in OUTCOMES):
-        raise FolderError(f"{str(path)!r} is corrupt (its outcomes are not {tuple(OUTCOMES)} of "
-                          f"{asked['throws']} throws each): delete it to throw it again")
-    wrong = _wrong_outcome(saved, spec.scene)
+    wrong = _wrong_outcome(saved, spec.scene, asked["throws"])
     if wrong:
         raise FolderError(f"{str(path)!r} is corrupt ({wrong}): delete it to throw it again")
     return saved
 
 
-def _wrong_outcome(saved: dict[str, np.ndarray], scene: Scene) -> str:
-    """What in a chunk's outcomes no run of ``scene`` gives (``""``: nothing): dtype, range."""
+def _wrong_outcome(saved: dict[str, np.ndarray], scene: Scene, throws: int) -> str:
+    """What in a chunk's outcomes no run of ``throws`` of ``scene`` gives (``""``: nothing)."""
+    if sorted(saved) != sorted(OUTCOMES) or any(saved[q].shape != (throws,) for q in OUTCOMES):
+        return f"its outcomes are not {tuple(OUTCOMES)} of {throws} throws each"
     for name, dtype in OUTCOMES.items():
         if saved[name].dtype != dtype:
             return f"{name} is {saved[name].dtype}, not {np.dtype(dtype)}"

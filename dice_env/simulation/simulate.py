@@ -194,7 +194,7 @@ def simulate(scene: Scene, state: State, *, t_max: float | None = None, until: s
                         free_flight=free_flight)
     ending(until)
     record = _record_names(record)
-    require_device(device)
+    cuda = require_device(device)
     body, contact = _packed_scene(scene)
     n_steps = scene.steps_for(t_max)
     out = state.copy()
@@ -204,8 +204,8 @@ def simulate(scene: Scene, state: State, *, t_max: float | None = None, until: s
     records = _records(record, record_every, b, n_steps, len(body.vertices))
     options, stops = pack_run(scene, n_steps=n_steps, until=until, free_flight=free_flight)
     inputs = (kernel.Dice(*out._arrays()), body, contact, options, stops, records)
-    if device == "cuda":
-        _cuda_kernel().run(*inputs, outcome)
+    if cuda:
+        cuda.run(*inputs, outcome)
     else:
         paper = vector_kernel.covers(scene, b, options.flight, records.stride <= n_steps)
         if paper:  # it keeps no records: in their place, which stop tests its loop runs
@@ -368,21 +368,17 @@ RECORDS = ("energy", "orientations", "nodes")
 RELEASE_SINK = 1e-3  # deepest corner of a release, as a fraction of the die's size
 MAX_RECORD_BYTES = 4 * 2**30  # records larger than this are refused before any work
 ROTATION_TOL = 1e-6  # State.orientation's allowed orthonormality error (a long run drifts)
-# Each kind of run's CPU kernel: its loop on numba's threads and its serial loop.
-BACKENDS: dict[str, tuple[Callable, Callable]] = {
-    "die": (kernel.simulate_batch, kernel.simulate_serial),
-    "paper": (vector_kernel.simulate_batch, vector_kernel.simulate_serial),
-    "dice": (group_kernel.simulate_groups, group_kernel.simulate_groups_serial),
+# Each kind of run's CPU kernel: its loop on numba's threads, its serial loop, its name.
+BACKENDS: dict[str, tuple[Callable, Callable, str]] = {
+    "die": (kernel.simulate_batch, kernel.simulate_serial, "the die's kernel"),
+    "paper": (vector_kernel.simulate_batch, vector_kernel.simulate_serial,
+              "the paper scene's kernel"),
+    "dice": (group_kernel.simulate_groups, group_kernel.simulate_groups_serial,
+             "the kernel of several dice"),
 }
-# Each CPU kernel loop's name in the compile notice (its cold compile time: compile_times.json).
-COMPILES = {
-    kernel.simulate_serial: "the die's kernel",
-    kernel.simulate_batch: "the die's kernel on threads",
-    vector_kernel.simulate_serial: "the paper scene's kernel",
-    vector_kernel.simulate_batch: "the paper scene's kernel on threads",
-    group_kernel.simulate_groups_serial: "the kernel of several dice",
-    group_kernel.simulate_groups: "the kernel of several dice on threads",
-}
+# Each loop's name in the compile notice (its cold compile time: compile_times.json).
+COMPILES = {loop: name + suffix for parallel, serial, name in BACKENDS.values()
+            for loop, suffix in ((serial, ""), (parallel, " on threads"))}
 SERIAL_FIRST = 256  # throws: a batch up to this size runs serially until its parallel loop
 # is compiled (a first small batch does not wait for that compile)
 _LONG_RUN = 2_000_000  # die-steps (about 0.1 s) from which a run goes on a worker thread
@@ -415,15 +411,11 @@ def _record_names(record: object) -> tuple[str, ...]:
     return tuple(names)
 
 
-def require_device(device: str) -> None:
-    """Refuse a ``device`` not in :data:`DEVICES`, or ``"cuda"`` without numba-cuda and a GPU."""
+def require_device(device: str) -> ModuleType | None:
+    """The CUDA kernel's module for ``"cuda"`` (refused without numba-cuda and a GPU), else None."""
     check_choice("device", device, DEVICES)
-    if device == "cuda":
-        _cuda_kernel()
-
-
-def _cuda_kernel() -> ModuleType:
-    """The CUDA kernel's module, once numba-cuda and a GPU (or its simulator) are there."""
+    if device == "cpu":
+        return None
     if importlib.util.find_spec("numba_cuda") is None:
         raise ImportError("device='cuda' needs numba-cuda: pip install 'dice_env[cuda]' (an "
                           "NVIDIA GPU and its driver too)")
@@ -453,7 +445,7 @@ def run_kernel(kind: str, inputs: tuple, outcome: tuple, *, batch: int, threads:
     Serially for one die or thread, after a fork, or up to :data:`SERIAL_FIRST` dice while the
     parallel loop is not compiled. ``work`` (die-steps) decides if Ctrl-C is watched for.
     """
-    parallel, serial = BACKENDS[kind]
+    parallel, serial, _ = BACKENDS[kind]
     args = (*inputs, outcome)
     serial_run = (batch == 1 or threads == 1 or _after_fork
                   or (batch <= SERIAL_FIRST and not ready(parallel, args)))
@@ -494,15 +486,8 @@ def _run_interruptibly(run: Callable, args: tuple, abort: np.ndarray, threads: i
         raise failure[0]
 
 
-def _packed_scene(scene: Scene) -> tuple[kernel.Body, kernel.Contact]:
-    """:func:`pack_scene`, computed once per (frozen, hashable) scene."""
-    try:
-        return _cached_pack(scene)
-    except TypeError:  # a scene holding something unhashable
-        return pack_scene(scene)
-
-
-_cached_pack = functools.lru_cache(maxsize=64)(pack_scene)
+# pack_scene once per scene: every field of a Scene is checked to be frozen and hashable
+_packed_scene = functools.lru_cache(maxsize=64)(pack_scene)
 
 
 def _rest_energy(scene: Scene, early_rest: bool) -> tuple[float, float]:
