@@ -45,17 +45,18 @@ class TaskHand:
     """The dice in the hand and how an action (:attr:`action_dim`) releases them.
 
     ``scenes``: the scene with each die (the first is the task's scene). The fields are the
-    ``gym.make`` keywords of the same names (``docs/environment.md``). An agent's actions
+    ``gym.make`` keywords of the same names, with their defaults in
+    :class:`~dice_env.envs.throw_task.ThrowTask` (``docs/environment.md``). An agent's actions
     drive it; :class:`dice_env.throws.Hand` draws the studies' throws at random.
     """
 
     scenes: tuple[Scene, ...]
     release_height: float
-    max_speed: float = 1.0
-    max_spin: float = 40.0
-    hand_noise: float = 0.05
-    orientation_noise: float = 0.05
-    set_dice: bool = False
+    max_speed: float
+    max_spin: float
+    hand_noise: float
+    orientation_noise: float
+    set_dice: bool
 
     def __post_init__(self) -> None:
         check_positive("release_height", self.release_height)

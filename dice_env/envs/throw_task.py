@@ -119,8 +119,9 @@ class ThrowTask:
     @cached_property
     def hand(self) -> TaskHand:
         """The hand: actions to releases, from the task's hand fields."""
-        return TaskHand(self.die_scenes, self.release_height, self.max_speed, self.max_spin,
-                    self.hand_noise, self.orientation_noise, self.set_dice)
+        return TaskHand(self.die_scenes, self.release_height, max_speed=self.max_speed,
+                        max_spin=self.max_spin, hand_noise=self.hand_noise,
+                        orientation_noise=self.orientation_noise, set_dice=self.set_dice)
 
     @cached_property
     def goal(self) -> Target:
