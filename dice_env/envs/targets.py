@@ -7,6 +7,7 @@ back, and says which landings hit it. ``faces``: a face per die; ``sum``: a tota
 
 from __future__ import annotations
 
+from abc import ABC, abstractmethod
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any, ClassVar
@@ -19,20 +20,42 @@ from dice_env.model.die import Die
 
 
 @dataclass(frozen=True)
-class Target:
-    """A kind of target over dice of ``faces`` faces each; targets are ints, 1 … F or totals.
-
-    Each kind gives ``shape`` (one throw's target: a face per die, or () for a total), ``dim``
-    (the columns of its encoding in the observation) and ``fix(target_face, target_sum)`` (the
-    episode keywords as a fixed target, None: drawn), ``draw(rng)`` (a target drawn uniformly),
-    ``columns(targets)`` (the encoding's columns set to 1, (n, k)), ``decode(encoding)``
-    (targets (n, shape) from encodings (n, dim)) and ``hit(faces, targets)`` (whether faces
-    (n, N) hit the targets, (n,) bool).
-    """
+class Target(ABC):
+    """A kind of target over dice of ``faces`` faces each; targets are ints, 1 … F or totals."""
 
     faces: tuple[int, ...]
     kind: ClassVar[str]
     info_key: ClassVar[str]  # the info's key of the throw's target
+
+    @property
+    @abstractmethod
+    def shape(self) -> tuple[int, ...]:
+        """One throw's target: a face per die, or a total (())."""
+
+    @property
+    @abstractmethod
+    def dim(self) -> int:
+        """Columns of the target's encoding in the observation."""
+
+    @abstractmethod
+    def fix(self, target_face: object, target_sum: object) -> Any:
+        """The episode keywords ``target_face``/``target_sum`` as a fixed target (None: drawn)."""
+
+    @abstractmethod
+    def draw(self, rng: np.random.Generator) -> Any:
+        """A target drawn uniformly."""
+
+    @abstractmethod
+    def columns(self, targets: np.ndarray) -> np.ndarray:
+        """The encoding's column set to 1 for each target, (n, k)."""
+
+    @abstractmethod
+    def decode(self, encoding: np.ndarray) -> np.ndarray:
+        """Targets (n, :attr:`shape`) from encodings (n, :attr:`dim`)."""
+
+    @abstractmethod
+    def hit(self, faces: np.ndarray, targets: np.ndarray) -> np.ndarray:
+        """Whether faces (n, N) hit ``targets`` (n, :attr:`shape`), (n,) bool."""
 
     def alignment(self, dice: Sequence[Die], normal: np.ndarray, orientation: np.ndarray,
                   targets: np.ndarray) -> np.ndarray:
@@ -113,12 +136,16 @@ class SumTarget(Target):
     kind: ClassVar[str] = "sum"
     info_key: ClassVar[str] = "target_sum"
     wanted: ClassVar[bool] = True  # whether landing on the total is a hit
-    shape: ClassVar[tuple[int, ...]] = ()  # a total per throw
 
     @property
     def totals(self) -> range:
         """The totals the faces can add up to: N … the sum of the faces."""
         return range(self.n_dice, sum(self.faces) + 1)
+
+    @property
+    def shape(self) -> tuple[int, ...]:
+        """A total per throw: ()."""
+        return ()
 
     @property
     def dim(self) -> int:
