@@ -17,6 +17,7 @@ from dice_env.model.surroundings import walls
 from dice_env.simulation.group import GroupState
 from dice_env.viewer import Recording, load, record
 from dice_env.viewer.gltf import ANIMATION, Z_UP, read_glb, write_glb
+from dice_env.viewer.scenery import scenery
 from dice_env.viewer.textures import face_atlas, png_bytes
 
 JS = Path(__file__).resolve().parents[1] / "dice_env" / "viewer" / "js"
@@ -117,6 +118,24 @@ def test_keyframes_and_meshes_are_the_recording(written: tuple[Recording, Path])
         (primitive,) = gltf.meshes[node.mesh].primitives
         corners = _accessor(gltf, primitive.attributes.POSITION)
         np.testing.assert_allclose(corners @ wall.normal, wall.offset, atol=1e-6)
+
+
+def test_floor_and_walls_are_the_pages(written: tuple[Recording, Path]) -> None:
+    recording, path = written
+    gltf = gl.GLTF2.load_binary(str(path))
+    view, scene = scenery(recording), recording.scene
+    planes = {"floor": (view.floor, scene.ground)} | {
+        f"wall {k}": (corners, scene.walls[k]) for k, corners in view.walls.items()}
+    drawn = {n.name: n for n in gltf.nodes if n.name == "floor" or n.name.startswith("wall")}
+    assert drawn.keys() == planes.keys()
+    for name, (corners, plane) in planes.items():
+        (primitive,) = gltf.meshes[drawn[name].mesh].primitives
+        position = _accessor(gltf, primitive.attributes.POSITION)
+        assert any(np.allclose(position, c, atol=1e-7) for c in (corners, corners[::-1])), name
+        np.testing.assert_allclose(_accessor(gltf, primitive.attributes.NORMAL),
+                                   np.tile(plane.normal, (len(corners), 1)), atol=1e-7)
+        a, b, c = position[_accessor(gltf, primitive.indices).reshape(-1, 3).T]
+        assert (np.cross(b - a, c - a) @ plane.normal > 0).all(), name  # counter-clockwise
 
 
 def test_data_comes_back(written: tuple[Recording, Path]) -> None:

@@ -2,14 +2,13 @@
 
 Every die is a flat-shaded mesh textured with its labels
 (:func:`~dice_env.viewer.textures.face_atlas`) on a node the animation ``"throw"`` moves; the
-floor and walls are finite quads around where the dice go. A root node turns the z-up world to
-glTF's y up. The recording's data rides in ``asset.extras["recordings"]`` as JSON text (pygltflib
-drops a JSON object's nulls), so :func:`read_glb` gets it back.
+floor and walls are the polygons the page draws (:mod:`~dice_env.viewer.scenery`). A root node
+turns the z-up world to glTF's y up. The recording's data rides in ``asset.extras["recordings"]``
+as JSON text (pygltflib drops a JSON object's nulls), so :func:`read_glb` gets it back.
 """
 
 from __future__ import annotations
 
-import itertools
 import json
 import math
 import os
@@ -21,15 +20,14 @@ import numpy as np
 import pygltflib as gl
 
 from dice_env.disk import parse_json, write_atomically
-from dice_env.envs.render import TABLE_COLOUR, WALL_COLOUR, _plane_axes, _unit
+from dice_env.envs.render import TABLE_COLOUR, WALL_COLOUR
 from dice_env.model.checks import check_type
 from dice_env.model.die import Die
 from dice_env.model.rotations import matrix_to_quaternion
 from dice_env.viewer.recording import Recording, library_version
+from dice_env.viewer.scenery import scenery
 from dice_env.viewer.textures import face_atlas, png_bytes
 
-MARGIN = 0.05  # m of floor beyond the dice's farthest corners and the walls' corners
-WALL_HEIGHT = 0.05  # m: a wall's quad above the floor
 Z_UP = [-math.sqrt(0.5), 0.0, 0.0, math.sqrt(0.5)]  # root rotation (x, y, z, w): z up to y up
 EXTRAS = "recordings"  # asset.extras[EXTRAS]: the recordings' data, JSON text of a list
 ANIMATION = "throw"
@@ -189,79 +187,23 @@ def _animate(blob: _Blob, recording: Recording) -> None:
 
 
 def _surroundings(blob: _Blob, recording: Recording) -> None:
-    """Nodes of the floor and of each wall as quads, :data:`MARGIN` beyond where the dice go."""
-    floor, walls = recording.scene.ground, recording.scene.walls
-    normal = np.asarray(floor.normal)
-    axes = np.array(_plane_axes(normal))  # in the floor, axes[0] x axes[1] = normal
-    origin = normal * floor.offset
-    # Where each wall meets the floor: a row (m_u, m_v, d), m . (u, v) >= d its free side.
-    lines = [np.append(axes @ w.normal, w.offset - np.asarray(w.normal) @ origin) for w in walls]
-    corners = np.concatenate([  # every die's at every frame
-        (recording.position[:, i, None] + np.einsum("nij,vj->nvi", recording.orientation[:, i],
-                                                     die.vertices_body)).reshape(-1, 3)
-        for i, die in enumerate(recording.dice)])
-    dice = (corners - origin) @ axes.T
-    middle = (dice.min(axis=0) + dice.max(axis=0)) / 2
-    feet = [middle + (line[2] - line[:2] @ middle) * line[:2] / (line[:2] @ line[:2])
-            for line in lines if line[:2] @ line[:2] > 1e-18]  # the walls' nearest points
-    flat = np.concatenate([dice, _wall_corners(lines), np.reshape(feet, (-1, 2))])
-    low, high = flat.min(axis=0) - MARGIN, flat.max(axis=0) + MARGIN
-    rectangle = np.array([low, (high[0], low[1]), high, (low[0], high[1])])
-    _quad(blob, "floor", origin + rectangle @ axes, normal,
-          blob.material("floor", colour=TABLE_COLOUR))
-    if not walls:
+    """Nodes of the floor and of each wall the page draws (:func:`scenery`), as flat polygons."""
+    view, scene = scenery(recording), recording.scene
+    _polygon(blob, "floor", view.floor, np.asarray(scene.ground.normal),
+             blob.material("floor", colour=TABLE_COLOUR))
+    if not view.walls:
         return
     material = blob.material("wall", colour=WALL_COLOUR)
-    for k, (wall, line) in enumerate(zip(walls, lines, strict=True)):
-        ends = _wall_ends(line, [other for j, other in enumerate(lines) if j != k], low, high)
-        if ends is None:
-            continue
-        up = _unit(normal - (normal @ wall.normal) * np.asarray(wall.normal)) * WALL_HEIGHT
-        bottom = origin + ends @ axes
-        _quad(blob, f"wall {k}", np.array([*bottom, bottom[1] + up, bottom[0] + up]),
-              np.asarray(wall.normal), material)
+    for k, corners in view.walls.items():
+        _polygon(blob, f"wall {k}", corners, np.asarray(scene.walls[k].normal), material)
 
 
-def _quad(blob: _Blob, name: str, corners: np.ndarray, normal: np.ndarray,
-          material: int) -> None:
-    """A node of the flat quad ``corners`` (4, 3), wound counter-clockwise about ``normal``."""
-    if np.cross(corners[1] - corners[0], corners[2] - corners[0]) @ normal < 0:
+def _polygon(blob: _Blob, name: str, corners: np.ndarray, normal: np.ndarray,
+             material: int) -> None:
+    """A node of the convex polygon ``corners`` (K, 3): a fan counter-clockwise about ``normal``."""
+    fan = np.cross(corners[1:-1] - corners[0], corners[2:] - corners[0]).sum(axis=0)
+    if fan @ normal < 0:
         corners = corners[::-1]
-    mesh = blob.mesh(name, corners, np.tile(normal, (4, 1)), np.array([(0, 1, 2), (0, 2, 3)]),
-                     material)
+    triangles = np.array([(0, i, i + 1) for i in range(1, len(corners) - 1)])
+    mesh = blob.mesh(name, corners, np.tile(normal, (len(corners), 1)), triangles, material)
     blob.gltf.nodes.append(gl.Node(name=name, mesh=mesh))
-
-
-def _wall_corners(lines: list[np.ndarray]) -> np.ndarray:
-    """The corners (K, 2) where two walls meet on the floor on every wall's free side."""
-    corners = []
-    for first, second in itertools.combinations(lines, 2):
-        matrix = np.array([first[:2], second[:2]])
-        if abs(np.linalg.det(matrix)) >= 1e-9:
-            point = np.linalg.solve(matrix, [first[2], second[2]])
-            if all(line[:2] @ point >= line[2] - 1e-9 for line in lines):
-                corners.append(point)
-    return np.array(corners).reshape(-1, 2)
-
-
-def _wall_ends(line: np.ndarray, others: list[np.ndarray], low: np.ndarray,
-               high: np.ndarray) -> np.ndarray | None:
-    """The ends (2, 2) of ``line`` within ``low``-``high`` and ``others``' free sides, or None."""
-    m, d = line[:2], line[2]
-    scale = m @ m
-    if scale < 1e-18:  # the wall is parallel to the floor
-        return None
-    base, along = m * d / scale, np.array([-m[1], m[0]]) / math.sqrt(scale)
-    start, stop = -np.inf, np.inf
-    bounds = [np.array([1.0, 0.0, low[0]]), np.array([0.0, 1.0, low[1]]),
-              np.array([-1.0, 0.0, -high[0]]), np.array([0.0, -1.0, -high[1]]), *others]
-    for other in bounds:  # keep base + s along with other[:2] . x >= other[2]
-        rate, gap = other[:2] @ along, other[2] - other[:2] @ base
-        if abs(rate) < 1e-12:
-            if gap > 0:
-                return None
-        elif rate > 0:
-            start = max(start, gap / rate)
-        else:
-            stop = min(stop, gap / rate)
-    return np.array([base + start * along, base + stop * along]) if start < stop else None

@@ -20,8 +20,8 @@ import numpy as np
 from dice_env.disk import parse_json, write_atomically
 from dice_env.model.checks import check_choice
 from dice_env.model.die import Die
-from dice_env.model.scene import Scene
 from dice_env.viewer.recording import Recording
+from dice_env.viewer.scenery import scenery
 from dice_env.viewer.textures import face_atlas, png_bytes
 
 LAYOUTS = ("sequence", "side")  # several throws one after another, or side by side on a grid
@@ -103,71 +103,12 @@ def _shape(die: Die) -> dict[str, Any]:
 
 def _throw_view(recording: Recording, shapes: dict[Die, int]) -> dict[str, Any]:
     """What the page draws of a throw besides its dice' frames: shapes, extent, floor, walls."""
-    dice = [shapes.setdefault(die, len(shapes)) for die in recording.dice]
-    size = max(die.size for die in recording.dice)
-    points = recording.position.reshape(-1, 3)
-    low, high = points.min(axis=0), points.max(axis=0)
-    floor, *walls = recording.scene.planes
-    centre = _onto(floor, (low + high) / 2)
-    reach = float(np.linalg.norm(points[:, :2] - centre[:2], axis=1).max()) + 2 * size
-    near = [abs(float(np.dot(w.normal, centre)) - w.offset) for w in walls]
-    radius = max([reach, 6 * size] + [d + size for d in near if d < 4 * reach])
-    height = max(3 * size, min(float(high[2]) + size, radius / 2))
-    u, w = _basis(np.asarray(floor.normal, dtype=np.float64))  # the floor's axes
-    return {"dice": dice, "size": size, "centre": _rounded(centre), "radius": radius,
-            "floor": {"point": _rounded(centre), "u": _rounded(u), "w": _rounded(w)},
-            "walls": _walls(recording.scene, centre, radius, height)}
-
-
-def _onto(plane: Any, point: np.ndarray) -> np.ndarray:
-    """The point of ``plane`` nearest ``point``."""
-    normal = np.asarray(plane.normal, dtype=np.float64)
-    return point + (plane.offset - normal @ point) * normal
-
-
-def _basis(normal: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Two unit vectors spanning the plane of ``normal``: the first horizontal if it can be."""
-    u = np.cross(normal, (0.0, 0.0, 1.0))
-    u = u if np.linalg.norm(u) > 1e-9 else np.cross(normal, (0.0, 1.0, 0.0))
-    u /= np.linalg.norm(u)
-    w = np.cross(normal, u)
-    return u, (w if w[2] >= 0 else -w)
-
-
-def _walls(scene: Scene, centre: np.ndarray, radius: float,
-           height: float) -> list[list[list[float]]]:
-    """Each wall's corners, ``height`` up and within ``radius`` of ``centre`` in x and y.
-
-    Cut where it passes behind the floor or another wall (a tray's sides meet at its corners).
-    """
-    floor, *walls = scene.planes
-    box = [(np.array(axis), float(np.dot(axis, centre)) - radius)
-           for axis in ((1.0, 0, 0), (-1.0, 0, 0), (0, 1.0, 0), (0, -1.0, 0))]
-    polygons = []
-    for k, wall in enumerate(walls):
-        foot = _onto(wall, centre)
-        u, w = _basis(np.asarray(wall.normal, dtype=np.float64))
-        polygon = [foot + a * 4 * radius * u + b * height * w
-                   for a, b in ((-1, -1), (1, -1), (1, 1), (-1, 1))]
-        others = [(np.asarray(p.normal, dtype=np.float64), p.offset)
-                  for p in (floor, *walls[:k], *walls[k + 1:])]
-        for normal, offset in others + box:
-            polygon = _clip(polygon, normal, offset)
-        if len(polygon) >= 3:
-            polygons.append([_rounded(p) for p in polygon])
-    return polygons
-
-
-def _clip(polygon: list[np.ndarray], normal: np.ndarray, offset: float) -> list[np.ndarray]:
-    """The part of a convex polygon on the side of ``normal . p >= offset`` (Sutherland-Hodgman)."""
-    kept = []
-    for a, b in zip(polygon, polygon[1:] + polygon[:1], strict=True):
-        da, db = normal @ a - offset, normal @ b - offset
-        if da >= 0:
-            kept.append(a)
-        if (da >= 0) != (db >= 0):
-            kept.append(a + da / (da - db) * (b - a))
-    return kept
+    view = scenery(recording)
+    u, w = view.axes
+    return {"dice": [shapes.setdefault(die, len(shapes)) for die in recording.dice],
+            "size": view.size, "centre": _rounded(view.centre), "radius": view.radius,
+            "floor": {"point": _rounded(view.centre), "u": _rounded(u), "w": _rounded(w)},
+            "walls": [[_rounded(p) for p in polygon] for polygon in view.walls.values()]}
 
 
 def _rounded(values: Any) -> list[float]:
