@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 from listing_transcription import real_throw_cube as listing_throw
 
-from dice_env import Die, Rest, Scene, State, simulate
+from dice_env import Die, Rest, Scene, State, Wall, simulate
 from dice_env.physics import vector_kernel
 from dice_env.simulation import paper
 
@@ -89,6 +89,15 @@ def test_a_batch_of_paper_throws_ends_where_the_listing_does():
         np.testing.assert_allclose(ours.final.position[k], ref["x_cm"][-1], rtol=0, atol=1e-9)
 
 
+@pytest.mark.parametrize("scene", [
+    paper.paper_scene().with_(t_max=1.0, walls=(Wall.through((1.0, 0.0, 0.0), (-1.0, 0.0, 0.0)),)),
+    paper.paper_scene().with_(t_max=3.0, ground=paper.paper_scene().ground.with_(offset=0.5)),
+], ids=["a wall the dice reach", "a raised floor"])
+def test_the_paper_law_with_other_planes_is_the_scalar_kernels(scene):
+    start = paper_throws(2 * vector_kernel.TILE)  # a batch the tiles would take
+    assert_identical(simulate(scene, start, **PLAIN), scalar(scene, start, **PLAIN))
+
+
 def test_other_scenes_and_runs_take_the_scalar_kernel():
     paper_scene = paper.paper_scene()
     assert vector_kernel.covers(paper_scene, vector_kernel.TILE, False, False)
@@ -97,5 +106,9 @@ def test_other_scenes_and_runs_take_the_scalar_kernel():
     assert not vector_kernel.covers(paper_scene, 64, True, False)  # free-flight jumps
     assert not vector_kernel.covers(paper_scene, 64, False, True)  # records
     assert not vector_kernel.covers(paper.paper_scene(rotation=False), 64, False, False)
+    walled = paper_scene.with_(walls=(Wall.through((1.0, 0.0, 0.0), (-1.0, 0.0, 0.0)),))
+    assert not vector_kernel.covers(walled, 64, False, False)  # the tile reads the floor alone
+    raised = paper_scene.with_(ground=paper_scene.ground.with_(offset=0.5))
+    assert not vector_kernel.covers(raised, 64, False, False)
     loaded = paper_scene.with_(die=Die.loaded(face=6, fraction=0.2, edge=1.0, mass=1.0))
     assert not vector_kernel.covers(loaded, 64, False, False)

@@ -68,10 +68,12 @@ def disabled() -> Iterator[None]:
 def covers(scene: object, batch: int, flight: bool, records: bool) -> bool:
     """Whether a run of ``batch`` dice in ``scene`` takes this kernel (else the scalar one).
 
-    The paper's law, friction and step, an isotropic rotating hexahedron, no free-flight jumps
-    or records, a tile of dice at least; not inside :func:`disabled`.
+    The paper's law, friction and step on one floor through the origin (no walls: the tile's
+    step reads the floor alone), an isotropic rotating hexahedron, no free-flight jumps or
+    records, a tile of dice at least; not inside :func:`disabled`.
     """
-    return (_enabled and scene.ground.contact_law.name == "PAPER"
+    return (_enabled and not scene.walls and scene.ground.offset == 0.0
+            and scene.ground.contact_law.name == "PAPER"
             and scene.friction_law.name == "REGULARIZED" and scene.scheme.name == "PAPER"
             and scene.rotation and scene.die.is_isotropic and len(scene.die.vertices) == 8
             and len(scene.die.faces) == 6 and batch >= TILE and not flight and not records)
