@@ -95,7 +95,7 @@ _ALGORITHMS: dict[str, dict[str, Any]] = {
 }
 ALGOS = tuple(_ALGORITHMS)
 # The search (``python -m agents.tune``): per algorithm, these changes to its keywords above,
-# each trained once on DiceThrow-v0 for its benchmark budget (seed TUNE_SEED) and scored on
+# each trained once on DiceThrow-v0 for agents.tune.TUNE_BUDGET throws (seed TUNE_SEED), scored on
 # throws of their own (``benchmarks/results/tuning.json``); TUNED names the best, which the
 # benchmark trains on every task.
 SEARCH: dict[str, dict[str, dict[str, Any]]] = {

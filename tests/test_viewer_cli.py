@@ -94,6 +94,17 @@ def test_an_export_without_pygltflib_is_refused_before_any_work(tmp_path, capsys
     assert not list(tmp_path.iterdir())
 
 
+def test_replaying_a_glb_without_pygltflib_is_a_usage_error(tmp_path, capsys, monkeypatch):
+    glb = tmp_path / "a.glb"
+    glb.write_bytes(b"glTF")
+    monkeypatch.setattr("importlib.util.find_spec", lambda name, *args: None)
+    with pytest.raises(SystemExit) as exit_info:
+        main(["--replay", str(glb)])
+    assert exit_info.value.code == 2
+    assert "reading a .glb needs pygltflib (pip install 'dice_env[gltf]')" in \
+        capsys.readouterr().err
+
+
 def test_a_file_that_exists_is_overwritten_only_with_force(tmp_path, capsys, monkeypatch):
     monkeypatch.chdir(tmp_path)
     assert main(["--seed", "1"]) == 0  # the default --out, throw.html

@@ -8,6 +8,7 @@ further than its frames and the rest hold after them.
 from __future__ import annotations
 
 import dataclasses
+import importlib.util
 import json
 import math
 from collections.abc import Sequence
@@ -44,6 +45,9 @@ def load(path: str | Path) -> list[Recording]:
     suffix = path.suffix.lower()
     if suffix not in (".html", ".htm", ".glb", ".json"):
         raise RecordingError(f"path must end in .html, .glb or .json, got {path.name!r}")
+    if suffix == ".glb" and importlib.util.find_spec("pygltflib") is None:
+        raise RecordingError(f"{path}: reading a .glb needs pygltflib (pip install "
+                             "'dice_env[gltf]')")
     try:
         if suffix == ".glb":
             from dice_env.viewer.gltf import read_glb
