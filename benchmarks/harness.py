@@ -13,6 +13,11 @@ from pathlib import Path
 from dice_env.disk import write_atomically
 
 RESULTS = Path(__file__).resolve().parent / "results"
+# The benchmarks run as scripts from a checkout (``python benchmarks/NAME.py``), which puts
+# benchmarks/ on the path: the checkout's root too, for the agents/ that some of them import.
+ROOT = str(RESULTS.parents[1])
+if ROOT not in sys.path:
+    sys.path.insert(1, ROOT)
 
 
 def benchmark_parser(doc: str, name: str, quick: str | None = None) -> argparse.ArgumentParser:

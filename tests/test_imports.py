@@ -146,3 +146,16 @@ def test_each_layer_imports_only_the_layers_below_it():
         wrong = {m for m in _imports(path, module, modules)
                  if m.startswith("dice_env") and _layer(m) not in allowed}
         assert not wrong, f"{module} imports {wrong}"
+
+
+def test_the_benchmarks_that_import_the_agents_run_as_scripts_from_a_checkout():
+    """``python benchmarks/NAME.py`` (benchmarks/ on the path, not the root) finds agents/."""
+    scripts = [path for path in sorted(ROOT.glob("benchmarks/*.py"))
+               if any(_top(m) == "agents" for m in _imports(path, f"benchmarks.{path.stem}",
+                                                            _modules()))]
+    assert scripts  # tasks.py and learn_from_scratch.py train or evaluate agents
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
+    for path in scripts:
+        done = subprocess.run([sys.executable, str(path.relative_to(ROOT)), "--help"], cwd=ROOT,
+                              env=env, capture_output=True, text=True, timeout=600)
+        assert done.returncode == 0, f"{path.name}: {done.stderr[-400:]}"
