@@ -155,17 +155,16 @@ HYPERPARAMS: dict[str, dict[str, dict[str, dict[str, Any]]]] = {
     env_id: {algo: {BENCHMARK: benchmark_entry(algo, env_id)} for algo in ALGOS}
     for env_id in BUDGETS
 }
-# train.py's presets on every named task: the warm start for one die; the tray's and the
-# craps throw's below; ``"best"`` five times the budget.
+# train.py's presets on every named task: the warm start for one die (``"best"``: 500,000
+# throws); the tray's and the craps throw's below (``"best"``: five times their budget).
 ONE_DIE_TASKS = ("DiceThrow-v0", "DiceThrowHigh-v0", "DiceThrowD20-v0")
 for _id in ONE_DIE_TASKS:
     HYPERPARAMS[_id]["ppo"].update(quick=_WARM_START, best={**_WARM_START, "n_timesteps": 500_000},
                                    scratch=_SCRATCH)
 # Two dice for a total (the tray): the one-die warm start's PPO with a rollout of 32 x 8
 # throws, the policy handed the direction the tray's rule spins up (agents.policy.PairNormal,
-# which the plain MLP fits poorly: imitating the rule through it kept half the rule's success
-# and the benchmark's PPO then lost the rest, 0.12 against the rule's 0.28 after 8,000
-# throws), and a budget of 16,384 throws (about 90 s of CPU at the tray's ~180 throws/s).
+# which the plain MLP fits poorly: imitating the rule through it kept half the rule's success,
+# and the benchmark's PPO then lost the rest; docs/benchmark.md), and a budget of 16,384 throws.
 _TRAY_WARM: dict[str, Any] = {
     **_WARM_START, "n_envs": 32, "n_timesteps": 16_384, "env_kwargs": {}, "batch_size": 256,
     "policy_kwargs": {**_WARM_START["policy_kwargs"],
