@@ -235,29 +235,24 @@ class ThrowTask:
         """The hand's releases: :meth:`TaskHand.release <dice_env.envs.hand.TaskHand.release>`."""
         return self.hand.release(actions, hands, noise, action_shape=action_shape)
 
+    def fair(self, state: State | GroupState) -> np.ndarray:
+        """Whether each release (n,) is within ``min_speed`` and ``min_spin``, every die's."""
+        n = np.size(state.velocity) // (3 * self.n_dice)
+        speed = np.linalg.norm(state.velocity, axis=-1).reshape(n, -1)
+        spin = np.linalg.norm(state.angular_velocity, axis=-1).reshape(n, -1)
+        return np.all((speed >= self.min_speed) & (spin >= self.min_spin), axis=1)
+
     def land(self, state: State | GroupState, targets: np.ndarray, *, record_every: int = 0,
              num_threads: int | None = None, device: str = "cpu") -> Landing:
         """Simulate the released dice (:attr:`run_until`) and judge each throw (:func:`judge`).
 
         ``targets`` (n, :attr:`target_shape`); ``num_threads``: the kernel's threads (None:
         all); ``device``: ``simulate``'s (one die only); ``record_every`` > 0 records the centres
-        and orientations every that many steps. A throw is fair if every die's release is within
-        ``min_speed`` and ``min_spin``.
+        and orientations every that many steps.
         """
-        n = np.size(state.velocity) // (3 * self.n_dice)
-        speed = np.linalg.norm(state.velocity, axis=-1).reshape(n, -1)
-        spin = np.linalg.norm(state.angular_velocity, axis=-1).reshape(n, -1)
-        fair = np.all((speed >= self.min_speed) & (spin >= self.min_spin), axis=1)  # every die's
-        targets = np.array(targets, dtype=np.int64).reshape(n, *self.target_shape)
-        if isinstance(state, GroupState):
-            check_choice("device", device, ("cpu",))  # several dice: the CPU's kernel only
-            run = simulate_group(self.scene, self.dice, state, until=self.run_until,
-                                 record_every=record_every, orientations=bool(record_every),
-                                 num_threads=num_threads)
-        else:
-            run = simulate(self.scene, state, until=self.run_until, record_every=record_every,
-                           record=("orientations",) if record_every else ("energy",),
-                           num_threads=num_threads, device=device)
+        fair = self.fair(state)
+        targets = np.array(targets, dtype=np.int64).reshape(len(fair), *self.target_shape)
+        run = self._simulate(state, record_every, num_threads, device)
         result, void = judge(self.scene, self.dice, run, self.run_until, fair=fair)
         return Landing(targets, result, void, fair)
 
@@ -267,9 +262,8 @@ class ThrowTask:
 
     def reward(self, landing: Landing) -> Reward:
         """Each throw's reward, in its terms: success (1 or 0) and shaping at rest."""
-        orientation = landing.result.final.orientation.reshape(len(landing.void), -1, 3, 3)
         alignment = self.goal.alignment(self.dice, np.asarray(self.scene.ground.normal),
-                                        orientation, landing.targets)
+                                        landing.orientation, landing.targets)
         return Reward(self.success(landing).astype(np.float64),
                       np.where(landing.void == "", self.shaping * alignment, 0.0))
 
@@ -310,6 +304,18 @@ class ThrowTask:
         """The kernel's ``until``: ``"early_rest"`` for one die to rest (the same face, faster)."""
         return "early_rest" if self.until == "rest" and self.n_dice == 1 else self.until
 
+    def _simulate(self, state: State | GroupState, record_every: int,
+                  num_threads: int | None, device: str) -> Result | GroupResult:
+        """The kernel's run of the released dice (:attr:`run_until`): one die's, or the group's."""
+        if isinstance(state, GroupState):
+            check_choice("device", device, ("cpu",))  # several dice: the CPU's kernel only
+            return simulate_group(self.scene, self.dice, state, until=self.run_until,
+                                  record_every=record_every, orientations=bool(record_every),
+                                  num_threads=num_threads)
+        return simulate(self.scene, state, until=self.run_until, record_every=record_every,
+                        record=("orientations",) if record_every else ("energy",),
+                        num_threads=num_threads, device=device)
+
 
 @dataclass(frozen=True)
 class Landing:
@@ -328,6 +334,11 @@ class Landing:
     def faces(self) -> np.ndarray:
         """The face each die reads, (n, N)."""
         return self.result.face.reshape(len(self.void), -1)
+
+    @property
+    def orientation(self) -> np.ndarray:
+        """Each die's orientation at the end, (n, N, 3, 3)."""
+        return self.result.final.orientation.reshape(len(self.void), -1, 3, 3)
 
 
 @dataclass(frozen=True)
