@@ -3,6 +3,7 @@
     python benchmarks/dice_together.py                  # 1, 2, 6, 12 dice, about 3 minutes
     python benchmarks/dice_together.py --dice 1 2 --throws 256 --repeats 3
     python benchmarks/dice_together.py --throws 240 --mujoco 2 12 --die-friction regularized
+    python benchmarks/dice_together.py --islands --out benchmarks/results/dice_islands.json
 
 Each group is thrown from the pairs study's hand (``dice_env.throws.group_throws``: the
 dice side by side 3 cm apart in rows of four, one hand velocity plus each die's noise) into
@@ -20,6 +21,9 @@ Prints a table and writes ``benchmarks/results/dice_together.json``.
 Then a pair whose dice (almost) never meet: two d6 from the same hand but :data:`APART` apart,
 as a pair (``simulate_group``) and as its two dice thrown alone one after the other
 (``simulate``), on one thread, CPU time: the pair's cost over its dice's.
+
+``--islands`` runs every group with ``DieContact(islands=True)``: dice that cannot
+meet for a while step apart, each island at its own step, and an island at rest sleeps.
 
 ``--mujoco 2 6 12`` adds MuJoCo on the same throws of those groups (``pip install mujoco``): N
 free boxes of the die's size, mass and inertia in the same tray (a plane floor and four plane
@@ -63,21 +67,23 @@ APART = 0.12  # m between the dice of the pair that never meets
 UNTIL = ("decided", "rest")  # the two ends of a throw compared with MuJoCo
 
 
-def ours_in_tray(n_dice: int, throws: int, repeats: int, seed: int, contact: DieContact,
+def ours_in_tray(n_dice: int, throws: int, repeats: int, seed: int, group: dict,
                  until: str = "decided") -> tuple:
-    """The tray, ``n_dice`` d6, their seeded throws, our least CPU time and the result."""
+    """The tray, ``n_dice`` d6, their seeded throws, our least CPU time and the result.
+
+    ``group``: ``simulate_group``'s keywords (``contact``).
+    """
     scene = tray_scene()
     dice = (Die(),) * n_dice
     state = group_throws(scene, dice, throws, np.random.default_rng(seed))
-    seconds, res = timed(lambda: simulate_group(scene, dice, state, until=until,
-                                                   contact=contact, num_threads=1), repeats)
+    seconds, res = timed(lambda: simulate_group(scene, dice, state, until=until, **group,
+                                                   num_threads=1), repeats)
     return scene, dice, state, seconds, res
 
 
-def measure(n_dice: int, throws: int, repeats: int, seed: int,
-            contact: DieContact) -> list[dict]:
-    """The rows of ``n_dice`` d6 meeting by ``contact`` (and the single-die path for one die)."""
-    scene, dice, state, seconds, res = ours_in_tray(n_dice, throws, repeats, seed, contact)
+def measure(n_dice: int, throws: int, repeats: int, seed: int, group: dict) -> list[dict]:
+    """The rows of ``n_dice`` d6 run with ``group`` (and the single-die path for one die)."""
+    scene, dice, state, seconds, res = ours_in_tray(n_dice, throws, repeats, seed, group)
     steps = float(res.steps.sum())
     row = {"path": "simulate_group", "dice": n_dice, "throws": throws, "cpu_s": seconds,
            "throws_per_s": throws / seconds, "die_steps_per_s": steps * n_dice / seconds,
@@ -100,14 +106,14 @@ def measure(n_dice: int, throws: int, repeats: int, seed: int,
     return rows
 
 
-def apart_pair(throws: int, repeats: int, seed: int, contact: DieContact) -> dict:
+def apart_pair(throws: int, repeats: int, seed: int, group: dict) -> dict:
     """Two d6 :data:`APART` apart in the tray: as a pair, and as its two dice thrown alone."""
     scene = tray_scene()
     dice = (Die(),) * 2
     state = group_throws(scene, dice, throws, np.random.default_rng(seed),
                          replace(HAND, spacing=APART))
-    pair_s, pair = timed(lambda: simulate_group(scene, dice, state, until="decided",
-                                                contact=contact, num_threads=1), repeats)
+    pair_s, pair = timed(lambda: simulate_group(scene, dice, state, until="decided", **group,
+                                                num_threads=1), repeats)
     alone_s = [timed(lambda i=i: simulate(scene, state.die(i), until="decided", num_threads=1),
                      repeats)[0] for i in range(2)]
     return {"throws": throws, "spacing_m": APART, "met": float((pair.overlap > 0).mean()),
@@ -240,10 +246,9 @@ def mujoco_run(scene: Scene, state: GroupState, model, until: str) -> dict:
             "face_counts": np.bincount(np.concatenate(faces), minlength=7)[1:].tolist()}
 
 
-def compare_mujoco(n_dice: int, throws: int, seed: int, contact: DieContact,
-                   until: str) -> dict:
+def compare_mujoco(n_dice: int, throws: int, seed: int, group: dict, until: str) -> dict:
     """Ours and MuJoCo (default and bouncing contact) on the same ``throws``, to ``until``."""
-    scene, dice, state, seconds, ours = ours_in_tray(n_dice, throws, 1, seed, contact, until)
+    scene, dice, state, seconds, ours = ours_in_tray(n_dice, throws, 1, seed, group, until)
     bounce, dt = bouncing_contact(scene)
     rows = {"ours": {"throws_per_s": throws / seconds, "cpu_s": seconds,
                      "ended": float((ours.settled | (ours.decided & (until == "decided"))
@@ -269,8 +274,11 @@ def main() -> None:
     parser.add_argument("--die-friction", choices=["stick_slip", "regularized"],
                         default=DieContact().friction_law.name.lower(),
                         help="the die–die friction law (DieContact.friction_law)")
+    parser.add_argument("--islands", action="store_true",
+                        help="DieContact(islands=True): dice apart step apart, sleep at rest")
     args = parser.parse_args()
-    contact = DieContact(friction_law=args.die_friction)
+    contact = DieContact(friction_law=args.die_friction, islands=args.islands)
+    group = {"contact": contact}
     for name in ("throws", "repeats"):
         if getattr(args, name) < 1:
             parser.error(f"--{name} must be >= 1, got {getattr(args, name)}")
@@ -279,14 +287,15 @@ def main() -> None:
                                     or max(getattr(args, name)) > 64):
             parser.error(f"--{name} must be 1 to 64 dice, got {getattr(args, name)}")
     for n_dice in (1, 2):
-        measure(n_dice, 2, 1, args.seed, contact)  # compile both paths' kernels, untimed
+        measure(n_dice, 2, 1, args.seed, group)  # compile both paths' kernels, untimed
     rows = []
     for n_dice in args.dice:
         rows += measure(n_dice, max(4, math.ceil(args.throws / n_dice)), args.repeats, args.seed,
-                        contact)
+                        group)
         print(f"{n_dice} dice done", flush=True)
     base = next(r for r in rows if r["path"] == "simulate_group" and r["dice"] == min(args.dice))
-    print(f"\nOne thread, CPU time, best of {args.repeats}, {contact.law} die–die friction; "
+    print(f"\nOne thread, CPU time, best of {args.repeats}, {contact.law} die–die friction"
+          f"{', islands' if args.islands else ''}; "
           f"load average {os.getloadavg()[0]:.2f} on {os.cpu_count()} cores.\n")
     print(markdown_table(
         "path | dice | throws | throws/s | cost per throw / smallest group | die-steps/s | "
@@ -295,7 +304,7 @@ def main() -> None:
           f"{base['throws_per_s'] / r['throws_per_s']:.2f}", f"{r['die_steps_per_s']:,.0f}",
           f"{r['decided']:.0%}", f"{r['all_read']:.0%}", f"{r['met']:.0%}", f"{r['sim_s']:.2f}")
          for r in rows)))
-    apart = apart_pair(max(4, math.ceil(args.throws / 2)), args.repeats, args.seed, contact)
+    apart = apart_pair(max(4, math.ceil(args.throws / 2)), args.repeats, args.seed, group)
     alone = apart["alone_cpu_s"]
     print(f"\nTwo d6 {APART * 100:.0f} cm apart (met in {apart['met']:.0%} of "
           f"{apart['throws']} throws): the pair {apart['pair_cpu_s']:.3f} s, its dice alone "
@@ -303,7 +312,7 @@ def main() -> None:
     mujoco_rows = []
     for until in UNTIL:
         mujoco_rows += [compare_mujoco(n_dice, max(4, math.ceil(args.throws / n_dice)),
-                                       args.seed, contact, until) for n_dice in args.mujoco]
+                                       args.seed, group, until) for n_dice in args.mujoco]
     if mujoco_rows:
         print("\nThe same throws in MuJoCo, one thread, CPU time:\n")
         print(markdown_table(
@@ -319,11 +328,13 @@ def main() -> None:
              for o, d, c in [(r["ours"], r["mujoco_default"], r["mujoco_bouncing"])])))
     write_json(args.out, {"mujoco": mujoco_rows, "apart_pair": apart,
         "command": "python benchmarks/dice_together.py " + " ".join(
-            f"--{k.replace('_', '-')} {' '.join(map(str, v)) if isinstance(v, list) else v}"
-            for k, v in vars(args).items() if k != "out"),
+            f"--{k.replace('_', '-')}" + ("" if isinstance(v, bool) else
+                                         f" {' '.join(map(str, v)) if isinstance(v, list) else v}")
+            for k, v in vars(args).items() if k != "out" and v is not False),
         "commit": code_version(), "threads": 1, "timer": "process CPU time",
         "repeats": args.repeats,
         "die_friction": contact.law,
+        "islands": args.islands,
         "load_average": os.getloadavg()[0], "cpu_count": os.cpu_count(),
         "numba": numba.__version__, "python": platform.python_version(), "rows": rows},
         indent=1)

@@ -148,9 +148,13 @@ def simulate_in_batches(scene: Scene, dice: tuple[Die, ...], state: GroupState,
 
 
 def throw_pairs(scene: Scene, dice: tuple[Die, ...], state: GroupState, bar: object = None,
-                batch: int = BATCH) -> Pairs:
-    """Throw ``state`` until the faces are decided, in batches of ``batch``; count them."""
-    result = simulate_in_batches(scene, dice, state, bar, batch, until="decided")
+                batch: int = BATCH, islands: bool = False) -> Pairs:
+    """Throw ``state`` until the faces are decided, in batches of ``batch``; count them.
+
+    ``islands``: as :class:`~dice_env.simulation.group.DieContact`'s.
+    """
+    result = simulate_in_batches(scene, dice, state, bar, batch, until="decided",
+                                 contact=DieContact(islands=islands))
     reasons = void_reasons(result)
     counted = not_void(reasons)
     met = result.overlap > 0

@@ -21,15 +21,18 @@ PATH = Path(__file__).with_name("data") / "pair_distribution.json"
 REFERENCE_SEED, THROWS, CHUNK = 49, 20_000, 2_000
 
 
-def pair_table(throws: int, seed: int, chunk: int = CHUNK) -> np.ndarray:
-    """Counted throws (6, 6) by (die 1, die 2) face, in chunks seeded ``(seed, i)``."""
+def pair_table(throws: int, seed: int, chunk: int = CHUNK, islands: bool = False) -> np.ndarray:
+    """Counted throws (6, 6) by (die 1, die 2) face, in chunks seeded ``(seed, i)``.
+
+    ``islands``: as :class:`~dice_env.simulation.group.DieContact`'s.
+    """
     scene = tray_scene()
     dice = (scene.die, scene.die)
     table = np.zeros((6, 6), np.int64)
     for i, start in enumerate(range(0, throws, chunk)):
         state = group_throws(scene, dice, min(chunk, throws - start),
                              np.random.default_rng([seed, i]))
-        table += throw_pairs(scene, dice, state).table
+        table += throw_pairs(scene, dice, state, islands=islands).table
     return table
 
 

@@ -3,7 +3,7 @@
 The reference is 20,000 seeded throws of the pairs study's hand into the tray, made with the
 group kernel before its speed changes (``tests/pair_distribution.py``); these tests throw new
 seeds and compare (two-sample chi-square): the totals, the 36 (die 1, die 2) cells, and the
-independence of the two faces.
+independence of the two faces, with and without ``DieContact``'s islands.
 """
 
 import numpy as np
@@ -37,14 +37,16 @@ def test_the_comparison_finds_a_die_showing_six_half_again_as_often_in_the_quick
     assert two_sample(stored, loaded) < SIGNIFICANT
 
 
-def test_a_few_thousand_pairs_keep_the_reference_faces():
-    table = pair_table(QUICK, 1, chunk=1_000)
+@pytest.mark.parametrize("islands", [False, True])
+def test_a_few_thousand_pairs_keep_the_reference_faces(islands):
+    table = pair_table(QUICK, 1, chunk=1_000, islands=islands)
     assert table.sum() > 0.99 * QUICK
     _compare(table)
 
 
 @pytest.mark.slow
-def test_twenty_thousand_pairs_keep_the_reference_faces():
-    table = pair_table(FULL, 2)
+@pytest.mark.parametrize("islands", [False, True])
+def test_twenty_thousand_pairs_keep_the_reference_faces(islands):
+    table = pair_table(FULL, 2, islands=islands)
     assert table.sum() > 0.99 * FULL
     _compare(table)

@@ -57,6 +57,10 @@ LATERAL = 1e-3
 # the way it is pushed out (this cosine; see inside_depth); a stack's sides, at right angles to
 # it, bound none.
 FACING = 0.2
+# A die's speed bound from its island's energy (see islands), times this for round-off.
+SPEED_MARGIN = 1.25
+# The longest window while two dice share an island, in the least windows.
+REGROUP = 4
 
 
 class Bodies(NamedTuple):
@@ -64,7 +68,8 @@ class Bodies(NamedTuple):
 
     Padded to the largest die: ``vertices`` (N, V, 3) and ``n_vertices``, ``faces`` (N, F, 3)
     and ``n_faces``; ``lock`` (N, F): the energy below which a die alone keeps the face it reads
-    (``-inf``: no rule); ``floor`` (N,): a lower bound of each die's energy.
+    (``-inf``: no rule); ``floor`` (N,): a lower bound of each die's energy under that rule;
+    ``low`` (N,): one on a level floor (``-inf``: none), for :func:`islands`.
     """
 
     vertices: np.ndarray
@@ -79,6 +84,7 @@ class Bodies(NamedTuple):
     reads_down: np.ndarray
     lock: np.ndarray
     floor: np.ndarray
+    low: np.ndarray
 
 
 class Hulls(NamedTuple):
@@ -127,7 +133,8 @@ class GroupStops(NamedTuple):
     """When a throw ends: as :class:`dice_env.physics.kernel.Stops`, for every die.
 
     Quiet: three contacts with the planes or one with another die; ``decide``: when no die's
-    face can change.
+    face can change. With ``islands``, dice step in islands (:func:`islands`) for windows of
+    ``least`` to ``most`` steps.
     """
 
     n_steps: int
@@ -136,6 +143,9 @@ class GroupStops(NamedTuple):
     hold_steps: int
     decide: bool
     energy_scale: float
+    islands: bool
+    least: int
+    most: int
 
 
 class GroupDice(NamedTuple):
@@ -569,7 +579,12 @@ def pair_contacts(a: int, b: int, n: tuple, world: np.ndarray, x: np.ndarray, q:
 def advance_group(g: int, dice: GroupDice, bodies: Bodies, hulls: Hulls, pair: Pair,
                    contact: Contact, options: Options, stops: GroupStops, records: GroupRecords,
                    out: GroupOutcome) -> None:
-    """Advance throw ``g`` (its N dice) in place; see :func:`simulate_groups`."""
+    """Advance throw ``g`` (its N dice) in place; see :func:`simulate_groups`.
+
+    The dice step together, or with ``stops.islands`` (a level floor) in windows: each island
+    (:func:`islands`) steps on its own to the window's end, and one at rest sleeps until a
+    die that may reach it wakes it.
+    """
     n_dice, n_planes = dice.x.shape[1], contact.planes.shape[0]
     planes, contact_law, stick, vmin = contact.planes, contact.law, contact.stick, contact.vmin
     vertices, n_vertices, mass = bodies.vertices, bodies.n_vertices, bodies.mass
@@ -614,165 +629,245 @@ def advance_group(g: int, dice: GroupDice, bodies: Bodies, hulls: Hulls, pair: P
         for a in range(n_dice):
             decisive = min(decisive, bodies.lock[a].max() + floor_total - bodies.floor[a])
     n_steps, stride, n_rec = stops.n_steps, records.stride, records.x.shape[1]
-    e_start, e_tol, e_max = 0.0, 1.0, -np.inf
-    quiet, step, passes, next_record, end = 0, 0, 0, stride, RUNNING
+    e_start, e_tol, e_max = 0.0, stops.energy_scale, -np.inf
+    passes, end = 0, RUNNING
     fine, coarse = pair.near, pair.apart
-    h_last, moved = fine * dt, 1  # the last move's step, and its steps with its jump
     depths = np.empty((n_dice, n_dice))  # each pair's overlap (< 0: a gap), as pair_depths
     gaps2, normals = np.empty((n_dice, n_dice)), np.empty((n_dice, n_dice, 3))
     speed = np.empty(n_dice)  # each die's speed bound, taken as needed (_speed)
     overlap, abort = out.overlap[g], out.abort
-    while step < n_steps:
-        passes, end = next_pass(passes, abort)
-        if end == ABORTED:
-            break
-        step += 1
-        apart = pair_depths(x, q, vertices, n_vertices, r_max, world, placed, axes, directions,
-                            separating, depths, gaps2, normals)  # every pair's spheres apart
+    # each die's steps, the step its rest began, its island's quiet steps and last move
+    clock, rest_at = np.zeros(n_dice, np.int64), np.zeros(n_dice, np.int64)
+    quiet_of, moved_of, h_of = np.zeros(n_dice, np.int64), np.ones(n_dice, np.int64), \
+        np.full(n_dice, fine * dt)
+    asleep = np.zeros(n_dice, np.bool_)
+    # each die's energy at its last step (a pair's springs shared), as checked and tangential
+    energy, stored = np.zeros(n_dice), np.zeros(n_dice)
+    label, members, pool = np.zeros(n_dice, np.int64), np.arange(n_dice), np.empty(n_dice)
+    level = stops.islands and n0 == 0.0 and n1 == 0.0 and n2 == 1.0
+    resting = stops.at_rest or level  # islands at rest sleep, whatever ends the throw
+    least = max(1, stops.least // coarse) * coarse  # a window's steps, whole moves apart
+    most = max(least, stops.most // coarse * coarse)
+    if level:
         for a in range(n_dice):
-            speed[a] = np.nan
-        moves = min(fine, n_steps - step + 1)  # ``coarse`` while no pair can meet within them
-        if coarse > fine and step - 1 + coarse <= n_steps and out_of_reach(
-                depths, gaps2, r_max, u, w, speed, coarse * dt):
-            moves = coarse
-        h = moves * dt
-        if midpoint and h != h_last:  # the last kick, as it would be over this step
-            _rescale(u, pu, h / h_last)
-            _rescale(w, pw, h / h_last)
-        h_last = h
-        checked, tangential = 0.0, 0.0
-        for a in range(n_dice):
-            u0, u1, u2, w0, w1, w2 = u[a, 0], u[a, 1], u[a, 2], w[a, 0], w[a, 1], w[a, 2]
-            cu0, cu1, cu2, cw0, cw1, cw2 = u0, u1, u2, w0, w1, w2
-            if midpoint:
-                cu0, cu1, cu2 = ahead((u0, u1, u2), (pu[a, 0], pu[a, 1], pu[a, 2]))
-                cw0, cw1, cw2 = ahead((w0, w1, w2), (pw[a, 0], pw[a, 1], pw[a, 2]))
-            cu[a, 0], cu[a, 1], cu[a, 2], cw[a, 0], cw[a, 1], cw[a, 2] = cu0, cu1, cu2, cw0, cw1, \
-                cw2
-            l0, l1, l2 = ang[a, 0], ang[a, 1], ang[a, 2]
-            if not inv_iso[a] > 0.0:  # else angular_velocity reads neither
-                _take(a, q, inv_inertia, inv_iso, qa, inv_a)
-            wl0, wl1, wl2 = angular_velocity(qa, inv_a, inv_iso[a], l0, l1, l2)
-            m = mass[a]
-            kinetic[a] = 0.5 * m * (u0 * u0 + u1 * u1 + u2 * u2) + 0.5 * (
-                l0 * wl0 + l1 * wl1 + l2 * wl2)
-            near[a] = stops.at_rest and kinetic[a] < 0.5 * m * stops.v_rest * stops.v_rest
-            x0, x1, x2 = x[a, 0], x[a, 1], x[a, 2]
-            law = (contact_law, stick, vmin, midpoint, rotation, h, h / m, m * g_acc)
-            (f0, f1, f2, t0, t1, t2, spring, spring_t, touching[a], approach[a], fastest[a],
-             sink) = die_on_planes(  # unsigned rows: indexed with no look for a negative
-                a, np.uint64(a * n_v), np.uint64(n_vertices[a]), flat, planes, law, contacts,
-                (q[a, 0, 0], q[a, 0, 1], q[a, 0, 2], q[a, 1, 0], q[a, 1, 1], q[a, 1, 2],
-                 q[a, 2, 0], q[a, 2, 1], q[a, 2, 2]),
-                ((x0, x1, x2), (u0, u1, u2), (w0, w1, w2), (cu0, cu1, cu2), (cw0, cw1, cw2)),
-                near[a])
-            max_pen[g, a] = max(max_pen[g, a], sink)
-            for p in range(n_planes):
-                if lowest[a, p] < 0.0:
-                    touched[g, a, p] = True
-            force[a, 0], force[a, 1], force[a, 2] = f0, f1, f2
-            torque[a, 0], torque[a, 1], torque[a, 2] = t0, t1, t2
-            checked += kinetic[a] + m * g_acc * x2 + spring
-            tangential += spring_t
-        # die against die
-        for a in range(n_dice):
-            die_touch[a] = False
-        for a in range(n_dice):
-            for b in range(a + 1, n_dice):
-                touch_ab = False
-                if depths[a, b] > 0.0:
-                    spring, stored, touch_ab = pair_contacts(
-                        a, b, (normals[a, b, 0], normals[a, b, 1], normals[a, b, 2]), world, x,
-                        q, cu, cw, hulls, pair, die_ties, not met[a, b], seen, force, torque)
-                    checked += spring
-                    tangential += stored
-                    overlap = max(overlap, depths[a, b])
-                if touch_ab and not met[a, b]:
-                    s0, s1, s2 = u[a, 0] - u[b, 0], u[a, 1] - u[b, 1], u[a, 2] - u[b, 2]
-                    if s0 * s0 + s1 * s1 + s2 * s2 > v_rest2:
-                        out.die_impacts[g, a] += 1
-                        out.die_impacts[g, b] += 1
-                    if first_a < 0:
-                        first_a, first_b = a, b
-                        _meeting(out, g, 0, step - 1, u, w)
-                elif met[a, b] and not touch_ab and a == first_a and b == first_b \
-                        and not parted:
-                    parted = True
-                    _meeting(out, g, 1, step - 1, u, w)
-                met[a, b] = touch_ab
-                if touch_ab:
-                    die_touch[a] = True
-                    die_touch[b] = True
-        energy = checked + tangential
-        if step == 1:
-            e_start = checked
-            e_tol = stops.energy_scale
-            for a in range(n_dice):
-                e_tol += kinetic[a]
-                e_tol += mass[a] * g_acc * max(0.0, (n0 * x[a, 0] + n1 * x[a, 1]
-                                                     + n2 * x[a, 2]) - floor)
-        else:
-            e_max = max(e_max, checked)
-        for a in range(n_dice):
-            now = touching[a] > 0 or die_touch[a]
-            if now and not was[a] and approach[a] > stops.v_rest:
-                out.impacts[g, a] += 1
-            was[a] = now
-        if energy < decisive and _decided(bodies, q, energy, floor_total, UP):
-            end = DECIDED
-            break
-        if stops.at_rest:
-            quiet_now = True
-            for a in range(n_dice):
-                if not ((touching[a] >= 3 or die_touch[a]) and near[a]
-                        and fastest[a] < stops.v_rest * stops.v_rest):
-                    quiet_now = False
-                    break
-            quiet, end = rest_test(quiet_now, quiet + (moved - 1 if quiet > 0 else 0),
-                                   stops.hold_steps, False)
-            if end == SETTLED:
-                break
-        jump = 1
-        # only moves apart jump, as stepping would take them; no record falls inside a jump
-        if options.flight and apart and moves == coarse and touching.max() == 0:
-            for a in range(n_dice):
-                _speed(a, u, w, r_max, speed)
-            jump = min(_group_jump(planes, lowest, speed, x, u, ang, force, bodies,
-                                   rotation, h, (n_steps - step + 1) // moves),
-                       (next_record - step + moves) // moves)
-        finite = True
-        for a in range(n_dice):
-            dt_m = h / mass[a]
-            dv0, dv1, dv2 = force[a, 0] * dt_m, force[a, 1] * dt_m, force[a, 2] * dt_m
             _take(a, q, inv_inertia, inv_iso, qa, inv_a)
-            finite, (x0, x1, x2), (nu0, nu1, nu2), (l0, l1, l2), (w0, w1, w2) = die_move(
-                (x[a, 0], x[a, 1], x[a, 2]), (u[a, 0], u[a, 1], u[a, 2]),
-                (ang[a, 0], ang[a, 1], ang[a, 2]), (w[a, 0], w[a, 1], w[a, 2]),
-                (dv0, dv1, dv2), (torque[a, 0], torque[a, 1], torque[a, 2]), qa, inv_a,
-                inv_iso[a], h, jump, rotation)
-            if not finite:
+            wl0, wl1, wl2 = angular_velocity(qa, inv_a, inv_iso[a], ang[a, 0], ang[a, 1],
+                                             ang[a, 2])
+            energy[a] = 0.5 * mass[a] * (u[a, 0] ** 2 + u[a, 1] ** 2 + u[a, 2] ** 2) + 0.5 * (
+                ang[a, 0] * wl0 + ang[a, 1] * wl1 + ang[a, 2] * wl2) + mass[a] * g_acc * x[a, 2]
+    t = 0
+    while t < n_steps and end == RUNNING:
+        t_end = n_steps
+        if level:
+            window = islands(x, energy, stored, bodies.low, mass, r_max, label, pool,
+                             least * dt) / dt
+            longest = most
+            for a in range(n_dice):
+                if label[a] != a:  # dice together: seen again soon, to part when they can
+                    longest = REGROUP * least
+            t_end = min(n_steps, t + (longest if not window < longest
+                                      else max(least, int(window) // coarse * coarse)))
+        for c in range(n_dice):
+            n_m, sleeping, others, others_t = 0, True, 0.0, 0.0  # the other dice's energy
+            for a in range(n_dice):
+                if label[a] == c:
+                    members[n_m] = a
+                    n_m += 1
+                    sleeping = sleeping and asleep[a]
+                else:
+                    others += energy[a]
+                    others_t += stored[a]
+            if n_m == 0 or sleeping:
+                continue
+            quiet, moved = quiet_of[members[0]], moved_of[members[0]]
+            for i in range(n_m):
+                a = members[i]
+                if asleep[a]:  # woken: it kept its place
+                    _record_die(records, g, a, clock[a], t // stride, x, q)
+                    asleep[a], clock[a], quiet_of[a] = False, t, 0
+                if quiet_of[a] < quiet:
+                    quiet, moved = quiet_of[a], moved_of[a]
+            step, next_record, island = t, (t // stride + 1) * stride, RUNNING
+            while step < t_end:
+                passes, island = next_pass(passes, abort)
+                if island == ABORTED:
+                    break
+                step += 1
+                apart = pair_depths(members, n_m, x, q, vertices, n_vertices, r_max, world,
+                                    placed, axes, directions, separating, depths, gaps2,
+                                    normals)  # every pair's spheres apart
+                for i in range(n_m):
+                    speed[members[i]] = np.nan
+                moves = min(fine, t_end - step + 1)  # ``coarse`` while no pair can meet
+                if coarse > fine and step - 1 + coarse <= t_end and out_of_reach(
+                        members, n_m, depths, gaps2, r_max, u, w, speed, coarse * dt):
+                    moves = coarse
+                h = moves * dt
+                checked, tangential = 0.0, 0.0
+                for i in range(n_m):
+                    a = members[i]
+                    if midpoint and h != h_of[a]:  # the last kick, as it would be over this step
+                        _rescale(a, u, pu, h / h_of[a])
+                        _rescale(a, w, pw, h / h_of[a])
+                    h_of[a] = h
+                    u0, u1, u2, w0, w1, w2 = u[a, 0], u[a, 1], u[a, 2], w[a, 0], w[a, 1], w[a, 2]
+                    cu0, cu1, cu2, cw0, cw1, cw2 = u0, u1, u2, w0, w1, w2
+                    if midpoint:
+                        cu0, cu1, cu2 = ahead((u0, u1, u2), (pu[a, 0], pu[a, 1], pu[a, 2]))
+                        cw0, cw1, cw2 = ahead((w0, w1, w2), (pw[a, 0], pw[a, 1], pw[a, 2]))
+                    cu[a, 0], cu[a, 1], cu[a, 2], cw[a, 0], cw[a, 1], cw[a, 2] = cu0, cu1, cu2, \
+                        cw0, cw1, cw2
+                    l0, l1, l2 = ang[a, 0], ang[a, 1], ang[a, 2]
+                    if not inv_iso[a] > 0.0:  # else angular_velocity reads neither
+                        _take(a, q, inv_inertia, inv_iso, qa, inv_a)
+                    wl0, wl1, wl2 = angular_velocity(qa, inv_a, inv_iso[a], l0, l1, l2)
+                    m = mass[a]
+                    kinetic[a] = 0.5 * m * (u0 * u0 + u1 * u1 + u2 * u2) + 0.5 * (
+                        l0 * wl0 + l1 * wl1 + l2 * wl2)
+                    near[a] = resting and kinetic[a] < 0.5 * m * stops.v_rest * stops.v_rest
+                    x0, x1, x2 = x[a, 0], x[a, 1], x[a, 2]
+                    law = (contact_law, stick, vmin, midpoint, rotation, h, h / m, m * g_acc)
+                    (f0, f1, f2, t0, t1, t2, spring, spring_t, touching[a], approach[a],
+                     fastest[a], sink) = die_on_planes(  # unsigned rows: no look for a negative
+                        a, np.uint64(a * n_v), np.uint64(n_vertices[a]), flat, planes, law,
+                        contacts, (q[a, 0, 0], q[a, 0, 1], q[a, 0, 2], q[a, 1, 0], q[a, 1, 1],
+                                   q[a, 1, 2], q[a, 2, 0], q[a, 2, 1], q[a, 2, 2]),
+                        ((x0, x1, x2), (u0, u1, u2), (w0, w1, w2), (cu0, cu1, cu2),
+                         (cw0, cw1, cw2)), near[a])
+                    max_pen[g, a] = max(max_pen[g, a], sink)
+                    for p in range(n_planes):
+                        if lowest[a, p] < 0.0:
+                            touched[g, a, p] = True
+                    force[a, 0], force[a, 1], force[a, 2] = f0, f1, f2
+                    torque[a, 0], torque[a, 1], torque[a, 2] = t0, t1, t2
+                    energy[a] = kinetic[a] + m * g_acc * x2 + spring
+                    stored[a] = spring_t
+                    checked += energy[a]
+                    tangential += spring_t
+                # die against die
+                for i in range(n_m):
+                    die_touch[members[i]] = False
+                for i in range(n_m):
+                    a = members[i]
+                    for j in range(i + 1, n_m):
+                        b = members[j]
+                        touch_ab = False
+                        if depths[a, b] > 0.0:
+                            spring, tied, touch_ab = pair_contacts(
+                                a, b, (normals[a, b, 0], normals[a, b, 1], normals[a, b, 2]),
+                                world, x, q, cu, cw, hulls, pair, die_ties, not met[a, b], seen,
+                                force, torque)
+                            checked += spring
+                            tangential += tied
+                            energy[a] += 0.5 * spring
+                            energy[b] += 0.5 * spring
+                            stored[a] += 0.5 * tied
+                            stored[b] += 0.5 * tied
+                            overlap = max(overlap, depths[a, b])
+                        if touch_ab and not met[a, b]:
+                            s0, s1, s2 = u[a, 0] - u[b, 0], u[a, 1] - u[b, 1], u[a, 2] - u[b, 2]
+                            if s0 * s0 + s1 * s1 + s2 * s2 > v_rest2:
+                                out.die_impacts[g, a] += 1
+                                out.die_impacts[g, b] += 1
+                            if first_a < 0:
+                                first_a, first_b = a, b
+                                _meeting(out, g, 0, step - 1, members, n_m, u, w)
+                        elif met[a, b] and not touch_ab and a == first_a and b == first_b \
+                                and not parted:
+                            parted = True
+                            _meeting(out, g, 1, step - 1, members, n_m, u, w)
+                        met[a, b] = touch_ab
+                        if touch_ab:
+                            die_touch[a] = True
+                            die_touch[b] = True
+                total = others + checked
+                if step == 1:
+                    e_start += checked
+                    for i in range(n_m):
+                        a = members[i]
+                        e_tol += kinetic[a]
+                        e_tol += mass[a] * g_acc * max(0.0, (n0 * x[a, 0] + n1 * x[a, 1]
+                                                             + n2 * x[a, 2]) - floor)
+                else:
+                    e_max = max(e_max, total)
+                for i in range(n_m):
+                    a = members[i]
+                    now = touching[a] > 0 or die_touch[a]
+                    if now and not was[a] and approach[a] > stops.v_rest:
+                        out.impacts[g, a] += 1
+                    was[a] = now
+                # no island gains energy: the others' at their last step bound theirs to come
+                if others_t + total + tangential < decisive and _decided(
+                        bodies, q, others_t + total + tangential, floor_total, UP):
+                    island = DECIDED
+                    break
+                if resting:
+                    quiet_now = True
+                    for i in range(n_m):
+                        a = members[i]
+                        if not ((touching[a] >= 3 or die_touch[a]) and near[a]
+                                and fastest[a] < v_rest2):
+                            quiet_now = False
+                            break
+                    quiet, island = rest_test(quiet_now, quiet + (moved - 1 if quiet > 0 else 0),
+                                              stops.hold_steps, False)
+                    if island == SETTLED:
+                        break
+                jump = 1
+                # only moves apart jump, as stepping would take them; no record inside a jump
+                if options.flight and apart and moves == coarse and _airborne(members, n_m,
+                                                                              touching):
+                    for i in range(n_m):
+                        _speed(members[i], u, w, r_max, speed)
+                    jump = min(_group_jump(members, n_m, planes, lowest, speed, x, u, ang, force,
+                                           bodies, rotation, h, (t_end - step + 1) // moves),
+                               (next_record - step + moves) // moves)
+                finite = True
+                for i in range(n_m):
+                    a = members[i]
+                    dt_m = h / mass[a]
+                    dv0, dv1, dv2 = force[a, 0] * dt_m, force[a, 1] * dt_m, force[a, 2] * dt_m
+                    _take(a, q, inv_inertia, inv_iso, qa, inv_a)
+                    finite, (x0, x1, x2), (nu0, nu1, nu2), (l0, l1, l2), (w0, w1, w2) = \
+                        die_move((x[a, 0], x[a, 1], x[a, 2]), (u[a, 0], u[a, 1], u[a, 2]),
+                                 (ang[a, 0], ang[a, 1], ang[a, 2]), (w[a, 0], w[a, 1], w[a, 2]),
+                                 (dv0, dv1, dv2), (torque[a, 0], torque[a, 1], torque[a, 2]),
+                                 qa, inv_a, inv_iso[a], h, jump, rotation)
+                    if not finite:
+                        break
+                    if midpoint:
+                        pu[a, 0], pu[a, 1], pu[a, 2] = nu0 - dv0, nu1 - dv1, nu2 - dv2
+                        pw[a, 0], pw[a, 1], pw[a, 2] = w[a, 0], w[a, 1], w[a, 2]
+                    u[a, 0], u[a, 1], u[a, 2], x[a, 0], x[a, 1], x[a, 2] = nu0, nu1, nu2, x0, x1, \
+                        x2
+                    ang[a, 0], ang[a, 1], ang[a, 2] = l0, l1, l2
+                    w[a, 0], w[a, 1], w[a, 2] = w0, w1, w2
+                    for r in range(3):
+                        for c2 in range(3):
+                            q[a, r, c2] = qa[r, c2]
+                if not finite:
+                    island = NONFINITE
+                    break
+                moved = moves * jump
+                step += moved - 1
+                if step >= next_record:  # a record inside a move holds the state at its end
+                    for j in range(next_record // stride - 1, min(step // stride, n_rec)):
+                        for i in range(n_m):
+                            _record(records, j, g, members[i], x, q)
+                    next_record = (step // stride + 1) * stride
+            step, rest = stopped_at(island, step, quiet)
+            for i in range(n_m):
+                a = members[i]
+                clock[a], rest_at[a], quiet_of[a], moved_of[a] = step, rest, quiet, moved
+                asleep[a] = island == SETTLED
+            if island != RUNNING and island != SETTLED:
+                end = island
                 break
-            if midpoint:
-                pu[a, 0], pu[a, 1], pu[a, 2] = nu0 - dv0, nu1 - dv1, nu2 - dv2
-                pw[a, 0], pw[a, 1], pw[a, 2] = w[a, 0], w[a, 1], w[a, 2]
-            u[a, 0], u[a, 1], u[a, 2], x[a, 0], x[a, 1], x[a, 2] = nu0, nu1, nu2, x0, x1, x2
-            ang[a, 0], ang[a, 1], ang[a, 2] = l0, l1, l2
-            w[a, 0], w[a, 1], w[a, 2] = w0, w1, w2
-            for r in range(3):
-                for c in range(3):
-                    q[a, r, c] = qa[r, c]
-        if not finite:
-            end = NONFINITE
-            break
-        moved = moves * jump
-        step += moved - 1
-        if step >= next_record:  # a record inside a move holds the state at its end
-            for j in range(next_record // stride - 1, min(step // stride, n_rec)):
-                _record(records, j, g, x, q)
-            next_record = (step // stride + 1) * stride
-    step, rest = stopped_at(end, step, quiet)
-    for j in range(step // stride, n_rec):  # dice that stopped early stay where they are
-        _record(records, j, g, x, q)
+        if end == RUNNING and asleep.all():
+            end = SETTLED
+        t = t_end
+    for a in range(n_dice):  # dice that stopped early stay where they are
+        _record_die(records, g, a, clock[a], n_rec, x, q)
     _put(dice.x[g], x)
     _put(dice.u[g], u)
     _put(dice.ang[g], ang)
@@ -784,31 +879,35 @@ def advance_group(g: int, dice: GroupDice, bodies: Bodies, hulls: Hulls, pair: P
         out.touching[g, a] = die_touch[a]
     out.status[g] = end
     out.unstable[g] = end == NONFINITE
-    out.rest_time[g] = rest * dt
-    out.steps[g] = step
+    out.rest_time[g] = rest_at.max() * dt
+    out.steps[g] = clock.max()
     out.overlap[g] = overlap
     out.meet_dice[g, 0], out.meet_dice[g, 1] = first_a, first_b
     out.energy_rise[g] = max(out.energy_rise[g], relative_rise(e_max, e_start, e_tol))
 
 
 @njit(cache=True, forceinline=True, _nrt=False)
-def pair_depths(x: np.ndarray, q: np.ndarray, vertices: np.ndarray, n_vertices: np.ndarray,
-                r_max: np.ndarray, world: np.ndarray, placed: np.ndarray, axes: np.ndarray,
-                directions: np.ndarray, separating: np.ndarray, depths: np.ndarray,
-                gaps2: np.ndarray, normals: np.ndarray) -> bool:
+def pair_depths(members: np.ndarray, n_m: int, x: np.ndarray, q: np.ndarray,
+                vertices: np.ndarray, n_vertices: np.ndarray, r_max: np.ndarray, world: np.ndarray,
+                placed: np.ndarray, axes: np.ndarray, directions: np.ndarray,
+                separating: np.ndarray, depths: np.ndarray, gaps2: np.ndarray,
+                normals: np.ndarray) -> bool:
     """Each pair's overlap ``depths`` (N, N; < 0: at least that far apart) and its ``normals``.
+
+    Over the pairs of the ``n_m`` dice ``members`` (ascending).
 
     Pairs whose bounding spheres meet by :func:`least_overlap` (their dice placed in ``world``,
     ``placed``; ``gaps2`` -1), the others' depth ``-inf`` and their centres' squared distance in
     ``gaps2`` (the gap for :func:`out_of_reach`, taken only as needed). Returns whether every
     pair's spheres are apart.
     """
-    n_dice = x.shape[0]
-    for a in range(n_dice):
-        placed[a] = False
+    for i in range(n_m):
+        placed[members[i]] = False
     apart = True
-    for a in range(n_dice):
-        for b in range(a + 1, n_dice):
+    for i in range(n_m):
+        a = members[i]
+        for j in range(i + 1, n_m):
+            b = members[j]
             d0, d1, d2 = x[a, 0] - x[b, 0], x[a, 1] - x[b, 1], x[a, 2] - x[b, 2]
             reach = r_max[a] + r_max[b]
             distance2 = d0 * d0 + d1 * d1 + d2 * d2
@@ -836,16 +935,19 @@ def _speed(a: int, u: np.ndarray, w: np.ndarray, r_max: np.ndarray, speed: np.nd
 
 
 @njit(cache=True, forceinline=True, _nrt=False)
-def out_of_reach(depths: np.ndarray, gaps2: np.ndarray, r_max: np.ndarray, u: np.ndarray,
-                 w: np.ndarray, speed: np.ndarray, h: float) -> bool:
-    """Whether no two dice can meet within a time ``h``.
+def out_of_reach(members: np.ndarray, n_m: int, depths: np.ndarray, gaps2: np.ndarray,
+                 r_max: np.ndarray, u: np.ndarray, w: np.ndarray, speed: np.ndarray,
+                 h: float) -> bool:
+    """Whether no two of the ``n_m`` dice ``members`` can meet within a time ``h``.
 
     Each pair's gap, ``-depths`` or its spheres' (``gaps2``, :func:`pair_depths`), must exceed
     twice what the dice may close by at their speed (:func:`_speed`): a plane's force changes
     a velocity over many steps, not within a few.
     """
-    for a in range(depths.shape[0]):
-        for b in range(a + 1, depths.shape[0]):
+    for i in range(n_m):
+        a = members[i]
+        for j in range(i + 1, n_m):
+            b = members[j]
             depth = depths[a, b]
             if gaps2[a, b] >= 0.0:
                 depth = r_max[a] + r_max[b] - math.sqrt(gaps2[a, b])
@@ -872,11 +974,10 @@ def _take(a: int, q: np.ndarray, inv_inertia: np.ndarray, inv_iso: np.ndarray, q
 
 
 @njit(cache=True, forceinline=True, _nrt=False)
-def _rescale(v: np.ndarray, before: np.ndarray, ratio: float) -> None:
-    """``before`` moved so that ``v - before``, each die's last change, is ``ratio`` times it."""
-    for a in range(v.shape[0]):
-        for k in range(3):
-            before[a, k] = v[a, k] - ratio * (v[a, k] - before[a, k])
+def _rescale(a: int, v: np.ndarray, before: np.ndarray, ratio: float) -> None:
+    """``before[a]`` moved so that ``v[a] - before[a]``, die ``a``'s last change, is ``ratio`` x."""
+    for k in range(3):
+        before[a, k] = v[a, k] - ratio * (v[a, k] - before[a, k])
 
 
 @njit(cache=True, forceinline=True, _nrt=False)
@@ -893,18 +994,18 @@ def _place(world: np.ndarray, a: int, vertices: np.ndarray, count: int, x: np.nd
 
 
 @njit(cache=True, _nrt=False)
-def _group_jump(planes: np.ndarray, lowest: np.ndarray, speed: np.ndarray, x: np.ndarray,
-                u: np.ndarray, ang: np.ndarray, force: np.ndarray, bodies: Bodies,
-                rotation: bool, dt: float, limit: int) -> int:
-    """Flight steps the whole group takes at once (at least 1), each die's as :func:`flight_jump`.
+def _group_jump(members: np.ndarray, n_m: int, planes: np.ndarray, lowest: np.ndarray,
+                speed: np.ndarray, x: np.ndarray, u: np.ndarray, ang: np.ndarray,
+                force: np.ndarray, bodies: Bodies, rotation: bool, dt: float, limit: int) -> int:
+    """Flight steps the ``n_m`` dice ``members`` take at once (at least 1), as :func:`flight_jump`.
 
     Every pair stays out of reach (:func:`out_of_reach`, ``speed`` as :func:`_speed`) over the
     steps, as stepping would find it: under gravity alone a pair's distance shrinks by
     ``dt |u_a - u_b|`` a step, and the reach grows with the speeds.
     """
-    n_dice = x.shape[0]
     jump = limit
-    for a in range(n_dice):
+    for i in range(n_m):
+        a = members[i]
         m = bodies.mass[a]
         spin = 0.0
         if rotation:
@@ -914,7 +1015,8 @@ def _group_jump(planes: np.ndarray, lowest: np.ndarray, speed: np.ndarray, x: np
         jump = min(jump, flight_jump(planes, lowest, a, (u[a, 0], u[a, 1], u[a, 2]), spin,
                                      bodies.r_max[a], (force[a, 0] * dt_m, force[a, 1] * dt_m,
                                                        force[a, 2] * dt_m), dt, limit))
-        for b in range(a + 1, n_dice):
+        for j in range(i + 1, n_m):
+            b = members[j]
             gap = math.sqrt((x[a, 0] - x[b, 0]) ** 2 + (x[a, 1] - x[b, 1]) ** 2
                             + (x[a, 2] - x[b, 2]) ** 2) - bodies.r_max[a] - bodies.r_max[b] \
                 - 2.0 * dt * (speed[a] + speed[b])
@@ -944,21 +1046,97 @@ def _decided(bodies: Bodies, q: np.ndarray, energy: float, floor_total: float, u
 
 
 @njit(cache=True)
-def _meeting(out: GroupOutcome, g: int, end: int, done: int, u: np.ndarray, w: np.ndarray) -> None:
-    """Store the first die–die contact's start (``end`` 0) or end (1), after ``done`` steps."""
+def _meeting(out: GroupOutcome, g: int, end: int, done: int, members: np.ndarray, n_m: int,
+             u: np.ndarray, w: np.ndarray) -> None:
+    """Store the first die–die contact's start (``end`` 0) or end (1), after ``done`` steps.
+
+    The velocities of the ``n_m`` dice ``members``, its island's.
+    """
     out.meet_steps[g, end] = done
-    for a in range(u.shape[0]):
+    for i in range(n_m):
+        a = members[i]
         for k in range(3):
             out.meet[g, end, a, k] = u[a, k]
             out.meet[g, end, a, 3 + k] = w[a, k]
 
 
 @njit(cache=True)
-def _record(records: GroupRecords, j: int, g: int, x: np.ndarray, q: np.ndarray) -> None:
-    """Store the dice's centres and orientations after a step."""
-    _put(records.x[g, j], x)
+def _record(records: GroupRecords, j: int, g: int, a: int, x: np.ndarray, q: np.ndarray) -> None:
+    """Store record ``j`` of die ``a``: its centre and orientation after a step."""
+    for k in range(3):
+        records.x[g, j, a, k] = x[a, k]
     if records.orientation.shape[1] > 0:
-        _put(records.orientation[g, j], q)
+        for r in range(3):
+            for k in range(3):
+                records.orientation[g, j, a, r, k] = q[a, r, k]
+
+
+@njit(cache=True)
+def _record_die(records: GroupRecords, g: int, a: int, clock: int, until: int, x: np.ndarray,
+                q: np.ndarray) -> None:
+    """Die ``a``, still since step ``clock``, in its records after it, up to record ``until``."""
+    for j in range(clock // records.stride, min(until, records.x.shape[1])):
+        _record(records, j, g, a, x, q)
+
+
+@njit(cache=True, forceinline=True, _nrt=False)
+def _airborne(members: np.ndarray, n_m: int, touching: np.ndarray) -> bool:
+    """Whether none of the ``n_m`` dice ``members`` touches a plane."""
+    for i in range(n_m):
+        if touching[members[i]] > 0:
+            return False
+    return True
+
+
+@njit(cache=True)
+def islands(x: np.ndarray, energy: np.ndarray, stored: np.ndarray, low: np.ndarray,
+            mass: np.ndarray, r_max: np.ndarray, label: np.ndarray, pool: np.ndarray,
+            least: float) -> float:
+    """Each die's island in ``label`` (its least die), and the time (s) no two islands meet in.
+
+    A die is no faster than ``sqrt(2 E / m)``, ``E`` its island's energy (``energy`` and
+    ``stored``, each die's) above its dice's least (``low``), times :data:`SPEED_MARGIN`: an
+    island that touches no other gains no energy. Dice whose spheres may meet within ``least``
+    share an island.
+    """
+    n_dice = x.shape[0]
+    for a in range(n_dice):
+        label[a] = a
+    merged = True
+    while merged:
+        merged = False
+        for a in range(n_dice):
+            pool[a] = 0.0
+        for a in range(n_dice):
+            pool[label[a]] += max(0.0, energy[a] + stored[a] - low[a])
+        for a in range(n_dice):
+            for b in range(a + 1, n_dice):
+                if label[a] != label[b] and _meet_time(a, b, x, pool, label, mass,
+                                                       r_max) < least:
+                    gone, kept = max(label[a], label[b]), min(label[a], label[b])
+                    for c in range(n_dice):
+                        if label[c] == gone:
+                            label[c] = kept
+                    merged = True
+    window = np.inf
+    for a in range(n_dice):
+        for b in range(a + 1, n_dice):
+            if label[a] != label[b]:
+                window = min(window, _meet_time(a, b, x, pool, label, mass, r_max))
+    return window
+
+
+@njit(cache=True, forceinline=True, _nrt=False)
+def _meet_time(a: int, b: int, x: np.ndarray, pool: np.ndarray, label: np.ndarray,
+               mass: np.ndarray, r_max: np.ndarray) -> float:
+    """The least time (s) dice ``a`` and ``b``'s spheres take to meet (:func:`islands`)."""
+    gap = math.sqrt((x[a, 0] - x[b, 0]) ** 2 + (x[a, 1] - x[b, 1]) ** 2
+                    + (x[a, 2] - x[b, 2]) ** 2) - r_max[a] - r_max[b]
+    if not gap > 0.0:
+        return 0.0
+    closing = SPEED_MARGIN * (math.sqrt(2.0 * pool[label[a]] / mass[a])
+                              + math.sqrt(2.0 * pool[label[b]] / mass[b]))
+    return gap / closing if closing > 0.0 else np.inf
 
 
 @njit(cache=True)

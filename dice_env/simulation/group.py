@@ -50,6 +50,8 @@ GROUP_UNTIL = ("rest", "decided", "t_max")  # simulate_group's until (early rest
 TOUCH = 1e-3  # dice released closer than this fraction of the smaller's size touch, not overlap
 MAX_APART = 2**20  # beyond this table's step over the pair's, every move takes the pair's step
 MAX_UNITS = 5  # a move apart takes at most this many units (ratio above 1/5; see moves)
+# DieContact(islands=True): the least and the most time (s) its islands step on their own
+ISLAND_WINDOW = (0.5e-3, 0.1)
 
 
 @dataclass(frozen=True)
@@ -58,7 +60,10 @@ class DieContact:
 
     ``stiffness`` (N/m per contact), ``damping`` (N s/m; default: :data:`DIE_RESTITUTION` for the
     default die), ``friction_law`` (:class:`dice_env.model.scene.FrictionLaw`), ``tangential``:
-    the stick-slip spring and damper as a fraction of them.
+    the stick-slip spring and damper as a fraction of them. With ``islands`` (on a level
+    floor), dice that cannot meet for a while step apart, each island of dice at its own step
+    with its own flights, and an island at rest sleeps until a die that may reach it wakes it
+    (``docs/performance.md``, "Islands"): seeded as ever, not step for step the same.
     """
 
     stiffness: float = STIFFNESS
@@ -66,9 +71,11 @@ class DieContact:
     friction: float = DIE_FRICTION
     friction_law: FrictionLaw = FrictionLaw.STICK_SLIP
     tangential: float = 2.0 / 7.0
+    islands: bool = False
 
     def __post_init__(self) -> None:
         check_material(self.stiffness, self.damping, self.friction, self.tangential)
+        check_type("islands", self.islands, bool)
         object.__setattr__(self, "friction_law",
                            as_enum("friction_law", FrictionLaw, self.friction_law))
 
@@ -212,7 +219,8 @@ def simulate_group(scene: Scene, dice: Sequence[Die], state: GroupState, *,
     """Run B throws of the N ``dice`` together; ``state`` is not modified.
 
     Keywords as :func:`dice_env.simulate`; ``until`` in :data:`GROUP_UNTIL`; ``record_every``
-    > 0 records the centres (and the ``orientations``). Refused besides: dice that overlap at
+    > 0 records the centres (and the ``orientations``); ``contact`` the die–die material and
+    whether dice step in islands (:class:`DieContact`). Refused besides: dice that overlap at
     the start, more than :data:`MAX_DICE` dice, a die-die step that underflows, with
     ``until="decided"`` a gravity whose energies overflow.
     """
@@ -244,7 +252,9 @@ def simulate_group(scene: Scene, dice: Sequence[Die], state: GroupState, *,
     stops = group_kernel.GroupStops(
         n_steps=n_steps, at_rest=ends.at_rest, v_rest=float(scene.rest.speed),
         hold_steps=n_steps if hold >= n_steps else math.ceil(hold), decide=ends.decided,
-        energy_scale=float(sum(d.mass * scene.gravity * d.size for d in dice)))
+        energy_scale=float(sum(d.mass * scene.gravity * d.size for d in dice)),
+        islands=contact.islands,
+        least=max(1, math.ceil(ISLAND_WINDOW[0] / dt)), most=max(1, int(ISLAND_WINDOW[1] / dt)))
     bodies = _bodies(scenes, ends.decided)
     stride, n_rec = record_plan(record_every, n_steps, b * n * (12 if orientations else 3),
                                 f"{b} throws of {n} dice")
@@ -318,7 +328,21 @@ def _bodies(scenes: list[Scene], decide: bool) -> group_kernel.Bodies:
         n_vertices=np.array([len(d.vertices) for d in dice]),
         faces=_padded([d.face_normals for d in dice], 0.0),
         n_faces=np.array([d.n_faces for d in dice]), lock=_padded(lock, -math.inf), floor=floor,
-        **per_die)
+        low=np.array([_least_energy(s) for s in scenes]), **per_die)
+
+
+def _least_energy(scene: Scene) -> float:
+    """A lower bound of the die's energy on the scene's ground (J; ``-inf`` if not level).
+
+    Resting on its lowest face, the ground's spring pressed by the whole weight.
+    """
+    ground, weight = scene.ground, np.float64(scene.die.mass * scene.gravity)
+    if tuple(ground.normal) != (0.0, 0.0, 1.0):
+        return -math.inf
+    with np.errstate(over="ignore"):
+        low = weight * (ground.offset + float(scene.die.resting_heights.min())) \
+            - weight**2 / (2.0 * ground.stiffness)
+    return float(low) if math.isfinite(low) else -math.inf
 
 
 def _hulls(dice: tuple[Die, ...], bodies: group_kernel.Bodies) -> group_kernel.Hulls:

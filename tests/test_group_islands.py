@@ -1,0 +1,94 @@
+"""DieContact(contact=ISLANDS): dice out of each other's reach step apart, and sleep at rest.
+
+Seeded and the same for any thread count or batch; dice that meet still meet (momentum kept,
+no die left inside another); a die at rest is woken by a die that reaches it; and the pairs'
+faces keep the reference distribution (``tests/test_group_distribution.py`` for 20,000).
+"""
+
+import numpy as np
+import pytest
+from test_group import DIE, EDGE, free_pair
+
+from dice_env import Scene, State
+from dice_env.model.rotations import random_rotations
+from dice_env.simulation.group import DieContact, GroupState, overlaps, simulate_group
+from dice_env.throws import group_throws, tray_scene
+
+SCENE = tray_scene()
+ISLANDS = DieContact(islands=True)
+
+
+def _pile(n_dice: int, throws: int, seed: int) -> GroupState:
+    return group_throws(SCENE, (DIE,) * n_dice, throws, np.random.default_rng(seed))
+
+
+def _same(a, b) -> None:
+    for name in ("face", "steps", "rest_time", "energy_rise", "overlap", "impacts"):
+        np.testing.assert_array_equal(getattr(a, name), getattr(b, name), err_msg=name)
+    np.testing.assert_array_equal(a.final.position, b.final.position)
+
+
+@pytest.mark.parametrize("until", ["rest", "decided"])
+def test_islands_are_seeded_for_any_thread_count_and_batch(until):
+    start = _pile(6, 8, 3)
+    runs = [simulate_group(SCENE, (DIE,) * 6, start, until=until, contact=ISLANDS,
+                           num_threads=threads) for threads in (1, 2)]
+    _same(*runs)
+    first = GroupState(*(a[:4] for a in start._arrays()))
+    half = simulate_group(SCENE, (DIE,) * 6, first, until=until, contact=ISLANDS, num_threads=1)
+    for name in ("face", "steps", "rest_time"):
+        np.testing.assert_array_equal(getattr(half, name), getattr(runs[0], name)[:4])
+
+
+def test_a_pile_with_islands_ends_as_one_without_them_would():
+    start = _pile(12, 6, 5)
+    dice = (DIE,) * 12
+    runs = {islands: simulate_group(SCENE, dice, start, until="rest",
+                                    contact=DieContact(islands=islands))
+            for islands in (False, True)}
+    on = runs[True]
+    assert on.settled.all() and not on.unstable.any() and not on.sunk.any()
+    assert on.energy_rise.max() <= max(runs[False].energy_rise.max(), 0.0) + 0.05
+    # no die left inside another: as deep at most as the dice resting in contact without
+    inside = overlaps(dice, on.final).max()
+    assert inside <= max(overlaps(dice, runs[False].final).max(), 0.0) + 1e-3 * EDGE
+    assert (on.rest_time > 0.1).all()
+
+
+def test_the_first_meeting_keeps_momentum_in_islands():
+    scene, start = free_pair([EDGE * 1.05, 0.003, 0.002], [0.6, 0.05, 0.0], spin=[3.0, -5.0, 8.0])
+    result = simulate_group(scene, (DIE, DIE), start, until="t_max", contact=ISLANDS)
+    assert result.meet_dice.tolist() == [[0, 1]] and (result.meet_steps >= 0).all()
+    momentum = result.meet_velocity[0].sum(axis=1)  # equal masses: kept across the contact
+    np.testing.assert_allclose(momentum[1], momentum[0], atol=1e-15)
+
+
+def test_dice_far_apart_keep_momentum_and_land_as_they_would_without_islands():
+    rng = np.random.default_rng(7)
+    n = 8
+    starts = [State.release(Scene(), [0.0, y, 0.1], rng.normal(0, 0.3, (n, 3)),
+                            rng.normal(0, 20, (n, 3)), random_rotations(rng, n))
+              for y in (-0.5, 0.5)]
+    start = GroupState.of(starts)
+    runs = [simulate_group(Scene(), (DIE, DIE), start, until="decided",
+                           contact=DieContact(islands=islands)) for islands in (False, True)]
+    assert (runs[1].overlap == 0).all() and (runs[1].meet_dice == -1).all()
+    # each die steps at the table's step alone: faces as the pair's at the pair's step, mostly
+    assert (runs[0].face == runs[1].face).mean() >= 0.75
+
+
+def test_a_die_at_rest_is_woken_by_a_die_that_reaches_it():
+    scene = Scene(t_max=3.0)
+    resting = State.release(scene, [0.0, 0.0, 0.5 * EDGE], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0])
+    thrown = State.release(scene, [-0.15, 0.0, 0.5 * EDGE + 0.002], [2.0, 0.0, 0.0],
+                           [0.0, 0.0, 0.0])
+    result = simulate_group(scene, (DIE, DIE), GroupState.of([resting, thrown]), until="rest",
+                            contact=ISLANDS)
+    assert result.settled.all() and result.meet_dice.tolist() == [[0, 1]]
+    assert result.final.position[0, 0, 0] > 0.005  # pushed along the thrown die's way
+    assert result.die_impacts[0, 0] >= 1
+
+
+def test_islands_must_be_a_bool():
+    with pytest.raises(TypeError, match="islands must be a bool"):
+        DieContact(islands=1)
