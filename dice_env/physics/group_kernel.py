@@ -659,8 +659,8 @@ def advance_group(g: int, dice: GroupDice, bodies: Bodies, hulls: Hulls, pair: P
     while t < n_steps and end == RUNNING:
         t_end = n_steps
         if level:
-            window = islands(x, energy, stored, bodies.low, mass, r_max, label, pool,
-                             least * dt) / dt
+            window = islands(x, q, energy, stored, bodies, hulls, world, separating, depths,
+                             label, pool, least * dt) / dt
             longest = most
             for a in range(n_dice):
                 if label[a] != a:  # dice together: seen again soon, to part when they can
@@ -1089,30 +1089,42 @@ def _airborne(members: np.ndarray, n_m: int, touching: np.ndarray) -> bool:
 
 
 @njit(cache=True)
-def islands(x: np.ndarray, energy: np.ndarray, stored: np.ndarray, low: np.ndarray,
-            mass: np.ndarray, r_max: np.ndarray, label: np.ndarray, pool: np.ndarray,
-            least: float) -> float:
+def islands(x: np.ndarray, q: np.ndarray, energy: np.ndarray, stored: np.ndarray,
+            bodies: Bodies, hulls: Hulls, world: np.ndarray, separating: np.ndarray,
+            gaps: np.ndarray, label: np.ndarray, pool: np.ndarray, least: float) -> float:
     """Each die's island in ``label`` (its least die), and the time (s) no two islands meet in.
 
-    A die is no faster than ``sqrt(2 E / m)``, ``E`` its island's energy (``energy`` and
-    ``stored``, each die's) above its dice's least (``low``), times :data:`SPEED_MARGIN`: an
-    island that touches no other gains no energy. Dice whose spheres may meet within ``least``
-    share an island.
+    A die's centre is no faster than ``sqrt(2 E / m)`` and its corners than
+    ``sqrt(2 E (1/m + r_max^2 / I_min))`` (Cauchy-Schwarz), ``E`` its island's energy
+    (``energy`` and ``stored``, each die's) above its dice's least (``Bodies.low``), times
+    :data:`SPEED_MARGIN`: an island that touches no other gains no energy. Two dice close the
+    gap between their bounding spheres at most at their centres' speeds and the gap along a
+    separating axis (:func:`least_overlap`, for dice whose spheres meet; kept in ``gaps``) at
+    most at their corners'. Dice that may meet within ``least`` share an island.
     """
-    n_dice = x.shape[0]
+    n_dice, r_max = x.shape[0], bodies.r_max
     for a in range(n_dice):
         label[a] = a
+        for b in range(a + 1, n_dice):
+            gaps[a, b] = 0.0
+            if (x[a, 0] - x[b, 0]) ** 2 + (x[a, 1] - x[b, 1]) ** 2 + (x[a, 2] - x[b, 2]) ** 2 \
+                    < (r_max[a] + r_max[b]) ** 2:
+                for c in (a, b):
+                    _place(world, c, bodies.vertices, bodies.n_vertices[c], x, q)
+                overlap, _, separating[a, b] = least_overlap(
+                    a, b, world, x, q, hulls.axes, hulls.directions, separating[a, b])
+                gaps[a, b] = max(0.0, -overlap)
     merged = True
     while merged:
         merged = False
         for a in range(n_dice):
             pool[a] = 0.0
         for a in range(n_dice):
-            pool[label[a]] += max(0.0, energy[a] + stored[a] - low[a])
+            pool[label[a]] += max(0.0, energy[a] + stored[a] - bodies.low[a])
         for a in range(n_dice):
             for b in range(a + 1, n_dice):
-                if label[a] != label[b] and _meet_time(a, b, x, pool, label, mass,
-                                                       r_max) < least:
+                if label[a] != label[b] and _meet_time(a, b, x, gaps, pool, label,
+                                                       bodies) < least:
                     gone, kept = max(label[a], label[b]), min(label[a], label[b])
                     for c in range(n_dice):
                         if label[c] == gone:
@@ -1122,21 +1134,27 @@ def islands(x: np.ndarray, energy: np.ndarray, stored: np.ndarray, low: np.ndarr
     for a in range(n_dice):
         for b in range(a + 1, n_dice):
             if label[a] != label[b]:
-                window = min(window, _meet_time(a, b, x, pool, label, mass, r_max))
+                window = min(window, _meet_time(a, b, x, gaps, pool, label, bodies))
     return window
 
 
 @njit(cache=True, forceinline=True, _nrt=False)
-def _meet_time(a: int, b: int, x: np.ndarray, pool: np.ndarray, label: np.ndarray,
-               mass: np.ndarray, r_max: np.ndarray) -> float:
-    """The least time (s) dice ``a`` and ``b``'s spheres take to meet (:func:`islands`)."""
-    gap = math.sqrt((x[a, 0] - x[b, 0]) ** 2 + (x[a, 1] - x[b, 1]) ** 2
-                    + (x[a, 2] - x[b, 2]) ** 2) - r_max[a] - r_max[b]
-    if not gap > 0.0:
-        return 0.0
-    closing = SPEED_MARGIN * (math.sqrt(2.0 * pool[label[a]] / mass[a])
-                              + math.sqrt(2.0 * pool[label[b]] / mass[b]))
-    return gap / closing if closing > 0.0 else np.inf
+def _meet_time(a: int, b: int, x: np.ndarray, gaps: np.ndarray, pool: np.ndarray,
+               label: np.ndarray, bodies: Bodies) -> float:
+    """The least time (s) dice ``a`` and ``b`` take to meet (:func:`islands`)."""
+    mass, r_max, inv_i = bodies.mass, bodies.r_max, bodies.inv_i_min
+    e_a, e_b = 2.0 * pool[label[a]], 2.0 * pool[label[b]]
+    sphere = math.sqrt((x[a, 0] - x[b, 0]) ** 2 + (x[a, 1] - x[b, 1]) ** 2
+                       + (x[a, 2] - x[b, 2]) ** 2) - r_max[a] - r_max[b]
+    time = 0.0
+    if sphere > 0.0:
+        closing = SPEED_MARGIN * (math.sqrt(e_a / mass[a]) + math.sqrt(e_b / mass[b]))
+        time = sphere / closing if closing > 0.0 else np.inf
+    elif gaps[a, b] > 0.0:
+        closing = SPEED_MARGIN * (math.sqrt(e_a * (1.0 / mass[a] + r_max[a] ** 2 * inv_i[a]))
+                                  + math.sqrt(e_b * (1.0 / mass[b] + r_max[b] ** 2 * inv_i[b])))
+        time = gaps[a, b] / closing if closing > 0.0 else np.inf
+    return time
 
 
 @njit(cache=True)

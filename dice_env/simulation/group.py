@@ -51,7 +51,7 @@ TOUCH = 1e-3  # dice released closer than this fraction of the smaller's size to
 MAX_APART = 2**20  # beyond this table's step over the pair's, every move takes the pair's step
 MAX_UNITS = 5  # a move apart takes at most this many units (ratio above 1/5; see moves)
 # DieContact(islands=True): the least and the most time (s) its islands step on their own
-ISLAND_WINDOW = (0.5e-3, 0.1)
+ISLAND_WINDOW = (0.05e-3, 0.1)
 
 
 @dataclass(frozen=True)
