@@ -252,7 +252,7 @@ def pack_run(scene: Scene, *, n_steps: int, until: str = "rest",
         flight=bool(free_flight and (ground.contact_law != ContactLaw.PAPER
                                      or ground.damping == 0)),
         midpoint=scene.scheme == Scheme.MIDPOINT)
-    rest_energy, rest_excess = _rest_energy(scene, ends.early_rest)
+    rest_energy, rest_excess = proven_rest(scene, ends.early_rest)
     stops = kernel.Stops(
         n_steps=int(n_steps), at_rest=ends.at_rest, v_rest=float(scene.rest.speed),
         hold_steps=math.ceil(scene.rest.hold / dt), rest_energy=float(rest_energy),
@@ -490,7 +490,7 @@ def _run_interruptibly(run: Callable, args: tuple, abort: np.ndarray, threads: i
 _packed_scene = functools.lru_cache(maxsize=64)(pack_scene)
 
 
-def _rest_energy(scene: Scene, early_rest: bool) -> tuple[float, float]:
+def proven_rest(scene: Scene, early_rest: bool) -> tuple[float, float]:
     """Lowest total energy of the die and the excess above it that proves rest (0: none).
 
     Fair, isotropic die on a horizontal table, ``k`` vertices a face: lowest flat on a face,
