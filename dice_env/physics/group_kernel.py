@@ -69,7 +69,9 @@ class Bodies(NamedTuple):
     Padded to the largest die: ``vertices`` (N, V, 3) and ``n_vertices``, ``faces`` (N, F, 3)
     and ``n_faces``; ``lock`` (N, F): the energy below which a die alone keeps the face it reads
     (``-inf``: no rule); ``floor`` (N,): a lower bound of each die's energy under that rule;
-    ``low`` (N,): one on a level floor (``-inf``: none), for :func:`islands`.
+    ``low`` (N,): one on a level floor (``-inf``: none), for :func:`islands`; ``rest`` (N,):
+    the energy below which a quiet die alone stays quiet (``-inf``: none; the single die's
+    early rest).
     """
 
     vertices: np.ndarray
@@ -85,6 +87,7 @@ class Bodies(NamedTuple):
     lock: np.ndarray
     floor: np.ndarray
     low: np.ndarray
+    rest: np.ndarray
 
 
 class Hulls(NamedTuple):
@@ -809,8 +812,10 @@ def advance_group(g: int, dice: GroupDice, bodies: Bodies, hulls: Hulls, pair: P
                                 and fastest[a] < v_rest2):
                             quiet_now = False
                             break
+                    a = members[0]  # a die alone may prove its rest (level: else -inf)
                     quiet, island = rest_test(quiet_now, quiet + (moved - 1 if quiet > 0 else 0),
-                                              stops.hold_steps, False)
+                                              stops.hold_steps, n_m == 1 and level
+                                              and energy[a] + stored[a] < bodies.rest[a])
                     if island == SETTLED:
                         break
                 jump = 1

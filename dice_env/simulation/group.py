@@ -36,6 +36,7 @@ from dice_env.simulation.simulate import (
     outcome_fields,
     pack_run,
     pack_scene,
+    proven_rest,
     record_plan,
     recorded,
     run_kernel,
@@ -328,7 +329,8 @@ def _bodies(scenes: list[Scene], decide: bool) -> group_kernel.Bodies:
         n_vertices=np.array([len(d.vertices) for d in dice]),
         faces=_padded([d.face_normals for d in dice], 0.0),
         n_faces=np.array([d.n_faces for d in dice]), lock=_padded(lock, -math.inf), floor=floor,
-        low=np.array([_least_energy(s) for s in scenes]), **per_die)
+        low=np.array([_least_energy(s) for s in scenes]),
+        rest=np.array([sum(proven_rest(s, early_rest=True)) for s in scenes]), **per_die)
 
 
 def _least_energy(scene: Scene) -> float:
