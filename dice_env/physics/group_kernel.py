@@ -3,7 +3,8 @@
 The model is ``docs/model.md``'s, the speed ``docs/performance.md``'s ("Several dice").
 :func:`least_overlap` finds a touching pair's normal, :func:`pair_contacts` its contacts and
 forces; :func:`advance_group` steps one throw, each die on the planes as the single die's: at
-the table's step while no pair can meet within it (:func:`out_of_reach`), else the pair's.
+the table's step while no pair can meet within it (:func:`out_of_reach`), else the pair's;
+with islands (:func:`islands`, "Islands" there), each island of dice that may meet on its own.
 """
 
 from __future__ import annotations
