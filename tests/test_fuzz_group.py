@@ -67,6 +67,7 @@ CONTACT = {
     "friction": ([0.0, 0.4, 2.0, 1e6], [-0.1, np.inf]),
     "friction_law": (["stick_slip", "regularized", 0, 1], [2, None, "glue"]),
     "tangential": ([2 / 7, 1.0, 1e-9], [0.0, 1.5, np.nan]),
+    "islands": ([False, True], [1, "yes"]),
 }
 RUN = {
     "t_max": ([1e-9, 1e-4, 0.01, 0.05, 0.3, None], [0.0, -1.0, np.nan, np.inf, "0.1"]),

@@ -92,3 +92,16 @@ def test_a_die_at_rest_is_woken_by_a_die_that_reaches_it():
 def test_islands_must_be_a_bool():
     with pytest.raises(TypeError, match="islands must be a bool"):
         DieContact(islands=1)
+
+
+def test_records_hold_each_die_where_its_island_left_it():
+    start = _pile(3, 4, 9)
+    result = simulate_group(SCENE, (DIE,) * 3, start, until="rest", contact=ISLANDS,
+                            record_every=500, orientations=True)
+    assert result.settled.all() and result.x_cm.shape[1] == len(result.t)
+    np.testing.assert_array_equal(result.x_cm[:, -1], result.final.position)
+    np.testing.assert_array_equal(result.orientations[:, -1], result.final.orientation)
+    together = simulate_group(SCENE, (DIE,) * 3, start, until="rest", record_every=500)
+    # 500 steps in, the dice still fly as they do stepped together
+    np.testing.assert_allclose(result.x_cm[:, 0], together.x_cm[:, 0], atol=1e-6)
+    assert not np.allclose(result.x_cm[:, 0], start.position, atol=1e-4)

@@ -652,13 +652,10 @@ def advance_group(g: int, dice: GroupDice, bodies: Bodies, hulls: Hulls, pair: P
     resting = stops.at_rest or level  # islands at rest sleep, whatever ends the throw
     least = max(1, stops.least // coarse) * coarse  # a window's steps, whole moves apart
     most = max(least, stops.most // coarse * coarse)
-    if level:
-        for a in range(n_dice):
-            _take(a, q, inv_inertia, inv_iso, qa, inv_a)
-            wl0, wl1, wl2 = angular_velocity(qa, inv_a, inv_iso[a], ang[a, 0], ang[a, 1],
-                                             ang[a, 2])
-            energy[a] = 0.5 * mass[a] * (u[a, 0] ** 2 + u[a, 1] ** 2 + u[a, 2] ** 2) + 0.5 * (
-                ang[a, 0] * wl0 + ang[a, 1] * wl1 + ang[a, 2] * wl2) + mass[a] * g_acc * x[a, 2]
+    for a in range(n_dice):  # at most, the spin's taken about the least inertia
+        energy[a] = 0.5 * mass[a] * (u[a, 0] ** 2 + u[a, 1] ** 2 + u[a, 2] ** 2) + 0.5 * (
+            ang[a, 0] ** 2 + ang[a, 1] ** 2 + ang[a, 2] ** 2) * bodies.inv_i_min[a] \
+            + mass[a] * g_acc * x[a, 2]
     t = 0
     while t < n_steps and end == RUNNING:
         t_end = n_steps
@@ -672,25 +669,11 @@ def advance_group(g: int, dice: GroupDice, bodies: Bodies, hulls: Hulls, pair: P
             t_end = min(n_steps, t + (longest if not window < longest
                                       else max(least, int(window) // coarse * coarse)))
         for c in range(n_dice):
-            n_m, sleeping, others, others_t = 0, True, 0.0, 0.0  # the other dice's energy
-            for a in range(n_dice):
-                if label[a] == c:
-                    members[n_m] = a
-                    n_m += 1
-                    sleeping = sleeping and asleep[a]
-                else:
-                    others += energy[a]
-                    others_t += stored[a]
-            if n_m == 0 or sleeping:
+            n_m, others, others_t, quiet, moved = _gather(c, t, label, asleep, energy, stored,
+                                                          clock, quiet_of, moved_of, members,
+                                                          records, g, x, q)
+            if n_m == 0:
                 continue
-            quiet, moved = quiet_of[members[0]], moved_of[members[0]]
-            for i in range(n_m):
-                a = members[i]
-                if asleep[a]:  # woken: it kept its place
-                    _record_die(records, g, a, clock[a], t // stride, x, q)
-                    asleep[a], clock[a], quiet_of[a] = False, t, 0
-                if quiet_of[a] < quiet:
-                    quiet, moved = quiet_of[a], moved_of[a]
             step, next_record, island = t, (t // stride + 1) * stride, RUNNING
             while step < t_end:
                 passes, island = next_pass(passes, abort)
@@ -890,6 +873,38 @@ def advance_group(g: int, dice: GroupDice, bodies: Bodies, hulls: Hulls, pair: P
     out.overlap[g] = overlap
     out.meet_dice[g, 0], out.meet_dice[g, 1] = first_a, first_b
     out.energy_rise[g] = max(out.energy_rise[g], relative_rise(e_max, e_start, e_tol))
+
+
+@njit(cache=True)
+def _gather(c: int, t: int, label: np.ndarray, asleep: np.ndarray, energy: np.ndarray,
+            stored: np.ndarray, clock: np.ndarray, quiet_of: np.ndarray, moved_of: np.ndarray,
+            members: np.ndarray, records: GroupRecords, g: int, x: np.ndarray,
+            q: np.ndarray) -> tuple:
+    """Island ``c``'s dice into ``members``, woken at step ``t`` unless all asleep.
+
+    Returns their count (0: none awake), the other dice's energy (as checked, and
+    tangential), and the island's quiet steps and last move (its least quiet die's).
+    """
+    n_m, sleeping, others, others_t = 0, True, 0.0, 0.0
+    for a in range(label.shape[0]):
+        if label[a] == c:
+            members[n_m] = a
+            n_m += 1
+            sleeping = sleeping and asleep[a]
+        else:
+            others += energy[a]
+            others_t += stored[a]
+    if sleeping:
+        return 0, others, others_t, 0, 1
+    quiet, moved = quiet_of[members[0]], moved_of[members[0]]
+    for i in range(n_m):
+        a = members[i]
+        if asleep[a]:  # woken: it kept its place
+            _record_die(records, g, a, clock[a], t // records.stride, x, q)
+            asleep[a], clock[a], quiet_of[a] = False, t, 0
+        if quiet_of[a] < quiet:
+            quiet, moved = quiet_of[a], moved_of[a]
+    return n_m, others, others_t, quiet, moved
 
 
 @njit(cache=True, forceinline=True, _nrt=False)

@@ -330,7 +330,15 @@ def _bodies(scenes: list[Scene], decide: bool) -> group_kernel.Bodies:
         faces=_padded([d.face_normals for d in dice], 0.0),
         n_faces=np.array([d.n_faces for d in dice]), lock=_padded(lock, -math.inf), floor=floor,
         low=np.array([_least_energy(s) for s in scenes]),
-        rest=np.array([sum(proven_rest(s, early_rest=True)) for s in scenes]), **per_die)
+        rest=np.array([_rest_bound(s) for s in scenes]), **per_die)
+
+
+def _rest_bound(scene: Scene) -> float:
+    """The energy (J) below which a quiet die alone stays quiet (``-inf``: none, or overflow)."""
+    try:
+        return sum(proven_rest(scene, early_rest=True))
+    except OverflowError:  # (m g)^2 beyond floats: no proof
+        return -math.inf
 
 
 def _least_energy(scene: Scene) -> float:
