@@ -105,3 +105,12 @@ def test_records_hold_each_die_where_its_island_left_it():
     # 500 steps in, the dice still fly as they do stepped together
     np.testing.assert_allclose(result.x_cm[:, 0], together.x_cm[:, 0], atol=1e-6)
     assert not np.allclose(result.x_cm[:, 0], start.position, atol=1e-4)
+
+
+def test_a_run_to_the_time_limit_runs_to_it():
+    start = _pile(2, 3, 11)
+    scene = SCENE.with_(t_max=1.5)
+    result = simulate_group(scene, (DIE, DIE), start, until="t_max", contact=ISLANDS)
+    together = simulate_group(scene, (DIE, DIE), start, until="t_max")
+    assert not result.settled.any() and not result.decided.any()
+    np.testing.assert_array_equal(result.steps, together.steps)

@@ -649,7 +649,6 @@ def advance_group(g: int, dice: GroupDice, bodies: Bodies, hulls: Hulls, pair: P
     energy, stored = np.zeros(n_dice), np.zeros(n_dice)
     label, members, pool = np.zeros(n_dice, np.int64), np.arange(n_dice), np.empty(n_dice)
     level = stops.islands and n0 == 0.0 and n1 == 0.0 and n2 == 1.0
-    resting = stops.at_rest or level  # islands at rest sleep, whatever ends the throw
     least = max(1, stops.least // coarse) * coarse  # a window's steps, whole moves apart
     most = max(least, stops.most // coarse * coarse)
     for a in range(n_dice):  # at most, the spin's taken about the least inertia
@@ -711,7 +710,7 @@ def advance_group(g: int, dice: GroupDice, bodies: Bodies, hulls: Hulls, pair: P
                     m = mass[a]
                     kinetic[a] = 0.5 * m * (u0 * u0 + u1 * u1 + u2 * u2) + 0.5 * (
                         l0 * wl0 + l1 * wl1 + l2 * wl2)
-                    near[a] = resting and kinetic[a] < 0.5 * m * stops.v_rest * stops.v_rest
+                    near[a] = stops.at_rest and kinetic[a] < 0.5 * m * stops.v_rest * stops.v_rest
                     x0, x1, x2 = x[a, 0], x[a, 1], x[a, 2]
                     law = (contact_law, stick, vmin, midpoint, rotation, h, h / m, m * g_acc)
                     (f0, f1, f2, t0, t1, t2, spring, spring_t, touching[a], approach[a],
@@ -788,7 +787,7 @@ def advance_group(g: int, dice: GroupDice, bodies: Bodies, hulls: Hulls, pair: P
                         bodies, q, others_t + total + tangential, floor_total, UP):
                     island = DECIDED
                     break
-                if resting:
+                if stops.at_rest:
                     quiet_now = True
                     for i in range(n_m):
                         a = members[i]
