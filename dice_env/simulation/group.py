@@ -128,7 +128,8 @@ class GroupResult(RunResult):
     The first die–die contact: ``meet_dice`` (B, 2) the pair (-1: none), ``meet_steps`` (B, 2)
     the steps done at its start and end (-1: none, or still touching), ``meet_velocity`` and
     ``meet_spin`` (B, 2, N, 3): every die's velocity and angular velocity (world) before its
-    first force and after its last. Recorded: ``t`` (n,), ``x_cm`` (B, n, N, 3),
+    first force and after its last (with islands, the pair's island's; 0 for the others).
+    Recorded: ``t`` (n,), ``x_cm`` (B, n, N, 3),
     ``orientations`` (B, n, N, 3, 3).
     """
 
