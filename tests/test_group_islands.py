@@ -114,3 +114,29 @@ def test_a_run_to_the_time_limit_runs_to_it():
     together = simulate_group(scene, (DIE, DIE), start, until="t_max")
     assert not result.settled.any() and not result.decided.any()
     np.testing.assert_array_equal(result.steps, together.steps)
+
+
+def test_the_first_meeting_is_the_earliest_whichever_island_steps_first():
+    scene = Scene(gravity=0.0, t_max=0.02)
+    lead = np.linspace(1e-5, 1.5e-4, 8)  # dice 2 and 3 meet this much (m at 1 m/s) sooner
+
+    def pair(y, gap):  # two dice closing at 1 m/s from ``gap`` apart
+        return [State.release(scene, np.column_stack([x, np.full(8, y), np.ones(8)]),
+                              [v, 0.0, 0.0])
+                for x, v in ((-0.5 * (EDGE + gap), 0.5), (0.5 * (EDGE + gap), -0.5))]
+
+    start = GroupState.of([*pair(0.0, np.full(8, 0.01)), *pair(0.5, 0.01 - lead)])
+    runs = [simulate_group(scene, (DIE,) * 4, start, until="t_max", contact=contact)
+            for contact in (DieContact(), ISLANDS)]
+    assert runs[0].meet_dice.tolist() == runs[1].meet_dice.tolist() == [[2, 3]] * 8
+    np.testing.assert_allclose(runs[1].meet_steps, runs[0].meet_steps, atol=5)
+    assert not runs[1].meet_velocity[:, :, :2].any()  # dice 0 and 1: another island
+
+
+def test_a_throw_decided_early_in_its_first_window_shows_no_energy_rise():
+    low = [State.release(Scene(), [x, 0.0, 0.5 * EDGE + 0.001], [0.1, 0.0, 0.0])
+           for x in (-0.3, 0.3)]
+    result = simulate_group(Scene(), (DIE, DIE), GroupState.of(low), until="decided",
+                            contact=ISLANDS)
+    assert result.decided.all() and (result.steps > 1000).all() and not result.unstable.any()
+    assert result.energy_rise.max() < 0.01

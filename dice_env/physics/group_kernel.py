@@ -633,7 +633,7 @@ def advance_group(g: int, dice: GroupDice, bodies: Bodies, hulls: Hulls, pair: P
         for a in range(n_dice):
             decisive = min(decisive, bodies.lock[a].max() + floor_total - bodies.floor[a])
     n_steps, stride, n_rec = stops.n_steps, records.stride, records.x.shape[1]
-    e_start, e_tol, e_max = 0.0, stops.energy_scale, -np.inf
+    e_tol, rise = stops.energy_scale, -np.inf  # rise: an island's energy over its first
     passes, end = 0, RUNNING
     fine, coarse = pair.near, pair.apart
     depths = np.empty((n_dice, n_dice))  # each pair's overlap (< 0: a gap), as pair_depths
@@ -673,6 +673,9 @@ def advance_group(g: int, dice: GroupDice, bodies: Bodies, hulls: Hulls, pair: P
                                                           records, g, x, q)
             if n_m == 0:
                 continue
+            e_first = 0.0  # the island's energy at the window's start (the first: its first step)
+            for i in range(n_m):
+                e_first += energy[members[i]]
             step, next_record, island = t, (t // stride + 1) * stride, RUNNING
             while step < t_end:
                 passes, island = next_pass(passes, abort)
@@ -755,8 +758,10 @@ def advance_group(g: int, dice: GroupDice, bodies: Bodies, hulls: Hulls, pair: P
                             if s0 * s0 + s1 * s1 + s2 * s2 > v_rest2:
                                 out.die_impacts[g, a] += 1
                                 out.die_impacts[g, b] += 1
-                            if first_a < 0:
-                                first_a, first_b = a, b
+                            if first_a < 0 or step - 1 < out.meet_steps[g, 0]:  # the earliest
+                                if first_a >= 0:  # met later in an island stepped before
+                                    _forget_meeting(out, g)
+                                first_a, first_b, parted = a, b, False
                                 _meeting(out, g, 0, step - 1, members, n_m, u, w)
                         elif met[a, b] and not touch_ab and a == first_a and b == first_b \
                                 and not parted:
@@ -768,14 +773,14 @@ def advance_group(g: int, dice: GroupDice, bodies: Bodies, hulls: Hulls, pair: P
                             die_touch[b] = True
                 total = others + checked
                 if step == 1:
-                    e_start += checked
+                    e_first = checked
                     for i in range(n_m):
                         a = members[i]
                         e_tol += kinetic[a]
                         e_tol += mass[a] * g_acc * max(0.0, (n0 * x[a, 0] + n1 * x[a, 1]
                                                              + n2 * x[a, 2]) - floor)
                 else:
-                    e_max = max(e_max, total)
+                    rise = max(rise, checked - e_first)
                 for i in range(n_m):
                     a = members[i]
                     now = touching[a] > 0 or die_touch[a]
@@ -871,7 +876,7 @@ def advance_group(g: int, dice: GroupDice, bodies: Bodies, hulls: Hulls, pair: P
     out.steps[g] = clock.max()
     out.overlap[g] = overlap
     out.meet_dice[g, 0], out.meet_dice[g, 1] = first_a, first_b
-    out.energy_rise[g] = max(out.energy_rise[g], relative_rise(e_max, e_start, e_tol))
+    out.energy_rise[g] = max(out.energy_rise[g], relative_rise(rise, 0.0, e_tol))
 
 
 @njit(cache=True)
@@ -1078,6 +1083,16 @@ def _meeting(out: GroupOutcome, g: int, end: int, done: int, members: np.ndarray
         for k in range(3):
             out.meet[g, end, a, k] = u[a, k]
             out.meet[g, end, a, 3 + k] = w[a, k]
+
+
+@njit(cache=True)
+def _forget_meeting(out: GroupOutcome, g: int) -> None:
+    """Clear a first meeting found to be later than another island's."""
+    out.meet_steps[g, 1] = -1
+    for end in range(2):
+        for a in range(out.meet.shape[2]):
+            for k in range(6):
+                out.meet[g, end, a, k] = 0.0
 
 
 @njit(cache=True)
