@@ -668,14 +668,12 @@ def advance_group(g: int, dice: GroupDice, bodies: Bodies, hulls: Hulls, pair: P
             t_end = min(n_steps, t + (longest if not window < longest
                                       else max(least, int(window) // coarse * coarse)))
         for c in range(n_dice):
-            n_m, others, others_t, quiet, moved = _gather(c, t, label, asleep, energy, stored,
-                                                          clock, quiet_of, moved_of, members,
-                                                          records, g, x, q)
+            # e_first: the island's energy at the window's start (the first: its first step)
+            n_m, e_first, others, others_t, quiet, moved = _gather(
+                c, t, label, asleep, energy, stored, clock, quiet_of, moved_of, members, records,
+                g, x, q)
             if n_m == 0:
                 continue
-            e_first = 0.0  # the island's energy at the window's start (the first: its first step)
-            for i in range(n_m):
-                e_first += energy[members[i]]
             step, next_record, island = t, (t // stride + 1) * stride, RUNNING
             while step < t_end:
                 passes, island = next_pass(passes, abort)
@@ -771,7 +769,6 @@ def advance_group(g: int, dice: GroupDice, bodies: Bodies, hulls: Hulls, pair: P
                         if touch_ab:
                             die_touch[a] = True
                             die_touch[b] = True
-                total = others + checked
                 if step == 1:
                     e_first = checked
                     for i in range(n_m):
@@ -788,8 +785,8 @@ def advance_group(g: int, dice: GroupDice, bodies: Bodies, hulls: Hulls, pair: P
                         out.impacts[g, a] += 1
                     was[a] = now
                 # no island gains energy: the others' at their last step bound theirs to come
-                if others_t + total + tangential < decisive and _decided(
-                        bodies, q, others_t + total + tangential, floor_total, UP):
+                bound = others_t + (others + checked) + tangential
+                if bound < decisive and _decided(bodies, q, bound, floor_total, UP):
                     island = DECIDED
                     break
                 if stops.at_rest:
@@ -886,20 +883,22 @@ def _gather(c: int, t: int, label: np.ndarray, asleep: np.ndarray, energy: np.nd
             q: np.ndarray) -> tuple:
     """Island ``c``'s dice into ``members``, woken at step ``t`` unless all asleep.
 
-    Returns their count (0: none awake), the other dice's energy (as checked, and
-    tangential), and the island's quiet steps and last move (its least quiet die's).
+    Returns their count (0: none awake), their energy (as checked), the other dice's (as
+    checked, and tangential), and the island's quiet steps and last move (its least quiet
+    die's).
     """
-    n_m, sleeping, others, others_t = 0, True, 0.0, 0.0
+    n_m, sleeping, own, others, others_t = 0, True, 0.0, 0.0, 0.0
     for a in range(label.shape[0]):
         if label[a] == c:
             members[n_m] = a
             n_m += 1
             sleeping = sleeping and asleep[a]
+            own += energy[a]
         else:
             others += energy[a]
             others_t += stored[a]
     if sleeping:
-        return 0, others, others_t, 0, 1
+        return 0, own, others, others_t, 0, 1
     quiet, moved = quiet_of[members[0]], moved_of[members[0]]
     for i in range(n_m):
         a = members[i]
@@ -908,7 +907,7 @@ def _gather(c: int, t: int, label: np.ndarray, asleep: np.ndarray, energy: np.nd
             asleep[a], clock[a], quiet_of[a] = False, t, 0
         if quiet_of[a] < quiet:
             quiet, moved = quiet_of[a], moved_of[a]
-    return n_m, others, others_t, quiet, moved
+    return n_m, own, others, others_t, quiet, moved
 
 
 @njit(cache=True, forceinline=True, _nrt=False)
