@@ -17,7 +17,7 @@ import numpy as np
 from dice_env import Die, Scene, simulate
 from dice_env.envs import TASKS
 from dice_env.model.surroundings import tray
-from dice_env.simulation.group import simulate_group
+from dice_env.simulation.group import DieContact, simulate_group
 from dice_env.simulation.paper import paper_scene
 from dice_env.throws import group_throws, vigorous_throws
 
@@ -43,11 +43,12 @@ def _single(scene: Scene, **run: object) -> Callable[[], dict[str, np.ndarray]]:
     return case
 
 
-def _group(n: int) -> Callable[[], dict[str, np.ndarray]]:
+def _group(n: int, islands: bool) -> Callable[[], dict[str, np.ndarray]]:
     def case() -> dict[str, np.ndarray]:
         scene, dice = Scene(walls=tray(), t_max=3.0), (Die(),) * n
         state = group_throws(scene, dice, 4, np.random.default_rng(11))
-        result = simulate_group(scene, dice, state, until="decided", num_threads=1)
+        result = simulate_group(scene, dice, state, until="decided", num_threads=1,
+                                contact=DieContact(islands=islands))
         final = result.final
         return {"face": result.face, "steps": result.steps,
                 "state": np.concatenate([final.position, final.velocity,
@@ -75,8 +76,10 @@ CASES: dict[str, Callable[[], dict[str, np.ndarray]]] = {
     "d20_tray": _single(Scene(die=Die.standard("d20"), walls=tray())),
     "loaded": _single(Scene(die=Die.loaded())),
     "drilled": _single(Scene(die=Die.standard("d6", pips="drilled16"))),
-    "two_d6": _group(2),
-    "twelve_d6": _group(12),
+    "two_d6": _group(2, islands=False),
+    "twelve_d6": _group(12, islands=False),
+    "two_d6_islands": _group(2, islands=True),
+    "twelve_d6_islands": _group(12, islands=True),
     **{f"env_{task.id}": _env(task.id) for task in TASKS},
 }
 
