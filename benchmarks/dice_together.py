@@ -3,7 +3,7 @@
     python benchmarks/dice_together.py                  # 1, 2, 6, 12 dice, about 3 minutes
     python benchmarks/dice_together.py --dice 1 2 --throws 256 --repeats 3
     python benchmarks/dice_together.py --throws 240 --mujoco 2 12 --die-friction regularized
-    python benchmarks/dice_together.py --islands --out benchmarks/results/dice_islands.json
+    python benchmarks/dice_together.py --lockstep --dice 2 6 12 --out lockstep.json
 
 Each group is thrown from the pairs study's hand (``dice_env.throws.group_throws``: the
 dice side by side 3 cm apart in rows of four, one hand velocity plus each die's noise) into
@@ -22,8 +22,9 @@ Then a pair whose dice (almost) never meet: two d6 from the same hand but :data:
 as a pair (``simulate_group``) and as its two dice thrown alone one after the other
 (``simulate``), on one thread, CPU time: the pair's cost over its dice's.
 
-``--islands`` runs every group with ``DieContact(islands=True)``: dice that cannot
-meet for a while step apart, each island at its own step, and an island at rest sleeps.
+Groups step in islands (``DieContact``'s default: dice that cannot meet for a while step
+apart, each island at its own step, and an island at rest sleeps); ``--lockstep`` steps every
+die of a group together (``DieContact(islands=False)``).
 
 ``--mujoco 2 6 12`` adds MuJoCo on the same throws of those groups (``pip install mujoco``): N
 free boxes of the die's size, mass and inertia in the same tray (a plane floor and four plane
@@ -274,10 +275,10 @@ def main() -> None:
     parser.add_argument("--die-friction", choices=["stick_slip", "regularized"],
                         default=DieContact().friction_law.name.lower(),
                         help="the die–die friction law (DieContact.friction_law)")
-    parser.add_argument("--islands", action="store_true",
-                        help="DieContact(islands=True): dice apart step apart, sleep at rest")
+    parser.add_argument("--lockstep", action="store_true",
+                        help="DieContact(islands=False): every die of a group steps together")
     args = parser.parse_args()
-    contact = DieContact(friction_law=args.die_friction, islands=args.islands)
+    contact = DieContact(friction_law=args.die_friction, islands=not args.lockstep)
     group = {"contact": contact}
     for name in ("throws", "repeats"):
         if getattr(args, name) < 1:
@@ -295,7 +296,7 @@ def main() -> None:
         print(f"{n_dice} dice done", flush=True)
     base = next(r for r in rows if r["path"] == "simulate_group" and r["dice"] == min(args.dice))
     print(f"\nOne thread, CPU time, best of {args.repeats}, {contact.law} die–die friction"
-          f"{', islands' if args.islands else ''}; "
+          f"{', lockstep' if args.lockstep else ', islands'}; "
           f"load average {os.getloadavg()[0]:.2f} on {os.cpu_count()} cores.\n")
     print(markdown_table(
         "path | dice | throws | throws/s | cost per throw / smallest group | die-steps/s | "
@@ -334,7 +335,7 @@ def main() -> None:
         "commit": code_version(), "threads": 1, "timer": "process CPU time",
         "repeats": args.repeats,
         "die_friction": contact.law,
-        "islands": args.islands,
+        "islands": contact.islands,
         "load_average": os.getloadavg()[0], "cpu_count": os.cpu_count(),
         "numba": numba.__version__, "python": platform.python_version(), "rows": rows},
         indent=1)

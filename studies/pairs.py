@@ -148,7 +148,7 @@ def simulate_in_batches(scene: Scene, dice: tuple[Die, ...], state: GroupState,
 
 
 def throw_pairs(scene: Scene, dice: tuple[Die, ...], state: GroupState, bar: object = None,
-                batch: int = BATCH, islands: bool = False) -> Pairs:
+                batch: int = BATCH, islands: bool = True) -> Pairs:
     """Throw ``state`` until the faces are decided, in batches of ``batch``; count them.
 
     ``islands``: as :class:`~dice_env.simulation.group.DieContact`'s.

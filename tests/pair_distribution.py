@@ -21,7 +21,7 @@ PATH = Path(__file__).with_name("data") / "pair_distribution.json"
 REFERENCE_SEED, THROWS, CHUNK = 49, 20_000, 2_000
 
 
-def pair_table(throws: int, seed: int, chunk: int = CHUNK, islands: bool = False) -> np.ndarray:
+def pair_table(throws: int, seed: int, chunk: int = CHUNK, islands: bool = True) -> np.ndarray:
     """Counted throws (6, 6) by (die 1, die 2) face, in chunks seeded ``(seed, i)``.
 
     ``islands``: as :class:`~dice_env.simulation.group.DieContact`'s.

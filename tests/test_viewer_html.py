@@ -29,6 +29,8 @@ from dice_env.viewer.recording import as_data
 from dice_env.viewer.throws import task_throws
 
 VIEWPORT = {"width": 800, "height": 600}
+# Points on a die (world offsets from its centre, within a quarter of its size): pips or edges.
+PATCH = [np.array([x, y, 0.0]) * Die().size / 4 for x in (-1, 0, 1) for y in (-1, 0, 1)]
 MAX_PAGE_BYTES = 2_000_000  # a 2 s throw of two dice
 
 
@@ -171,24 +173,27 @@ def test_dice_are_drawn_where_recorded(browser_page: tuple[Any, list[str]],
     times = [0, n // 2, n - 1]  # frames: released, moving, at rest
     assert np.linalg.norm(throw.position[n // 2, 0] - throw.position[0, 0]) > 3 * Die().size
     seen: dict[int, tuple[np.ndarray, np.ndarray]] = {}  # frame: (die 0's pixel, its colour)
+    dice: dict[int, list[np.ndarray]] = {}  # frame: every die's pixel
     for i in times:
         tab.evaluate(f"diceViewer.setTime({float(throw.t[i])!r})")
         camera = tab.evaluate("diceViewer.camera()")
+        dice[i] = [_projected(camera, throw.position[i, j]) for j in range(throw.n_dice)]
         for j in range(throw.n_dice):
             shown = np.array(tab.evaluate(f"diceViewer.project(0, {j})"))
-            expected = _projected(camera, throw.position[i, j])
-            np.testing.assert_allclose(shown, expected, atol=0.5)
-        centre = _projected(camera, throw.position[i, 0])
-        seen[i] = centre, _pixels(tab, [tuple(centre)])[0]
-    # Each of die 0's pixels looks different at the frame (of those) where it is farthest
-    # off: the die, not the floor, was there.
-    for i, (centre, colour) in seen.items():
-        other = max(times, key=lambda k: np.linalg.norm(seen[k][0] - centre))
-        assert np.linalg.norm(seen[other][0] - centre) > 20, "the die hardly moved on screen"
+            np.testing.assert_allclose(shown, dice[i][j], atol=0.5)
+        patch = [tuple(_projected(camera, throw.position[i, 0] + offset)) for offset in PATCH]
+        seen[i] = dice[i][0], patch, _pixels(tab, patch)
+    # Die 0's patch of pixels looks different at the frame (of those) where every die is
+    # farthest off: the die, not the floor, was there.
+    for i, (centre, patch, colours) in seen.items():
+        other = max(times, key=lambda k: min(np.linalg.norm(p - centre) for p in dice[k]))
+        assert min(np.linalg.norm(p - centre) for p in dice[other]) > 20, \
+            "the dice hardly moved on screen"
         tab.evaluate(f"diceViewer.setTime({float(throw.t[other])!r})")
-        behind = _pixels(tab, [tuple(centre)])[0]
-        assert np.abs(colour - behind).max() > 24, \
-            f"frame {i}: die 0's pixel {colour} is what shows without it ({behind})"
+        behind = _pixels(tab, patch)
+        assert np.abs(colours - behind).max() > 24, \
+            f"frame {i}: die 0's pixels {colours.tolist()} are what shows without it " \
+            f"({behind.tolist()})"
     assert errors == []
 
 

@@ -61,10 +61,11 @@ class DieContact:
 
     ``stiffness`` (N/m per contact), ``damping`` (N s/m; default: :data:`DIE_RESTITUTION` for the
     default die), ``friction_law`` (:class:`dice_env.model.scene.FrictionLaw`), ``tangential``:
-    the stick-slip spring and damper as a fraction of them. With ``islands`` (on a level
-    floor), dice that cannot meet for a while step apart, each island of dice at its own step
-    with its own flights, and an island at rest sleeps until a die that may reach it wakes it
-    (``docs/performance.md``, "Islands"): seeded as ever, not step for step the same.
+    the stick-slip spring and damper as a fraction of them. With ``islands`` (the default;
+    several dice on a level floor), dice that cannot meet for a while step apart, each island
+    of dice at its own step with its own flights, and an island at rest sleeps until a die
+    that may reach it wakes it (``docs/performance.md``, "Islands"); without, every die takes
+    every step of the throw, at the nearest pair's step.
     """
 
     stiffness: float = STIFFNESS
@@ -72,7 +73,7 @@ class DieContact:
     friction: float = DIE_FRICTION
     friction_law: FrictionLaw = FrictionLaw.STICK_SLIP
     tangential: float = 2.0 / 7.0
-    islands: bool = False
+    islands: bool = True
 
     def __post_init__(self) -> None:
         check_material(self.stiffness, self.damping, self.friction, self.tangential)
@@ -255,7 +256,7 @@ def simulate_group(scene: Scene, dice: Sequence[Die], state: GroupState, *,
         n_steps=n_steps, at_rest=ends.at_rest, v_rest=float(scene.rest.speed),
         hold_steps=n_steps if hold >= n_steps else math.ceil(hold), decide=ends.decided,
         energy_scale=float(sum(d.mass * scene.gravity * d.size for d in dice)),
-        islands=contact.islands,
+        islands=contact.islands and n > 1,  # a group of one is the single die
         least=max(1, math.ceil(ISLAND_WINDOW[0] / dt)), most=max(1, int(ISLAND_WINDOW[1] / dt)))
     bodies = _bodies(scenes, ends.decided)
     stride, n_rec = record_plan(record_every, n_steps, b * n * (12 if orientations else 3),
