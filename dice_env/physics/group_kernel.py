@@ -633,7 +633,7 @@ def advance_group(g: int, dice: GroupDice, bodies: Bodies, hulls: Hulls, pair: P
         for a in range(n_dice):
             decisive = min(decisive, bodies.lock[a].max() + floor_total - bodies.floor[a])
     n_steps, stride, n_rec = stops.n_steps, records.stride, records.x.shape[1]
-    e_tol, rise = stops.energy_scale, -np.inf  # rise: an island's energy over its first
+    e_tol, rise = stops.energy_scale, -np.inf  # rise: the throw's energy over its first
     passes, end = 0, RUNNING
     fine, coarse = pair.near, pair.apart
     depths = np.empty((n_dice, n_dice))  # each pair's overlap (< 0: a gap), as pair_depths
@@ -655,12 +655,16 @@ def advance_group(g: int, dice: GroupDice, bodies: Bodies, hulls: Hulls, pair: P
         energy[a] = 0.5 * mass[a] * (u[a, 0] ** 2 + u[a, 1] ** 2 + u[a, 2] ** 2) + 0.5 * (
             ang[a, 0] ** 2 + ang[a, 1] ** 2 + ang[a, 2] ** 2) * bodies.inv_i_min[a] \
             + mass[a] * g_acc * x[a, 2]
+    first = 0.0  # the throw's energy: each die's at its first step (until then, as above)
+    for a in range(n_dice):
+        first += energy[a]
     t = 0
     while t < n_steps and end == RUNNING:
         t_end = n_steps
         if level:
             window = islands(x, q, energy, stored, bodies, hulls, world, separating, depths,
                              label, pool, least * dt) / dt
+            parted = _part(out, g, t, label, met, first_a, first_b, parted, members, u, w)
             longest = most
             for a in range(n_dice):
                 if label[a] != a:  # dice together: seen again soon, to part when they can
@@ -668,8 +672,7 @@ def advance_group(g: int, dice: GroupDice, bodies: Bodies, hulls: Hulls, pair: P
             t_end = min(n_steps, t + (longest if not window < longest
                                       else max(least, int(window) // coarse * coarse)))
         for c in range(n_dice):
-            # e_first: the island's energy at the window's start (the first: its first step)
-            n_m, e_first, others, others_t, quiet, moved = _gather(
+            n_m, own, others, others_t, quiet, moved = _gather(
                 c, t, label, asleep, energy, stored, clock, quiet_of, moved_of, members, records,
                 g, x, q)
             if n_m == 0:
@@ -770,14 +773,14 @@ def advance_group(g: int, dice: GroupDice, bodies: Bodies, hulls: Hulls, pair: P
                             die_touch[a] = True
                             die_touch[b] = True
                 if step == 1:
-                    e_first = checked
+                    first += checked - own  # the island's first step in place of its start
                     for i in range(n_m):
                         a = members[i]
                         e_tol += kinetic[a]
                         e_tol += mass[a] * g_acc * max(0.0, (n0 * x[a, 0] + n1 * x[a, 1]
                                                              + n2 * x[a, 2]) - floor)
-                else:
-                    rise = max(rise, checked - e_first)
+                else:  # the other islands' energies at their last step
+                    rise = max(rise, checked + others - first)
                 for i in range(n_m):
                     a = members[i]
                     now = touching[a] > 0 or die_touch[a]
@@ -1082,6 +1085,30 @@ def _meeting(out: GroupOutcome, g: int, end: int, done: int, members: np.ndarray
         for k in range(3):
             out.meet[g, end, a, k] = u[a, k]
             out.meet[g, end, a, 3 + k] = w[a, k]
+
+
+@njit(cache=True)
+def _part(out: GroupOutcome, g: int, t: int, label: np.ndarray, met: np.ndarray, first_a: int,
+          first_b: int, parted: bool, members: np.ndarray, u: np.ndarray, w: np.ndarray) -> bool:
+    """Part the pairs that touched at their last step and now lie in different islands.
+
+    As the step that finds a pair apart does: its contact ends (a later touch starts afresh,
+    with new stick-slip anchors) and, for the first meeting's pair, its end is stored after
+    ``t`` steps with the dice of both islands. Returns whether the first meeting has ended.
+    """
+    n_dice = label.shape[0]
+    for a in range(n_dice):
+        for b in range(a + 1, n_dice):
+            if met[a, b] and label[a] != label[b]:
+                met[a, b] = False
+                if a == first_a and b == first_b and not parted:
+                    parted, n_m = True, 0
+                    for c in range(n_dice):
+                        if label[c] == label[a] or label[c] == label[b]:
+                            members[n_m] = c
+                            n_m += 1
+                    _meeting(out, g, 1, t, members, n_m, u, w)
+    return parted
 
 
 @njit(cache=True)
