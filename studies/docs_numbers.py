@@ -658,15 +658,33 @@ it the group keeps per-die arrays and tests its pairs: one die in a group runs a
 the same throws, to decided faces on one thread (`{dice.command}`, \
 `benchmarks/results/dice_together.json`). Two d6 into the tray run at \
 {rows[3].throws_per_s:.1f} throws/s, six at {rows[4].throws_per_s:.1f} and twelve at \
-{rows[5].throws_per_s:.2f}. A throw moves at the table's step while no pair of dice can meet \
-within it and at the die–die contact's (`dice_env.simulation.group.pair_step`, shorter: the \
-pair's reduced mass) while one can; every die is stepped until the throw ends. Two d6 \
-{apart.spacing_m * 100:.0f} cm apart (they met in {apart.met:.0%} of {apart.throws} throws) \
-cost {apart.pair_per_alone:.1f}× the CPU time of their two dice thrown alone.
+{rows[5].throws_per_s:.2f}, in islands ("Islands" below): an island of several dice moves at \
+the table's step while no pair of its dice can meet within it and at the die–die contact's \
+(`dice_env.simulation.group.pair_step`, shorter: the pair's reduced mass) while one can. Two \
+d6 {apart.spacing_m * 100:.0f} cm apart (they met in {apart.met:.0%} of {apart.throws} throws) \
+cost {apart.pair_per_alone:.1f}× the CPU time of their two dice thrown alone: the group's rule \
+for a decided face (no energy left in the throw can turn any die) waits for both dice, where \
+each die alone stops at its own lock.
 
 Against MuJoCo on the same releases into the tray, one thread, CPU time, to decided faces and
 to rest (MuJoCo's rest: every corner slower than the rest speed for the hold, its contacts not
 counted; the benchmark's docstring gives both rules):
+
+{table}
+"""
+
+
+@generated("performance-islands", islands="benchmarks/results/islands.json")
+def performance_islands(islands) -> str:
+    """The several-dice tasks' throws in islands against stepped together."""
+    table = markdown_table(
+        "task | in islands (throws/s) | stepped together (throws/s) | ratio | same faces",
+        ((f"`{r.task}`", f"{r.islands_throws_per_s:,.0f}", f"{r.together_throws_per_s:,.0f}",
+          f"{r.islands_over_together:.2f}", f"{r.same_faces:.0%}") for r in islands.rows))
+    return f"""\
+The releases of the several-dice tasks' vector envs ({islands.rows[0].throws} seeded random \
+actions a task, one thread, CPU time, best of {islands.repeats}; `{islands.command}`, \
+`benchmarks/results/islands.json`), in islands and stepped together:
 
 {table}
 """
@@ -708,14 +726,17 @@ def best_algorithm(row) -> str:
 
 @generated("benchmark-budget", b=BASELINES)
 def benchmark_budget(b) -> str:
-    """Where ``DiceThrow-v0``'s best algorithm levels off."""
-    row = b.rows[0]
-    best = best_algorithm(row)
-    curve = ", ".join(f"{p[2]:.2f} at {p[0]:,.0f}" for p in row.learned[best].curve)
+    """Each task's best algorithm along its budget: where it levels off, or not."""
+    lines = []
+    for row in b.rows:
+        best = best_algorithm(row)
+        curve = ", ".join(f"{p[2]:.2f} at {p[0]:,.0f}" for p in row.learned[best].curve)
+        lines.append(f"- `{row.task}`, {row.budget:,} throws: {best.upper()}, {curve}")
     return f"""\
-`DiceThrow-v0`'s budget, {row.budget:,} throws, is where its best algorithm levels off:
-{best.upper()}'s seeds' mean success on the curve's fixed throws is
-{curve} throws.
+The best algorithm of each task (by its seeds' mean success), its seeds' mean success on
+the curve's {b.curve_throws} fixed throws along the budget:
+
+{chr(10).join(lines)}
 """
 
 
