@@ -164,7 +164,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Analyse the tasks (default: every task with kept runs) into ``learned.json``.
 
     Each task's entry (with its own time and commit) replaces that task's in the file, which is
-    written after each task; the other tasks' are kept. Every argument, kept run and model is
+    written after each task; the other tasks' are kept, and so are the file's other keys (the
+    ``sharpness`` and ``recipe`` rows of their own commands). Every argument, kept run and model is
     checked first: exit 2 with one line naming what cannot be used and how to go on.
     """
     from dice_env.envs.tasks import TASKS
@@ -189,8 +190,8 @@ def main(argv: Sequence[str] | None = None) -> int:
                      "agents.benchmark first")
     path = args.out / "learned.json"
     try:
-        reports = {r["task"]: r for r in (read_json(path, "delete it").get("tasks", [])
-                                          if path.exists() else [])}
+        stored = read_json(path, "delete it") if path.exists() else {}  # sharpness, recipe too
+        reports = {r["task"]: r for r in stored.get("tasks", [])}
         for task_id in args.tasks or kept:  # before any work: each task's best model is there
             model_path(best_run(task_id, args.out, args.quick), args.out)
     except RunError as error:
@@ -209,7 +210,7 @@ def main(argv: Sequence[str] | None = None) -> int:
               f"oracle's {oracle:.3f}", flush=True)
         ordered = [reports[t.id] for t in TASKS if t.id in reports]
         commits = " ".join(sorted({r["commit"] for r in ordered}))  # the entries' own
-        write_json(path, {"tasks": ordered, "command": "python -m agents.learned",
+        write_json(path, {**stored, "tasks": ordered, "command": "python -m agents.learned",
                           "commit": commits})
     print(f"wrote {path}")
     return 0

@@ -255,6 +255,16 @@ def test_learned_keeps_each_task_as_soon_as_it_is_analysed(two_tasks, monkeypatc
     assert [r["task"] for r in kept["tasks"]] == [TASK]
 
 
+def test_learned_keeps_the_rows_other_commands_wrote(two_tasks, monkeypatch):
+    monkeypatch.setattr(learned, "analyse", lambda task_id, out, quick: report(task_id))
+    others = {"sharpness": [{"task": OTHER}], "recipe": [{"task": TASK}]}
+    (two_tasks / "learned.json").write_text(json.dumps(others))
+    assert learned.main(["--quick", "--out", str(two_tasks), "--tasks", TASK]) == 0
+    kept = json.loads((two_tasks / "learned.json").read_text())
+    assert {key: kept[key] for key in others} == others
+    assert [r["task"] for r in kept["tasks"]] == [TASK]
+
+
 def test_learned_checks_every_model_and_setting_before_any_analysis(two_tasks, capsys,
                                                                     monkeypatch, tmp_path):
     analysed = []
